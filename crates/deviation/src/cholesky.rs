@@ -1,0 +1,153 @@
+//! Pivoted (rank-revealing) Cholesky factorisation of a symmetric positive semi-definite
+//! matrix, A = L·Lᵀ with L of size n × rank.
+//!
+//! nalgebra's Cholesky needs a positive definite matrix; the covariances of document 001
+//! are singular (001 Eq. 12 gives σ3 = σ6 = 0), so rvtol uses the outer-product algorithm
+//! with full diagonal pivoting (Higham, "Accuracy and Stability of Numerical Algorithms",
+//! 2nd ed., §10.3, Algorithm 10.14). It stops when the largest remaining diagonal is below
+//! `n · ε · max(diag A)`. A variable with zero variance has a zero row in L, so a draw
+//! μ + L·z reproduces its mean exactly.
+
+use nalgebra::{DMatrix, SymmetricEigen};
+
+/// The factor L of A = L·Lᵀ, stored row-major (n rows, `rank` columns), rows in the
+/// original variable order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CholeskyFactor {
+    /// Number of variables (rows).
+    pub n: usize,
+    /// Numerical rank (columns).
+    pub rank: usize,
+    /// Row-major entries, `n * rank` of them.
+    pub entries: Vec<f64>,
+}
+
+impl CholeskyFactor {
+    /// Entry (row, col) of L.
+    pub fn get(&self, row: usize, col: usize) -> f64 {
+        self.entries[row * self.rank + col]
+    }
+
+    /// Reconstructs L·Lᵀ (for tests and diagnostics).
+    pub fn reconstruct(&self) -> DMatrix<f64> {
+        DMatrix::from_fn(self.n, self.n, |i, j| {
+            (0..self.rank)
+                .map(|k| self.get(i, k) * self.get(j, k))
+                .sum()
+        })
+    }
+}
+
+/// Factorises a symmetric positive semi-definite matrix with diagonal pivoting.
+///
+/// The caller checks symmetry and definiteness first ([`crate::check_covariance`]); tiny
+/// negative pivots from rounding end the factorisation like zero pivots do.
+pub fn pivoted_cholesky(matrix: &DMatrix<f64>) -> CholeskyFactor {
+    let n = matrix.nrows();
+    let mut work = matrix.clone();
+    let mut perm: Vec<usize> = (0..n).collect();
+    let mut columns: Vec<Vec<f64>> = Vec::new();
+    let max_diag = (0..n).map(|i| matrix[(i, i)]).fold(0.0_f64, f64::max);
+    let tolerance = (n as f64) * f64::EPSILON * max_diag;
+    for k in 0..n {
+        let (pivot_pos, pivot_value) = (k..n).map(|i| (i, work[(perm[i], perm[i])])).fold(
+            (k, f64::NEG_INFINITY),
+            |best, cand| {
+                if cand.1 > best.1 {
+                    cand
+                } else {
+                    best
+                }
+            },
+        );
+        if pivot_value <= tolerance || max_diag == 0.0 {
+            break;
+        }
+        perm.swap(k, pivot_pos);
+        let pivot = perm[k];
+        let diagonal = pivot_value.sqrt();
+        let mut column = vec![0.0; n];
+        column[pivot] = diagonal;
+        for &row in &perm[k + 1..] {
+            column[row] = work[(row, pivot)] / diagonal;
+        }
+        for (a, &row_a) in perm.iter().enumerate().skip(k + 1) {
+            for &row_b in &perm[a..] {
+                let updated = work[(row_a, row_b)] - column[row_a] * column[row_b];
+                work[(row_a, row_b)] = updated;
+                work[(row_b, row_a)] = updated;
+            }
+        }
+        columns.push(column);
+    }
+    let rank = columns.len();
+    let mut entries = vec![0.0; n * rank];
+    for (col, column) in columns.iter().enumerate() {
+        for (row, &value) in column.iter().enumerate() {
+            entries[row * rank + col] = value;
+        }
+    }
+    CholeskyFactor { n, rank, entries }
+}
+
+/// The smallest eigenvalue of a symmetric matrix (for the indefiniteness message).
+pub fn smallest_eigenvalue(matrix: &DMatrix<f64>) -> f64 {
+    if matrix.nrows() == 0 {
+        return 0.0;
+    }
+    SymmetricEigen::new(matrix.clone())
+        .eigenvalues
+        .iter()
+        .copied()
+        .fold(f64::INFINITY, f64::min)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    #[test]
+    fn singular_matrix_has_exact_zero_rows() {
+        // 001 Eq. 12 with Δτ = 0.006 mm, L1 = 120 mm: diagonal with two zero variances.
+        let sd = [0.001, 0.001, 0.0, 0.006 / 360.0, 0.006 / 360.0, 0.0];
+        let cov = DMatrix::from_fn(6, 6, |i, j| if i == j { sd[i] * sd[i] } else { 0.0 });
+        let factor = pivoted_cholesky(&cov);
+        assert_eq!(factor.rank, 4);
+        for k in 0..factor.rank {
+            assert_eq!(factor.get(2, k), 0.0);
+            assert_eq!(factor.get(5, k), 0.0);
+        }
+        assert!((factor.reconstruct() - cov).abs().max() < 1e-20);
+    }
+
+    #[test]
+    fn rank_one_matrix() {
+        // v·vᵀ has rank 1 exactly.
+        let v = [1.0, -2.0, 0.5];
+        let cov = DMatrix::from_fn(3, 3, |i, j| v[i] * v[j]);
+        let factor = pivoted_cholesky(&cov);
+        assert_eq!(factor.rank, 1);
+        assert!((factor.reconstruct() - cov).abs().max() < 1e-14);
+    }
+
+    #[test]
+    fn zero_matrix_has_rank_zero() {
+        let factor = pivoted_cholesky(&DMatrix::zeros(3, 3));
+        assert_eq!(factor.rank, 0);
+        assert!(factor.entries.is_empty());
+    }
+
+    proptest! {
+        // Round trip: for any B (n × r), A = B·Bᵀ is PSD of rank ≤ r and L·Lᵀ = A.
+        #[test]
+        fn factorisation_round_trip(n in 1usize..8, r in 1usize..8, seed in proptest::collection::vec(-3.0f64..3.0, 64)) {
+            let b = DMatrix::from_fn(n, r, |i, j| seed[(i * 8 + j) % 64]);
+            let a = &b * b.transpose();
+            let factor = pivoted_cholesky(&a);
+            prop_assert!(factor.rank <= r.min(n));
+            let scale = a.abs().max().max(1.0);
+            prop_assert!((factor.reconstruct() - &a).abs().max() <= 1e-10 * scale);
+        }
+    }
+}

@@ -1,0 +1,91 @@
+//! Errors of the deviation model. Each names the JSON path of the offending value, as
+//! handed in by the caller, so that a user can find it in the scenario file.
+
+use thiserror::Error;
+
+/// A deviation specification that cannot be sampled.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum DeviationError {
+    /// A value that must be finite is NaN or infinite.
+    #[error("{path}: must be a finite number, got {value}")]
+    NotFinite {
+        /// JSON path of the value.
+        path: String,
+        /// The value found.
+        value: f64,
+    },
+    /// A standard deviation, variance or width that must not be negative is.
+    #[error("{path}: must not be negative, got {value}")]
+    Negative {
+        /// JSON path of the value.
+        path: String,
+        /// The value found.
+        value: f64,
+    },
+    /// A matrix that must be symmetric is not.
+    #[error(
+        "{path}: matrix is not symmetric: [{row}][{col}] = {upper} but [{col}][{row}] = {lower}"
+    )]
+    Asymmetric {
+        /// JSON path of the matrix.
+        path: String,
+        /// Row of the first mismatching entry.
+        row: usize,
+        /// Column of the first mismatching entry.
+        col: usize,
+        /// Entry (row, col).
+        upper: f64,
+        /// Entry (col, row).
+        lower: f64,
+    },
+    /// A covariance (or correlation) matrix has a negative eigenvalue.
+    #[error("{path}: covariance is not positive semi-definite (smallest eigenvalue {smallest_eigenvalue:e})")]
+    Indefinite {
+        /// JSON path of the matrix.
+        path: String,
+        /// Its smallest eigenvalue.
+        smallest_eigenvalue: f64,
+    },
+    /// Any other invalid value, with the reason.
+    #[error("{path}: {reason}")]
+    Invalid {
+        /// JSON path of the value.
+        path: String,
+        /// What is wrong.
+        reason: String,
+    },
+}
+
+impl DeviationError {
+    pub(crate) fn invalid(path: impl Into<String>, reason: impl Into<String>) -> Self {
+        DeviationError::Invalid {
+            path: path.into(),
+            reason: reason.into(),
+        }
+    }
+
+    /// Checks that `value` is finite.
+    pub(crate) fn finite(path: &str, value: f64) -> Result<f64, Self> {
+        if value.is_finite() {
+            Ok(value)
+        } else {
+            Err(DeviationError::NotFinite {
+                path: path.to_string(),
+                value,
+            })
+        }
+    }
+
+    /// Checks that `value` is finite and not negative.
+    pub(crate) fn non_negative(path: &str, value: f64) -> Result<f64, Self> {
+        let value = Self::finite(path, value)?;
+        if value < 0.0 {
+            Err(DeviationError::Negative {
+                path: path.to_string(),
+                value,
+            })
+        } else {
+            Ok(value)
+        }
+    }
+}

@@ -1,0 +1,36 @@
+//! rvtol-deviation: what can deviate in an RV reducer and how it is drawn.
+//!
+//! The deviation model of source document 001 (Zheng Yang, "Deviation modeling of RV
+//! retarder parts based on probability statistics and vector"):
+//!
+//! - a part's deviation is the six-component vector (Δu, Δv, Δw, Δα, Δβ, Δγ): three
+//!   translations in mm and three small rotations in rad, always in that order
+//!   ([`SixDof`], 001 Eq. 1);
+//! - the components are jointly normal with a mean vector and a full covariance
+//!   (001 Eq. 2–4), given directly, as standard deviations plus a correlation matrix, or
+//!   derived from a tolerance band (001 Eq. 9, 10, 12; [`PartSpec::from_tolerance_band`]),
+//!   optionally restricted by the constraint of 001 Eq. 11 ([`TiltConstraint`]);
+//! - scalar error parameters follow a [`ScalarDistribution`];
+//! - all normal components of a scenario form one multivariate normal, drawn by
+//!   [`InputSpace`] from a pivoted Cholesky factor ([`pivoted_cholesky`]) so that positive
+//!   semi-definite covariances work and zero-variance components are exactly their mean;
+//! - the vector expression φ = ε + θ (001 Eq. 5–8) turns a part's deviation into the
+//!   displacement of a point on it ([`point_displacement`]).
+//!
+//! No I/O, no serde, no threads: the engine owns those.
+
+mod cholesky;
+mod constraint;
+mod displacement;
+mod error;
+mod input_space;
+mod part;
+mod scalar;
+
+pub use cholesky::{pivoted_cholesky, smallest_eigenvalue, CholeskyFactor};
+pub use constraint::TiltConstraint;
+pub use displacement::point_displacement;
+pub use error::DeviationError;
+pub use input_space::{ConstraintCounts, InputSpace, InputSpaceBuilder};
+pub use part::{check_covariance, PartSpec, SixDof};
+pub use scalar::ScalarDistribution;

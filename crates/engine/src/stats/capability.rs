@@ -1,0 +1,310 @@
+//! Process-capability indices and the out-of-specification fraction.
+//!
+//! * Moment method: Cp = (U − L) / (6σ), Cpk = min(Cpu, Cpl) with
+//!   Cpu = (U − μ) / (3σ) and Cpl = (μ − L) / (3σ) (Montgomery,
+//!   "Introduction to Statistical Quality Control", ch. 8; ISO 22514-2).
+//! * Percentile method (Clements 1989, "Process capability calculations for
+//!   non-normal distributions", Quality Progress 22(9); ISO 22514-2:2017
+//!   method with quantiles): Cp = (U − L) / (P99.865 − P0.135),
+//!   Cpu = (U − P50) / (P99.865 − P50), Cpl = (P50 − L) / (P50 − P0.135).
+//! * Out-of-spec fraction: Clopper & Pearson (1934), "The use of confidence
+//!   or fiducial limits illustrated in the case of the binomial",
+//!   Biometrika 26(4): the exact two-sided interval
+//!   [B(α/2; k, n − k + 1), B(1 − α/2; k + 1, n − k)] with B the Beta
+//!   quantile function.
+//!
+//! A zero-width spread (σ = 0 or coinciding percentiles) never gives NaN: an
+//! index is +inf when the centre is strictly inside the limit, −inf when it
+//! is strictly outside and 0 when it is exactly on the limit (the value of
+//! the index for any positive spread).
+
+use statrs::distribution::{Beta, ContinuousCDF};
+
+/// Specification limits; either may be absent (one-sided specification).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpecLimits {
+    /// Lower specification limit L, if any.
+    pub lower: Option<f64>,
+    /// Upper specification limit U, if any.
+    pub upper: Option<f64>,
+}
+
+/// Capability indices.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MomentCapability {
+    /// Cp, only when both limits are set.
+    pub cp: Option<f64>,
+    /// Cpk: the minimum of Cpu and Cpl over the limits that are set
+    /// (Cpu or Cpl alone for a one-sided specification; +inf when no limit
+    /// is set, since nothing can be out of specification).
+    pub cpk: f64,
+}
+
+/// Estimated fraction with an exact confidence interval.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProportionEstimate {
+    /// Point estimate k / n (0 when n = 0).
+    pub fraction: f64,
+    /// Lower confidence limit.
+    pub lower: f64,
+    /// Upper confidence limit.
+    pub upper: f64,
+}
+
+impl ProportionEstimate {
+    /// The estimate in parts per million: (fraction, lower, upper) · 10^6.
+    pub fn to_ppm(&self) -> (f64, f64, f64) {
+        (
+            self.fraction * 1e6,
+            self.lower * 1e6,
+            self.upper * 1e6,
+        )
+    }
+}
+
+/// `numerator / denominator`, with a zero (or negative, or NaN) denominator
+/// mapped to +inf / −inf / 0 by the sign of the numerator (module docs).
+fn index_ratio(numerator: f64, denominator: f64) -> f64 {
+    if denominator > 0.0 {
+        numerator / denominator
+    } else if numerator > 0.0 {
+        f64::INFINITY
+    } else if numerator < 0.0 {
+        f64::NEG_INFINITY
+    } else {
+        0.0
+    }
+}
+
+/// Shared Cp / Cpk assembly: `upper_side(U)` and `lower_side(L)` give Cpu and
+/// Cpl, `spread` is the full-width denominator of Cp.
+fn assemble(
+    limits: SpecLimits,
+    spread: f64,
+    upper_side: impl Fn(f64) -> f64,
+    lower_side: impl Fn(f64) -> f64,
+) -> MomentCapability {
+    let cp = match (limits.lower, limits.upper) {
+        (Some(lower), Some(upper)) => Some(index_ratio(upper - lower, spread)),
+        _ => None,
+    };
+    let cpu = limits.upper.map(upper_side);
+    let cpl = limits.lower.map(lower_side);
+    let cpk = [cpu, cpl]
+        .into_iter()
+        .flatten()
+        .fold(f64::INFINITY, f64::min);
+    MomentCapability { cp, cpk }
+}
+
+/// Moment-method capability from the mean μ and standard deviation σ:
+/// Cp = (U − L) / (6σ) (both limits only), Cpk = min((U − μ) / (3σ),
+/// (μ − L) / (3σ)) over the limits that are set.
+///
+/// σ = 0 (or negative or NaN, treated as 0): the indices are +inf when the
+/// mean is strictly inside, −inf when strictly outside, 0 on a limit. Finite
+/// inputs never give NaN.
+pub fn capability_from_moments(mean: f64, sd: f64, limits: SpecLimits) -> MomentCapability {
+    assemble(
+        limits,
+        6.0 * sd,
+        |upper| index_ratio(upper - mean, 3.0 * sd),
+        |lower| index_ratio(mean - lower, 3.0 * sd),
+    )
+}
+
+/// Percentile-method capability (ISO 22514-2 / Clements 1989) from the
+/// 0.135 %, 50 % and 99.865 % percentiles:
+/// Cp = (U − L) / (P99.865 − P0.135) (both limits only),
+/// Cpk = min((U − P50) / (P99.865 − P50), (P50 − L) / (P50 − P0.135)) over
+/// the limits that are set. Zero-width denominators are handled as in
+/// [`capability_from_moments`].
+pub fn capability_percentile_method(
+    p00135: f64,
+    p50: f64,
+    p99865: f64,
+    limits: SpecLimits,
+) -> MomentCapability {
+    assemble(
+        limits,
+        p99865 - p00135,
+        |upper| index_ratio(upper - p50, p99865 - p50),
+        |lower| index_ratio(p50 - lower, p50 - p00135),
+    )
+}
+
+/// Clopper–Pearson exact two-sided interval for the out-of-spec fraction,
+/// from `n_out` out-of-spec samples among `n`, at `confidence` (e.g. 0.95).
+///
+/// lower = 0 when `n_out` = 0, upper = 1 when `n_out` = n. Edge cases never
+/// panic: n = 0 gives fraction 0 and the interval [0, 1]; `n_out` > n is
+/// treated as n; `confidence` is clamped into [0, 1] and NaN means 0.95.
+pub fn out_of_spec_interval(n_out: u64, n: u64, confidence: f64) -> ProportionEstimate {
+    if n == 0 {
+        return ProportionEstimate {
+            fraction: 0.0,
+            lower: 0.0,
+            upper: 1.0,
+        };
+    }
+    let n_out = n_out.min(n);
+    let confidence = if confidence.is_nan() {
+        0.95
+    } else {
+        confidence.clamp(0.0, 1.0)
+    };
+    let tail = (1.0 - confidence) / 2.0;
+    let successes = n_out as f64;
+    let failures = (n - n_out) as f64;
+    let beta_quantile = |a: f64, b: f64, probability: f64, fallback: f64| {
+        Beta::new(a, b)
+            .map(|beta| beta.inverse_cdf(probability.clamp(0.0, 1.0)))
+            .ok()
+            .filter(|value| value.is_finite())
+            .map_or(fallback, |value| value.clamp(0.0, 1.0))
+    };
+    let fraction = successes / n as f64;
+    let lower = if n_out == 0 {
+        0.0
+    } else {
+        beta_quantile(successes, failures + 1.0, tail, 0.0)
+    };
+    let upper = if n_out == n {
+        1.0
+    } else {
+        beta_quantile(successes + 1.0, failures, 1.0 - tail, 1.0)
+    };
+    ProportionEstimate {
+        fraction,
+        lower: lower.min(fraction),
+        upper: upper.max(fraction),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const BOTH: SpecLimits = SpecLimits {
+        lower: Some(-3.0),
+        upper: Some(3.0),
+    };
+
+    fn close(a: f64, b: f64, tolerance: f64) -> bool {
+        (a - b).abs() <= tolerance
+    }
+
+    #[test]
+    fn moment_method_easy_cases() {
+        // Centred, σ = 1, limits ±3: Cp = 6/6 = 1, Cpk = 3/3 = 1.
+        let centred = capability_from_moments(0.0, 1.0, BOTH);
+        assert_eq!(centred.cp, Some(1.0));
+        assert_eq!(centred.cpk, 1.0);
+        // Mean 1, σ = 0.5: Cp = 6/3 = 2, Cpu = 2/1.5 = 1.333..., Cpl = 4/1.5.
+        let shifted = capability_from_moments(1.0, 0.5, BOTH);
+        assert_eq!(shifted.cp, Some(2.0));
+        assert!(close(shifted.cpk, 4.0 / 3.0, 1e-15));
+        // Mean outside: Cpk negative, (3 − 4)/3 = −1/3.
+        let outside = capability_from_moments(4.0, 1.0, BOTH);
+        assert!(close(outside.cpk, -1.0 / 3.0, 1e-15));
+    }
+
+    #[test]
+    fn moment_method_one_sided() {
+        let upper_only = SpecLimits {
+            lower: None,
+            upper: Some(10.0),
+        };
+        let result = capability_from_moments(4.0, 2.0, upper_only);
+        assert_eq!(result.cp, None);
+        assert_eq!(result.cpk, 1.0); // (10 − 4)/(3·2)
+        let lower_only = SpecLimits {
+            lower: Some(1.0),
+            upper: None,
+        };
+        let result = capability_from_moments(4.0, 2.0, lower_only);
+        assert_eq!(result.cp, None);
+        assert_eq!(result.cpk, 0.5); // (4 − 1)/(3·2)
+        let none = SpecLimits {
+            lower: None,
+            upper: None,
+        };
+        let result = capability_from_moments(4.0, 2.0, none);
+        assert_eq!(result.cp, None);
+        assert_eq!(result.cpk, f64::INFINITY);
+    }
+
+    #[test]
+    fn zero_sigma_never_nan() {
+        let inside = capability_from_moments(1.0, 0.0, BOTH);
+        assert_eq!(inside.cp, Some(f64::INFINITY));
+        assert_eq!(inside.cpk, f64::INFINITY);
+        let outside = capability_from_moments(5.0, 0.0, BOTH);
+        assert_eq!(outside.cp, Some(f64::INFINITY));
+        assert_eq!(outside.cpk, f64::NEG_INFINITY);
+        let on_limit = capability_from_moments(3.0, 0.0, BOTH);
+        assert_eq!(on_limit.cpk, 0.0);
+        let nan_sd = capability_from_moments(1.0, f64::NAN, BOTH);
+        assert_eq!(nan_sd.cpk, f64::INFINITY);
+        let percentile = capability_percentile_method(2.0, 2.0, 2.0, BOTH);
+        assert_eq!(percentile.cp, Some(f64::INFINITY));
+        assert_eq!(percentile.cpk, f64::INFINITY);
+    }
+
+    #[test]
+    fn percentile_method() {
+        // Normal(0, 1): P0.135 = −3, P50 = 0, P99.865 = 3 (the 3σ points), so
+        // the percentile method reproduces the moment method: Cp = Cpk = 1.
+        let normal = capability_percentile_method(-3.0, 0.0, 3.0, BOTH);
+        assert_eq!(normal.cp, Some(1.0));
+        assert_eq!(normal.cpk, 1.0);
+        // Skewed: P0.135 = −1, P50 = 0, P99.865 = 4, limits ±3:
+        // Cp = 6/5, Cpu = 3/4, Cpl = 3/1 → Cpk = 0.75.
+        let skewed = capability_percentile_method(-1.0, 0.0, 4.0, BOTH);
+        assert_eq!(skewed.cp, Some(1.2));
+        assert_eq!(skewed.cpk, 0.75);
+    }
+
+    #[test]
+    fn clopper_pearson_known_values() {
+        // 0 of 100 at 95 %: upper = 1 − 0.025^(1/100) = 0.0362167 (closed
+        // form for k = 0; also R binom.test(0, 100)$conf.int).
+        let none = out_of_spec_interval(0, 100, 0.95);
+        assert_eq!(none.fraction, 0.0);
+        assert_eq!(none.lower, 0.0);
+        assert!(close(none.upper, 1.0 - 0.025f64.powf(0.01), 1e-9));
+        assert!(close(none.upper, 0.036_216_7, 1e-7));
+        // 5 of 100 at 95 %: R binom.test(5, 100)$conf.int =
+        // [0.01643188, 0.11283491].
+        let five = out_of_spec_interval(5, 100, 0.95);
+        assert_eq!(five.fraction, 0.05);
+        assert!(close(five.lower, 0.016_431_88, 1e-7));
+        assert!(close(five.upper, 0.112_834_91, 1e-7));
+        // All out of spec: mirror of the k = 0 case, lower = 0.025^(1/100).
+        let all = out_of_spec_interval(100, 100, 0.95);
+        assert_eq!(all.upper, 1.0);
+        assert!(close(all.lower, 0.025f64.powf(0.01), 1e-9));
+        let (ppm, lower_ppm, upper_ppm) = five.to_ppm();
+        assert!(close(ppm, 50_000.0, 1e-6));
+        assert!(lower_ppm < ppm && ppm < upper_ppm);
+    }
+
+    #[test]
+    fn clopper_pearson_edge_cases() {
+        let empty = out_of_spec_interval(0, 0, 0.95);
+        assert_eq!((empty.fraction, empty.lower, empty.upper), (0.0, 0.0, 1.0));
+        let too_many = out_of_spec_interval(7, 5, 0.95);
+        assert_eq!(too_many.fraction, 1.0);
+        assert_eq!(too_many.upper, 1.0);
+        for confidence in [f64::NAN, -1.0, 0.0, 1.0, 2.0] {
+            let estimate = out_of_spec_interval(3, 1000, confidence);
+            assert!(estimate.lower <= estimate.fraction && estimate.fraction <= estimate.upper);
+            assert!(estimate.lower >= 0.0 && estimate.upper <= 1.0);
+        }
+        // Large n: 0 of 10^9 at 95 %: upper ≈ −ln(0.025)/n = 3.689e-9.
+        let large = out_of_spec_interval(0, 1_000_000_000, 0.95);
+        assert!(close(large.upper, -(0.025f64.ln()) / 1e9, 1e-13));
+        let large_some = out_of_spec_interval(12, 1_000_000_000, 0.95);
+        assert!(large_some.lower < 12e-9 && 12e-9 < large_some.upper);
+    }
+}

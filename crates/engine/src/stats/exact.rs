@@ -1,0 +1,218 @@
+//! Exact sample percentiles, Hyndman & Fan (1996) definition 7 ("Sample
+//! quantiles in statistical packages", The American Statistician 50(4),
+//! 361–365), the default of R's `quantile()` and of `numpy.percentile`:
+//! for n values and p in [0, 1], h = (n − 1)·p and the result interpolates
+//! linearly between the order statistics of 0-based ranks floor(h) and
+//! floor(h) + 1.
+//!
+//! Order statistics are found with `select_nth_unstable_by(f64::total_cmp)`
+//! (expected linear time), never with a full sort. The slice is reordered;
+//! no function here assumes anything about its order on entry.
+
+/// 0-based position h = (n − 1)·p of percent `percent` (clamped into
+/// [0, 100]) among `count` values; `None` for NaN.
+fn type7_position(count: usize, percent: f64) -> Option<(usize, f64)> {
+    if count == 0 || percent.is_nan() {
+        return None;
+    }
+    let fraction_of_range = percent.clamp(0.0, 100.0) / 100.0;
+    let position = (count - 1) as f64 * fraction_of_range;
+    let lower_rank = (position.floor() as usize).min(count - 1);
+    let weight = if lower_rank + 1 < count {
+        position - lower_rank as f64
+    } else {
+        0.0
+    };
+    Some((lower_rank, weight))
+}
+
+/// Linear interpolation between neighbouring order statistics.
+fn interpolate(lower: f64, upper: f64, weight: f64) -> f64 {
+    if weight == 0.0 || lower == upper {
+        lower
+    } else {
+        lower + weight * (upper - lower)
+    }
+}
+
+/// Smallest element by `f64::total_cmp`; `None` when empty.
+fn total_min(values: &[f64]) -> Option<f64> {
+    values
+        .iter()
+        .copied()
+        .min_by(|a, b| a.total_cmp(b))
+}
+
+/// Type 7 percentile of `sorted_or_unsorted` at `percent` (0–100, clamped;
+/// e.g. 99.865), reordering the slice in place by selection (not a full
+/// sort). `None` for an empty slice or NaN `percent`.
+///
+/// Values are ordered by `f64::total_cmp` (NaN is not expected; a positive
+/// NaN would sort above +inf, a negative one below −inf).
+pub fn percentile_type7(sorted_or_unsorted: &mut [f64], percent: f64) -> Option<f64> {
+    let (lower_rank, weight) = type7_position(sorted_or_unsorted.len(), percent)?;
+    let (_, &mut lower, above) =
+        sorted_or_unsorted.select_nth_unstable_by(lower_rank, f64::total_cmp);
+    if weight == 0.0 {
+        return Some(lower);
+    }
+    // Everything above the selected element is ≥ it, so the next order
+    // statistic is the minimum of that part.
+    let upper = total_min(above).unwrap_or(lower);
+    Some(interpolate(lower, upper, weight))
+}
+
+/// Type 7 percentiles of `values` at each of `percents` (same rules as
+/// [`percentile_type7`], same results bit for bit), in the order of
+/// `percents`. The slice is reordered in place.
+///
+/// The needed order statistics are selected in increasing rank order, each
+/// within the part of the slice above the previous one, so the cost is
+/// O(n·k) at worst for k percentiles and close to O(n·log k) in practice.
+pub fn percentiles_type7(values: &mut [f64], percents: &[f64]) -> Vec<Option<f64>> {
+    let count = values.len();
+    let positions: Vec<Option<(usize, f64)>> = percents
+        .iter()
+        .map(|&percent| type7_position(count, percent))
+        .collect();
+
+    let mut ranks: Vec<usize> = positions
+        .iter()
+        .flatten()
+        .flat_map(|&(lower_rank, weight)| {
+            let upper_rank = (weight > 0.0).then_some(lower_rank + 1);
+            std::iter::once(lower_rank).chain(upper_rank)
+        })
+        .collect();
+    ranks.sort_unstable();
+    ranks.dedup();
+
+    let mut order_statistics: Vec<(usize, f64)> = Vec::with_capacity(ranks.len());
+    let mut start = 0;
+    for rank in ranks {
+        // rank ≥ start and rank < n, so the sub-slice is never empty.
+        let value = *values[start..]
+            .select_nth_unstable_by(rank - start, f64::total_cmp)
+            .1;
+        order_statistics.push((rank, value));
+        start = rank + 1;
+    }
+
+    let lookup = |rank: usize| -> f64 {
+        order_statistics
+            .binary_search_by_key(&rank, |&(r, _)| r)
+            .map_or(f64::NAN, |index| order_statistics[index].1)
+    };
+    positions
+        .iter()
+        .map(|position| {
+            position.map(|(lower_rank, weight)| {
+                let lower = lookup(lower_rank);
+                if weight == 0.0 {
+                    lower
+                } else {
+                    interpolate(lower, lookup(lower_rank + 1), weight)
+                }
+            })
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn one_to_ten() -> Vec<f64> {
+        // Shuffled on purpose: the functions must not rely on order.
+        vec![7.0, 3.0, 10.0, 1.0, 9.0, 2.0, 8.0, 5.0, 4.0, 6.0]
+    }
+
+    #[test]
+    fn numpy_known_values() {
+        // numpy.percentile(np.arange(1, 11), p) (linear = type 7):
+        // 25 → 3.25, 50 → 5.5, 99.865 → 9.98785, 0.135 → 1.01215,
+        // 0 → 1, 100 → 10, 90 → 9.1. (h = 9·p/100, e.g. 9·0.99865 = 8.98785
+        // → 9 + 0.98785·(10 − 9).)
+        let cases = [
+            (25.0, 3.25),
+            (50.0, 5.5),
+            (99.865, 9.98785),
+            (0.135, 1.01215),
+            (0.0, 1.0),
+            (100.0, 10.0),
+            (90.0, 9.1),
+        ];
+        let mut values = one_to_ten();
+        for (percent, expected) in cases {
+            let got = percentile_type7(&mut values, percent).unwrap();
+            assert!((got - expected).abs() < 1e-12, "p {percent}: {got}");
+        }
+        let percents: Vec<f64> = cases.iter().map(|&(p, _)| p).collect();
+        let mut values = one_to_ten();
+        let all = percentiles_type7(&mut values, &percents);
+        for ((percent, expected), got) in cases.iter().zip(&all) {
+            let got = got.unwrap();
+            assert!((got - expected).abs() < 1e-12, "p {percent}: {got}");
+        }
+    }
+
+    #[test]
+    fn odd_count_and_duplicates() {
+        // numpy.percentile([5, 1, 3, 3, 9], [10, 50, 75]) = [1.8, 3.0, 5.0]:
+        // sorted 1 3 3 5 9, h = 4·p: 0.4 → 1 + 0.4·2, 2 → 3, 3 → 5.
+        let mut values = vec![5.0, 1.0, 3.0, 3.0, 9.0];
+        let got = percentiles_type7(&mut values, &[10.0, 50.0, 75.0]);
+        assert!((got[0].unwrap() - 1.8).abs() < 1e-12);
+        assert_eq!(got[1], Some(3.0));
+        assert_eq!(got[2], Some(5.0));
+    }
+
+    #[test]
+    fn empty_single_nan_and_clamping() {
+        assert_eq!(percentile_type7(&mut [], 50.0), None);
+        assert_eq!(percentile_type7(&mut [4.0], 50.0), Some(4.0));
+        assert_eq!(percentile_type7(&mut [4.0, 6.0], f64::NAN), None);
+        assert_eq!(percentile_type7(&mut [4.0, 6.0], -5.0), Some(4.0));
+        assert_eq!(percentile_type7(&mut [4.0, 6.0], 500.0), Some(6.0));
+        assert_eq!(
+            percentiles_type7(&mut [], &[1.0, 50.0]),
+            vec![None, None]
+        );
+        assert_eq!(
+            percentiles_type7(&mut [1.0, 2.0], &[f64::NAN, 50.0]),
+            vec![None, Some(1.5)]
+        );
+    }
+
+    #[test]
+    fn batch_matches_single_calls_bit_for_bit() {
+        // LCG data (Knuth MMIX constants) with many ties.
+        let mut state = 12345u64;
+        let data: Vec<f64> = (0..5001)
+            .map(|_| {
+                state = state
+                    .wrapping_mul(6_364_136_223_846_793_005)
+                    .wrapping_add(1_442_695_040_888_963_407);
+                ((state >> 40) % 1000) as f64 / 7.0 - 50.0
+            })
+            .collect();
+        let percents = [
+            99.865, 0.135, 50.0, 0.0, 100.0, 25.0, 75.0, 50.0, 1.0, 99.0, 33.3,
+        ];
+        let mut batch_values = data.clone();
+        let batch = percentiles_type7(&mut batch_values, &percents);
+        let mut sorted = data.clone();
+        sorted.sort_by(f64::total_cmp);
+        for (&percent, got) in percents.iter().zip(&batch) {
+            let mut single_values = data.clone();
+            let single = percentile_type7(&mut single_values, percent).unwrap();
+            assert_eq!(got.unwrap().to_bits(), single.to_bits());
+            // Against a full sort (reference implementation of type 7).
+            let h = 5000.0 * (percent / 100.0);
+            let lower = sorted[h.floor() as usize];
+            let upper = sorted[(h.floor() as usize + 1).min(5000)];
+            let reference = lower + (h - h.floor()) * (upper - lower);
+            assert!((single - reference).abs() < 1e-9);
+        }
+    }
+}

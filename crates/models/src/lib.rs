@@ -1,0 +1,124 @@
+//! rvtol-models: the physical error models of RV reducers behind one small trait.
+//!
+//! A model is a pure function from one row of named inputs to named outputs
+//! ([`ErrorModel::evaluate`]); it owns no randomness and no I/O. Its fixed parameters
+//! (geometry) are checked once, when the engine builds it from the scenario through the
+//! registry ([`all`], [`find`]); `evaluate` never re-checks them.
+//!
+//! Adding a model touches three places: its file here, one line in [`all`], one scenario.
+
+mod geometric_hysteresis;
+mod linear_stack;
+mod params;
+
+pub use geometric_hysteresis::{tilt_from_deflection, GeometricHysteresis};
+pub use linear_stack::LinearStack;
+pub use params::{ModelError, ModelParams, ParamValue};
+
+/// Arcminutes per radian, 180·60/π (000 Eq. 5, 13, 18 carry this factor).
+pub const ARCMIN_PER_RAD: f64 = 180.0 * 60.0 / std::f64::consts::PI;
+
+/// A named model input with its unit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InputSpec {
+    /// Name, with the unit as suffix (`pin_radius_error_mm`).
+    pub name: String,
+    /// Unit (`mm`, `rad`, …; `any` when the model does not care).
+    pub unit: String,
+    /// One line saying what it is and where it comes from.
+    pub description: &'static str,
+}
+
+/// Whether an output is a continuous quantity or a 0/1 event indicator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OutputKind {
+    /// A continuous quantity: moments, percentiles, histogram, capability.
+    Continuous,
+    /// 1 when an event happened in the sample, else 0: the report gives its fraction with
+    /// a confidence interval.
+    Indicator,
+}
+
+/// A named model output with its unit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OutputSpec {
+    /// Name, with the unit as suffix (`hysteresis_arcmin`).
+    pub name: String,
+    /// Unit (`arcmin`, `fraction`, …).
+    pub unit: String,
+    /// One line saying what it is.
+    pub description: &'static str,
+    /// Continuous or indicator.
+    pub kind: OutputKind,
+}
+
+/// A fixed parameter a model reads from the scenario.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ParamSpec {
+    /// Key in the scenario's `params` object.
+    pub name: &'static str,
+    /// Unit.
+    pub unit: &'static str,
+    /// What it is.
+    pub description: &'static str,
+    /// Default value when the scenario omits it; `None` means required.
+    pub default: Option<f64>,
+}
+
+/// A physical error model: a pure function from inputs to outputs.
+pub trait ErrorModel: Send + Sync {
+    /// Registry name (`geometric_hysteresis`).
+    fn name(&self) -> &'static str;
+    /// Inputs it reads, in the order of the `inputs` row.
+    fn inputs(&self) -> &[InputSpec];
+    /// Outputs it writes, in the order of the `outputs` row.
+    fn outputs(&self) -> &[OutputSpec];
+    /// Evaluates one sample. `inputs.len() == self.inputs().len()`,
+    /// `outputs.len() == self.outputs().len()`. No allocation, no panic on finite input.
+    fn evaluate(&self, inputs: &[f64], outputs: &mut [f64]);
+    /// Evaluates a chunk of samples, row-major in both buffers. Implementations override
+    /// it only when a batch form is faster; the default loops over [`Self::evaluate`],
+    /// so the per-sample call is static, not dynamic, dispatch.
+    fn evaluate_batch(&self, inputs: &[f64], outputs: &mut [f64]) {
+        let (n_in, n_out) = (self.inputs().len(), self.outputs().len());
+        if n_out == 0 {
+            return;
+        }
+        if n_in == 0 {
+            for out in outputs.chunks_exact_mut(n_out) {
+                self.evaluate(&[], out);
+            }
+            return;
+        }
+        for (row, out) in inputs
+            .chunks_exact(n_in)
+            .zip(outputs.chunks_exact_mut(n_out))
+        {
+            self.evaluate(row, out);
+        }
+    }
+}
+
+/// How a model is built from its scenario parameters, and how it is described.
+pub struct ModelEntry {
+    /// Registry name.
+    pub name: &'static str,
+    /// One line: what it computes and its source document.
+    pub summary: &'static str,
+    /// Its fixed parameters.
+    pub params: &'static [ParamSpec],
+    /// Builds it from checked parameters.
+    pub build: fn(&ModelParams) -> Result<Box<dyn ErrorModel>, ModelError>,
+    /// Parameters of a representative instance, for `rvtol models`.
+    pub example_params: fn() -> ModelParams,
+}
+
+/// Every model rvtol knows, in the order `rvtol models` lists them.
+pub fn all() -> &'static [ModelEntry] {
+    &[geometric_hysteresis::ENTRY, linear_stack::ENTRY]
+}
+
+/// The registry entry of a model by name.
+pub fn find(name: &str) -> Option<&'static ModelEntry> {
+    all().iter().find(|entry| entry.name == name)
+}

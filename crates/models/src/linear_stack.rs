@@ -1,0 +1,148 @@
+//! `linear_stack`: a linear tolerance stack y = c + Σ a_i·x_i over named inputs.
+//!
+//! Users run their own one-dimensional stacks with it, and it checks the whole engine
+//! against a closed form: with jointly normal inputs of mean μ and covariance Σ,
+//! E[y] = c + aᵀμ and sd(y) = √(aᵀΣa) exactly (validation.md, "Checks that need no
+//! document").
+//!
+//! Parameters: `coefficients` (object: input name → a_i, in the unit of y per unit of the
+//! input), `constant` (c, default 0), `output` (name of y, default `stack`), `unit` (unit
+//! of y, default `mm`).
+
+use crate::{
+    ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputKind, OutputSpec, ParamSpec,
+    ParamValue,
+};
+
+/// y = c + Σ a_i·x_i.
+#[derive(Debug, Clone)]
+pub struct LinearStack {
+    coefficients: Vec<f64>,
+    constant: f64,
+    inputs: Vec<InputSpec>,
+    outputs: Vec<OutputSpec>,
+}
+
+const PARAMS: &[ParamSpec] = &[
+    ParamSpec {
+        name: "coefficients",
+        unit: "output unit per input unit",
+        description: "object mapping each input name to its coefficient a_i",
+        default: None,
+    },
+    ParamSpec {
+        name: "constant",
+        unit: "output unit",
+        description: "constant term c",
+        default: Some(0.0),
+    },
+];
+
+/// Registry entry.
+pub const ENTRY: ModelEntry = ModelEntry {
+    name: "linear_stack",
+    summary: "linear tolerance stack y = c + Σ a_i·x_i (closed form: mean c + aᵀμ, sd √(aᵀΣa)); params also take `output` (name, default \"stack\") and `unit` (default \"mm\")",
+    params: PARAMS,
+    build: |params| Ok(Box::new(LinearStack::from_params(params)?)),
+    example_params: || {
+        ModelParams::new().with(
+            "coefficients",
+            ParamValue::Named(vec![("x1".into(), 1.0), ("x2".into(), -2.0)]),
+        )
+    },
+};
+
+impl LinearStack {
+    /// Builds the stack from its parameters.
+    pub fn from_params(params: &ModelParams) -> Result<Self, ModelError> {
+        let named = params.named("coefficients")?;
+        if named.is_empty() {
+            return Err(ModelError::new("coefficients", "needs at least one input"));
+        }
+        let mut inputs = Vec::with_capacity(named.len());
+        let mut coefficients = Vec::with_capacity(named.len());
+        for (name, a) in named {
+            if !a.is_finite() {
+                return Err(ModelError::new(
+                    format!("coefficients.{name}"),
+                    format!("must be a finite number, got {a}"),
+                ));
+            }
+            inputs.push(InputSpec {
+                name: name.clone(),
+                unit: "any".into(),
+                description: "stack input",
+            });
+            coefficients.push(*a);
+        }
+        let constant = params.number("constant", Some(0.0))?;
+        let output = params.text("output", "stack")?;
+        if output.is_empty() {
+            return Err(ModelError::new("output", "must not be empty"));
+        }
+        let unit = params.text("unit", "mm")?;
+        params.reject_unknown(&["coefficients", "constant", "output", "unit"])?;
+        Ok(LinearStack {
+            coefficients,
+            constant,
+            inputs,
+            outputs: vec![OutputSpec {
+                name: output,
+                unit,
+                description: "c + Σ a_i·x_i",
+                kind: OutputKind::Continuous,
+            }],
+        })
+    }
+}
+
+impl ErrorModel for LinearStack {
+    fn name(&self) -> &'static str {
+        "linear_stack"
+    }
+
+    fn inputs(&self) -> &[InputSpec] {
+        &self.inputs
+    }
+
+    fn outputs(&self) -> &[OutputSpec] {
+        &self.outputs
+    }
+
+    #[inline]
+    fn evaluate(&self, inputs: &[f64], outputs: &mut [f64]) {
+        let mut y = self.constant;
+        for (a, x) in self.coefficients.iter().zip(inputs) {
+            y += a * x;
+        }
+        outputs[0] = y;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn evaluates_the_sum() {
+        let params = ModelParams::new()
+            .with(
+                "coefficients",
+                ParamValue::Named(vec![("a".into(), 2.0), ("b".into(), -0.5)]),
+            )
+            .with_number("constant", 1.0);
+        let model = LinearStack::from_params(&params).unwrap();
+        let mut out = [0.0];
+        model.evaluate(&[3.0, 4.0], &mut out);
+        assert_eq!(out[0], 1.0 + 6.0 - 2.0);
+    }
+
+    #[test]
+    fn unknown_parameter_is_named() {
+        let params = ModelParams::new()
+            .with("coefficients", ParamValue::Named(vec![("a".into(), 1.0)]))
+            .with_number("gain", 1.0);
+        let err = LinearStack::from_params(&params).unwrap_err();
+        assert_eq!(err.key, "gain");
+    }
+}

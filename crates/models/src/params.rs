@@ -1,0 +1,151 @@
+//! Model parameters as handed over by the engine (no serde here), with typed accessors that
+//! record which keys were read, so unknown keys are reported, and error messages that the
+//! engine prefixes with the JSON path of the `params` object.
+
+use std::cell::RefCell;
+use std::collections::{BTreeMap, BTreeSet};
+
+use thiserror::Error;
+
+/// A parameter value: a number, or an object of named numbers (for example the
+/// coefficients of `linear_stack`).
+#[derive(Debug, Clone, PartialEq)]
+pub enum ParamValue {
+    /// A number.
+    Number(f64),
+    /// Named numbers, in the scenario's order.
+    Named(Vec<(String, f64)>),
+    /// A text (a name or a unit).
+    Text(String),
+}
+
+/// An invalid model parameter: `key` is relative to the model's `params` object.
+#[derive(Debug, Clone, PartialEq, Error)]
+#[error("{key}: {reason}")]
+pub struct ModelError {
+    /// Key path inside `params` (`z_c`, `coefficients.x1`).
+    pub key: String,
+    /// What is wrong.
+    pub reason: String,
+}
+
+impl ModelError {
+    /// A new error for `key`.
+    pub fn new(key: impl Into<String>, reason: impl Into<String>) -> Self {
+        ModelError {
+            key: key.into(),
+            reason: reason.into(),
+        }
+    }
+}
+
+/// The parameters of one model in a scenario.
+#[derive(Debug, Clone, Default)]
+pub struct ModelParams {
+    values: BTreeMap<String, ParamValue>,
+    read: RefCell<BTreeSet<String>>,
+}
+
+impl ModelParams {
+    /// Empty parameters.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Adds a value (builder style).
+    pub fn with(mut self, key: &str, value: ParamValue) -> Self {
+        self.values.insert(key.to_string(), value);
+        self
+    }
+
+    /// Adds a number (builder style).
+    pub fn with_number(self, key: &str, value: f64) -> Self {
+        self.with(key, ParamValue::Number(value))
+    }
+
+    /// Inserts a value.
+    pub fn insert(&mut self, key: String, value: ParamValue) {
+        self.values.insert(key, value);
+    }
+
+    /// A finite number, or the default when absent and a default exists.
+    pub fn number(&self, key: &str, default: Option<f64>) -> Result<f64, ModelError> {
+        self.read.borrow_mut().insert(key.to_string());
+        match self.values.get(key) {
+            Some(ParamValue::Number(v)) if v.is_finite() => Ok(*v),
+            Some(ParamValue::Number(v)) => Err(ModelError::new(
+                key,
+                format!("must be a finite number, got {v}"),
+            )),
+            Some(ParamValue::Named(_)) => {
+                Err(ModelError::new(key, "must be a number, got an object"))
+            }
+            Some(ParamValue::Text(_)) => {
+                Err(ModelError::new(key, "must be a number, got a string"))
+            }
+            None => default.ok_or_else(|| ModelError::new(key, "required parameter is missing")),
+        }
+    }
+
+    /// A number that must be strictly positive.
+    pub fn positive(&self, key: &str, default: Option<f64>) -> Result<f64, ModelError> {
+        let value = self.number(key, default)?;
+        if value > 0.0 {
+            Ok(value)
+        } else {
+            Err(ModelError::new(
+                key,
+                format!("must be positive, got {value}"),
+            ))
+        }
+    }
+
+    /// A number that must be a positive whole number (a tooth or pin count).
+    pub fn count(&self, key: &str, default: Option<f64>) -> Result<u32, ModelError> {
+        let value = self.number(key, default)?;
+        if value >= 1.0 && value.fract() == 0.0 && value <= u32::MAX as f64 {
+            Ok(value as u32)
+        } else {
+            Err(ModelError::new(
+                key,
+                format!("must be a positive whole number, got {value}"),
+            ))
+        }
+    }
+
+    /// An object of named numbers.
+    pub fn named(&self, key: &str) -> Result<&[(String, f64)], ModelError> {
+        self.read.borrow_mut().insert(key.to_string());
+        match self.values.get(key) {
+            Some(ParamValue::Named(entries)) => Ok(entries),
+            Some(_) => Err(ModelError::new(key, "must be an object of named numbers")),
+            None => Err(ModelError::new(key, "required parameter is missing")),
+        }
+    }
+
+    /// A text, or the default when absent.
+    pub fn text(&self, key: &str, default: &str) -> Result<String, ModelError> {
+        self.read.borrow_mut().insert(key.to_string());
+        match self.values.get(key) {
+            Some(ParamValue::Text(text)) => Ok(text.clone()),
+            Some(_) => Err(ModelError::new(key, "must be a string")),
+            None => Ok(default.to_string()),
+        }
+    }
+
+    /// Fails on the first key that no accessor read (call after building).
+    pub fn reject_unknown(&self, known: &[&str]) -> Result<(), ModelError> {
+        let read = self.read.borrow();
+        match self
+            .values
+            .keys()
+            .find(|k| !read.contains(k.as_str()) && !known.contains(&k.as_str()))
+        {
+            Some(key) => Err(ModelError::new(
+                key.clone(),
+                format!("unknown parameter; expected one of: {}", known.join(", ")),
+            )),
+            None => Ok(()),
+        }
+    }
+}
