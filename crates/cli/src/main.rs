@@ -1,1 +1,289 @@
-fn main() {}
+//! `rvtol`: the command-line interface. Parses arguments (clap), calls the engine, prints
+//! the report on stdout and writes report files atomically. Progress goes to stderr, only
+//! when it is a terminal and `--quiet` is not given.
+//!
+//! Exit codes: 0 success; 1 a check or gate failed; 2 bad input or usage.
+
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{Context, Result};
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rvtol_engine::{
+    nominal, run, NominalReport, RunReport, RunSettings, Scenario, ScenarioError,
+    DEFAULT_EXACT_PERCENTILE_LIMIT,
+};
+
+/// Monte Carlo tolerance and deviation statistics for RV reducers.
+#[derive(Debug, Parser)]
+#[command(name = "rvtol", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Run the Monte Carlo simulation of a scenario and report its output distributions.
+    Run {
+        /// Scenario file (JSON).
+        scenario: PathBuf,
+        /// Number of samples (default: the scenario's `samples`, else 1,000,000).
+        #[arg(long)]
+        samples: Option<u64>,
+        /// Seed of the random streams (default: the scenario's `seed`, else 1).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Worker threads (default: all cores). Results do not depend on it.
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Write the JSON report to PATH ("-" for stdout instead of the table).
+        #[arg(long, value_name = "PATH")]
+        json: Option<PathBuf>,
+        /// Exact percentiles while samples × outputs stays at or below this many values;
+        /// a bounded-memory sketch beyond it.
+        #[arg(long, value_name = "VALUES", default_value_t = DEFAULT_EXACT_PERCENTILE_LIMIT)]
+        exact_percentile_limit: u64,
+        /// No progress bar.
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Evaluate every model with every deviation at its mean.
+    Nominal {
+        /// Scenario file (JSON).
+        scenario: PathBuf,
+        /// Write the JSON report to PATH ("-" for stdout instead of the table).
+        #[arg(long, value_name = "PATH")]
+        json: Option<PathBuf>,
+    },
+    /// Check a scenario file without running it.
+    Validate {
+        /// Scenario file (JSON).
+        scenario: PathBuf,
+    },
+    /// List the models with their parameters, inputs and outputs.
+    Models,
+}
+
+/// An error in the user's input, reported as one line.
+#[derive(Debug)]
+struct BadInput(String);
+
+impl std::fmt::Display for BadInput {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for BadInput {}
+
+fn bad_scenario(path: &Path, err: ScenarioError) -> anyhow::Error {
+    BadInput(format!("{}: {err}", path.display())).into()
+}
+
+fn load(path: &Path) -> Result<Scenario> {
+    Scenario::load(path).map_err(|err| bad_scenario(path, err))
+}
+
+/// Writes `contents` to `path` through a temporary file in the same directory and a
+/// rename, so an interrupted run never leaves a half-written report.
+fn write_atomically(path: &Path, contents: &str) -> Result<()> {
+    let directory = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let file_name = path
+        .file_name()
+        .with_context(|| format!("{} is not a file path", path.display()))?;
+    let temporary = directory.join(format!(
+        ".{}.tmp-{}",
+        file_name.to_string_lossy(),
+        std::process::id()
+    ));
+    let result = (|| -> std::io::Result<()> {
+        let mut file = std::fs::File::create(&temporary)?;
+        file.write_all(contents.as_bytes())?;
+        file.sync_all()?;
+        std::fs::rename(&temporary, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&temporary);
+    }
+    result.with_context(|| format!("cannot write {}", path.display()))
+}
+
+fn emit(
+    json_path: Option<&Path>,
+    json: impl FnOnce() -> String,
+    text: impl FnOnce() -> String,
+) -> Result<()> {
+    let mut stdout = std::io::stdout().lock();
+    match json_path {
+        Some(p) if p == Path::new("-") => stdout.write_all(json().as_bytes())?,
+        Some(p) => {
+            write_atomically(p, &json())?;
+            stdout.write_all(text().as_bytes())?;
+        }
+        None => stdout.write_all(text().as_bytes())?,
+    }
+    Ok(())
+}
+
+fn progress_bar(samples: u64, quiet: bool) -> ProgressBar {
+    if quiet || !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::with_draw_target(Some(samples), ProgressDrawTarget::stderr());
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} {percent:>3}% {human_pos}/{human_len} samples, eta {eta}")
+            .expect("valid template"),
+    );
+    bar
+}
+
+#[allow(clippy::too_many_arguments)]
+fn command_run(
+    scenario_path: &Path,
+    samples: Option<u64>,
+    seed: Option<u64>,
+    threads: Option<usize>,
+    json: Option<&Path>,
+    exact_percentile_limit: u64,
+    quiet: bool,
+) -> Result<()> {
+    let scenario = load(scenario_path)?;
+    let samples = samples.unwrap_or(scenario.samples);
+    if samples == 0 {
+        return Err(BadInput("--samples: must be at least 1".into()).into());
+    }
+    if threads == Some(0) {
+        return Err(BadInput("--threads: must be at least 1".into()).into());
+    }
+    let settings = RunSettings {
+        samples,
+        seed: seed.unwrap_or(scenario.seed),
+        exact_percentile_limit,
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or(0))
+        .build()
+        .context("cannot start the worker threads")?;
+    let bar = progress_bar(samples, quiet);
+    let started = std::time::Instant::now();
+    let result = pool
+        .install(|| run(&scenario, settings, &|n| bar.inc(n)))
+        .map_err(|err| bad_scenario(scenario_path, err))?;
+    bar.finish_and_clear();
+    let elapsed = started.elapsed();
+    let report = RunReport::new(&scenario, result);
+    emit(json, || report.to_json(), || report.to_text())?;
+    if !quiet && std::io::stderr().is_terminal() {
+        eprintln!(
+            "{} samples in {:.2} s ({:.1} ns per sample)",
+            samples,
+            elapsed.as_secs_f64(),
+            elapsed.as_secs_f64() * 1e9 / samples as f64
+        );
+    }
+    Ok(())
+}
+
+fn command_models() -> Result<()> {
+    let mut out = String::new();
+    for entry in rvtol_models::all() {
+        out.push_str(&format!("{}\n  {}\n", entry.name, entry.summary));
+        out.push_str("  parameters:\n");
+        for p in entry.params {
+            let default = p
+                .default
+                .map(|d| format!(" (default {d})"))
+                .unwrap_or_default();
+            out.push_str(&format!(
+                "    {:<34} {:<6} {}{default}\n",
+                p.name, p.unit, p.description
+            ));
+        }
+        let model = (entry.build)(&(entry.example_params)())
+            .map_err(|err| anyhow::anyhow!("example of {} does not build: {err}", entry.name))?;
+        out.push_str("  inputs:\n");
+        for i in model.inputs() {
+            out.push_str(&format!(
+                "    {:<34} {:<6} {}\n",
+                i.name, i.unit, i.description
+            ));
+        }
+        out.push_str("  outputs:\n");
+        for o in model.outputs() {
+            out.push_str(&format!(
+                "    {:<34} {:<8} {}\n",
+                o.name, o.unit, o.description
+            ));
+        }
+        out.push('\n');
+    }
+    std::io::stdout().lock().write_all(out.as_bytes())?;
+    Ok(())
+}
+
+fn dispatch(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Run {
+            scenario,
+            samples,
+            seed,
+            threads,
+            json,
+            exact_percentile_limit,
+            quiet,
+        } => command_run(
+            &scenario,
+            samples,
+            seed,
+            threads,
+            json.as_deref(),
+            exact_percentile_limit,
+            quiet,
+        ),
+        Command::Nominal {
+            scenario: path,
+            json,
+        } => {
+            let scenario = load(&path)?;
+            let report = NominalReport::new(&scenario, &nominal(&scenario));
+            emit(json.as_deref(), || report.to_json(), || report.to_text())
+        }
+        Command::Validate { scenario: path } => {
+            let scenario = load(&path)?;
+            println!(
+                "{}: valid ({} input columns, {} models, {} outputs)",
+                path.display(),
+                scenario.input_space.n_columns(),
+                scenario.models.len(),
+                scenario.outputs.len()
+            );
+            Ok(())
+        }
+        Command::Models => command_models(),
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(err) => {
+            let _ = err.print();
+            return ExitCode::from(if err.use_stderr() { 2 } else { 0 });
+        }
+    };
+    match dispatch(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(err) => {
+            eprintln!("error: {err:#}");
+            // Every failure so far is bad input or usage (a scenario, a path); exit code 1 is
+            // kept for checks and gates that fail.
+            ExitCode::from(2)
+        }
+    }
+}

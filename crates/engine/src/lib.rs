@@ -1,1 +1,16 @@
-//! placeholder
+//! rvtol-engine: from a scenario file to statistics.
+//!
+//! Data flows one way: [`scenario`] loads and validates the JSON into a [`Scenario`]
+//! (input space + bound models + outputs); [`run`] draws chunks in parallel under the
+//! reproducibility contract and folds model outputs into [`stats`] accumulators;
+//! [`report`] turns the result into JSON and text. Nothing downstream reaches back into
+//! the scenario or the sampler, and the engine never prints.
+
+pub mod report;
+pub mod run;
+pub mod scenario;
+pub mod stats;
+
+pub use report::{NominalReport, RunReport};
+pub use run::{nominal, run, RunResult, RunSettings, DEFAULT_EXACT_PERCENTILE_LIMIT};
+pub use scenario::{Scenario, ScenarioError};

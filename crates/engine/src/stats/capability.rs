@@ -11,14 +11,20 @@
 //!   or fiducial limits illustrated in the case of the binomial",
 //!   Biometrika 26(4): the exact two-sided interval
 //!   [B(α/2; k, n − k + 1), B(1 − α/2; k + 1, n − k)] with B the Beta
-//!   quantile function.
+//!   quantile function. The Beta quantile is found by bisection on the
+//!   regularized incomplete beta function I_x(a, b), evaluated with the
+//!   continued fraction of Numerical Recipes (Press et al., 3rd ed., §6.4,
+//!   modified Lentz method) and `statrs` log-gamma. (statrs 0.18's own
+//!   `Beta::inverse_cdf` does not terminate for shape parameters around
+//!   10^9, and its `beta_reg` stops after 140 terms, which is inaccurate
+//!   when both shapes are large; sample counts here reach 10^9.)
 //!
 //! A zero-width spread (σ = 0 or coinciding percentiles) never gives NaN: an
 //! index is +inf when the centre is strictly inside the limit, −inf when it
 //! is strictly outside and 0 when it is exactly on the limit (the value of
 //! the index for any positive spread).
 
-use statrs::distribution::{Beta, ContinuousCDF};
+use statrs::function::gamma::ln_gamma;
 
 /// Specification limits; either may be absent (one-sided specification).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -54,11 +60,7 @@ pub struct ProportionEstimate {
 impl ProportionEstimate {
     /// The estimate in parts per million: (fraction, lower, upper) · 10^6.
     pub fn to_ppm(&self) -> (f64, f64, f64) {
-        (
-            self.fraction * 1e6,
-            self.lower * 1e6,
-            self.upper * 1e6,
-        )
+        (self.fraction * 1e6, self.lower * 1e6, self.upper * 1e6)
     }
 }
 
@@ -156,29 +158,125 @@ pub fn out_of_spec_interval(n_out: u64, n: u64, confidence: f64) -> ProportionEs
     let tail = (1.0 - confidence) / 2.0;
     let successes = n_out as f64;
     let failures = (n - n_out) as f64;
-    let beta_quantile = |a: f64, b: f64, probability: f64, fallback: f64| {
-        Beta::new(a, b)
-            .map(|beta| beta.inverse_cdf(probability.clamp(0.0, 1.0)))
-            .ok()
-            .filter(|value| value.is_finite())
-            .map_or(fallback, |value| value.clamp(0.0, 1.0))
-    };
     let fraction = successes / n as f64;
     let lower = if n_out == 0 {
         0.0
     } else {
-        beta_quantile(successes, failures + 1.0, tail, 0.0)
+        beta_quantile(successes, failures + 1.0, tail)
     };
     let upper = if n_out == n {
         1.0
     } else {
-        beta_quantile(successes + 1.0, failures, 1.0 - tail, 1.0)
+        beta_quantile(successes + 1.0, failures, 1.0 - tail)
     };
     ProportionEstimate {
         fraction,
         lower: lower.min(fraction),
         upper: upper.max(fraction),
     }
+}
+
+/// Largest number of continued-fraction terms; convergence needs about
+/// sqrt(max(a, b)) terms, i.e. a few 10^4 for a and b near 10^9.
+const MAX_CONTINUED_FRACTION_TERMS: u32 = 1_000_000;
+
+/// Continued fraction for I_x(a, b) (Numerical Recipes §6.4, `betacf`),
+/// modified Lentz evaluation. Converges fast for x < (a + 1) / (a + b + 2).
+fn incomplete_beta_continued_fraction(a: f64, b: f64, x: f64) -> f64 {
+    let tiny = f64::MIN_POSITIVE / f64::EPSILON;
+    let guard = |value: f64| if value.abs() < tiny { tiny } else { value };
+    let sum = a + b;
+    let mut c = 1.0;
+    let mut d = 1.0 / guard(1.0 - sum * x / (a + 1.0));
+    let mut result = d;
+    for term in 1..=MAX_CONTINUED_FRACTION_TERMS {
+        let m = f64::from(term);
+        let two_m = 2.0 * m;
+        let even = m * (b - m) * x / ((a - 1.0 + two_m) * (a + two_m));
+        d = 1.0 / guard(1.0 + even * d);
+        c = guard(1.0 + even / c);
+        result *= d * c;
+        let odd = -(a + m) * (sum + m) * x / ((a + two_m) * (a + 1.0 + two_m));
+        d = 1.0 / guard(1.0 + odd * d);
+        c = guard(1.0 + odd / c);
+        let step = d * c;
+        result *= step;
+        if (step - 1.0).abs() <= 1e-15 {
+            break;
+        }
+    }
+    result
+}
+
+/// Stirling-series remainder ln Γ(z) − [(z − ½)·ln z − z + ½·ln 2π]
+/// (Abramowitz & Stegun 6.1.41), truncation error below 1e-12 for z ≥ 10.
+fn stirling_remainder(z: f64) -> f64 {
+    let inverse = 1.0 / z;
+    let inverse_squared = inverse * inverse;
+    inverse
+        * (1.0 / 12.0
+            - inverse_squared
+                * (1.0 / 360.0 - inverse_squared * (1.0 / 1260.0 - inverse_squared / 1680.0)))
+}
+
+/// ln B(a, b) = ln Γ(a) + ln Γ(b) − ln Γ(a + b). When the larger argument
+/// is ≥ 10, ln Γ(large + small) − ln Γ(large) is taken from the Stirling
+/// series as a difference (no cancellation between two ~10^10 log-gammas
+/// when n ~ 10^9); otherwise plain log-gammas.
+fn ln_beta_function(a: f64, b: f64) -> f64 {
+    let (small, large) = if a <= b { (a, b) } else { (b, a) };
+    if large < 10.0 {
+        return ln_gamma(a) + ln_gamma(b) - ln_gamma(a + b);
+    }
+    let log_gamma_difference =
+        (large - 0.5) * (small / large).ln_1p() + small * (large + small).ln() - small
+            + (stirling_remainder(large + small) - stirling_remainder(large));
+    ln_gamma(small) - log_gamma_difference
+}
+
+/// Regularized incomplete beta function I_x(a, b) for a, b > 0, the CDF of
+/// the Beta(a, b) distribution at x (Numerical Recipes §6.4, `betai`).
+fn regularized_incomplete_beta(a: f64, b: f64, x: f64) -> f64 {
+    if x <= 0.0 {
+        return 0.0;
+    }
+    if x >= 1.0 {
+        return 1.0;
+    }
+    let log_prefactor = a * x.ln() + b * (-x).ln_1p() - ln_beta_function(a, b);
+    let prefactor = log_prefactor.exp();
+    let value = if x < (a + 1.0) / (a + b + 2.0) {
+        prefactor * incomplete_beta_continued_fraction(a, b, x) / a
+    } else {
+        1.0 - prefactor * incomplete_beta_continued_fraction(b, a, 1.0 - x) / b
+    };
+    value.clamp(0.0, 1.0)
+}
+
+/// Quantile of Beta(a, b) at `probability`, by bisection on
+/// [`regularized_incomplete_beta`] to a relative precision of 1e-14.
+fn beta_quantile(a: f64, b: f64, probability: f64) -> f64 {
+    if probability.is_nan() || probability <= 0.0 {
+        return 0.0;
+    }
+    if probability >= 1.0 {
+        return 1.0;
+    }
+    let (mut low, mut high) = (0.0_f64, 1.0_f64);
+    // At most ~1100 halvings reach the smallest subnormal; the relative
+    // stopping rule ends far earlier (about log2(1/x) + 47 steps).
+    for _ in 0..1100 {
+        let middle = 0.5 * (low + high);
+        if high - low <= 1e-14 * high || middle <= low || middle >= high {
+            break;
+        }
+        if regularized_incomplete_beta(a, b, middle) < probability {
+            low = middle;
+        } else {
+            high = middle;
+        }
+    }
+    0.5 * (low + high)
 }
 
 #[cfg(test)]
@@ -306,5 +404,46 @@ mod tests {
         assert!(close(large.upper, -(0.025f64.ln()) / 1e9, 1e-13));
         let large_some = out_of_spec_interval(12, 1_000_000_000, 0.95);
         assert!(large_some.lower < 12e-9 && 12e-9 < large_some.upper);
+        // Half out of 10^6: symmetric interval around 0.5, half-width close to
+        // the normal approximation 1.959964·sqrt(0.25/10^6) = 9.79982e-4
+        // (Clopper–Pearson is slightly wider).
+        let half = out_of_spec_interval(500_000, 1_000_000, 0.95);
+        assert!(close(0.5 - half.lower, half.upper - 0.5, 1e-9));
+        assert!(close(half.upper - 0.5, 9.79982e-4, 2e-6));
+    }
+
+    #[test]
+    fn incomplete_beta_closed_forms() {
+        // I_x(1, b) = 1 − (1 − x)^b and I_x(a, 1) = x^a (Abramowitz & Stegun
+        // 26.5.x special cases; direct integration of the Beta density).
+        for (b, x) in [(1.0, 0.3_f64), (10.0, 0.05), (1e9, 3e-9), (2.5, 0.9)] {
+            let expected = -(b * (-x).ln_1p()).exp_m1();
+            let got = regularized_incomplete_beta(1.0, b, x);
+            assert!(
+                close(got, expected, 1e-9 * expected),
+                "{b} {x}: {got} {expected}"
+            );
+        }
+        for (a, x) in [(3.0, 0.5_f64), (7.5, 0.99)] {
+            assert!(close(
+                regularized_incomplete_beta(a, 1.0, x),
+                x.powf(a),
+                1e-12
+            ));
+        }
+        // ln B(a, b) against direct log-gammas where those are accurate, and
+        // ln B(1, b) = −ln b exactly (B(1, b) = 1/b).
+        for (a, b) in [(3.0, 12.0), (0.5, 40.0), (25.0, 30.0), (2.0, 9.0)] {
+            let direct = ln_gamma(a) + ln_gamma(b) - ln_gamma(a + b);
+            assert!(close(ln_beta_function(a, b), direct, 1e-11), "{a} {b}");
+        }
+        assert!(close(ln_beta_function(1.0, 1e9), -(1e9f64.ln()), 1e-12));
+        // Symmetry I_0.5(a, a) = 0.5 even for large a.
+        for a in [2.0, 1e3, 5e5, 5e8] {
+            assert!(
+                close(regularized_incomplete_beta(a, a, 0.5), 0.5, 1e-6),
+                "{a}"
+            );
+        }
     }
 }

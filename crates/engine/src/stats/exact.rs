@@ -37,10 +37,7 @@ fn interpolate(lower: f64, upper: f64, weight: f64) -> f64 {
 
 /// Smallest element by `f64::total_cmp`; `None` when empty.
 fn total_min(values: &[f64]) -> Option<f64> {
-    values
-        .iter()
-        .copied()
-        .min_by(|a, b| a.total_cmp(b))
+    values.iter().copied().min_by(|a, b| a.total_cmp(b))
 }
 
 /// Type 7 percentile of `sorted_or_unsorted` at `percent` (0–100, clamped;
@@ -174,10 +171,7 @@ mod tests {
         assert_eq!(percentile_type7(&mut [4.0, 6.0], f64::NAN), None);
         assert_eq!(percentile_type7(&mut [4.0, 6.0], -5.0), Some(4.0));
         assert_eq!(percentile_type7(&mut [4.0, 6.0], 500.0), Some(6.0));
-        assert_eq!(
-            percentiles_type7(&mut [], &[1.0, 50.0]),
-            vec![None, None]
-        );
+        assert_eq!(percentiles_type7(&mut [], &[1.0, 50.0]), vec![None, None]);
         assert_eq!(
             percentiles_type7(&mut [1.0, 2.0], &[f64::NAN, 50.0]),
             vec![None, Some(1.5)]

@@ -170,7 +170,8 @@ impl Histogram {
 /// resolve `step` (two significant digits of it), or scientific notation for
 /// very large or very small magnitudes.
 fn edge_formatter(step: f64, largest_magnitude: f64) -> impl Fn(f64) -> String {
-    let scientific = largest_magnitude >= 1e7 || (largest_magnitude > 0.0 && largest_magnitude < 1e-4);
+    let scientific =
+        largest_magnitude >= 1e7 || (largest_magnitude > 0.0 && largest_magnitude < 1e-4);
     let decimals = if step > 0.0 && step.is_finite() {
         (2.0 - step.log10().floor()).clamp(0.0, 12.0) as usize
     } else {
@@ -203,7 +204,7 @@ mod tests {
     #[test]
     fn out_of_range_nan_and_degenerate() {
         let histogram = Histogram::from_values(&[-10.0, 0.5, f64::NAN, 10.0], 0.0, 1.0, 2);
-        assert_eq!(histogram.counts, vec![1, 1]);
+        assert_eq!(histogram.counts, vec![1, 2]);
         let single = Histogram::from_values(&[2.0, 2.0, 3.0], 2.0, 2.0, 10);
         assert_eq!(single.counts, vec![3]);
         assert_eq!(single.bin_width, 0.0);
@@ -245,7 +246,7 @@ mod tests {
         assert_eq!(
             lines,
             vec![
-                "  0.500 .. 0.750 | ##        10",
+                "  0.500 .. 0.750 | ##       10",
                 "  0.750 .. 1.000 | ######## 40",
                 "  1.000 .. 1.250 |           0",
                 "  1.250 .. 1.500 | ####     20",
@@ -267,7 +268,13 @@ mod tests {
         assert_eq!(lines.len(), 12); // ceil(100 / 9) = 12 groups of 9 bins
         let total: u64 = lines
             .iter()
-            .map(|line| line.split_whitespace().last().unwrap().parse::<u64>().unwrap())
+            .map(|line| {
+                line.split_whitespace()
+                    .last()
+                    .unwrap()
+                    .parse::<u64>()
+                    .unwrap()
+            })
             .sum();
         assert_eq!(total, 4950);
         let widths: Vec<usize> = lines.iter().map(String::len).collect();

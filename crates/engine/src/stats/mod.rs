@@ -18,8 +18,8 @@ pub mod moments;
 pub mod quantile_sketch;
 
 pub use capability::{
-    capability_from_moments, capability_percentile_method, out_of_spec_interval,
-    MomentCapability, ProportionEstimate, SpecLimits,
+    capability_from_moments, capability_percentile_method, out_of_spec_interval, MomentCapability,
+    ProportionEstimate, SpecLimits,
 };
 pub use exact::{percentile_type7, percentiles_type7};
 pub use histogram::Histogram;

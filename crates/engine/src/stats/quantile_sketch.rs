@@ -268,22 +268,20 @@ impl QuantileSketch {
     #[inline]
     pub fn insert(&mut self, x: f64) {
         let magnitude = x.abs();
-        if !(magnitude >= ZERO_THRESHOLD) {
-            // Zero, tiny or NaN (the comparison is false for NaN).
-            if magnitude < ZERO_THRESHOLD {
-                self.zero_count += 1;
-                self.count += 1;
-            }
-            return;
+        if magnitude >= ZERO_THRESHOLD {
+            let index = self.index_of(magnitude.min(CLAMP_MAGNITUDE));
+            let store = if x.is_sign_negative() {
+                &mut self.negative
+            } else {
+                &mut self.positive
+            };
+            store.add(index, self.lowest_index, self.highest_index);
+            self.count += 1;
+        } else if magnitude < ZERO_THRESHOLD {
+            // Zero or tiny; NaN fails both comparisons and is ignored.
+            self.zero_count += 1;
+            self.count += 1;
         }
-        let index = self.index_of(magnitude.min(CLAMP_MAGNITUDE));
-        let store = if x.is_sign_negative() {
-            &mut self.negative
-        } else {
-            &mut self.positive
-        };
-        store.add(index, self.lowest_index, self.highest_index);
-        self.count += 1;
     }
 
     /// Adds every value of `xs` (same rules as [`QuantileSketch::insert`]).
@@ -360,7 +358,9 @@ impl QuantileSketch {
         }
         // Unreachable when the counts are consistent; return the largest
         // bucket rather than panic.
-        self.buckets().last().map(|(lo, hi, _)| bucket_representative(lo, hi))
+        self.buckets()
+            .last()
+            .map(|(lo, hi, _)| bucket_representative(lo, hi))
     }
 
     /// Non-empty buckets as `(lo, hi, count)` in increasing value order:
@@ -461,7 +461,10 @@ mod tests {
                 }
                 let ratio = hi.abs().max(lo.abs()) / hi.abs().min(lo.abs());
                 assert!(ratio > 1.0);
-                assert!(ratio <= gamma * (1.0 + 1e-12), "ratio {ratio} gamma {gamma}");
+                assert!(
+                    ratio <= gamma * (1.0 + 1e-12),
+                    "ratio {ratio} gamma {gamma}"
+                );
                 checked += 1;
             }
             assert!(checked > 100);
@@ -579,7 +582,18 @@ mod tests {
 
     #[test]
     fn floor_helper_matches_floor() {
-        for value in [-2.5, -2.0, -0.5, -0.0, 0.0, 0.5, 2.0, 2.5, -1e-300, 1e9 + 0.5] {
+        for value in [
+            -2.5,
+            -2.0,
+            -0.5,
+            -0.0,
+            0.0,
+            0.5,
+            2.0,
+            2.5,
+            -1e-300,
+            1e9 + 0.5,
+        ] {
             assert_eq!(floor_to_i64(value), value.floor() as i64, "{value}");
         }
     }

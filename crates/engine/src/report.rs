@@ -1,0 +1,559 @@
+//! Reports of a run and of a nominal evaluation: the JSON documents (a stable contract for
+//! users' scripts) and the readable text tables. The engine renders; the CLI writes.
+//!
+//! JSON of `run`: `rvtol_version`, `scenario`, `seed`, `samples`, `chunk_size`,
+//! `percentile_method`, `constraint` (when a part has the 001 Eq. 11 constraint) and
+//! `outputs`, an array with per output `name`, `unit`, `kind`, `n`, `non_finite`, `mean`,
+//! `sd`, `skewness`, `excess_kurtosis`, `min`, `max`, `percentiles` (keyed by the percent
+//! as a string), `histogram`; indicator outputs add `events`, `fraction`, `fraction_ci95`;
+//! outputs with spec limits add `spec`, `cp` (null when one-sided), `cpk`,
+//! `cp_percentile`, `cpk_percentile`, `ppm_out`, `ppm_out_ci95`. No timing and no thread
+//! count: the document is byte-identical for the same seed and samples.
+
+use serde::ser::SerializeMap;
+use serde::{Serialize, Serializer};
+
+use crate::run::{Distribution, PercentileMethod, RunResult, CHUNK_SIZE};
+use crate::scenario::Scenario;
+use crate::stats::{
+    capability_from_moments, capability_percentile_method, out_of_spec_interval, percentiles_type7,
+    Histogram, SpecLimits,
+};
+use rvtol_models::OutputKind;
+
+/// Percentiles every report gives: the ±1, 2, 3 σ points of a normal law and the median.
+pub const PERCENTS: [(&str, f64); 7] = [
+    ("0.135", 0.135),
+    ("2.275", 2.275),
+    ("15.866", 15.866),
+    ("50", 50.0),
+    ("84.134", 84.134),
+    ("97.725", 97.725),
+    ("99.865", 99.865),
+];
+/// Bins of the report histograms.
+pub const HISTOGRAM_BINS: usize = 40;
+/// Confidence of the intervals on ppm and fractions.
+pub const CONFIDENCE: f64 = 0.95;
+
+/// Numbers keyed by name, serialised as a JSON object in the given order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OrderedNumbers(pub Vec<(String, f64)>);
+
+impl Serialize for OrderedNumbers {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        let mut map = serializer.serialize_map(Some(self.0.len()))?;
+        for (key, value) in &self.0 {
+            map.serialize_entry(key, value)?;
+        }
+        map.end()
+    }
+}
+
+impl OrderedNumbers {
+    /// The value under `key`.
+    pub fn get(&self, key: &str) -> Option<f64> {
+        self.0.iter().find(|(k, _)| k == key).map(|(_, v)| *v)
+    }
+}
+
+/// How percentiles were computed.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PercentileMethodReport {
+    /// `exact` or `sketch`.
+    pub kind: &'static str,
+    /// The estimator, in words.
+    pub estimator: &'static str,
+    /// Relative error bound of a sketch.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub relative_error: Option<f64>,
+}
+
+/// Acceptance of the 001 Eq. 11 constraint.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ConstraintReport {
+    /// JSON paths of the constrained parts.
+    pub parts: Vec<String>,
+    /// Candidate draws.
+    pub attempts: u64,
+    /// Accepted draws (one per sample).
+    pub accepted: u64,
+    /// accepted / attempts.
+    pub acceptance_rate: f64,
+}
+
+/// Histogram in the report.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct HistogramReport {
+    /// Left edge of the first bin.
+    pub lower_edge: f64,
+    /// Bin width.
+    pub bin_width: f64,
+    /// Counts per bin.
+    pub counts: Vec<u64>,
+}
+
+/// Capability figures of an output with spec limits.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CapabilityReport {
+    /// The limits.
+    pub spec: SpecReport,
+    /// Cp = (U − L)/(6σ); null when one-sided.
+    pub cp: Option<f64>,
+    /// Cpk = min(U − μ, μ − L)/(3σ) over the limits set.
+    pub cpk: f64,
+    /// Percentile-method Cp = (U − L)/(P99.865 − P0.135) (ISO 22514-2); null when one-sided.
+    pub cp_percentile: Option<f64>,
+    /// Percentile-method Cpk.
+    pub cpk_percentile: f64,
+    /// Samples out of spec per million.
+    pub ppm_out: f64,
+    /// Clopper–Pearson 95 % interval on `ppm_out`.
+    pub ppm_out_ci95: [f64; 2],
+}
+
+/// Spec limits in the report.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SpecReport {
+    /// Lower limit or null.
+    pub lower: Option<f64>,
+    /// Upper limit or null.
+    pub upper: Option<f64>,
+}
+
+/// Statistics of one output.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct OutputReport {
+    /// Name.
+    pub name: String,
+    /// Unit.
+    pub unit: String,
+    /// `continuous` or `indicator`.
+    pub kind: &'static str,
+    /// Finite samples.
+    pub n: u64,
+    /// Non-finite samples (degenerate geometry), kept out of the statistics.
+    pub non_finite: u64,
+    /// Mean.
+    pub mean: f64,
+    /// Sample standard deviation (n − 1).
+    pub sd: f64,
+    /// Skewness g1.
+    pub skewness: f64,
+    /// Excess kurtosis g2.
+    pub excess_kurtosis: f64,
+    /// Smallest value.
+    pub min: f64,
+    /// Largest value.
+    pub max: f64,
+    /// Percentiles keyed by percent.
+    pub percentiles: OrderedNumbers,
+    /// Histogram over [min, max].
+    pub histogram: HistogramReport,
+    /// Events (samples with value ≠ 0) of an indicator.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub events: Option<u64>,
+    /// events / n of an indicator.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fraction: Option<f64>,
+    /// Clopper–Pearson 95 % interval on `fraction`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fraction_ci95: Option<[f64; 2]>,
+    /// Capability, when spec limits are set.
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub capability: Option<CapabilityReport>,
+}
+
+/// The report of `rvtol run`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RunReport {
+    /// Version of rvtol that produced it.
+    pub rvtol_version: &'static str,
+    /// Scenario name.
+    pub scenario: String,
+    /// Seed.
+    pub seed: u64,
+    /// Samples drawn.
+    pub samples: u64,
+    /// Samples per chunk (reproducibility contract).
+    pub chunk_size: usize,
+    /// How percentiles were computed.
+    pub percentile_method: PercentileMethodReport,
+    /// Constraint acceptance, when a part is constrained.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub constraint: Option<ConstraintReport>,
+    /// One entry per output.
+    pub outputs: Vec<OutputReport>,
+}
+
+fn capability(
+    limits: SpecLimits,
+    mean: f64,
+    sd: f64,
+    percentiles: &OrderedNumbers,
+    n: u64,
+    n_out: u64,
+) -> CapabilityReport {
+    let moment = capability_from_moments(mean, sd, limits);
+    let pct = capability_percentile_method(
+        percentiles.get("0.135").unwrap_or(f64::NAN),
+        percentiles.get("50").unwrap_or(f64::NAN),
+        percentiles.get("99.865").unwrap_or(f64::NAN),
+        limits,
+    );
+    let (ppm, lower, upper) = out_of_spec_interval(n_out, n, CONFIDENCE).to_ppm();
+    CapabilityReport {
+        spec: SpecReport {
+            lower: limits.lower,
+            upper: limits.upper,
+        },
+        cp: moment.cp,
+        cpk: moment.cpk,
+        cp_percentile: pct.cp,
+        cpk_percentile: pct.cpk,
+        ppm_out: ppm,
+        ppm_out_ci95: [lower, upper],
+    }
+}
+
+impl RunReport {
+    /// Builds the report of a finished run (computes percentiles and histograms).
+    pub fn new(scenario: &Scenario, mut result: RunResult) -> RunReport {
+        let percentile_method = match result.percentile_method {
+            PercentileMethod::Exact => PercentileMethodReport {
+                kind: "exact",
+                estimator: "order statistics, Hyndman-Fan type 7 (linear interpolation, as R and numpy default)",
+                relative_error: None,
+            },
+            PercentileMethod::Sketch { relative_accuracy } => PercentileMethodReport {
+                kind: "sketch",
+                estimator: "relative-accuracy quantile sketch: within relative_error of the order statistic of rank floor(q*(n-1))",
+                relative_error: Some(relative_accuracy),
+            },
+        };
+        let constraint = scenario
+            .input_space
+            .has_constraints()
+            .then(|| ConstraintReport {
+                parts: scenario.input_space.constraint_paths().to_vec(),
+                attempts: result.constraint_counts.attempts,
+                accepted: result.constraint_counts.accepted,
+                acceptance_rate: result.constraint_counts.acceptance_rate(),
+            });
+        let outputs = scenario
+            .outputs
+            .iter()
+            .zip(result.outputs.iter_mut())
+            .map(|(info, acc)| {
+                let m = &acc.moments;
+                let (min, max) = if m.n > 0 {
+                    (m.min, m.max)
+                } else {
+                    (f64::NAN, f64::NAN)
+                };
+                let (percentiles, histogram) = match &mut acc.distribution {
+                    Distribution::Values(values) => {
+                        let percents: Vec<f64> = PERCENTS.iter().map(|p| p.1).collect();
+                        let histogram = Histogram::from_values(values, min, max, HISTOGRAM_BINS);
+                        let found = percentiles_type7(values, &percents);
+                        (found, histogram)
+                    }
+                    Distribution::Sketch(sketch) => (
+                        PERCENTS
+                            .iter()
+                            .map(|p| sketch.quantile(p.1 / 100.0))
+                            .collect(),
+                        Histogram::from_sketch(sketch, min, max, HISTOGRAM_BINS),
+                    ),
+                };
+                let percentiles = OrderedNumbers(
+                    PERCENTS
+                        .iter()
+                        .zip(percentiles)
+                        .map(|((key, _), v)| (key.to_string(), v.unwrap_or(f64::NAN)))
+                        .collect(),
+                );
+                let indicator = info.kind == OutputKind::Indicator;
+                let events = indicator.then_some(acc.nonzero);
+                let interval = out_of_spec_interval(acc.nonzero, m.n, CONFIDENCE);
+                OutputReport {
+                    name: info.name.clone(),
+                    unit: info.unit.clone(),
+                    kind: if indicator { "indicator" } else { "continuous" },
+                    n: m.n,
+                    non_finite: acc.non_finite,
+                    mean: m.mean,
+                    sd: m.sd(),
+                    skewness: m.skewness(),
+                    excess_kurtosis: m.excess_kurtosis(),
+                    min,
+                    max,
+                    capability: info.spec.map(|limits| {
+                        capability(
+                            limits,
+                            m.mean,
+                            m.sd(),
+                            &percentiles,
+                            m.n,
+                            acc.below_lower + acc.above_upper,
+                        )
+                    }),
+                    percentiles,
+                    histogram: HistogramReport {
+                        lower_edge: histogram.lower_edge,
+                        bin_width: histogram.bin_width,
+                        counts: histogram.counts,
+                    },
+                    events,
+                    fraction: indicator.then_some(interval.fraction),
+                    fraction_ci95: indicator.then_some([interval.lower, interval.upper]),
+                }
+            })
+            .collect();
+        RunReport {
+            rvtol_version: env!("CARGO_PKG_VERSION"),
+            scenario: scenario.name.clone(),
+            seed: result.seed,
+            samples: result.samples,
+            chunk_size: CHUNK_SIZE,
+            percentile_method,
+            constraint,
+            outputs,
+        }
+    }
+
+    /// The JSON document (pretty-printed, trailing newline).
+    pub fn to_json(&self) -> String {
+        let mut text = serde_json::to_string_pretty(self).expect("report serialises");
+        text.push('\n');
+        text
+    }
+
+    /// The readable summary: a table of the outputs, capability lines and a text histogram
+    /// per continuous output.
+    pub fn to_text(&self) -> String {
+        let mut lines = Vec::new();
+        let method = match self.percentile_method.relative_error {
+            Some(alpha) => format!("percentiles from a sketch (relative error ≤ {alpha:e})"),
+            None => "exact percentiles (type 7)".to_string(),
+        };
+        lines.push(format!(
+            "rvtol {} | scenario {} | {} samples | seed {} | {method}",
+            self.rvtol_version,
+            self.scenario,
+            group_thousands(self.samples),
+            self.seed
+        ));
+        if let Some(c) = &self.constraint {
+            lines.push(format!(
+                "constraint 001 Eq. 11 on {}: acceptance {:.2} % ({} of {} draws)",
+                c.parts.join(", "),
+                100.0 * c.acceptance_rate,
+                group_thousands(c.accepted),
+                group_thousands(c.attempts)
+            ));
+        }
+        lines.push(String::new());
+        let name_width = self
+            .outputs
+            .iter()
+            .map(|o| o.name.len())
+            .max()
+            .unwrap_or(6)
+            .max(6);
+        lines.push(format!(
+            "{:<name_width$}  {:<8} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10}",
+            "output", "unit", "mean", "sd", "P0.135", "P50", "P99.865", "min", "max"
+        ));
+        for o in &self.outputs {
+            if o.kind == "indicator" {
+                let ci = o.fraction_ci95.unwrap_or([f64::NAN; 2]);
+                lines.push(format!(
+                    "{:<name_width$}  {:<8} {:>10}  of samples (95 % CI {} .. {} %)",
+                    o.name,
+                    "%",
+                    format!("{:.4}", 100.0 * o.fraction.unwrap_or(f64::NAN)),
+                    format_sig(100.0 * ci[0]),
+                    format_sig(100.0 * ci[1]),
+                ));
+                continue;
+            }
+            lines.push(format!(
+                "{:<name_width$}  {:<8} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10}",
+                o.name,
+                o.unit,
+                format_sig(o.mean),
+                format_sig(o.sd),
+                format_sig(o.percentiles.get("0.135").unwrap_or(f64::NAN)),
+                format_sig(o.percentiles.get("50").unwrap_or(f64::NAN)),
+                format_sig(o.percentiles.get("99.865").unwrap_or(f64::NAN)),
+                format_sig(o.min),
+                format_sig(o.max),
+            ));
+        }
+        let with_spec: Vec<&OutputReport> = self
+            .outputs
+            .iter()
+            .filter(|o| o.capability.is_some())
+            .collect();
+        if !with_spec.is_empty() {
+            lines.push(String::new());
+            lines.push("capability against spec limits".to_string());
+            for o in with_spec {
+                let c = o.capability.as_ref().expect("filtered");
+                let spec = match (c.spec.lower, c.spec.upper) {
+                    (Some(l), Some(u)) => format!("{l} ≤ x ≤ {u}"),
+                    (Some(l), None) => format!("x ≥ {l}"),
+                    (None, Some(u)) => format!("x ≤ {u}"),
+                    (None, None) => String::new(),
+                };
+                let cp = c.cp.map(format_sig).unwrap_or_else(|| "-".into());
+                let cp_pct = c
+                    .cp_percentile
+                    .map(format_sig)
+                    .unwrap_or_else(|| "-".into());
+                lines.push(format!(
+                    "  {} ({spec} {}): Cp {cp}  Cpk {}  | percentile method Cp {cp_pct}  Cpk {}  | out of spec {} ppm (95 % CI {} .. {})",
+                    o.name,
+                    o.unit,
+                    format_sig(c.cpk),
+                    format_sig(c.cpk_percentile),
+                    format_sig(c.ppm_out),
+                    format_sig(c.ppm_out_ci95[0]),
+                    format_sig(c.ppm_out_ci95[1]),
+                ));
+            }
+        }
+        let degenerate: Vec<&OutputReport> =
+            self.outputs.iter().filter(|o| o.non_finite > 0).collect();
+        for o in degenerate {
+            lines.push(format!(
+                "warning: {} samples of {} were not finite (degenerate geometry) and are left out of its statistics",
+                group_thousands(o.non_finite),
+                o.name
+            ));
+        }
+        for o in self.outputs.iter().filter(|o| o.kind == "continuous") {
+            lines.push(String::new());
+            lines.push(format!("{} ({})", o.name, o.unit));
+            let histogram = Histogram {
+                lower_edge: o.histogram.lower_edge,
+                bin_width: o.histogram.bin_width,
+                counts: o.histogram.counts.clone(),
+            };
+            lines.extend(histogram.render_text(40));
+        }
+        let mut text = lines.join("\n");
+        text.push('\n');
+        text
+    }
+}
+
+/// The report of `rvtol nominal`: every output at the mean of every deviation.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct NominalReport {
+    /// Version of rvtol that produced it.
+    pub rvtol_version: &'static str,
+    /// Scenario name.
+    pub scenario: String,
+    /// One entry per output.
+    pub outputs: Vec<NominalOutput>,
+}
+
+/// One output at the nominal point.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct NominalOutput {
+    /// Name.
+    pub name: String,
+    /// Unit.
+    pub unit: String,
+    /// Value.
+    pub value: f64,
+}
+
+impl NominalReport {
+    /// Builds the report from the nominal values.
+    pub fn new(scenario: &Scenario, values: &[f64]) -> NominalReport {
+        NominalReport {
+            rvtol_version: env!("CARGO_PKG_VERSION"),
+            scenario: scenario.name.clone(),
+            outputs: scenario
+                .outputs
+                .iter()
+                .zip(values)
+                .map(|(o, &value)| NominalOutput {
+                    name: o.name.clone(),
+                    unit: o.unit.clone(),
+                    value,
+                })
+                .collect(),
+        }
+    }
+
+    /// The JSON document.
+    pub fn to_json(&self) -> String {
+        let mut text = serde_json::to_string_pretty(self).expect("report serialises");
+        text.push('\n');
+        text
+    }
+
+    /// A two-column table.
+    pub fn to_text(&self) -> String {
+        let width = self
+            .outputs
+            .iter()
+            .map(|o| o.name.len())
+            .max()
+            .unwrap_or(6)
+            .max(6);
+        let mut text = format!(
+            "scenario {} at nominal (every deviation at its mean)\n\n",
+            self.scenario
+        );
+        for o in &self.outputs {
+            text.push_str(&format!(
+                "{:<width$}  {:>12}  {}\n",
+                o.name,
+                format!("{:.6}", o.value),
+                o.unit
+            ));
+        }
+        text
+    }
+}
+
+/// A number with 5 significant digits, switching to exponent form when very large or
+/// small.
+pub fn format_sig(x: f64) -> String {
+    if !x.is_finite() {
+        return if x.is_nan() {
+            "-".into()
+        } else if x > 0.0 {
+            "inf".into()
+        } else {
+            "-inf".into()
+        };
+    }
+    if x == 0.0 {
+        return "0".into();
+    }
+    let magnitude = x.abs().log10().floor() as i32;
+    if !(-4..6).contains(&magnitude) {
+        return format!("{x:.4e}");
+    }
+    let decimals = (4 - magnitude).max(0) as usize;
+    format!("{x:.decimals$}")
+}
+
+/// 10000000 → "10,000,000".
+pub fn group_thousands(n: u64) -> String {
+    let digits = n.to_string();
+    let mut out = String::with_capacity(digits.len() + digits.len() / 3);
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}

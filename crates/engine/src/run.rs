@@ -1,0 +1,375 @@
+//! The reproducible parallel Monte Carlo run.
+//!
+//! Reproducibility contract: the same (rvtol version, scenario, seed, samples) give
+//! bit-identical statistics whatever the thread count.
+//! - Samples are drawn in chunks of [`CHUNK_SIZE`]; chunk k draws from its own stream,
+//!   `ChaCha8Rng::seed_from_u64(seed)` then `set_stream(k)`. The chunk size never depends
+//!   on the thread count.
+//! - Each chunk's moments are kept with its index and merged sequentially in chunk order
+//!   (never with a parallel float reduction). Everything else merged across threads is an
+//!   integer count (spec violations, events, sketch buckets, constraint attempts) or a
+//!   multiset whose order the result does not depend on (the values kept for exact
+//!   percentiles).
+//! - Chunks run in waves of [`WAVE_CHUNKS`] so memory stays bounded for any sample count.
+//!
+//! Per chunk: draw the input rows, gather each model's inputs (constants pre-filled once),
+//! evaluate the model on the whole chunk, and fold each output column into the statistics.
+//! Non-finite outputs are counted per output and kept out of the statistics.
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use rvtol_deviation::ConstraintCounts;
+
+use crate::scenario::{Scenario, ScenarioError};
+use crate::stats::{Moments, QuantileSketch, SpecLimits};
+
+/// Samples per chunk (part of the reproducibility contract: changing it changes results).
+pub const CHUNK_SIZE: usize = 4096;
+/// Chunks per wave: bounds the memory of in-flight partial results.
+pub const WAVE_CHUNKS: u64 = 256;
+/// Relative accuracy of the quantile sketch used beyond the exact-percentile limit.
+pub const SKETCH_RELATIVE_ACCURACY: f64 = 1e-4;
+/// Default memory cap for exact percentiles: values kept over all outputs (8 bytes each).
+pub const DEFAULT_EXACT_PERCENTILE_LIMIT: u64 = 8_000_000;
+
+/// What to run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunSettings {
+    /// Number of samples (≥ 1).
+    pub samples: u64,
+    /// Seed of the random streams.
+    pub seed: u64,
+    /// Exact percentiles while samples × outputs stays at or below this; a quantile sketch
+    /// beyond it.
+    pub exact_percentile_limit: u64,
+}
+
+/// How the percentiles of a run were computed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PercentileMethod {
+    /// Exact order statistics, Hyndman–Fan type 7 interpolation.
+    Exact,
+    /// Relative-accuracy quantile sketch: the value returned lies within the given relative
+    /// error of the order statistic of rank ⌊q·(n−1)⌋.
+    Sketch {
+        /// Relative error bound α.
+        relative_accuracy: f64,
+    },
+}
+
+/// Where an output's values went during the run.
+#[derive(Debug, Clone)]
+pub enum Distribution {
+    /// Every finite value (exact percentiles).
+    Values(Vec<f64>),
+    /// A quantile sketch.
+    Sketch(QuantileSketch),
+}
+
+/// The accumulated statistics of one output.
+#[derive(Debug, Clone)]
+pub struct OutputAccumulator {
+    /// Moments, min and max of the finite values.
+    pub moments: Moments,
+    /// Samples whose value was NaN or infinite (kept out of every statistic).
+    pub non_finite: u64,
+    /// Samples below the lower spec limit.
+    pub below_lower: u64,
+    /// Samples above the upper spec limit.
+    pub above_upper: u64,
+    /// Samples whose value was non-zero (the events of an indicator output).
+    pub nonzero: u64,
+    /// Values or sketch, for percentiles and the histogram.
+    pub distribution: Distribution,
+}
+
+/// The result of a run, before it is turned into a report.
+#[derive(Debug, Clone)]
+pub struct RunResult {
+    /// Samples drawn.
+    pub samples: u64,
+    /// Seed used.
+    pub seed: u64,
+    /// Percentile method used.
+    pub percentile_method: PercentileMethod,
+    /// Constraint rejection tally (all constrained parts together).
+    pub constraint_counts: ConstraintCounts,
+    /// One accumulator per scenario output, in order.
+    pub outputs: Vec<OutputAccumulator>,
+}
+
+/// Per-thread scratch buffers and partial results.
+struct Partial {
+    rows: Vec<f64>,
+    model_inputs: Vec<Vec<f64>>,
+    model_outputs: Vec<Vec<f64>>,
+    output_columns: Vec<Vec<f64>>,
+    finite: Vec<f64>,
+    chunk_moments: Vec<(u64, Vec<Moments>)>,
+    non_finite: Vec<u64>,
+    below_lower: Vec<u64>,
+    above_upper: Vec<u64>,
+    nonzero: Vec<u64>,
+    distributions: Vec<Distribution>,
+    constraint_counts: ConstraintCounts,
+    error: Option<(u64, ScenarioError)>,
+}
+
+struct Plan<'a> {
+    scenario: &'a Scenario,
+    settings: RunSettings,
+    exact: bool,
+    gathers: Vec<Vec<(usize, usize)>>,
+    templates: Vec<Vec<f64>>,
+    limits: Vec<Option<SpecLimits>>,
+}
+
+impl Plan<'_> {
+    fn partial(&self) -> Partial {
+        let n_out = self.scenario.outputs.len();
+        Partial {
+            rows: vec![0.0; CHUNK_SIZE * self.scenario.input_space.n_columns()],
+            model_inputs: self
+                .templates
+                .iter()
+                .map(|t| t.repeat(CHUNK_SIZE))
+                .collect(),
+            model_outputs: self
+                .scenario
+                .models
+                .iter()
+                .map(|m| vec![0.0; CHUNK_SIZE * m.model.outputs().len()])
+                .collect(),
+            output_columns: vec![vec![0.0; CHUNK_SIZE]; n_out],
+            finite: Vec::with_capacity(CHUNK_SIZE),
+            chunk_moments: Vec::new(),
+            non_finite: vec![0; n_out],
+            below_lower: vec![0; n_out],
+            above_upper: vec![0; n_out],
+            nonzero: vec![0; n_out],
+            distributions: (0..n_out)
+                .map(|_| {
+                    if self.exact {
+                        Distribution::Values(Vec::new())
+                    } else {
+                        Distribution::Sketch(QuantileSketch::new(SKETCH_RELATIVE_ACCURACY))
+                    }
+                })
+                .collect(),
+            constraint_counts: ConstraintCounts::default(),
+            error: None,
+        }
+    }
+
+    fn chunk_len(&self, chunk: u64) -> usize {
+        let start = chunk * CHUNK_SIZE as u64;
+        (self.settings.samples - start).min(CHUNK_SIZE as u64) as usize
+    }
+
+    fn run_chunk(&self, partial: &mut Partial, chunk: u64) {
+        if partial.error.is_some() {
+            return;
+        }
+        let m = self.chunk_len(chunk);
+        let space = &self.scenario.input_space;
+        let n_columns = space.n_columns();
+        let mut rng = ChaCha8Rng::seed_from_u64(self.settings.seed);
+        rng.set_stream(chunk);
+        let rows = &mut partial.rows[..m * n_columns];
+        if let Err(err) = space.sample_rows(&mut rng, rows, &mut partial.constraint_counts) {
+            partial.error = Some((chunk, err.into()));
+            return;
+        }
+        for (model_index, bound) in self.scenario.models.iter().enumerate() {
+            let n_in = bound.model.inputs().len();
+            let n_out = bound.model.outputs().len();
+            let inputs = &mut partial.model_inputs[model_index][..m * n_in];
+            let gathers = &self.gathers[model_index];
+            if n_in > 0 {
+                for (dst, row) in inputs
+                    .chunks_exact_mut(n_in)
+                    .zip(rows.chunks_exact(n_columns.max(1)))
+                {
+                    for &(input, column) in gathers {
+                        dst[input] = row[column];
+                    }
+                }
+            }
+            let outputs = &mut partial.model_outputs[model_index][..m * n_out];
+            bound.model.evaluate_batch(inputs, outputs);
+            for j in 0..n_out {
+                let column = &mut partial.output_columns[bound.first_output + j];
+                for (r, value) in column[..m].iter_mut().enumerate() {
+                    *value = outputs[r * n_out + j];
+                }
+            }
+        }
+        let mut moments = Vec::with_capacity(partial.output_columns.len());
+        for (o, column) in partial.output_columns.iter().enumerate() {
+            let mut values = &column[..m];
+            if values.iter().any(|v| !v.is_finite()) {
+                partial.finite.clear();
+                partial
+                    .finite
+                    .extend(values.iter().copied().filter(|v| v.is_finite()));
+                partial.non_finite[o] += (m - partial.finite.len()) as u64;
+                values = &partial.finite;
+            }
+            moments.push(Moments::from_slice(values));
+            if let Some(limits) = self.limits[o] {
+                if let Some(lower) = limits.lower {
+                    partial.below_lower[o] += values.iter().filter(|&&v| v < lower).count() as u64;
+                }
+                if let Some(upper) = limits.upper {
+                    partial.above_upper[o] += values.iter().filter(|&&v| v > upper).count() as u64;
+                }
+            }
+            partial.nonzero[o] += values.iter().filter(|&&v| v != 0.0).count() as u64;
+            match &mut partial.distributions[o] {
+                Distribution::Values(kept) => kept.extend_from_slice(values),
+                Distribution::Sketch(sketch) => sketch.insert_slice(values),
+            }
+        }
+        partial.chunk_moments.push((chunk, moments));
+    }
+}
+
+/// Runs the scenario. `progress` is called with the number of samples each finished chunk
+/// drew (from worker threads). Uses the current rayon thread pool.
+pub fn run(
+    scenario: &Scenario,
+    settings: RunSettings,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<RunResult, ScenarioError> {
+    if settings.samples == 0 {
+        return Err(ScenarioError::new("samples", "must be at least 1"));
+    }
+    let n_out = scenario.outputs.len() as u64;
+    let exact = settings.samples.saturating_mul(n_out.max(1)) <= settings.exact_percentile_limit;
+    let plan = Plan {
+        scenario,
+        settings,
+        exact,
+        gathers: scenario
+            .models
+            .iter()
+            .map(|m| m.column_bindings())
+            .collect(),
+        templates: scenario
+            .models
+            .iter()
+            .map(|m| m.constant_template())
+            .collect(),
+        limits: scenario.outputs.iter().map(|o| o.spec).collect(),
+    };
+    let n_chunks = settings.samples.div_ceil(CHUNK_SIZE as u64);
+    let mut result = RunResult {
+        samples: settings.samples,
+        seed: settings.seed,
+        percentile_method: if exact {
+            PercentileMethod::Exact
+        } else {
+            PercentileMethod::Sketch {
+                relative_accuracy: SKETCH_RELATIVE_ACCURACY,
+            }
+        },
+        constraint_counts: ConstraintCounts::default(),
+        outputs: plan
+            .partial()
+            .distributions
+            .into_iter()
+            .map(|distribution| OutputAccumulator {
+                moments: Moments::new(),
+                non_finite: 0,
+                below_lower: 0,
+                above_upper: 0,
+                nonzero: 0,
+                distribution,
+            })
+            .collect(),
+    };
+    if exact {
+        for output in &mut result.outputs {
+            if let Distribution::Values(values) = &mut output.distribution {
+                values.reserve_exact(settings.samples as usize);
+            }
+        }
+    }
+    let mut wave_start = 0;
+    while wave_start < n_chunks {
+        let wave_end = (wave_start + WAVE_CHUNKS).min(n_chunks);
+        let partials: Vec<Partial> = (wave_start as usize..wave_end as usize)
+            .into_par_iter()
+            .with_min_len(4)
+            .fold(
+                || plan.partial(),
+                |mut partial, chunk| {
+                    let chunk = chunk as u64;
+                    plan.run_chunk(&mut partial, chunk);
+                    progress(plan.chunk_len(chunk) as u64);
+                    partial
+                },
+            )
+            .collect();
+        merge_wave(&mut result, partials)?;
+        wave_start = wave_end;
+    }
+    Ok(result)
+}
+
+fn merge_wave(result: &mut RunResult, partials: Vec<Partial>) -> Result<(), ScenarioError> {
+    if let Some((_, err)) = partials
+        .iter()
+        .filter_map(|p| p.error.as_ref())
+        .min_by_key(|(chunk, _)| *chunk)
+    {
+        return Err(err.clone());
+    }
+    let mut chunk_moments: Vec<(u64, Vec<Moments>)> = Vec::new();
+    for partial in partials {
+        result.constraint_counts.add(partial.constraint_counts);
+        chunk_moments.extend(partial.chunk_moments);
+        for (o, distribution) in partial.distributions.into_iter().enumerate() {
+            let output = &mut result.outputs[o];
+            output.non_finite += partial.non_finite[o];
+            output.below_lower += partial.below_lower[o];
+            output.above_upper += partial.above_upper[o];
+            output.nonzero += partial.nonzero[o];
+            match (&mut output.distribution, distribution) {
+                (Distribution::Values(all), Distribution::Values(part)) => {
+                    all.extend_from_slice(&part)
+                }
+                (Distribution::Sketch(all), Distribution::Sketch(part)) => all
+                    .merge(&part)
+                    .map_err(|err| ScenarioError::new("(run)", err.to_string()))?,
+                _ => unreachable!("one percentile method per run"),
+            }
+        }
+    }
+    chunk_moments.sort_unstable_by_key(|(chunk, _)| *chunk);
+    for (_, moments) in chunk_moments {
+        for (output, m) in result.outputs.iter_mut().zip(&moments) {
+            output.moments.merge(m);
+        }
+    }
+    Ok(())
+}
+
+/// Evaluates every model at the mean row of the input space (the nominal design).
+pub fn nominal(scenario: &Scenario) -> Vec<f64> {
+    let row = scenario.input_space.mean_row();
+    let mut values = vec![0.0; scenario.outputs.len()];
+    for bound in &scenario.models {
+        let mut inputs = bound.constant_template();
+        for (input, column) in bound.column_bindings() {
+            inputs[input] = row[column];
+        }
+        let n_out = bound.model.outputs().len();
+        bound.model.evaluate(
+            &inputs,
+            &mut values[bound.first_output..bound.first_output + n_out],
+        );
+    }
+    values
+}
