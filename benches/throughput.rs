@@ -1,2 +1,107 @@
-//! Criterion benchmarks (written in the next step).
-fn main() {}
+//! Criterion benchmarks: nanoseconds per sample of each stage of a run on the RV-20E
+//! hysteresis scenario (sampler, model, statistics), the normal generator against
+//! rand_distr's, and whole-run throughput.
+//!
+//! Run with `cargo bench -p rvtol-benches`; each figure is per sample (Throughput::Elements).
+
+// criterion_group! generates an undocumented public function.
+#![allow(missing_docs)]
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rvtol_benches::scenario_path;
+use rvtol_deviation::Ziggurat;
+use rvtol_engine::stats::{Moments, QuantileSketch};
+use rvtol_engine::{run, RunSettings, Scenario};
+
+const ROWS: usize = 4096;
+
+fn rv20e() -> Scenario {
+    Scenario::load(&scenario_path("rv20e-hysteresis.json")).expect("shipped scenario loads")
+}
+
+fn normals(c: &mut Criterion) {
+    let mut group = c.benchmark_group("normal");
+    group.throughput(Throughput::Elements(ROWS as u64));
+    let mut rng = ChaCha8Rng::seed_from_u64(1);
+    let mut out = vec![0.0; ROWS];
+    group.bench_function("ziggurat_32bit", |b| {
+        let z = Ziggurat::get();
+        b.iter(|| {
+            for x in out.iter_mut() {
+                *x = z.sample(&mut rng);
+            }
+        })
+    });
+    group.bench_function("rand_distr_standard_normal", |b| {
+        b.iter(|| {
+            for x in out.iter_mut() {
+                *x = rng.sample(rand_distr::StandardNormal);
+            }
+        })
+    });
+    group.finish();
+}
+
+fn stages(c: &mut Criterion) {
+    let scenario = rv20e();
+    let space = &scenario.input_space;
+    let bound = &scenario.models[0];
+    let n_columns = space.n_columns();
+    let mut group = c.benchmark_group("rv20e_stage");
+    group.throughput(Throughput::Elements(ROWS as u64));
+
+    let mut rows = vec![0.0; ROWS * n_columns];
+    let mut counts = space.new_constraint_counts();
+    let mut rng = ChaCha8Rng::seed_from_u64(1);
+    group.bench_function("sampler", |b| {
+        b.iter(|| space.sample_rows(&mut rng, &mut rows, &mut counts).unwrap())
+    });
+
+    let n_in = bound.model.inputs().len();
+    let n_out = bound.model.outputs().len();
+    let mut inputs = bound.constant_template().repeat(ROWS);
+    for (dst, row) in inputs
+        .chunks_exact_mut(n_in)
+        .zip(rows.chunks_exact(n_columns))
+    {
+        for (input, column) in bound.column_bindings() {
+            dst[input] = row[column];
+        }
+    }
+    let mut outputs = vec![0.0; ROWS * n_out];
+    group.bench_function("model", |b| {
+        b.iter(|| bound.model.evaluate_batch(&inputs, &mut outputs))
+    });
+
+    let column: Vec<f64> = outputs.iter().step_by(n_out).copied().collect();
+    let mut sketch = QuantileSketch::new(rvtol_engine::run::SKETCH_RELATIVE_ACCURACY);
+    group.bench_function("moments_one_output", |b| {
+        b.iter(|| Moments::from_slice(&column))
+    });
+    group.bench_function("sketch_one_output", |b| {
+        b.iter(|| sketch.insert_slice(&column))
+    });
+    group.finish();
+}
+
+fn whole_run(c: &mut Criterion) {
+    let scenario = rv20e();
+    let mut group = c.benchmark_group("rv20e_run");
+    group.sample_size(10);
+    let samples = 1_000_000u64;
+    group.throughput(Throughput::Elements(samples));
+    let settings = RunSettings {
+        samples,
+        seed: 1,
+        exact_percentile_limit: 0,
+    };
+    group.bench_function(BenchmarkId::from_parameter(samples), |b| {
+        b.iter(|| run(&scenario, settings, &|_| {}).unwrap())
+    });
+    group.finish();
+}
+
+criterion_group!(benches, normals, stages, whole_run);
+criterion_main!(benches);

@@ -10,17 +10,21 @@
 //! diagonal Σ costs one normal draw per non-degenerate column and zero-variance columns are
 //! exactly their mean. Non-normal scalars are drawn independently.
 //!
-//! Parts with the 001 Eq. 11 constraint are drawn by rejection: the blocks that hold their
-//! components are redrawn until every constraint holds, which conditions the joint normal on
-//! Eq. 11 without touching the other blocks (they are independent of these).
+//! Parts with the 001 Eq. 11 constraint are drawn by rejection: the blocks that hold the
+//! components of an inequality are redrawn until it holds, which conditions the joint
+//! normal on Eq. 11 without touching the other blocks (they are independent of these).
+//! Inequalities that share no block are independent and get their own rejection loop
+//! (for a diagonal 001 covariance, (Δu, Δβ) and (Δv, Δα) separately), so the expected cost
+//! is the sum, not the product, of the inverse acceptance rates. The acceptance rate of
+//! the whole constraint is the product of the groups' rates.
 
 use nalgebra::{DMatrix, DVector};
 use rand::{Rng, SeedableRng};
-use rand_distr::StandardNormal;
 
 use crate::cholesky::pivoted_cholesky;
-use crate::constraint::TiltConstraint;
+use crate::constraint::{LinearInequality, TiltConstraint};
 use crate::error::DeviationError;
+use crate::normal::Ziggurat;
 use crate::part::{check_covariance, PartSpec};
 use crate::scalar::ScalarDistribution;
 
@@ -32,29 +36,39 @@ pub const MIN_ACCEPTANCE_RATE: f64 = 0.01;
 /// Draws of the deterministic pilot that measures the acceptance rate when building.
 const PILOT_DRAWS: u64 = 20_000;
 
-/// Attempts and acceptances of the constraint rejection sampler.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+/// Attempts and acceptances of the constraint rejection sampler, per independent group of
+/// inequalities.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct ConstraintCounts {
-    /// Candidate draws of the constrained blocks.
-    pub attempts: u64,
-    /// Candidates that satisfied every constraint.
-    pub accepted: u64,
+    /// (candidate draws, accepted draws) of each group.
+    pub groups: Vec<(u64, u64)>,
 }
 
 impl ConstraintCounts {
     /// Adds another tally.
-    pub fn add(&mut self, other: ConstraintCounts) {
-        self.attempts += other.attempts;
-        self.accepted += other.accepted;
+    pub fn add(&mut self, other: &ConstraintCounts) {
+        if self.groups.len() < other.groups.len() {
+            self.groups.resize(other.groups.len(), (0, 0));
+        }
+        for (mine, theirs) in self.groups.iter_mut().zip(&other.groups) {
+            mine.0 += theirs.0;
+            mine.1 += theirs.1;
+        }
     }
 
-    /// Accepted / attempts (1 when nothing was attempted).
+    /// Candidate draws over all groups.
+    pub fn attempts(&self) -> u64 {
+        self.groups.iter().map(|g| g.0).sum()
+    }
+
+    /// Probability that an unconstrained draw satisfies every inequality: the product of
+    /// the groups' acceptance rates (1 when nothing was attempted).
     pub fn acceptance_rate(&self) -> f64 {
-        if self.attempts == 0 {
-            1.0
-        } else {
-            self.accepted as f64 / self.attempts as f64
-        }
+        self.groups
+            .iter()
+            .filter(|g| g.0 > 0)
+            .map(|g| g.1 as f64 / g.0 as f64)
+            .product()
     }
 }
 
@@ -243,23 +257,20 @@ impl InputSpaceBuilder {
             }
             components[component_of_root[root]].push(g);
         }
-        let constrained_columns: Vec<usize> = self
+        let inequalities: Vec<LinearInequality> = self
             .constraints
             .iter()
-            .flat_map(|c| [0, 1, 3, 4].map(|k| c.first_column + k))
+            .flat_map(|c| c.constraint.inequalities(c.first_column))
             .collect();
+        let constrained_columns: Vec<usize> = inequalities.iter().flat_map(|q| q.columns).collect();
+        let mut constrained_blocks: Vec<GaussianBlock> = Vec::new();
         let mut space = InputSpace {
             n_columns: self.n_columns,
             fixed: Vec::new(),
             singles: Vec::new(),
             blocks: Vec::new(),
-            constrained_blocks: Vec::new(),
+            constrained_groups: Vec::new(),
             independent: self.independent,
-            constraints: self
-                .constraints
-                .iter()
-                .map(|c| (c.first_column, c.constraint))
-                .collect(),
             constraint_paths: self.constraints.iter().map(|c| c.path.clone()).collect(),
             gaussian_columns: self.gaussian.iter().map(|g| g.column).collect(),
             gaussian_mean: DVector::from_iterator(n_g, self.gaussian.iter().map(|g| g.mean)),
@@ -312,11 +323,12 @@ impl InputSpaceBuilder {
                 factor: factor.entries,
             };
             if constrained {
-                space.constrained_blocks.push(block);
+                constrained_blocks.push(block);
             } else {
                 space.blocks.push(block);
             }
         }
+        space.constrained_groups = group_inequalities(inequalities, constrained_blocks);
         space.check_acceptance()?;
         Ok(space)
     }
@@ -333,10 +345,16 @@ struct GaussianBlock {
 
 impl GaussianBlock {
     #[inline]
-    fn draw<R: Rng + ?Sized>(&self, rng: &mut R, z: &mut [f64], row: &mut [f64]) {
+    fn draw<R: Rng + ?Sized>(
+        &self,
+        normal: &Ziggurat,
+        rng: &mut R,
+        z: &mut [f64],
+        row: &mut [f64],
+    ) {
         let z = &mut z[..self.rank];
         for value in z.iter_mut() {
-            *value = rng.sample(StandardNormal);
+            *value = normal.sample(rng);
         }
         for (i, (&column, &mean)) in self.columns.iter().zip(&self.means).enumerate() {
             let factor_row = &self.factor[i * self.rank..(i + 1) * self.rank];
@@ -349,6 +367,100 @@ impl GaussianBlock {
     }
 }
 
+/// Inequalities that share blocks, with those blocks: one rejection loop.
+#[derive(Debug, Clone)]
+struct ConstrainedGroup {
+    /// Independent 1×1 blocks: (column, mean, sd).
+    singles: Vec<(usize, f64, f64)>,
+    /// Dense blocks.
+    blocks: Vec<GaussianBlock>,
+    inequalities: Vec<LinearInequality>,
+}
+
+impl ConstrainedGroup {
+    #[inline]
+    fn draw_candidate<R: Rng + ?Sized>(
+        &self,
+        normal: &Ziggurat,
+        rng: &mut R,
+        z: &mut [f64],
+        row: &mut [f64],
+    ) -> bool {
+        for &(column, mean, sd) in &self.singles {
+            row[column] = mean + sd * normal.sample(rng);
+        }
+        for block in &self.blocks {
+            block.draw(normal, rng, z, row);
+        }
+        self.inequalities.iter().all(|q| q.holds(row))
+    }
+}
+
+/// Splits inequalities into groups that share no block (union-find over shared blocks).
+fn group_inequalities(
+    inequalities: Vec<LinearInequality>,
+    blocks: Vec<GaussianBlock>,
+) -> Vec<ConstrainedGroup> {
+    let blocks_of = |q: &LinearInequality| -> Vec<usize> {
+        blocks
+            .iter()
+            .enumerate()
+            .filter(|(_, b)| b.columns.iter().any(|c| q.columns.contains(c)))
+            .map(|(i, _)| i)
+            .collect()
+    };
+    let mut group_of_block: Vec<Option<usize>> = vec![None; blocks.len()];
+    let mut groups: Vec<(Vec<usize>, Vec<LinearInequality>)> = Vec::new();
+    for q in inequalities {
+        let touched = blocks_of(&q);
+        let mut existing: Vec<usize> = touched.iter().filter_map(|&b| group_of_block[b]).collect();
+        existing.sort_unstable();
+        existing.dedup();
+        let target = match existing.first() {
+            Some(&g) => g,
+            None => {
+                groups.push((Vec::new(), Vec::new()));
+                groups.len() - 1
+            }
+        };
+        // Merge every other touched group into the target.
+        for &g in existing.iter().skip(1).rev() {
+            let (moved_blocks, moved_inequalities) = std::mem::take(&mut groups[g]);
+            for &b in &moved_blocks {
+                group_of_block[b] = Some(target);
+            }
+            groups[target].0.extend(moved_blocks);
+            groups[target].1.extend(moved_inequalities);
+        }
+        for b in touched {
+            if group_of_block[b].is_none() {
+                group_of_block[b] = Some(target);
+                groups[target].0.push(b);
+            }
+        }
+        groups[target].1.push(q);
+    }
+    let mut slots: Vec<Option<GaussianBlock>> = blocks.into_iter().map(Some).collect();
+    groups
+        .into_iter()
+        .filter(|(_, inequalities)| !inequalities.is_empty())
+        .map(|(block_indices, inequalities)| {
+            let (singles, blocks): (Vec<GaussianBlock>, Vec<GaussianBlock>) = block_indices
+                .into_iter()
+                .filter_map(|b| slots[b].take())
+                .partition(|b| b.columns.len() == 1 && b.rank == 1);
+            ConstrainedGroup {
+                singles: singles
+                    .iter()
+                    .map(|b| (b.columns[0], b.means[0], b.factor[0]))
+                    .collect(),
+                blocks,
+                inequalities,
+            }
+        })
+        .collect()
+}
+
 /// A built input space: draws sample rows of `n_columns()` values.
 #[derive(Debug, Clone)]
 pub struct InputSpace {
@@ -356,9 +468,8 @@ pub struct InputSpace {
     fixed: Vec<(usize, f64)>,
     singles: Vec<(usize, f64, f64)>,
     blocks: Vec<GaussianBlock>,
-    constrained_blocks: Vec<GaussianBlock>,
+    constrained_groups: Vec<ConstrainedGroup>,
     independent: Vec<(usize, ScalarDistribution)>,
-    constraints: Vec<(usize, TiltConstraint)>,
     constraint_paths: Vec<String>,
     gaussian_columns: Vec<usize>,
     gaussian_mean: DVector<f64>,
@@ -374,7 +485,14 @@ impl InputSpace {
 
     /// Whether any part carries the Eq. 11 constraint.
     pub fn has_constraints(&self) -> bool {
-        !self.constraints.is_empty()
+        !self.constraint_paths.is_empty()
+    }
+
+    /// A tally with one slot per independent constraint group.
+    pub fn new_constraint_counts(&self) -> ConstraintCounts {
+        ConstraintCounts {
+            groups: vec![(0, 0); self.constrained_groups.len()],
+        }
     }
 
     /// JSON paths of the constrained parts.
@@ -416,23 +534,23 @@ impl InputSpace {
         if self.n_columns == 0 {
             return Ok(());
         }
+        let normal = Ziggurat::get();
         let mut z = vec![0.0; self.max_rank.max(1)];
         for row in rows.chunks_exact_mut(self.n_columns) {
             for &(column, mean) in &self.fixed {
                 row[column] = mean;
             }
             for &(column, mean, sd) in &self.singles {
-                let draw: f64 = rng.sample(StandardNormal);
-                row[column] = mean + sd * draw;
+                row[column] = mean + sd * normal.sample(rng);
             }
             for block in &self.blocks {
-                block.draw(rng, &mut z, row);
+                block.draw(normal, rng, &mut z, row);
             }
             for (column, distribution) in &self.independent {
                 row[*column] = distribution.sample(rng);
             }
-            if !self.constraints.is_empty() {
-                self.draw_constrained(rng, &mut z, row, counts)?;
+            if !self.constrained_groups.is_empty() {
+                self.draw_constrained(normal, rng, &mut z, row, counts)?;
             }
         }
         Ok(())
@@ -440,54 +558,48 @@ impl InputSpace {
 
     fn draw_constrained<R: Rng + ?Sized>(
         &self,
+        normal: &Ziggurat,
         rng: &mut R,
         z: &mut [f64],
         row: &mut [f64],
         counts: &mut ConstraintCounts,
     ) -> Result<(), DeviationError> {
-        for _ in 0..MAX_REJECTIONS_PER_ROW {
-            counts.attempts += 1;
-            for block in &self.constrained_blocks {
-                block.draw(rng, z, row);
-            }
-            if self
-                .constraints
-                .iter()
-                .all(|(first, c)| c.holds(&row[*first..*first + 6]))
-            {
-                counts.accepted += 1;
-                return Ok(());
-            }
+        if counts.groups.len() < self.constrained_groups.len() {
+            counts.groups.resize(self.constrained_groups.len(), (0, 0));
         }
-        Err(DeviationError::invalid(
-            self.constraint_paths.join(", "),
-            format!("the Eq. 11 constraint rejected {MAX_REJECTIONS_PER_ROW} draws in a row"),
-        ))
+        'groups: for (group, tally) in self.constrained_groups.iter().zip(counts.groups.iter_mut())
+        {
+            for attempt in 1..=MAX_REJECTIONS_PER_ROW {
+                if group.draw_candidate(normal, rng, z, row) {
+                    tally.0 += attempt;
+                    tally.1 += 1;
+                    continue 'groups;
+                }
+            }
+            return Err(DeviationError::invalid(
+                self.constraint_paths.join(", "),
+                format!("the Eq. 11 constraint rejected {MAX_REJECTIONS_PER_ROW} draws in a row"),
+            ));
+        }
+        Ok(())
     }
 
     /// Measures the acceptance rate of the constraints on a fixed pilot stream and rejects
     /// the space when it is below [`MIN_ACCEPTANCE_RATE`].
     fn check_acceptance(&self) -> Result<(), DeviationError> {
-        if self.constraints.is_empty() {
+        if self.constrained_groups.is_empty() {
             return Ok(());
         }
         let mut rng = rand_chacha_pilot();
         let mut z = vec![0.0; self.max_rank.max(1)];
         let mut row = self.mean_row();
-        let mut accepted = 0u64;
-        for _ in 0..PILOT_DRAWS {
-            for block in &self.constrained_blocks {
-                block.draw(&mut rng, &mut z, &mut row);
-            }
-            if self
-                .constraints
-                .iter()
-                .all(|(first, c)| c.holds(&row[*first..*first + 6]))
-            {
-                accepted += 1;
-            }
+        let mut rate = 1.0;
+        for group in &self.constrained_groups {
+            let accepted = (0..PILOT_DRAWS)
+                .filter(|_| group.draw_candidate(Ziggurat::get(), &mut rng, &mut z, &mut row))
+                .count();
+            rate *= accepted as f64 / PILOT_DRAWS as f64;
         }
-        let rate = accepted as f64 / PILOT_DRAWS as f64;
         if rate < MIN_ACCEPTANCE_RATE {
             return Err(DeviationError::invalid(
                 self.constraint_paths.join(", "),
@@ -519,7 +631,7 @@ mod tests {
         let space = builder.build("correlations").unwrap();
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
         let mut rows = vec![f64::NAN; 6 * 1000];
-        let mut counts = ConstraintCounts::default();
+        let mut counts = space.new_constraint_counts();
         space.sample_rows(&mut rng, &mut rows, &mut counts).unwrap();
         for row in rows.chunks_exact(6) {
             assert_eq!(row[2], 0.0);

@@ -24,6 +24,7 @@ mod constraint;
 mod displacement;
 mod error;
 mod input_space;
+mod normal;
 mod part;
 mod scalar;
 
@@ -32,5 +33,6 @@ pub use constraint::TiltConstraint;
 pub use displacement::point_displacement;
 pub use error::DeviationError;
 pub use input_space::{ConstraintCounts, InputSpace, InputSpaceBuilder};
+pub use normal::Ziggurat;
 pub use part::{check_covariance, PartSpec, SixDof};
 pub use scalar::ScalarDistribution;

@@ -260,7 +260,7 @@ impl ScalarDistribution {
             }
             normal => {
                 let (mean, sd) = normal.as_normal().unwrap_or((0.0, 0.0));
-                mean + sd * rng.sample::<f64, _>(rand_distr::StandardNormal)
+                mean + sd * crate::normal::Ziggurat::get().sample(rng)
             }
         }
     }

@@ -74,11 +74,12 @@ pub struct PercentileMethodReport {
 pub struct ConstraintReport {
     /// JSON paths of the constrained parts.
     pub parts: Vec<String>,
-    /// Candidate draws.
-    pub attempts: u64,
-    /// Accepted draws (one per sample).
-    pub accepted: u64,
-    /// accepted / attempts.
+    /// Independent groups of inequalities, each drawn by its own rejection loop.
+    pub independent_groups: usize,
+    /// Candidate draws over all groups.
+    pub candidate_draws: u64,
+    /// Probability that an unconstrained draw satisfies the whole constraint (product of
+    /// the groups' acceptance rates).
     pub acceptance_rate: f64,
 }
 
@@ -236,8 +237,8 @@ impl RunReport {
             .has_constraints()
             .then(|| ConstraintReport {
                 parts: scenario.input_space.constraint_paths().to_vec(),
-                attempts: result.constraint_counts.attempts,
-                accepted: result.constraint_counts.accepted,
+                independent_groups: result.constraint_counts.groups.len(),
+                candidate_draws: result.constraint_counts.attempts(),
                 acceptance_rate: result.constraint_counts.acceptance_rate(),
             });
         let outputs = scenario
@@ -265,6 +266,20 @@ impl RunReport {
                             .collect(),
                         Histogram::from_sketch(sketch, min, max, HISTOGRAM_BINS),
                     ),
+                    Distribution::Indicator => {
+                        let zeros = m.n - acc.nonzero;
+                        (
+                            PERCENTS
+                                .iter()
+                                .map(|p| binary_percentile(zeros, m.n, p.1))
+                                .collect(),
+                            Histogram {
+                                lower_edge: 0.0,
+                                bin_width: 0.5,
+                                counts: vec![zeros, acc.nonzero],
+                            },
+                        )
+                    }
                 };
                 let percentiles = OrderedNumbers(
                     PERCENTS
@@ -346,11 +361,11 @@ impl RunReport {
         ));
         if let Some(c) = &self.constraint {
             lines.push(format!(
-                "constraint 001 Eq. 11 on {}: acceptance {:.2} % ({} of {} draws)",
+                "constraint 001 Eq. 11 on {}: acceptance {:.2} % ({} candidate draws in {} independent groups)",
                 c.parts.join(", "),
                 100.0 * c.acceptance_rate,
-                group_thousands(c.accepted),
-                group_thousands(c.attempts)
+                group_thousands(c.candidate_draws),
+                c.independent_groups
             ));
         }
         lines.push(String::new());
@@ -447,6 +462,18 @@ impl RunReport {
         text.push('\n');
         text
     }
+}
+
+/// Type-7 percentile of a sample of `zeros` zeros followed by ones, `n` values in all.
+fn binary_percentile(zeros: u64, n: u64, percent: f64) -> Option<f64> {
+    if n == 0 {
+        return None;
+    }
+    let h = (n - 1) as f64 * percent / 100.0;
+    let low = h.floor() as u64;
+    let value = |rank: u64| if rank < zeros { 0.0 } else { 1.0 };
+    let (a, b) = (value(low), value((low + 1).min(n - 1)));
+    Some(a + (h - low as f64) * (b - a))
 }
 
 /// The report of `rvtol nominal`: every output at the mean of every deviation.

@@ -20,6 +20,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use rvtol_deviation::ConstraintCounts;
+use rvtol_models::OutputKind;
 
 use crate::scenario::{Scenario, ScenarioError};
 use crate::stats::{Moments, QuantileSketch, SpecLimits};
@@ -27,9 +28,9 @@ use crate::stats::{Moments, QuantileSketch, SpecLimits};
 /// Samples per chunk (part of the reproducibility contract: changing it changes results).
 pub const CHUNK_SIZE: usize = 4096;
 /// Chunks per wave: bounds the memory of in-flight partial results.
-pub const WAVE_CHUNKS: u64 = 256;
+pub const WAVE_CHUNKS: u64 = 1024;
 /// Relative accuracy of the quantile sketch used beyond the exact-percentile limit.
-pub const SKETCH_RELATIVE_ACCURACY: f64 = 1e-4;
+pub const SKETCH_RELATIVE_ACCURACY: f64 = 1e-3;
 /// Default memory cap for exact percentiles: values kept over all outputs (8 bytes each).
 pub const DEFAULT_EXACT_PERCENTILE_LIMIT: u64 = 8_000_000;
 
@@ -65,6 +66,8 @@ pub enum Distribution {
     Values(Vec<f64>),
     /// A quantile sketch.
     Sketch(QuantileSketch),
+    /// Nothing kept: an indicator output, whose distribution is its event count.
+    Indicator,
 }
 
 /// The accumulated statistics of one output.
@@ -93,7 +96,7 @@ pub struct RunResult {
     pub seed: u64,
     /// Percentile method used.
     pub percentile_method: PercentileMethod,
-    /// Constraint rejection tally (all constrained parts together).
+    /// Constraint rejection tally, per independent group of inequalities.
     pub constraint_counts: ConstraintCounts,
     /// One accumulator per scenario output, in order.
     pub outputs: Vec<OutputAccumulator>,
@@ -123,6 +126,7 @@ struct Plan<'a> {
     gathers: Vec<Vec<(usize, usize)>>,
     templates: Vec<Vec<f64>>,
     limits: Vec<Option<SpecLimits>>,
+    indicator: Vec<bool>,
 }
 
 impl Plan<'_> {
@@ -149,15 +153,17 @@ impl Plan<'_> {
             above_upper: vec![0; n_out],
             nonzero: vec![0; n_out],
             distributions: (0..n_out)
-                .map(|_| {
-                    if self.exact {
+                .map(|o| {
+                    if self.indicator[o] {
+                        Distribution::Indicator
+                    } else if self.exact {
                         Distribution::Values(Vec::new())
                     } else {
                         Distribution::Sketch(QuantileSketch::new(SKETCH_RELATIVE_ACCURACY))
                     }
                 })
                 .collect(),
-            constraint_counts: ConstraintCounts::default(),
+            constraint_counts: self.scenario.input_space.new_constraint_counts(),
             error: None,
         }
     }
@@ -208,6 +214,17 @@ impl Plan<'_> {
         let mut moments = Vec::with_capacity(partial.output_columns.len());
         for (o, column) in partial.output_columns.iter().enumerate() {
             let mut values = &column[..m];
+            if self.indicator[o] {
+                // Events only: the moments follow from the counts at the end.
+                let finite = values.iter().filter(|v| v.is_finite()).count();
+                partial.non_finite[o] += (m - finite) as u64;
+                partial.nonzero[o] += values
+                    .iter()
+                    .filter(|&&v| v.is_finite() && v != 0.0)
+                    .count() as u64;
+                moments.push(Moments::new());
+                continue;
+            }
             if values.iter().any(|v| !v.is_finite()) {
                 partial.finite.clear();
                 partial
@@ -225,10 +242,10 @@ impl Plan<'_> {
                     partial.above_upper[o] += values.iter().filter(|&&v| v > upper).count() as u64;
                 }
             }
-            partial.nonzero[o] += values.iter().filter(|&&v| v != 0.0).count() as u64;
             match &mut partial.distributions[o] {
                 Distribution::Values(kept) => kept.extend_from_slice(values),
                 Distribution::Sketch(sketch) => sketch.insert_slice(values),
+                Distribution::Indicator => {}
             }
         }
         partial.chunk_moments.push((chunk, moments));
@@ -262,6 +279,11 @@ pub fn run(
             .map(|m| m.constant_template())
             .collect(),
         limits: scenario.outputs.iter().map(|o| o.spec).collect(),
+        indicator: scenario
+            .outputs
+            .iter()
+            .map(|o| o.kind == OutputKind::Indicator)
+            .collect(),
     };
     let n_chunks = settings.samples.div_ceil(CHUNK_SIZE as u64);
     let mut result = RunResult {
@@ -274,7 +296,7 @@ pub fn run(
                 relative_accuracy: SKETCH_RELATIVE_ACCURACY,
             }
         },
-        constraint_counts: ConstraintCounts::default(),
+        constraint_counts: scenario.input_space.new_constraint_counts(),
         outputs: plan
             .partial()
             .distributions
@@ -296,12 +318,17 @@ pub fn run(
             }
         }
     }
+    let min_chunks_per_split =
+        (WAVE_CHUNKS as usize / (4 * rayon::current_num_threads().max(1))).max(1);
     let mut wave_start = 0;
     while wave_start < n_chunks {
         let wave_end = (wave_start + WAVE_CHUNKS).min(n_chunks);
         let partials: Vec<Partial> = (wave_start as usize..wave_end as usize)
             .into_par_iter()
-            .with_min_len(4)
+            // A few splits per thread: each split allocates its scratch buffers and
+            // partial statistics once. Grouping does not change any result (see the
+            // module comment).
+            .with_min_len(min_chunks_per_split)
             .fold(
                 || plan.partial(),
                 |mut partial, chunk| {
@@ -314,6 +341,12 @@ pub fn run(
             .collect();
         merge_wave(&mut result, partials)?;
         wave_start = wave_end;
+    }
+    for (output, info) in result.outputs.iter_mut().zip(&scenario.outputs) {
+        if info.kind == OutputKind::Indicator {
+            let n = settings.samples - output.non_finite;
+            output.moments = indicator_moments(output.nonzero, n);
+        }
     }
     Ok(result)
 }
@@ -328,7 +361,7 @@ fn merge_wave(result: &mut RunResult, partials: Vec<Partial>) -> Result<(), Scen
     }
     let mut chunk_moments: Vec<(u64, Vec<Moments>)> = Vec::new();
     for partial in partials {
-        result.constraint_counts.add(partial.constraint_counts);
+        result.constraint_counts.add(&partial.constraint_counts);
         chunk_moments.extend(partial.chunk_moments);
         for (o, distribution) in partial.distributions.into_iter().enumerate() {
             let output = &mut result.outputs[o];
@@ -340,6 +373,7 @@ fn merge_wave(result: &mut RunResult, partials: Vec<Partial>) -> Result<(), Scen
                 (Distribution::Values(all), Distribution::Values(part)) => {
                     all.extend_from_slice(&part)
                 }
+                (Distribution::Indicator, Distribution::Indicator) => {}
                 (Distribution::Sketch(all), Distribution::Sketch(part)) => all
                     .merge(&part)
                     .map_err(|err| ScenarioError::new("(run)", err.to_string()))?,
@@ -354,6 +388,26 @@ fn merge_wave(result: &mut RunResult, partials: Vec<Partial>) -> Result<(), Scen
         }
     }
     Ok(())
+}
+
+/// Moments of a 0/1 sample with `events` ones among `n` values, in closed form.
+fn indicator_moments(events: u64, n: u64) -> Moments {
+    if n == 0 {
+        return Moments::new();
+    }
+    let (k, nf) = (events as f64, n as f64);
+    let p = k / nf;
+    let (one, zero) = (1.0 - p, -p);
+    let zeros = nf - k;
+    Moments {
+        n,
+        mean: p,
+        m2: k * one * one + zeros * zero * zero,
+        m3: k * one.powi(3) + zeros * zero.powi(3),
+        m4: k * one.powi(4) + zeros * zero.powi(4),
+        min: if events < n { 0.0 } else { 1.0 },
+        max: if events > 0 { 1.0 } else { 0.0 },
+    }
 }
 
 /// Evaluates every model at the mean row of the input space (the nominal design).

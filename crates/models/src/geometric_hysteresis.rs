@@ -389,8 +389,14 @@ impl ErrorModel for GeometricHysteresis {
         // Input shaft deviation at the sun mesh (001 Eq. 5–8): radial offset a1, tilt β.
         let shaft = [shaft_du, shaft_dv, 0.0, shaft_dalpha, shaft_dbeta, 0.0];
         let at_sun = point_displacement(&shaft, [0.0, 0.0, self.sun_gear_axial_position]);
-        let a1 = at_sun[0].hypot(at_sun[1]);
-        let cos_beta = shaft_dalpha.hypot(shaft_dbeta).cos();
+        let a1 = (at_sun[0] * at_sun[0] + at_sun[1] * at_sun[1]).sqrt();
+        let beta_squared = shaft_dalpha * shaft_dalpha + shaft_dbeta * shaft_dbeta;
+        // cos β by its series below β = 1e-3 rad (truncation error β⁶/720 < 1e-20).
+        let cos_beta = if beta_squared < 1e-6 {
+            1.0 - 0.5 * beta_squared + beta_squared * beta_squared / 24.0
+        } else {
+            beta_squared.sqrt().cos()
+        };
         let tilted_distance = self.center_distance + a1;
 
         // Involute stage, Eq. 5 / 12 with the operating pressure angle.

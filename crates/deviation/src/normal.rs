@@ -1,0 +1,205 @@
+//! Standard normal draws by the ziggurat method of Marsaglia & Tsang (2000), "The
+//! ziggurat method for generating random variables", J. Stat. Softw. 5(8), with 128
+//! layers, and the independent-bits fix of Doornik (2005), "An improved ziggurat method
+//! to generate normal random samples".
+//!
+//! One 32-bit word per draw in 98.8 % of cases: bits 0–6 pick the layer, bit 7 the sign,
+//! bits 8–31 the position inside the layer (24 bits, so the layer index and the value never
+//! share bits, Doornik's point against the original RNOR). The value is
+//! (j + ½)·x_i/2²⁴: the midpoint of one of 2²⁴ equal cells of the layer's rectangle, which
+//! is exact for the distribution of the rectangle part and symmetric about zero. Draws in
+//! a layer's wedge are accepted against e^(−x²/2), draws beyond r = 3.442619855899 come
+//! from Marsaglia's exponential tail method. Using half the random bits of a 64-bit
+//! ziggurat halves the generator's cost, the largest part of a sample's cost; 24 bits
+//! resolve a layer to 2⁻²⁴ of its width, far below any tolerance of interest.
+
+use std::sync::OnceLock;
+
+use rand::Rng;
+
+const LAYERS: usize = 128;
+/// Right edge of the base strip (start of the tail), Marsaglia & Tsang (2000).
+const TAIL_START: f64 = 3.442_619_855_899;
+/// Area of every layer, Marsaglia & Tsang (2000).
+const LAYER_AREA: f64 = 9.912_563_035_262_17e-3;
+const SCALE: f64 = 16_777_216.0; // 2^24
+
+/// The ziggurat tables: acceptance thresholds, widths per cell and density at the edges.
+#[derive(Debug)]
+pub struct Ziggurat {
+    threshold: [u32; LAYERS],
+    cell_width: [f64; LAYERS],
+    density: [f64; LAYERS],
+}
+
+impl Ziggurat {
+    fn build() -> Ziggurat {
+        let mut threshold = [0u32; LAYERS];
+        let mut cell_width = [0.0; LAYERS];
+        let mut density = [0.0; LAYERS];
+        let f = |x: f64| (-0.5 * x * x).exp();
+        let mut edge = TAIL_START;
+        let mut previous_edge = edge;
+        // Base strip: a rectangle of the layer area, width q = v / f(r).
+        let q = LAYER_AREA / f(edge);
+        threshold[0] = (edge / q * SCALE) as u32;
+        cell_width[0] = q / SCALE;
+        cell_width[LAYERS - 1] = edge / SCALE;
+        density[0] = 1.0;
+        density[LAYERS - 1] = f(edge);
+        for i in (1..LAYERS - 1).rev() {
+            edge = (-2.0 * (LAYER_AREA / edge + f(edge)).ln()).sqrt();
+            threshold[i + 1] = (edge / previous_edge * SCALE) as u32;
+            previous_edge = edge;
+            density[i] = f(edge);
+            cell_width[i] = edge / SCALE;
+        }
+        threshold[1] = 0;
+        Ziggurat {
+            threshold,
+            cell_width,
+            density,
+        }
+    }
+
+    /// The shared tables.
+    pub fn get() -> &'static Ziggurat {
+        static TABLES: OnceLock<Ziggurat> = OnceLock::new();
+        TABLES.get_or_init(Ziggurat::build)
+    }
+
+    /// One standard normal draw.
+    #[inline]
+    pub fn sample<R: Rng + ?Sized>(&self, rng: &mut R) -> f64 {
+        let word = rng.next_u32();
+        self.from_word(word, rng)
+    }
+
+    /// A standard normal draw from a random 32-bit word, drawing more from `rng` only in
+    /// the rare slow path (wedges and tail, 1.2 % of words).
+    #[inline]
+    pub fn from_word<R: Rng + ?Sized>(&self, word: u32, rng: &mut R) -> f64 {
+        let layer = (word & 0x7f) as usize;
+        let cell = word >> 8;
+        if cell < self.threshold[layer] {
+            let x = (cell as f64 + 0.5) * self.cell_width[layer];
+            // Branch-free sign from bit 7 (a branch would be mispredicted half the time).
+            return f64::from_bits(x.to_bits() ^ (((word & 0x80) as u64) << 56));
+        }
+        self.sample_slow(rng, word)
+    }
+
+    #[cold]
+    fn sample_slow<R: Rng + ?Sized>(&self, rng: &mut R, mut word: u32) -> f64 {
+        loop {
+            let layer = (word & 0x7f) as usize;
+            let cell = word >> 8;
+            let negative = word & 0x80 != 0;
+            let sign = |x: f64| if negative { -x } else { x };
+            if cell < self.threshold[layer] {
+                return sign((cell as f64 + 0.5) * self.cell_width[layer]);
+            }
+            if layer == 0 {
+                // Tail beyond r (Marsaglia 1964): x = −ln(U1)/r, y = −ln(U2), accept if
+                // 2y > x², return r + x.
+                loop {
+                    let x = -open_unit(rng).ln() / TAIL_START;
+                    let y = -open_unit(rng).ln();
+                    if y + y > x * x {
+                        return sign(TAIL_START + x);
+                    }
+                }
+            }
+            let x = (cell as f64 + 0.5) * self.cell_width[layer];
+            let y = self.density[layer]
+                + open_unit(rng) * (self.density[layer - 1] - self.density[layer]);
+            if y < (-0.5 * x * x).exp() {
+                return sign(x);
+            }
+            word = rng.next_u32();
+        }
+    }
+}
+
+/// A uniform draw in (0, 1), never 0 (53 random bits).
+#[inline]
+fn open_unit<R: Rng + ?Sized>(rng: &mut R) -> f64 {
+    ((rng.next_u64() >> 11) as f64 + 0.5) * (1.0 / 9_007_199_254_740_992.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+    use statrs::distribution::{ContinuousCDF, Normal};
+
+    #[test]
+    fn layers_cover_the_density() {
+        // Every layer's rectangle has the same area v; the edges decrease to the top.
+        let z = Ziggurat::get();
+        for i in 2..LAYERS {
+            let x_i = z.cell_width[i] * SCALE;
+            let x_above = z.cell_width[i - 1] * SCALE;
+            assert!(x_above < x_i);
+            let area = x_i * (z.density[i - 1] - z.density[i]);
+            assert!((area - LAYER_AREA).abs() < 1e-9, "layer {i}: {area}");
+        }
+    }
+
+    #[test]
+    fn kolmogorov_smirnov_against_standard_normal() {
+        // One-sample KS test, n = 1e6: the 0.1 % critical value of √n·D is 1.949
+        // (Kolmogorov distribution), so a correct sampler fails this 1 time in 1000.
+        let z = Ziggurat::get();
+        let mut rng = ChaCha8Rng::seed_from_u64(42);
+        let n = 1_000_000;
+        let mut xs: Vec<f64> = (0..n).map(|_| z.sample(&mut rng)).collect();
+        xs.sort_by(f64::total_cmp);
+        let normal = Normal::new(0.0, 1.0).unwrap();
+        let d = xs
+            .iter()
+            .enumerate()
+            .map(|(i, &x)| {
+                let cdf = normal.cdf(x);
+                (cdf - i as f64 / n as f64).max((i + 1) as f64 / n as f64 - cdf)
+            })
+            .fold(0.0, f64::max);
+        assert!(
+            (n as f64).sqrt() * d < 1.949,
+            "√n·D = {}",
+            (n as f64).sqrt() * d
+        );
+    }
+
+    #[test]
+    fn tail_and_moments() {
+        // Beyond the ziggurat's tail start r: P(|X| > r) = 2(1 − Φ(r)) = 5.7601e-4; the count
+        // is binomial, bound 5 standard errors. Moments: mean 0 ± 5/√n, variance 1 ± 5·√(2/n),
+        // kurtosis E[X⁴] = 3 ± 5·√(96/n).
+        let z = Ziggurat::get();
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let n = 4_000_000u64;
+        let (mut s1, mut s2, mut s4, mut tail) = (0.0, 0.0, 0.0, 0u64);
+        for _ in 0..n {
+            let x = z.sample(&mut rng);
+            s1 += x;
+            s2 += x * x;
+            s4 += x * x * x * x;
+            if x.abs() > TAIL_START {
+                tail += 1;
+            }
+        }
+        let nf = n as f64;
+        let normal = Normal::new(0.0, 1.0).unwrap();
+        let p = 2.0 * (1.0 - normal.cdf(TAIL_START));
+        let expected = p * nf;
+        assert!(
+            (tail as f64 - expected).abs() < 5.0 * (expected * (1.0 - p)).sqrt(),
+            "{tail} vs {expected}"
+        );
+        assert!((s1 / nf).abs() < 5.0 / nf.sqrt());
+        assert!((s2 / nf - 1.0).abs() < 5.0 * (2.0 / nf).sqrt());
+        assert!((s4 / nf - 3.0).abs() < 5.0 * (96.0 / nf).sqrt());
+    }
+}
