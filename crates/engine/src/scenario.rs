@@ -286,6 +286,10 @@ impl Scenario {
         let file: ScenarioFile =
             serde_path_to_error::deserialize(&mut deserializer).map_err(|err| {
                 let path = err.path().to_string();
+                if err.inner().is_syntax() || err.inner().is_eof() {
+                    // The position is the useful part; the path stops at the broken token.
+                    return ScenarioError::new("JSON syntax", err.into_inner().to_string());
+                }
                 let path = if path == "." || path.is_empty() {
                     "(root)".to_string()
                 } else {

@@ -1,0 +1,388 @@
+//! End-to-end tests of bad input: every broken scenario, bad argument and usage error
+//! must make `rvtol` exit with code 2 and, for scenarios and arguments, print exactly one
+//! line `error: …` on stderr that names the JSON path of the problem, with nothing on
+//! stdout and no panic. Each scenario case is checked with both `rvtol validate` and
+//! `rvtol run --samples 1000 --quiet`, which must fail the same way.
+
+mod common;
+
+use std::process::Output;
+
+use common::{run_rvtol, TempScenario};
+use serde_json::{json, Value};
+
+/// A small valid scenario: two normal variables x1, x2 stacked as y = x1 − 2·x2.
+fn base() -> Value {
+    json!({
+        "name": "bad-input-base",
+        "samples": 1000,
+        "seed": 7,
+        "variables": [
+            { "name": "x1", "unit": "mm", "distribution": { "normal": { "mean": 0.0, "sd": 0.1 } } },
+            { "name": "x2", "unit": "mm", "distribution": { "normal": { "mean": 1.0, "sd": 0.2 } } }
+        ],
+        "models": [
+            {
+                "model": "linear_stack",
+                "params": { "coefficients": { "a": 1.0, "b": -2.0 } },
+                "inputs": { "a": "x1", "b": "x2" }
+            }
+        ]
+    })
+}
+
+/// The base scenario after `change`.
+fn scenario_with(change: impl FnOnce(&mut Value)) -> String {
+    let mut scenario = base();
+    change(&mut scenario);
+    serde_json::to_string_pretty(&scenario).expect("serialisable")
+}
+
+/// A part with six zero means and `covariance`.
+fn part_with_covariance(covariance: Value) -> Value {
+    json!({ "name": "shaft", "mean": [0.0, 0.0, 0.0, 0.0, 0.0, 0.0], "covariance": covariance })
+}
+
+/// The 6×6 identity as JSON rows.
+fn identity6() -> Vec<Vec<f64>> {
+    (0..6)
+        .map(|i| (0..6).map(|j| if i == j { 1.0 } else { 0.0 }).collect())
+        .collect()
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+/// Asserts exit code 2, empty stdout, no panic and exactly one stderr line starting with
+/// `error: ` that contains every `needle`; returns that line.
+fn assert_one_line_error(what: &str, output: &Output, needles: &[&str]) -> String {
+    let stdout = text(&output.stdout);
+    let stderr = text(&output.stderr);
+    let context = format!(
+        "{what}\n--- status {:?}\n--- stdout\n{stdout}\n--- stderr\n{stderr}",
+        output.status.code()
+    );
+    assert_eq!(output.status.code(), Some(2), "exit code: {context}");
+    assert!(!stderr.contains("panicked"), "panic: {context}");
+    assert!(stdout.is_empty(), "stdout not empty: {context}");
+    let line = stderr.strip_suffix('\n').unwrap_or(&stderr);
+    assert!(!line.contains('\n'), "more than one line: {context}");
+    assert!(
+        line.starts_with("error: "),
+        "no `error: ` prefix: {context}"
+    );
+    for needle in needles {
+        assert!(line.contains(needle), "missing {needle:?}: {context}");
+    }
+    line.to_string()
+}
+
+/// Writes `contents` as a scenario, runs `validate` and `run`, and asserts both fail with
+/// the same single line naming `json_path` (as `: <path>: `, when given) and `words`.
+fn assert_bad_scenario(label: &str, contents: &str, json_path: Option<&str>, words: &[&str]) {
+    let file = TempScenario::new(&format!("bad-input-{label}"), contents);
+    let path_needle = json_path.map(|p| format!(": {p}: "));
+    let mut needles: Vec<&str> = words.to_vec();
+    if let Some(p) = &path_needle {
+        needles.push(p);
+    }
+    let validate = run_rvtol(&["validate".as_ref(), file.path().as_os_str()]);
+    let validate_line = assert_one_line_error(&format!("{label}: validate"), &validate, &needles);
+    let run = run_rvtol(&[
+        "run".as_ref(),
+        file.path().as_os_str(),
+        "--samples".as_ref(),
+        "1000".as_ref(),
+        "--quiet".as_ref(),
+    ]);
+    let run_line = assert_one_line_error(&format!("{label}: run"), &run, &needles);
+    assert_eq!(validate_line, run_line, "{label}: validate and run differ");
+}
+
+#[test]
+fn valid_base_scenario_validates_and_runs() {
+    let file = TempScenario::new("bad-input-valid", &scenario_with(|_| {}));
+    let validate = run_rvtol(&["validate".as_ref(), file.path().as_os_str()]);
+    assert_eq!(
+        validate.status.code(),
+        Some(0),
+        "{}",
+        text(&validate.stderr)
+    );
+    assert!(text(&validate.stdout).contains("valid"));
+    assert!(validate.stderr.is_empty(), "{}", text(&validate.stderr));
+    let run = run_rvtol(&[
+        "run".as_ref(),
+        file.path().as_os_str(),
+        "--samples".as_ref(),
+        "1000".as_ref(),
+        "--quiet".as_ref(),
+    ]);
+    assert_eq!(run.status.code(), Some(0), "{}", text(&run.stderr));
+    assert!(!run.stdout.is_empty());
+}
+
+#[test]
+fn malformed_json_missing_comma() {
+    let contents = scenario_with(|_| {}).replacen("\"seed\": 7,", "\"seed\": 7", 1);
+    assert!(contents.contains("\"seed\": 7\n"));
+    assert_bad_scenario("missing-comma", &contents, None, &[" at line ", " column "]);
+}
+
+#[test]
+fn malformed_json_truncated() {
+    let full = scenario_with(|_| {});
+    assert_bad_scenario(
+        "truncated",
+        &full[..full.len() / 2],
+        None,
+        &[" at line ", " column "],
+    );
+}
+
+#[test]
+fn unknown_key_at_top_level() {
+    let contents = scenario_with(|s| s["sampels"] = json!(10));
+    assert_bad_scenario(
+        "unknown-top-key",
+        &contents,
+        Some("sampels"),
+        &["unknown field"],
+    );
+}
+
+#[test]
+fn unknown_key_inside_a_variable() {
+    let contents = scenario_with(|s| s["variables"][1]["colour"] = json!("red"));
+    assert_bad_scenario(
+        "unknown-variable-key",
+        &contents,
+        Some("variables[1].colour"),
+        &["unknown field"],
+    );
+}
+
+#[test]
+fn sd_given_as_a_string() {
+    let contents =
+        scenario_with(|s| s["variables"][0]["distribution"]["normal"]["sd"] = json!("0.1"));
+    assert_bad_scenario(
+        "sd-string",
+        &contents,
+        Some("variables[0].distribution.normal.sd"),
+        &["invalid type", "string"],
+    );
+}
+
+#[test]
+fn negative_samples_in_file() {
+    let contents = scenario_with(|s| s["samples"] = json!(-5));
+    assert_bad_scenario("samples-negative", &contents, Some("samples"), &["-5"]);
+}
+
+#[test]
+fn negative_sd() {
+    let contents =
+        scenario_with(|s| s["variables"][1]["distribution"]["normal"]["sd"] = json!(-0.2));
+    assert_bad_scenario(
+        "sd-negative",
+        &contents,
+        Some("variables[1].distribution.normal.sd"),
+        &["must not be negative"],
+    );
+}
+
+#[test]
+fn nan_sd_as_string() {
+    let contents =
+        scenario_with(|s| s["variables"][0]["distribution"]["normal"]["sd"] = json!("NaN"));
+    assert_bad_scenario(
+        "sd-nan",
+        &contents,
+        Some("variables[0].distribution.normal.sd"),
+        &["invalid type", "NaN"],
+    );
+}
+
+#[test]
+fn tolerance_band_with_zero_cp() {
+    let contents = scenario_with(|s| {
+        s["variables"][1]["distribution"] =
+            json!({ "tolerance_band": { "lower": -0.1, "upper": 0.1, "cp": 0.0 } })
+    });
+    assert_bad_scenario(
+        "cp-zero",
+        &contents,
+        Some("variables[1].distribution.tolerance_band.cp"),
+        &["process capability must be positive"],
+    );
+}
+
+#[test]
+fn asymmetric_part_covariance() {
+    let mut covariance = identity6();
+    covariance[0][1] = 0.5;
+    let contents = scenario_with(|s| s["parts"] = json!([part_with_covariance(json!(covariance))]));
+    assert_bad_scenario(
+        "cov-asymmetric",
+        &contents,
+        Some("parts[0].covariance"),
+        &["not symmetric"],
+    );
+}
+
+#[test]
+fn indefinite_part_covariance() {
+    let mut covariance = identity6();
+    covariance[0][1] = 2.0;
+    covariance[1][0] = 2.0;
+    let contents = scenario_with(|s| s["parts"] = json!([part_with_covariance(json!(covariance))]));
+    assert_bad_scenario(
+        "cov-indefinite",
+        &contents,
+        Some("parts[0].covariance"),
+        &["positive semi-definite", "smallest eigenvalue -1"],
+    );
+}
+
+#[test]
+fn model_input_not_bound() {
+    let contents = scenario_with(|s| {
+        s["models"][0]["inputs"]
+            .as_object_mut()
+            .expect("inputs object")
+            .remove("b");
+    });
+    assert_bad_scenario(
+        "input-unbound",
+        &contents,
+        Some("models[0].inputs"),
+        &["\"b\"", "not bound"],
+    );
+}
+
+#[test]
+fn unknown_model_name() {
+    let contents = scenario_with(|s| s["models"][0]["model"] = json!("frobnicator"));
+    assert_bad_scenario(
+        "unknown-model",
+        &contents,
+        Some("models[0].model"),
+        &["unknown model", "frobnicator"],
+    );
+}
+
+#[test]
+fn zero_samples_in_file() {
+    let contents = scenario_with(|s| s["samples"] = json!(0));
+    assert_bad_scenario("samples-zero", &contents, Some("samples"), &["at least 1"]);
+}
+
+#[test]
+fn zero_samples_on_command_line() {
+    let file = TempScenario::new("bad-input-samples-arg-zero", &scenario_with(|_| {}));
+    let output = run_rvtol(&[
+        "run".as_ref(),
+        file.path().as_os_str(),
+        "--samples".as_ref(),
+        "0".as_ref(),
+        "--quiet".as_ref(),
+    ]);
+    assert_one_line_error("run --samples 0", &output, &["--samples", "at least 1"]);
+}
+
+#[test]
+fn correlation_with_unknown_variable() {
+    let contents =
+        scenario_with(|s| s["correlations"] = json!([{ "between": ["x1", "x9"], "rho": 0.5 }]));
+    assert_bad_scenario(
+        "corr-unknown",
+        &contents,
+        Some("correlations[0].between[1]"),
+        &["\"x9\""],
+    );
+}
+
+#[test]
+fn correlation_above_one() {
+    let contents =
+        scenario_with(|s| s["correlations"] = json!([{ "between": ["x1", "x2"], "rho": 1.5 }]));
+    assert_bad_scenario(
+        "corr-rho",
+        &contents,
+        Some("correlations[0].rho"),
+        &["[-1, 1]", "1.5"],
+    );
+}
+
+#[test]
+fn spec_limits_for_unknown_output() {
+    let contents = scenario_with(|s| s["spec_limits"] = json!({ "nonesuch": { "upper": 1.0 } }));
+    assert_bad_scenario(
+        "spec-unknown",
+        &contents,
+        Some("spec_limits.nonesuch"),
+        &["no output named"],
+    );
+}
+
+#[test]
+fn model_input_bound_to_unknown_variable() {
+    let contents = scenario_with(|s| s["models"][0]["inputs"]["b"] = json!("x9"));
+    assert_bad_scenario(
+        "input-unknown-variable",
+        &contents,
+        Some("models[0].inputs.b"),
+        &["\"x9\""],
+    );
+}
+
+#[test]
+fn part_covariance_with_five_rows() {
+    let mut covariance = identity6();
+    covariance.pop();
+    let contents = scenario_with(|s| s["parts"] = json!([part_with_covariance(json!(covariance))]));
+    assert_bad_scenario(
+        "cov-five-rows",
+        &contents,
+        Some("parts[0].covariance"),
+        &["6 rows", "got 5 rows"],
+    );
+}
+
+#[test]
+fn usage_run_without_file() {
+    let output = run_rvtol(&["run"]);
+    assert_eq!(output.status.code(), Some(2), "{}", text(&output.stderr));
+    assert!(!text(&output.stderr).contains("panicked"));
+}
+
+#[test]
+fn usage_unknown_command() {
+    let output = run_rvtol(&["frobnicate"]);
+    assert_eq!(output.status.code(), Some(2), "{}", text(&output.stderr));
+    assert!(!text(&output.stderr).contains("panicked"));
+}
+
+#[test]
+fn missing_scenario_file() {
+    let missing = std::env::temp_dir().join(format!(
+        "rvtol-bad-input-missing-{}.json",
+        std::process::id()
+    ));
+    let _ = std::fs::remove_file(&missing);
+    let name = missing.display().to_string();
+    let validate = run_rvtol(&["validate".as_ref(), missing.as_os_str()]);
+    let validate_line =
+        assert_one_line_error("validate missing file", &validate, &[&name, "cannot read"]);
+    let run = run_rvtol(&[
+        "run".as_ref(),
+        missing.as_os_str(),
+        "--samples".as_ref(),
+        "1000".as_ref(),
+        "--quiet".as_ref(),
+    ]);
+    let run_line = assert_one_line_error("run missing file", &run, &[&name, "cannot read"]);
+    assert_eq!(validate_line, run_line);
+}

@@ -1,0 +1,164 @@
+//! End-to-end tests of the `rvtol` binary on the shipped scenarios: the two README
+//! commands' work, byte-identical JSON reports across thread counts, the report contract
+//! (keys users' scripts rely on), `nominal`, `models`, and atomic report writing.
+
+mod common;
+
+use common::{run_rvtol, workspace_dir};
+
+fn scenario(file: &str) -> String {
+    workspace_dir()
+        .join("scenarios")
+        .join(file)
+        .display()
+        .to_string()
+}
+
+fn temp_path(label: &str) -> std::path::PathBuf {
+    std::env::temp_dir().join(format!("rvtol-cli-{label}-{}.json", std::process::id()))
+}
+
+#[test]
+fn run_json_is_byte_identical_with_1_2_and_4_threads() {
+    let mut reports = Vec::new();
+    for threads in ["1", "2", "4"] {
+        let path = temp_path(&format!("threads-{threads}"));
+        let output = run_rvtol(&[
+            "run",
+            &scenario("rv20e-hysteresis.json"),
+            "--samples",
+            "300000",
+            "--seed",
+            "17",
+            "--threads",
+            threads,
+            "--json",
+            path.to_str().unwrap(),
+            "--quiet",
+        ]);
+        assert_eq!(
+            output.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        reports.push(std::fs::read(&path).unwrap());
+        std::fs::remove_file(&path).unwrap();
+    }
+    assert_eq!(reports[0], reports[1]);
+    assert_eq!(reports[0], reports[2]);
+}
+
+#[test]
+fn run_report_has_the_documented_keys() {
+    let output = run_rvtol(&[
+        "run",
+        &scenario("rv20e-hysteresis.json"),
+        "--samples",
+        "50000",
+        "--json",
+        "-",
+        "--quiet",
+    ]);
+    assert_eq!(output.status.code(), Some(0));
+    let report: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+    for key in ["rvtol_version", "seed", "samples", "outputs"] {
+        assert!(report.get(key).is_some(), "missing {key}");
+    }
+    assert_eq!(report["samples"], 50000);
+    assert_eq!(report["seed"], 20221013);
+    let outputs = report["outputs"].as_array().unwrap();
+    let hysteresis = outputs
+        .iter()
+        .find(|o| o["name"] == "hysteresis_arcmin")
+        .unwrap();
+    for key in [
+        "name",
+        "unit",
+        "n",
+        "mean",
+        "sd",
+        "min",
+        "max",
+        "percentiles",
+        "histogram",
+        "spec",
+        "cp",
+        "cpk",
+        "ppm_out",
+    ] {
+        assert!(hysteresis.get(key).is_some(), "missing {key}");
+    }
+    for percent in ["0.135", "2.275", "50", "97.725", "99.865"] {
+        assert!(
+            hysteresis["percentiles"][percent].is_f64(),
+            "percentile {percent}"
+        );
+    }
+    assert_eq!(hysteresis["unit"], "arcmin");
+    assert_eq!(hysteresis["spec"]["upper"], 1.0);
+    assert!(hysteresis["cp"].is_null(), "one-sided spec has no Cp");
+    let interference = outputs
+        .iter()
+        .find(|o| o["name"] == "interference")
+        .unwrap();
+    assert_eq!(interference["kind"], "indicator");
+    assert!(interference["fraction"].is_f64());
+}
+
+#[test]
+fn nominal_json_gives_the_published_hysteresis() {
+    // 000 §5.2: 0.5467 arcmin, within 1 % (issue acceptance).
+    let output = run_rvtol(&["nominal", &scenario("rv20e-hysteresis.json"), "--json", "-"]);
+    assert_eq!(output.status.code(), Some(0));
+    let report: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+    let value = report["outputs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|o| o["name"] == "hysteresis_arcmin")
+        .unwrap()["value"]
+        .as_f64()
+        .unwrap();
+    assert!((value - 0.5467).abs() < 0.01 * 0.5467, "{value}");
+}
+
+#[test]
+fn models_lists_inputs_outputs_and_units() {
+    let output = run_rvtol(&["models"]);
+    assert_eq!(output.status.code(), Some(0));
+    let text = String::from_utf8(output.stdout).unwrap();
+    assert!(text.contains("geometric_hysteresis"));
+    assert!(text.contains("linear_stack"));
+    assert!(text.contains("cycloid_cumulative_pitch_error_mm"));
+    assert!(text.contains("hysteresis_arcmin"));
+}
+
+#[test]
+fn a_failed_run_leaves_no_report_behind() {
+    // The report is written to a temporary file and renamed: a run that fails (here on bad
+    // input) neither creates nor truncates the target.
+    let path = temp_path("atomic");
+    std::fs::write(&path, "previous report\n").unwrap();
+    let output = run_rvtol(&[
+        "run",
+        &scenario("rv20e-hysteresis.json"),
+        "--samples",
+        "0",
+        "--json",
+        path.to_str().unwrap(),
+    ]);
+    assert_eq!(output.status.code(), Some(2));
+    assert_eq!(std::fs::read_to_string(&path).unwrap(), "previous report\n");
+    std::fs::remove_file(&path).unwrap();
+    let leftovers = std::fs::read_dir(std::env::temp_dir())
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| {
+            e.file_name()
+                .to_string_lossy()
+                .contains(&format!("rvtol-cli-atomic-{}.json.tmp", std::process::id()))
+        })
+        .count();
+    assert_eq!(leftovers, 0);
+}
