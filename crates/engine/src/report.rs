@@ -15,9 +15,10 @@ use serde::{Serialize, Serializer};
 
 use crate::run::{Distribution, PercentileMethod, RunResult, CHUNK_SIZE};
 use crate::scenario::Scenario;
+use crate::stats::quantile_sketch::bucket_representative;
 use crate::stats::{
     capability_from_moments, capability_percentile_method, out_of_spec_interval, percentiles_type7,
-    Histogram, SpecLimits,
+    Histogram, QuantileSketch, SpecLimits,
 };
 use rvtol_models::OutputKind;
 
@@ -149,6 +150,9 @@ pub struct OutputReport {
     pub max: f64,
     /// Percentiles keyed by percent.
     pub percentiles: OrderedNumbers,
+    /// Bound on each percentile's error from the percentile method, in the output's unit:
+    /// 0 for exact order statistics; for the sketch, α·|percentile − centre|.
+    pub percentile_error_bounds: OrderedNumbers,
     /// Histogram over [min, max].
     pub histogram: HistogramReport,
     /// Events (samples with value ≠ 0) of an indicator.
@@ -228,7 +232,7 @@ impl RunReport {
             },
             PercentileMethod::Sketch { relative_accuracy } => PercentileMethodReport {
                 kind: "sketch",
-                estimator: "relative-accuracy quantile sketch: within relative_error of the order statistic of rank floor(q*(n-1))",
+                estimator: "relative-accuracy quantile sketch of (x - m)/s, m and s the mean and sd of the first chunk: each percentile lies within relative_error*|percentile - m| (percentile_error_bounds) of the order statistic of rank floor(q*(n-1))",
                 relative_error: Some(relative_accuracy),
             },
         };
@@ -252,20 +256,37 @@ impl RunReport {
                 } else {
                     (f64::NAN, f64::NAN)
                 };
-                let (percentiles, histogram) = match &mut acc.distribution {
+                let exact_bounds = || vec![0.0; PERCENTS.len()];
+                let (percentiles, bounds, histogram) = match &mut acc.distribution {
                     Distribution::Values(values) => {
                         let percents: Vec<f64> = PERCENTS.iter().map(|p| p.1).collect();
                         let histogram = Histogram::from_values(values, min, max, HISTOGRAM_BINS);
                         let found = percentiles_type7(values, &percents);
-                        (found, histogram)
+                        (found, exact_bounds(), histogram)
                     }
-                    Distribution::Sketch(sketch) => (
-                        PERCENTS
+                    Distribution::Sketch {
+                        sketch,
+                        center,
+                        scale,
+                    } => {
+                        let alpha = sketch.relative_accuracy();
+                        let standardised: Vec<Option<f64>> = PERCENTS
                             .iter()
                             .map(|p| sketch.quantile(p.1 / 100.0))
-                            .collect(),
-                        Histogram::from_sketch(sketch, min, max, HISTOGRAM_BINS),
-                    ),
+                            .collect();
+                        // Back to output units; the true order statistic lies in [min, max].
+                        let values = standardised
+                            .iter()
+                            .map(|z| z.map(|z| (*center + *scale * z).clamp(min, max)))
+                            .collect();
+                        let bounds = standardised
+                            .iter()
+                            .map(|z| z.map_or(f64::NAN, |z| alpha * (*scale * z).abs()))
+                            .collect();
+                        let histogram =
+                            histogram_of_standardised_sketch(sketch, *center, *scale, min, max);
+                        (values, bounds, histogram)
+                    }
                     Distribution::Indicator => {
                         let zeros = m.n - acc.nonzero;
                         (
@@ -273,6 +294,7 @@ impl RunReport {
                                 .iter()
                                 .map(|p| binary_percentile(zeros, m.n, p.1))
                                 .collect(),
+                            exact_bounds(),
                             Histogram {
                                 lower_edge: 0.0,
                                 bin_width: 0.5,
@@ -286,6 +308,13 @@ impl RunReport {
                         .iter()
                         .zip(percentiles)
                         .map(|((key, _), v)| (key.to_string(), v.unwrap_or(f64::NAN)))
+                        .collect(),
+                );
+                let percentile_error_bounds = OrderedNumbers(
+                    PERCENTS
+                        .iter()
+                        .zip(bounds)
+                        .map(|((key, _), b)| (key.to_string(), b))
                         .collect(),
                 );
                 let indicator = info.kind == OutputKind::Indicator;
@@ -314,6 +343,7 @@ impl RunReport {
                         )
                     }),
                     percentiles,
+                    percentile_error_bounds,
                     histogram: HistogramReport {
                         lower_edge: histogram.lower_edge,
                         bin_width: histogram.bin_width,
@@ -349,7 +379,9 @@ impl RunReport {
     pub fn to_text(&self) -> String {
         let mut lines = Vec::new();
         let method = match self.percentile_method.relative_error {
-            Some(alpha) => format!("percentiles from a sketch (relative error ≤ {alpha:e})"),
+            Some(alpha) => {
+                format!("percentiles from a sketch (error ≤ {alpha:e} × distance from the centre)")
+            }
             None => "exact percentiles (type 7)".to_string(),
         };
         lines.push(format!(
@@ -461,6 +493,38 @@ impl RunReport {
         let mut text = lines.join("\n");
         text.push('\n');
         text
+    }
+}
+
+/// Histogram over [min, max] of a sketch of (x − center)/scale: each bucket's count goes to
+/// the bin of its representative value mapped back to output units.
+fn histogram_of_standardised_sketch(
+    sketch: &QuantileSketch,
+    center: f64,
+    scale: f64,
+    min: f64,
+    max: f64,
+) -> Histogram {
+    let width = (max - min) / HISTOGRAM_BINS as f64;
+    if !(width > 0.0 && width.is_finite()) {
+        return Histogram {
+            lower_edge: if min.is_finite() { min } else { 0.0 },
+            bin_width: 0.0,
+            counts: vec![sketch.count()],
+        };
+    }
+    let mut counts = vec![0u64; HISTOGRAM_BINS];
+    for (lo, hi, count) in sketch.buckets() {
+        let value = center + scale * bucket_representative(lo, hi);
+        let bin = ((value - min) / width)
+            .floor()
+            .clamp(0.0, (HISTOGRAM_BINS - 1) as f64);
+        counts[bin as usize] += count;
+    }
+    Histogram {
+        lower_edge: min,
+        bin_width: width,
+        counts,
     }
 }
 

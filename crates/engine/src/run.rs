@@ -51,8 +51,9 @@ pub struct RunSettings {
 pub enum PercentileMethod {
     /// Exact order statistics, Hyndman–Fan type 7 interpolation.
     Exact,
-    /// Relative-accuracy quantile sketch: the value returned lies within the given relative
-    /// error of the order statistic of rank ⌊q·(n−1)⌋.
+    /// Relative-accuracy quantile sketch of the standardised output: the value returned
+    /// lies within α·|value − centre| of the order statistic of rank ⌊q·(n−1)⌋, the centre
+    /// being the mean of the pilot chunk 0.
     Sketch {
         /// Relative error bound α.
         relative_accuracy: f64,
@@ -64,8 +65,16 @@ pub enum PercentileMethod {
 pub enum Distribution {
     /// Every finite value (exact percentiles).
     Values(Vec<f64>),
-    /// A quantile sketch.
-    Sketch(QuantileSketch),
+    /// A quantile sketch of the standardised values (x − center)/scale, so its relative
+    /// accuracy applies to the distance from the output's centre in units of its spread.
+    Sketch {
+        /// The sketch.
+        sketch: QuantileSketch,
+        /// Centre subtracted before insertion (the pilot mean).
+        center: f64,
+        /// Scale divided out before insertion (the pilot standard deviation).
+        scale: f64,
+    },
     /// Nothing kept: an indicator output, whose distribution is its event count.
     Indicator,
 }
@@ -127,6 +136,8 @@ struct Plan<'a> {
     templates: Vec<Vec<f64>>,
     limits: Vec<Option<SpecLimits>>,
     indicator: Vec<bool>,
+    /// (center, scale) of each output's sketch, from the pilot chunk.
+    sketch_frames: Vec<(f64, f64)>,
 }
 
 impl Plan<'_> {
@@ -159,7 +170,12 @@ impl Plan<'_> {
                     } else if self.exact {
                         Distribution::Values(Vec::new())
                     } else {
-                        Distribution::Sketch(QuantileSketch::new(SKETCH_RELATIVE_ACCURACY))
+                        let (center, scale) = self.sketch_frames[o];
+                        Distribution::Sketch {
+                            sketch: QuantileSketch::new(SKETCH_RELATIVE_ACCURACY),
+                            center,
+                            scale,
+                        }
                     }
                 })
                 .collect(),
@@ -173,10 +189,9 @@ impl Plan<'_> {
         (self.settings.samples - start).min(CHUNK_SIZE as u64) as usize
     }
 
-    fn run_chunk(&self, partial: &mut Partial, chunk: u64) {
-        if partial.error.is_some() {
-            return;
-        }
+    /// Draws chunk `chunk` and evaluates the models into `partial.output_columns`;
+    /// returns the number of samples, or records the error.
+    fn evaluate_chunk(&self, partial: &mut Partial, chunk: u64) -> Option<usize> {
         let m = self.chunk_len(chunk);
         let space = &self.scenario.input_space;
         let n_columns = space.n_columns();
@@ -185,7 +200,7 @@ impl Plan<'_> {
         let rows = &mut partial.rows[..m * n_columns];
         if let Err(err) = space.sample_rows(&mut rng, rows, &mut partial.constraint_counts) {
             partial.error = Some((chunk, err.into()));
-            return;
+            return None;
         }
         for (model_index, bound) in self.scenario.models.iter().enumerate() {
             let n_in = bound.model.inputs().len();
@@ -211,6 +226,49 @@ impl Plan<'_> {
                 }
             }
         }
+        Some(m)
+    }
+
+    /// Centre and scale of each output's sketch: mean and standard deviation of the finite
+    /// values of chunk 0, which every run draws identically whatever its thread count.
+    fn pilot_sketch_frames(&self) -> Result<Vec<(f64, f64)>, ScenarioError> {
+        let mut partial = self.partial();
+        if self.evaluate_chunk(&mut partial, 0).is_none() {
+            let (_, err) = partial.error.expect("evaluate_chunk records its error");
+            return Err(err);
+        }
+        let m = self.chunk_len(0);
+        Ok(partial
+            .output_columns
+            .iter()
+            .map(|column| {
+                let finite: Vec<f64> = column[..m]
+                    .iter()
+                    .copied()
+                    .filter(|v| v.is_finite())
+                    .collect();
+                let moments = Moments::from_slice(&finite);
+                let center = if moments.n > 0 { moments.mean } else { 0.0 };
+                let sd = moments.sd();
+                let scale = if sd > 0.0 && sd.is_finite() {
+                    sd
+                } else if center != 0.0 {
+                    center.abs()
+                } else {
+                    1.0
+                };
+                (center, scale)
+            })
+            .collect())
+    }
+
+    fn run_chunk(&self, partial: &mut Partial, chunk: u64) {
+        if partial.error.is_some() {
+            return;
+        }
+        let Some(m) = self.evaluate_chunk(partial, chunk) else {
+            return;
+        };
         let mut moments = Vec::with_capacity(partial.output_columns.len());
         for (o, column) in partial.output_columns.iter().enumerate() {
             let mut values = &column[..m];
@@ -244,7 +302,16 @@ impl Plan<'_> {
             }
             match &mut partial.distributions[o] {
                 Distribution::Values(kept) => kept.extend_from_slice(values),
-                Distribution::Sketch(sketch) => sketch.insert_slice(values),
+                Distribution::Sketch {
+                    sketch,
+                    center,
+                    scale,
+                } => {
+                    let inverse_scale = 1.0 / *scale;
+                    for &v in values {
+                        sketch.insert((v - *center) * inverse_scale);
+                    }
+                }
                 Distribution::Indicator => {}
             }
         }
@@ -264,7 +331,7 @@ pub fn run(
     }
     let n_out = scenario.outputs.len() as u64;
     let exact = settings.samples.saturating_mul(n_out.max(1)) <= settings.exact_percentile_limit;
-    let plan = Plan {
+    let mut plan = Plan {
         scenario,
         settings,
         exact,
@@ -284,7 +351,11 @@ pub fn run(
             .iter()
             .map(|o| o.kind == OutputKind::Indicator)
             .collect(),
+        sketch_frames: vec![(0.0, 1.0); scenario.outputs.len()],
     };
+    if !exact {
+        plan.sketch_frames = plan.pilot_sketch_frames()?;
+    }
     let n_chunks = settings.samples.div_ceil(CHUNK_SIZE as u64);
     let mut result = RunResult {
         samples: settings.samples,
@@ -374,7 +445,10 @@ fn merge_wave(result: &mut RunResult, partials: Vec<Partial>) -> Result<(), Scen
                     all.extend_from_slice(&part)
                 }
                 (Distribution::Indicator, Distribution::Indicator) => {}
-                (Distribution::Sketch(all), Distribution::Sketch(part)) => all
+                (
+                    Distribution::Sketch { sketch: all, .. },
+                    Distribution::Sketch { sketch: part, .. },
+                ) => all
                     .merge(&part)
                     .map_err(|err| ScenarioError::new("(run)", err.to_string()))?,
                 _ => unreachable!("one percentile method per run"),

@@ -265,14 +265,15 @@ pub const ENTRY: ModelEntry = ModelEntry {
 #[derive(Debug, Clone)]
 pub struct GeometricHysteresis {
     ratio: f64,
-    eccentricity: f64,
-    cycloid_teeth: f64,
-    pin_circle_radius: f64,
-    curtate_ratio: f64,
-    cos_pressure_angle: f64,
     center_distance: f64,
-    sun_pitch_radius: f64,
     sun_gear_axial_position: f64,
+    /// 10800/π / (2·r1·i16·a0·cos α): Δφ12' = −(E_ws + E_wi)·this·(a0 + a1)/cos β.
+    involute_scale: f64,
+    /// Eq. 16 coefficients in arcmin per mm, in the order of the inputs 2..=11.
+    cycloid_coefficients: [f64; 10],
+    /// Eq. 17: Kn = kn_equidistant·Δr_rp + kn_shift·Δr_p (1/mm).
+    kn_equidistant: f64,
+    kn_shift: f64,
     inputs: Vec<InputSpec>,
     outputs: Vec<OutputSpec>,
 }
@@ -332,16 +333,33 @@ impl GeometricHysteresis {
         let ratio = 1.0
             + (planet_teeth as f64 * pin_count as f64)
                 / (sun_teeth as f64 * (pin_count - cycloid_teeth) as f64);
+        let (e, zc, k1) = (eccentricity, cycloid_teeth as f64, curtate_ratio);
+        let s = (1.0 - k1 * k1).sqrt();
+        let per_ezc = ARCMIN_PER_RAD / (e * zc);
         Ok(GeometricHysteresis {
             ratio,
-            eccentricity,
-            cycloid_teeth: cycloid_teeth as f64,
-            pin_circle_radius,
-            curtate_ratio,
-            cos_pressure_angle: pressure_angle_deg.to_radians().cos(),
             center_distance,
-            sun_pitch_radius,
             sun_gear_axial_position,
+            involute_scale: ARCMIN_PER_RAD
+                / (2.0
+                    * sun_pitch_radius
+                    * ratio
+                    * center_distance
+                    * pressure_angle_deg.to_radians().cos()),
+            cycloid_coefficients: [
+                2.0 * s * per_ezc,  // Δr_rp
+                -2.0 * s * per_ezc, // Δr_p
+                2.0 * s * per_ezc,  // δr_p
+                -2.0 * per_ezc,     // δr_rp
+                per_ezc,            // δJ
+                0.5 * per_ezc,      // ΔF_r
+                2.0 * k1 * per_ezc, // δt
+                -k1 * per_ezc,      // ΔF_p
+                2.0 * per_ezc,      // δΔr_rp
+                -2.0 * s * per_ezc, // δΔr_p
+            ],
+            kn_equidistant: 1.0 / (e * e * zc),
+            kn_shift: -(zc / (e * pin_circle_radius * pin_circle_radius * s) + s / (e * zc)),
             inputs: INPUTS
                 .iter()
                 .map(|&(name, unit, description)| InputSpec {
@@ -384,8 +402,11 @@ impl ErrorModel for GeometricHysteresis {
     #[inline]
     fn evaluate(&self, x: &[f64], out: &mut [f64]) {
         let x: &[f64; 18] = x[..18].try_into().expect("18 inputs");
-        let [e_ws, e_wi, mod_equidistant, mod_shift, pin_circle_err, pin_radius_err, pin_hole_clearance, runout, pin_hole_position_err, cumulative_pitch_err, mod_equidistant_err, mod_shift_err, eccentricity_err, crank_clearance, shaft_du, shaft_dv, shaft_dalpha, shaft_dbeta] =
-            *x;
+        let (e_ws, e_wi) = (x[0], x[1]);
+        let (mod_equidistant, mod_shift, eccentricity_err) = (x[2], x[3], x[12]);
+        let crank_clearance = x[13];
+        let (shaft_du, shaft_dv, shaft_dalpha, shaft_dbeta) = (x[14], x[15], x[16], x[17]);
+
         // Input shaft deviation at the sun mesh (001 Eq. 5–8): radial offset a1, tilt β.
         let shaft = [shaft_du, shaft_dv, 0.0, shaft_dalpha, shaft_dbeta, 0.0];
         let at_sun = point_displacement(&shaft, [0.0, 0.0, self.sun_gear_axial_position]);
@@ -399,30 +420,16 @@ impl ErrorModel for GeometricHysteresis {
         };
         let tilted_distance = self.center_distance + a1;
 
-        // Involute stage, Eq. 5 / 12 with the operating pressure angle.
-        let cos_operating_angle =
-            self.center_distance * self.cos_pressure_angle * cos_beta / tilted_distance;
-        let involute = -(e_ws + e_wi) * ARCMIN_PER_RAD
-            / (2.0 * self.sun_pitch_radius * self.ratio * cos_operating_angle);
+        // Involute stage, Eq. 5 / 12 with cos α' = a0·cos α·cos β/(a0 + a1).
+        let involute = -(e_ws + e_wi) * self.involute_scale * tilted_distance / cos_beta;
 
-        // Cycloid–pin stage, Eq. 16 and 17, all terms in arcmin.
-        let (e, zc, k1) = (self.eccentricity, self.cycloid_teeth, self.curtate_ratio);
-        let s = (1.0 - k1 * k1).sqrt();
-        let per_ezc = 1.0 / (e * zc);
-        let k_n = mod_equidistant / (e * e * zc)
-            - (zc / (e * self.pin_circle_radius * self.pin_circle_radius * s) + s * per_ezc)
-                * mod_shift;
-        let cycloid_rad = (2.0 * mod_equidistant - 2.0 * mod_shift) * s * per_ezc
-            + 2.0 * pin_circle_err * s * per_ezc
-            - 2.0 * pin_radius_err * per_ezc
-            + pin_hole_clearance * per_ezc
-            + 0.5 * runout * per_ezc
-            + 2.0 * pin_hole_position_err * k1 * per_ezc
-            - cumulative_pitch_err * k1 * per_ezc
-            + 2.0 * mod_equidistant_err * per_ezc
-            - 2.0 * mod_shift_err * s * per_ezc
-            - 2.0 * k_n * eccentricity_err;
-        let cycloid = cycloid_rad * ARCMIN_PER_RAD;
+        // Cycloid–pin stage, Eq. 16 and 17, every term in arcmin.
+        let mut cycloid = 0.0;
+        for (c, value) in self.cycloid_coefficients.iter().zip(&x[2..12]) {
+            cycloid += c * value;
+        }
+        let k_n = self.kn_equidistant * mod_equidistant + self.kn_shift * mod_shift;
+        cycloid -= 2.0 * k_n * eccentricity_err * ARCMIN_PER_RAD;
 
         // Crank bearing clearance, Eq. 20.
         let crank = crank_clearance * cos_beta / tilted_distance * ARCMIN_PER_RAD;
