@@ -57,6 +57,24 @@ pub enum DeviationError {
 }
 
 impl DeviationError {
+    /// The JSON path of the offending value.
+    pub fn path(&self) -> &str {
+        match self {
+            DeviationError::NotFinite { path, .. }
+            | DeviationError::Negative { path, .. }
+            | DeviationError::Asymmetric { path, .. }
+            | DeviationError::Indefinite { path, .. }
+            | DeviationError::Invalid { path, .. } => path,
+        }
+    }
+
+    /// What is wrong, without the path.
+    pub fn message(&self) -> String {
+        let text = self.to_string();
+        let prefix_length = self.path().len() + ": ".len();
+        text.get(prefix_length..).unwrap_or(&text).to_string()
+    }
+
     pub(crate) fn invalid(path: impl Into<String>, reason: impl Into<String>) -> Self {
         DeviationError::Invalid {
             path: path.into(),

@@ -454,11 +454,11 @@ impl RunReport {
                     (None, Some(u)) => format!("x ≤ {u}"),
                     (None, None) => String::new(),
                 };
-                let cp = c.cp.map(format_sig).unwrap_or_else(|| "-".into());
+                let cp = c.cp.map(format_sig).unwrap_or_else(|| "n/a".into());
                 let cp_pct = c
                     .cp_percentile
                     .map(format_sig)
-                    .unwrap_or_else(|| "-".into());
+                    .unwrap_or_else(|| "n/a".into());
                 lines.push(format!(
                     "  {} ({spec} {}): Cp {cp}  Cpk {}  | percentile method Cp {cp_pct}  Cpk {}  | out of spec {} ppm (95 % CI {} .. {})",
                     o.name,

@@ -118,6 +118,7 @@ struct Partial {
     model_outputs: Vec<Vec<f64>>,
     output_columns: Vec<Vec<f64>>,
     finite: Vec<f64>,
+    standardised: Vec<f64>,
     chunk_moments: Vec<(u64, Vec<Moments>)>,
     non_finite: Vec<u64>,
     below_lower: Vec<u64>,
@@ -158,6 +159,7 @@ impl Plan<'_> {
                 .collect(),
             output_columns: vec![vec![0.0; CHUNK_SIZE]; n_out],
             finite: Vec::with_capacity(CHUNK_SIZE),
+            standardised: Vec::with_capacity(CHUNK_SIZE),
             chunk_moments: Vec::new(),
             non_finite: vec![0; n_out],
             below_lower: vec![0; n_out],
@@ -308,9 +310,11 @@ impl Plan<'_> {
                     scale,
                 } => {
                     let inverse_scale = 1.0 / *scale;
-                    for &v in values {
-                        sketch.insert((v - *center) * inverse_scale);
-                    }
+                    partial.standardised.clear();
+                    partial
+                        .standardised
+                        .extend(values.iter().map(|&v| (v - *center) * inverse_scale));
+                    sketch.insert_slice(&partial.standardised);
                 }
                 Distribution::Indicator => {}
             }

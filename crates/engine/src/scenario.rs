@@ -43,11 +43,7 @@ impl ScenarioError {
 
 impl From<rvtol_deviation::DeviationError> for ScenarioError {
     fn from(err: rvtol_deviation::DeviationError) -> Self {
-        let text = err.to_string();
-        match text.split_once(": ") {
-            Some((path, message)) => ScenarioError::new(path, message),
-            None => ScenarioError::new("(scenario)", text),
-        }
+        ScenarioError::new(err.path(), err.message())
     }
 }
 
@@ -80,7 +76,9 @@ struct ScenarioFile {
 #[serde(deny_unknown_fields)]
 struct PartFile {
     name: String,
+    /// Documentation for the reader of the file; not used by the run.
     #[serde(default)]
+    #[allow(dead_code)]
     description: Option<String>,
     #[serde(default)]
     mean: Option<Vec<f64>>,
@@ -109,7 +107,9 @@ struct VariableFile {
     name: String,
     #[serde(default)]
     unit: Option<String>,
+    /// Documentation for the reader of the file; not used by the run.
     #[serde(default)]
+    #[allow(dead_code)]
     description: Option<String>,
     distribution: DistributionFile,
 }
@@ -508,7 +508,6 @@ fn compile(file: ScenarioFile, fallback_name: &str) -> Result<Scenario, Scenario
                 &mut columns,
             )?;
         }
-        let _ = &part.description;
     }
     for (i, variable) in file.variables.iter().enumerate() {
         let path = format!("variables[{i}]");
@@ -523,7 +522,6 @@ fn compile(file: ScenarioFile, fallback_name: &str) -> Result<Scenario, Scenario
             variable.unit.clone(),
             &mut columns,
         )?;
-        let _ = &variable.description;
     }
     for (i, correlation) in file.correlations.iter().enumerate() {
         let path = format!("correlations[{i}]");

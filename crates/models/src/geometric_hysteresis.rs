@@ -412,16 +412,21 @@ impl ErrorModel for GeometricHysteresis {
         let at_sun = point_displacement(&shaft, [0.0, 0.0, self.sun_gear_axial_position]);
         let a1 = (at_sun[0] * at_sun[0] + at_sun[1] * at_sun[1]).sqrt();
         let beta_squared = shaft_dalpha * shaft_dalpha + shaft_dbeta * shaft_dbeta;
-        // cos β by its series below β = 1e-3 rad (truncation error β⁶/720 < 1e-20).
-        let cos_beta = if beta_squared < 1e-6 {
-            1.0 - 0.5 * beta_squared + beta_squared * beta_squared / 24.0
+        // cos β and 1/cos β by their series below β = 1e-3 rad (truncation errors β⁶/720 and
+        // 61β⁶/720, below 1e-19).
+        let (cos_beta, sec_beta) = if beta_squared < 1e-6 {
+            (
+                1.0 - 0.5 * beta_squared + beta_squared * beta_squared / 24.0,
+                1.0 + 0.5 * beta_squared + 5.0 * beta_squared * beta_squared / 24.0,
+            )
         } else {
-            beta_squared.sqrt().cos()
+            let cos_beta = beta_squared.sqrt().cos();
+            (cos_beta, 1.0 / cos_beta)
         };
         let tilted_distance = self.center_distance + a1;
 
         // Involute stage, Eq. 5 / 12 with cos α' = a0·cos α·cos β/(a0 + a1).
-        let involute = -(e_ws + e_wi) * self.involute_scale * tilted_distance / cos_beta;
+        let involute = -(e_ws + e_wi) * self.involute_scale * tilted_distance * sec_beta;
 
         // Cycloid–pin stage, Eq. 16 and 17, every term in arcmin.
         let mut cycloid = 0.0;
@@ -429,20 +434,16 @@ impl ErrorModel for GeometricHysteresis {
             cycloid += c * value;
         }
         let k_n = self.kn_equidistant * mod_equidistant + self.kn_shift * mod_shift;
-        cycloid -= 2.0 * k_n * eccentricity_err * ARCMIN_PER_RAD;
+        cycloid -= 2.0 * ARCMIN_PER_RAD * k_n * eccentricity_err;
 
         // Crank bearing clearance, Eq. 20.
-        let crank = crank_clearance * cos_beta / tilted_distance * ARCMIN_PER_RAD;
+        let crank = crank_clearance * cos_beta * ARCMIN_PER_RAD / tilted_distance;
 
         out[0] = involute.max(0.0) + cycloid.max(0.0) + crank.max(0.0);
         out[1] = involute;
         out[2] = cycloid;
         out[3] = crank;
-        out[4] = if involute < 0.0 || cycloid < 0.0 || crank < 0.0 {
-            1.0
-        } else {
-            0.0
-        };
+        out[4] = f64::from(u8::from(involute.min(cycloid).min(crank) < 0.0));
     }
 }
 
