@@ -401,13 +401,7 @@ impl RunReport {
             ));
         }
         lines.push(String::new());
-        let name_width = self
-            .outputs
-            .iter()
-            .map(|o| o.name.len())
-            .max()
-            .unwrap_or(6)
-            .max(6);
+        let name_width = name_column_width(self.outputs.iter().map(|o| o.name.as_str()));
         lines.push(format!(
             "{:<name_width$}  {:<8} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10}",
             "output", "unit", "mean", "sd", "P0.135", "P50", "P99.865", "min", "max"
@@ -590,13 +584,7 @@ impl NominalReport {
 
     /// A two-column table.
     pub fn to_text(&self) -> String {
-        let width = self
-            .outputs
-            .iter()
-            .map(|o| o.name.len())
-            .max()
-            .unwrap_or(6)
-            .max(6);
+        let width = name_column_width(self.outputs.iter().map(|o| o.name.as_str()));
         let mut text = format!(
             "scenario {} at nominal (every deviation at its mean)\n\n",
             self.scenario
@@ -611,6 +599,11 @@ impl NominalReport {
         }
         text
     }
+}
+
+/// Width of a table's name column: the longest name, at least 6.
+fn name_column_width<'a>(names: impl Iterator<Item = &'a str>) -> usize {
+    names.map(str::len).max().unwrap_or(0).max(6)
 }
 
 /// A number with 5 significant digits, switching to exponent form when very large or
