@@ -22,6 +22,7 @@ use rayon::prelude::*;
 use rvtol_deviation::ConstraintCounts;
 use rvtol_models::OutputKind;
 
+use crate::evaluate::ChunkEvaluator;
 use crate::scenario::{Scenario, ScenarioError};
 use crate::stats::{Moments, QuantileSketch, SpecLimits};
 
@@ -112,11 +113,9 @@ pub struct RunResult {
 }
 
 /// Per-thread scratch buffers and partial results.
-struct Partial {
+struct Partial<'a> {
     rows: Vec<f64>,
-    model_inputs: Vec<Vec<f64>>,
-    model_outputs: Vec<Vec<f64>>,
-    output_columns: Vec<Vec<f64>>,
+    evaluator: ChunkEvaluator<'a>,
     finite: Vec<f64>,
     standardised: Vec<f64>,
     chunk_moments: Vec<(u64, Vec<Moments>)>,
@@ -133,31 +132,18 @@ struct Plan<'a> {
     scenario: &'a Scenario,
     settings: RunSettings,
     exact: bool,
-    gathers: Vec<Vec<(usize, usize)>>,
-    templates: Vec<Vec<f64>>,
     limits: Vec<Option<SpecLimits>>,
     indicator: Vec<bool>,
     /// (center, scale) of each output's sketch, from the pilot chunk.
     sketch_frames: Vec<(f64, f64)>,
 }
 
-impl Plan<'_> {
-    fn partial(&self) -> Partial {
+impl<'a> Plan<'a> {
+    fn partial(&self) -> Partial<'a> {
         let n_out = self.scenario.outputs.len();
         Partial {
             rows: vec![0.0; CHUNK_SIZE * self.scenario.input_space.n_columns()],
-            model_inputs: self
-                .templates
-                .iter()
-                .map(|t| t.repeat(CHUNK_SIZE))
-                .collect(),
-            model_outputs: self
-                .scenario
-                .models
-                .iter()
-                .map(|m| vec![0.0; CHUNK_SIZE * m.model.outputs().len()])
-                .collect(),
-            output_columns: vec![vec![0.0; CHUNK_SIZE]; n_out],
+            evaluator: ChunkEvaluator::new(self.scenario),
             finite: Vec::with_capacity(CHUNK_SIZE),
             standardised: Vec::with_capacity(CHUNK_SIZE),
             chunk_moments: Vec::new(),
@@ -204,30 +190,7 @@ impl Plan<'_> {
             partial.error = Some((chunk, err.into()));
             return None;
         }
-        for (model_index, bound) in self.scenario.models.iter().enumerate() {
-            let n_in = bound.model.inputs().len();
-            let n_out = bound.model.outputs().len();
-            let inputs = &mut partial.model_inputs[model_index][..m * n_in];
-            let gathers = &self.gathers[model_index];
-            if n_in > 0 {
-                for (dst, row) in inputs
-                    .chunks_exact_mut(n_in)
-                    .zip(rows.chunks_exact(n_columns.max(1)))
-                {
-                    for &(input, column) in gathers {
-                        dst[input] = row[column];
-                    }
-                }
-            }
-            let outputs = &mut partial.model_outputs[model_index][..m * n_out];
-            bound.model.evaluate_batch(inputs, outputs);
-            for j in 0..n_out {
-                let column = &mut partial.output_columns[bound.first_output + j];
-                for (r, value) in column[..m].iter_mut().enumerate() {
-                    *value = outputs[r * n_out + j];
-                }
-            }
-        }
+        partial.evaluator.evaluate(rows, m);
         Some(m)
     }
 
@@ -241,6 +204,7 @@ impl Plan<'_> {
         }
         let m = self.chunk_len(0);
         Ok(partial
+            .evaluator
             .output_columns
             .iter()
             .map(|column| {
@@ -271,8 +235,8 @@ impl Plan<'_> {
         let Some(m) = self.evaluate_chunk(partial, chunk) else {
             return;
         };
-        let mut moments = Vec::with_capacity(partial.output_columns.len());
-        for (o, column) in partial.output_columns.iter().enumerate() {
+        let mut moments = Vec::with_capacity(partial.evaluator.output_columns.len());
+        for (o, column) in partial.evaluator.output_columns.iter().enumerate() {
             let mut values = &column[..m];
             if self.indicator[o] {
                 // Events only: the moments follow from the counts at the end.
@@ -339,16 +303,6 @@ pub fn run(
         scenario,
         settings,
         exact,
-        gathers: scenario
-            .models
-            .iter()
-            .map(|m| m.column_bindings())
-            .collect(),
-        templates: scenario
-            .models
-            .iter()
-            .map(|m| m.constant_template())
-            .collect(),
         limits: scenario.outputs.iter().map(|o| o.spec).collect(),
         indicator: scenario
             .outputs
