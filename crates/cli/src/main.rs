@@ -11,6 +11,8 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rvtol_engine::sensitivity::{sobol_indices, SensitivitySettings};
+use rvtol_engine::sensitivity_report::SensitivityReport;
 use rvtol_engine::{
     nominal, run, NominalReport, RunReport, RunSettings, Scenario, ScenarioError,
     DEFAULT_EXACT_PERCENTILE_LIMIT,
@@ -57,6 +59,29 @@ enum Command {
         /// Write the JSON report to PATH ("-" for stdout instead of the table).
         #[arg(long, value_name = "PATH")]
         json: Option<PathBuf>,
+    },
+    /// Rank the error sources: Sobol' first-order and total indices with bootstrap intervals.
+    Sensitivity {
+        /// Scenario file (JSON).
+        scenario: PathBuf,
+        /// Base samples N; the models are evaluated N·(2·groups + 2) times.
+        #[arg(long, default_value_t = 65_536)]
+        samples: u64,
+        /// Seed of the random streams (default: the scenario's `seed`, else 1).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Worker threads (default: all cores). Results do not depend on it.
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Bootstrap resamples for the 95 % intervals.
+        #[arg(long, default_value_t = 500)]
+        bootstrap: usize,
+        /// Write the JSON report to PATH ("-" for stdout instead of the table).
+        #[arg(long, value_name = "PATH")]
+        json: Option<PathBuf>,
+        /// No progress bar.
+        #[arg(long, short)]
+        quiet: bool,
     },
     /// Check a scenario file without running it.
     Validate {
@@ -143,6 +168,17 @@ fn progress_bar(samples: u64, quiet: bool) -> ProgressBar {
     bar
 }
 
+/// A rayon pool of `threads` workers (all cores when absent).
+fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
+    if threads == Some(0) {
+        return Err(BadInput("--threads: must be at least 1".into()).into());
+    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or(0))
+        .build()
+        .context("cannot start the worker threads")
+}
+
 #[allow(clippy::too_many_arguments)]
 fn command_run(
     scenario_path: &Path,
@@ -158,18 +194,12 @@ fn command_run(
     if samples == 0 {
         return Err(BadInput("--samples: must be at least 1".into()).into());
     }
-    if threads == Some(0) {
-        return Err(BadInput("--threads: must be at least 1".into()).into());
-    }
     let settings = RunSettings {
         samples,
         seed: seed.unwrap_or(scenario.seed),
         exact_percentile_limit,
     };
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads.unwrap_or(0))
-        .build()
-        .context("cannot start the worker threads")?;
+    let pool = thread_pool(threads)?;
     let bar = progress_bar(samples, quiet);
     let started = std::time::Instant::now();
     let result = pool
@@ -264,6 +294,40 @@ fn dispatch(cli: Cli) -> Result<()> {
                 scenario.outputs.len()
             );
             Ok(())
+        }
+        Command::Sensitivity {
+            scenario: path,
+            samples,
+            seed,
+            threads,
+            bootstrap,
+            json,
+            quiet,
+        } => {
+            let scenario = load(&path)?;
+            if samples < 2 {
+                return Err(BadInput(
+                    "--samples: sensitivity needs at least 2 base samples".into(),
+                )
+                .into());
+            }
+            if bootstrap < 2 {
+                return Err(BadInput("--bootstrap: needs at least 2 resamples".into()).into());
+            }
+            let settings = SensitivitySettings {
+                base_samples: samples,
+                seed: seed.unwrap_or(scenario.seed),
+                bootstrap,
+                confidence: 0.95,
+            };
+            let pool = thread_pool(threads)?;
+            let bar = progress_bar(samples, quiet);
+            let outputs = pool
+                .install(|| sobol_indices(&scenario, settings, &|n| bar.inc(n)))
+                .map_err(|err| bad_scenario(&path, err))?;
+            bar.finish_and_clear();
+            let report = SensitivityReport::new(&scenario, settings, outputs);
+            emit(json.as_deref(), || report.to_json(), || report.to_text())
         }
         Command::Models => command_models(),
     }

@@ -10,6 +10,8 @@ pub mod evaluate;
 pub mod report;
 pub mod run;
 pub mod scenario;
+pub mod sensitivity;
+pub mod sensitivity_report;
 pub mod stats;
 
 pub use report::{NominalReport, RunReport};

@@ -247,6 +247,16 @@ pub struct ColumnInfo {
     pub unit: Option<String>,
 }
 
+/// A named set of input-space columns: one error source (a part, a variable) or a group of
+/// them.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct InputGroup {
+    /// Name: the part or variable name, or names joined with `+`.
+    pub name: String,
+    /// Its columns.
+    pub columns: Vec<usize>,
+}
+
 /// A validated scenario: the input space, the bound models and the outputs.
 pub struct Scenario {
     /// Name (from the file, or its stem).
@@ -261,6 +271,8 @@ pub struct Scenario {
     pub input_space: InputSpace,
     /// Its columns' names.
     pub columns: Vec<ColumnInfo>,
+    /// The error sources: each part (its six columns) and each variable (its column).
+    pub sources: Vec<InputGroup>,
     /// The models in scenario order.
     pub models: Vec<BoundModel>,
     /// All outputs, models in order.
@@ -478,6 +490,7 @@ fn compile(file: ScenarioFile, fallback_name: &str) -> Result<Scenario, Scenario
     }
     let mut builder = InputSpaceBuilder::new();
     let mut columns: Vec<ColumnInfo> = Vec::new();
+    let mut sources: Vec<InputGroup> = Vec::new();
     let mut column_by_name: BTreeMap<String, usize> = BTreeMap::new();
     let mut add_name = |path: &str,
                         name: String,
@@ -499,6 +512,10 @@ fn compile(file: ScenarioFile, fallback_name: &str) -> Result<Scenario, Scenario
         check_name(&format!("{path}.name"), &part.name)?;
         let spec = part_spec(&path, part)?;
         let first = builder.add_part(&path, &spec);
+        sources.push(InputGroup {
+            name: part.name.clone(),
+            columns: (first..first + 6).collect(),
+        });
         for (k, component) in SixDof::NAMES.iter().enumerate() {
             add_name(
                 &format!("{path}.name"),
@@ -515,6 +532,10 @@ fn compile(file: ScenarioFile, fallback_name: &str) -> Result<Scenario, Scenario
         let (dist, kind) = distribution(&variable.distribution);
         dist.validate(&format!("{path}.distribution.{kind}"))?;
         let column = builder.add_scalar(&path, dist);
+        sources.push(InputGroup {
+            name: variable.name.clone(),
+            columns: vec![column],
+        });
         add_name(
             &format!("{path}.name"),
             variable.name.clone(),
@@ -682,6 +703,7 @@ fn compile(file: ScenarioFile, fallback_name: &str) -> Result<Scenario, Scenario
         seed: file.seed.unwrap_or(DEFAULT_SEED),
         input_space,
         columns,
+        sources,
         models,
         outputs,
     })

@@ -10,10 +10,12 @@
 mod geometric_hysteresis;
 mod linear_stack;
 mod params;
+mod test_functions;
 
 pub use geometric_hysteresis::{tilt_from_deflection, GeometricHysteresis};
 pub use linear_stack::LinearStack;
 pub use params::{ModelError, ModelParams, ParamValue};
+pub use test_functions::{Ishigami, SobolG};
 
 /// Arcminutes per radian, 180·60/π (000 Eq. 5, 13, 18 carry this factor).
 pub const ARCMIN_PER_RAD: f64 = 180.0 * 60.0 / std::f64::consts::PI;
@@ -115,7 +117,12 @@ pub struct ModelEntry {
 
 /// Every model rvtol knows, in the order `rvtol models` lists them.
 pub fn all() -> &'static [ModelEntry] {
-    &[geometric_hysteresis::ENTRY, linear_stack::ENTRY]
+    &[
+        geometric_hysteresis::ENTRY,
+        linear_stack::ENTRY,
+        test_functions::ISHIGAMI_ENTRY,
+        test_functions::SOBOL_G_ENTRY,
+    ]
 }
 
 /// The registry entry of a model by name.

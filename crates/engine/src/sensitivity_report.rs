@@ -1,0 +1,171 @@
+//! The report of `rvtol sensitivity`: JSON (`rvtol_version`, `scenario`, `seed`,
+//! `base_samples`, `evaluations`, `bootstrap`, `confidence`, `method`, and `outputs`, each
+//! with `name`, `unit`, `variance`, `non_finite_rows` and `indices`: per input group
+//! `input`, `first_order`, `first_order_ci`, `total`, `total_ci`, sorted by decreasing
+//! total index) and a readable ranking table per output.
+
+use serde::Serialize;
+
+use crate::report::format_sig;
+use crate::scenario::Scenario;
+use crate::sensitivity::{OutputSensitivity, SensitivitySettings};
+
+/// One input group's indices.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct IndexReport {
+    /// Input group (part, variable, or correlated sources joined with `+`).
+    pub input: String,
+    /// First-order Sobol' index.
+    pub first_order: f64,
+    /// Its bootstrap interval.
+    pub first_order_ci: [f64; 2],
+    /// Total Sobol' index.
+    pub total: f64,
+    /// Its bootstrap interval.
+    pub total_ci: [f64; 2],
+}
+
+/// One output's ranking.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct OutputSensitivityReport {
+    /// Output name.
+    pub name: String,
+    /// Unit.
+    pub unit: String,
+    /// Output variance.
+    pub variance: f64,
+    /// Rows left out for non-finite values.
+    pub non_finite_rows: u64,
+    /// Indices, most important first.
+    pub indices: Vec<IndexReport>,
+}
+
+/// The report of a sensitivity analysis.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SensitivityReport {
+    /// Version of rvtol that produced it.
+    pub rvtol_version: &'static str,
+    /// Scenario name.
+    pub scenario: String,
+    /// Seed.
+    pub seed: u64,
+    /// Base samples N.
+    pub base_samples: u64,
+    /// Model evaluations, N·(2G + 2).
+    pub evaluations: u64,
+    /// Bootstrap resamples.
+    pub bootstrap: usize,
+    /// Confidence of the intervals.
+    pub confidence: f64,
+    /// Estimators, in words.
+    pub method: &'static str,
+    /// One entry per continuous output.
+    pub outputs: Vec<OutputSensitivityReport>,
+}
+
+impl SensitivityReport {
+    /// Builds the report.
+    pub fn new(
+        scenario: &Scenario,
+        settings: SensitivitySettings,
+        outputs: Vec<OutputSensitivity>,
+    ) -> Self {
+        let groups = outputs.first().map_or(0, |o| o.indices.len()) as u64;
+        SensitivityReport {
+            rvtol_version: env!("CARGO_PKG_VERSION"),
+            scenario: scenario.name.clone(),
+            seed: settings.seed,
+            base_samples: settings.base_samples,
+            evaluations: settings.base_samples * (2 * groups + 2),
+            bootstrap: settings.bootstrap,
+            confidence: settings.confidence,
+            method: "Sobol' indices of independent input groups: first order by Saltelli et al. (2010), total by Jansen (1999), each averaged over the A_B and B_A designs; percentile bootstrap intervals over the base samples",
+            outputs: outputs
+                .into_iter()
+                .map(|o| OutputSensitivityReport {
+                    name: o.name,
+                    unit: o.unit,
+                    variance: o.variance,
+                    non_finite_rows: o.non_finite_rows,
+                    indices: o
+                        .indices
+                        .into_iter()
+                        .map(|g| IndexReport {
+                            input: g.group,
+                            first_order: g.first_order.value,
+                            first_order_ci: g.first_order.interval,
+                            total: g.total.value,
+                            total_ci: g.total.interval,
+                        })
+                        .collect(),
+                })
+                .collect(),
+        }
+    }
+
+    /// The JSON document.
+    pub fn to_json(&self) -> String {
+        let mut text = serde_json::to_string_pretty(self).expect("report serialises");
+        text.push('\n');
+        text
+    }
+
+    /// One ranking table per output.
+    pub fn to_text(&self) -> String {
+        let mut lines = vec![format!(
+            "rvtol {} | scenario {} | sensitivity: {} base samples ({} model evaluations) | seed {} | {} bootstrap resamples, {:.0} % intervals",
+            self.rvtol_version,
+            self.scenario,
+            self.base_samples,
+            self.evaluations,
+            self.seed,
+            self.bootstrap,
+            100.0 * self.confidence
+        )];
+        let interval = |ci: [f64; 2]| format!("[{}, {}]", format_sig(ci[0]), format_sig(ci[1]));
+        for output in &self.outputs {
+            lines.push(String::new());
+            let squared_unit = if output.unit == "1" {
+                String::new()
+            } else {
+                format!(" {}²", output.unit)
+            };
+            lines.push(format!(
+                "{} ({}), variance {}{squared_unit}",
+                output.name,
+                output.unit,
+                format_sig(output.variance),
+            ));
+            let width = output
+                .indices
+                .iter()
+                .map(|i| i.input.len())
+                .max()
+                .unwrap_or(5)
+                .max(5);
+            lines.push(format!(
+                "  {:<width$}  {:>9} {:<22} {:>9} {:<22}",
+                "input", "first", "interval", "total", "interval"
+            ));
+            for index in &output.indices {
+                lines.push(format!(
+                    "  {:<width$}  {:>9} {:<22} {:>9} {:<22}",
+                    index.input,
+                    format_sig(index.first_order),
+                    interval(index.first_order_ci),
+                    format_sig(index.total),
+                    interval(index.total_ci)
+                ));
+            }
+            if output.non_finite_rows > 0 {
+                lines.push(format!(
+                    "  warning: {} rows with non-finite values were left out",
+                    output.non_finite_rows
+                ));
+            }
+        }
+        let mut text = lines.join("\n");
+        text.push('\n');
+        text
+    }
+}

@@ -1,0 +1,128 @@
+//! Tests of the Sobol' sensitivity indices against closed forms (validation.md, "Checks
+//! that need no document"): the Ishigami function (a = 7, b = 0.1) and the Sobol'
+//! G-function, with 2^16 base samples; grouping of correlated sources; reproducibility.
+//!
+//! A 95 % interval misses the true value 5 % of the time, so "every interval of one run
+//! covers its closed form" fails for a correct estimator in about a quarter of the seeds
+//! (six intervals). The tests therefore check the coverage over many seeds against its
+//! binomial distribution (precision policy, tests/lib.rs), and every interval's width.
+
+use rvtol_engine::sensitivity::{independent_groups, sobol_indices, SensitivitySettings};
+use rvtol_engine::sensitivity_report::SensitivityReport;
+use rvtol_engine::Scenario;
+use rvtol_models::{Ishigami, ModelParams, ParamValue, SobolG};
+use rvtol_tests::{scenario_path, SIGMA_BOUND};
+
+const BASE_SAMPLES: u64 = 1 << 16;
+
+fn settings(seed: u64) -> SensitivitySettings {
+    SensitivitySettings {
+        base_samples: BASE_SAMPLES,
+        seed,
+        bootstrap: 300,
+        confidence: 0.95,
+    }
+}
+
+/// Runs `seeds` analyses of a one-output scenario; returns (intervals covering the closed
+/// form, intervals in all, widest interval).
+fn coverage(file: &str, seeds: u64, closed_form: impl Fn(&str) -> (f64, f64)) -> (u64, u64, f64) {
+    let scenario = Scenario::load(&scenario_path(file)).unwrap();
+    let (mut covered, mut total, mut widest) = (0u64, 0u64, 0.0f64);
+    for seed in 1..=seeds {
+        let outputs = sobol_indices(&scenario, settings(seed), &|_| {}).unwrap();
+        for index in &outputs[0].indices {
+            let (s, st) = closed_form(&index.group);
+            for (value, interval) in [(s, index.first_order.interval), (st, index.total.interval)] {
+                total += 1;
+                covered += u64::from(interval[0] <= value && value <= interval[1]);
+                widest = widest.max(interval[1] - interval[0]);
+            }
+        }
+    }
+    (covered, total, widest)
+}
+
+fn assert_coverage(covered: u64, total: u64) {
+    // Binomial(total, 0.95): bound 5 standard deviations below the mean.
+    let n = total as f64;
+    let floor = 0.95 * n - SIGMA_BOUND * (n * 0.95 * 0.05).sqrt();
+    assert!(
+        covered as f64 >= floor,
+        "{covered} of {total} intervals cover (floor {floor:.1})"
+    );
+}
+
+#[test]
+fn ishigami_intervals_cover_the_closed_form_and_are_narrow() {
+    let (s, st) = Ishigami::from_params(&ModelParams::new())
+        .unwrap()
+        .sobol_indices();
+    let (covered, total, widest) = coverage("ishigami.json", 20, |name| {
+        let i = ["x1", "x2", "x3"].iter().position(|n| *n == name).unwrap();
+        (s[i], st[i])
+    });
+    assert_coverage(covered, total);
+    assert!(widest < 0.02, "widest interval {widest}");
+}
+
+#[test]
+fn g_function_intervals_cover_the_closed_form_and_are_narrow() {
+    let coefficients = [0.0, 1.0, 4.5, 9.0, 99.0, 99.0];
+    let params = ModelParams::new().with(
+        "coefficients",
+        ParamValue::Named(
+            coefficients
+                .iter()
+                .enumerate()
+                .map(|(i, a)| (format!("x{}", i + 1), *a))
+                .collect(),
+        ),
+    );
+    let (s, st) = SobolG::from_params(&params).unwrap().sobol_indices();
+    let (covered, total, widest) = coverage("sobol-g.json", 10, |name| {
+        let i: usize = name[1..].parse::<usize>().unwrap() - 1;
+        (s[i], st[i])
+    });
+    assert_coverage(covered, total);
+    assert!(widest < 0.02, "widest interval {widest}");
+}
+
+#[test]
+fn correlated_sources_form_one_group_and_a_part_is_one_group() {
+    // linear-stack-correlated.json correlates bearing_width with spacer_width and the
+    // carrier's dw with bore_depth: two groups remain (a part's six components stay together).
+    let scenario = Scenario::load(&scenario_path("linear-stack-correlated.json")).unwrap();
+    let names: Vec<String> = independent_groups(&scenario)
+        .into_iter()
+        .map(|g| g.name)
+        .collect();
+    assert_eq!(names, ["carrier+bore_depth", "bearing_width+spacer_width"]);
+    let scenario = Scenario::load(&scenario_path("rv20e-hysteresis.json")).unwrap();
+    let groups = independent_groups(&scenario);
+    assert_eq!(groups.len(), 10);
+    assert_eq!(groups[0].name, "input_shaft");
+    assert_eq!(groups[0].columns.len(), 6);
+}
+
+#[test]
+fn report_is_byte_identical_for_1_and_2_threads() {
+    let scenario = Scenario::load(&scenario_path("rv20e-hysteresis.json")).unwrap();
+    let settings = SensitivitySettings {
+        base_samples: 10_000,
+        seed: 4,
+        bootstrap: 50,
+        confidence: 0.95,
+    };
+    let json = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let outputs = pool
+            .install(|| sobol_indices(&scenario, settings, &|_| {}))
+            .unwrap();
+        SensitivityReport::new(&scenario, settings, outputs).to_json()
+    };
+    assert_eq!(json(1), json(2));
+}
