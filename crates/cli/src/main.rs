@@ -11,6 +11,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rvtol_engine::gate;
 use rvtol_engine::sensitivity::{sobol_indices, SensitivitySettings};
 use rvtol_engine::sensitivity_report::SensitivityReport;
 use rvtol_engine::{
@@ -83,6 +84,50 @@ enum Command {
         #[arg(long, short)]
         quiet: bool,
     },
+    /// Record the distribution figures of every output, with the band a re-run may move
+    /// within, for `rvtol check`.
+    Baseline {
+        /// Scenario file (JSON).
+        scenario: PathBuf,
+        /// Baseline file to write.
+        #[arg(short, long, value_name = "FILE")]
+        output: PathBuf,
+        /// Number of samples (default: the scenario's `samples`, else 1,000,000).
+        #[arg(long)]
+        samples: Option<u64>,
+        /// Seed (default: the scenario's `seed`, else 1).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Worker threads (default: all cores). Results do not depend on it.
+        #[arg(long)]
+        threads: Option<usize>,
+        /// No progress bar.
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Re-run a scenario and compare it with a baseline: exit 1 when a figure moved.
+    Check {
+        /// Scenario file (JSON).
+        scenario: PathBuf,
+        /// Baseline file written by `rvtol baseline`.
+        #[arg(long, value_name = "FILE")]
+        baseline: PathBuf,
+        /// Seed of the check run (default: the baseline's).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Write a JUnit XML report to PATH.
+        #[arg(long, value_name = "PATH")]
+        junit: Option<PathBuf>,
+        /// Write the JSON report to PATH ("-" for stdout instead of the summary).
+        #[arg(long, value_name = "PATH")]
+        json: Option<PathBuf>,
+        /// Worker threads (default: all cores). Results do not depend on it.
+        #[arg(long)]
+        threads: Option<usize>,
+        /// No progress bar.
+        #[arg(long, short)]
+        quiet: bool,
+    },
     /// Check a scenario file without running it.
     Validate {
         /// Scenario file (JSON).
@@ -103,6 +148,18 @@ impl std::fmt::Display for BadInput {
 }
 
 impl std::error::Error for BadInput {}
+
+/// A check or gate that failed (exit code 1); its report is already printed.
+#[derive(Debug)]
+struct GateFailed;
+
+impl std::fmt::Display for GateFailed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("figures moved beyond their baseline bands")
+    }
+}
+
+impl std::error::Error for GateFailed {}
 
 fn bad_scenario(path: &Path, err: ScenarioError) -> anyhow::Error {
     BadInput(format!("{}: {err}", path.display())).into()
@@ -329,6 +386,75 @@ fn dispatch(cli: Cli) -> Result<()> {
             let report = SensitivityReport::new(&scenario, settings, outputs);
             emit(json.as_deref(), || report.to_json(), || report.to_text())
         }
+        Command::Baseline {
+            scenario: path,
+            output,
+            samples,
+            seed,
+            threads,
+            quiet,
+        } => {
+            let (scenario, text) = Scenario::read(&path).map_err(|err| bad_scenario(&path, err))?;
+            let samples = samples.unwrap_or(scenario.samples);
+            if samples < 2 {
+                return Err(
+                    BadInput("--samples: a baseline needs at least 2 samples".into()).into(),
+                );
+            }
+            let seed = seed.unwrap_or(scenario.seed);
+            let pool = thread_pool(threads)?;
+            let bar = progress_bar(samples, quiet);
+            let baseline = pool
+                .install(|| gate::baseline(&scenario, &text, samples, seed, &|n| bar.inc(n)))
+                .map_err(|err| bad_scenario(&path, err))?;
+            bar.finish_and_clear();
+            write_atomically(&output, &baseline.to_json())?;
+            println!(
+                "{}: {} figures of {} ({} samples, seed {}) written to {}",
+                path.display(),
+                baseline.figures.len(),
+                baseline.scenario,
+                samples,
+                seed,
+                output.display()
+            );
+            Ok(())
+        }
+        Command::Check {
+            scenario: path,
+            baseline,
+            seed,
+            junit,
+            json,
+            threads,
+            quiet,
+        } => {
+            let (scenario, text) = Scenario::read(&path).map_err(|err| bad_scenario(&path, err))?;
+            let baseline_text = std::fs::read_to_string(&baseline)
+                .map_err(|err| BadInput(format!("{}: cannot read: {err}", baseline.display())))?;
+            let recorded = gate::Baseline::from_json(&baseline_text)
+                .map_err(|err| bad_scenario(&baseline, err))?;
+            let seed = seed.unwrap_or(recorded.seed);
+            let pool = thread_pool(threads)?;
+            let bar = progress_bar(recorded.samples, quiet);
+            let report = pool
+                .install(|| {
+                    gate::check(&scenario, &text, &recorded, recorded.samples, seed, &|n| {
+                        bar.inc(n)
+                    })
+                })
+                .map_err(|err| bad_scenario(&path, err))?;
+            bar.finish_and_clear();
+            if let Some(junit) = &junit {
+                write_atomically(junit, &report.to_junit())?;
+            }
+            emit(json.as_deref(), || report.to_json(), || report.to_text())?;
+            if report.passed {
+                Ok(())
+            } else {
+                Err(GateFailed.into())
+            }
+        }
         Command::Models => command_models(),
     }
 }
@@ -345,9 +471,12 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
             eprintln!("error: {err:#}");
-            // Every failure so far is bad input or usage (a scenario, a path); exit code 1 is
-            // kept for checks and gates that fail.
-            ExitCode::from(2)
+            if err.downcast_ref::<GateFailed>().is_some() {
+                ExitCode::from(1)
+            } else {
+                // Bad input or usage: a scenario, a baseline, a path.
+                ExitCode::from(2)
+            }
         }
     }
 }

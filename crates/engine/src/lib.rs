@@ -7,6 +7,7 @@
 //! the scenario or the sampler, and the engine never prints.
 
 pub mod evaluate;
+pub mod gate;
 pub mod report;
 pub mod run;
 pub mod scenario;

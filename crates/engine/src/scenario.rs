@@ -282,6 +282,11 @@ pub struct Scenario {
 impl Scenario {
     /// Reads and validates a scenario file.
     pub fn load(path: &Path) -> Result<Scenario, ScenarioError> {
+        Scenario::read(path).map(|(scenario, _)| scenario)
+    }
+
+    /// Reads and validates a scenario file, returning its text too.
+    pub fn read(path: &Path) -> Result<(Scenario, String), ScenarioError> {
         let text = std::fs::read_to_string(path).map_err(|err| {
             ScenarioError::new("(file)", format!("cannot read {}: {err}", path.display()))
         })?;
@@ -289,7 +294,8 @@ impl Scenario {
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_else(|| "scenario".to_string());
-        Scenario::from_json(&text, &fallback_name)
+        let scenario = Scenario::from_json(&text, &fallback_name)?;
+        Ok((scenario, text))
     }
 
     /// Parses and validates scenario JSON text.

@@ -1,0 +1,504 @@
+//! The CI gate: `rvtol baseline` records the distribution figures of every output with the
+//! band a re-run may move within by Monte Carlo noise alone; `rvtol check` re-runs and
+//! flags every figure outside its band.
+//!
+//! Gated figures per continuous output: mean, sd, the percentiles 0.135, 2.275, 50,
+//! 97.725, 99.865, and ppm out of spec when the scenario sets limits; per indicator
+//! output: its fraction. Bands, for a re-run with another seed and the same sample count
+//! (two independent estimates, hence the factor √2 on a one-sample interval):
+//!
+//! - percentile p: the distribution-free interval [X_(l), X_(u)] from order statistics with
+//!   l, u = n·p ∓ z·√(n·p·(1 − p)) (normal approximation to the binomial count of values
+//!   below the true quantile), each side widened by √2 about the estimate;
+//! - mean: ± √2·z·sd/√n; sd: ± √2·z·sd·√((g2 + 2)/(4n)) (delta method, g2 the excess
+//!   kurtosis); ppm and fractions: ± √2·z·√(p(1 − p)/n) with p at least 1/n.
+//!
+//! z = Φ⁻¹(1 − α/(2m)) for m gated figures and a family-wise false-alarm level α = 1 %
+//! (Bonferroni), so an unchanged scenario fails with probability at most 1 %. The same seed
+//! and sample count reproduce every figure exactly. A figure may instead carry an
+//! absolute or relative tolerance in the baseline file, which then replaces its band.
+
+use serde::{Deserialize, Serialize};
+use statrs::distribution::{ContinuousCDF, Normal};
+
+use crate::run::{run, Distribution, RunSettings};
+use crate::scenario::{Scenario, ScenarioError};
+use rvtol_models::OutputKind;
+
+/// Family-wise false-alarm level of a check.
+pub const FAMILY_FALSE_ALARM: f64 = 0.01;
+/// Percentiles the gate watches.
+pub const GATED_PERCENTS: [(&str, f64); 5] = [
+    ("p0.135", 0.135),
+    ("p2.275", 2.275),
+    ("p50", 50.0),
+    ("p97.725", 97.725),
+    ("p99.865", 99.865),
+];
+
+/// One gated figure of one output.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Figure {
+    /// Output name.
+    pub output: String,
+    /// Figure name: `mean`, `sd`, `p0.135` … `p99.865`, `ppm_out`, `fraction`.
+    pub figure: String,
+    /// Value of the baseline run.
+    pub value: f64,
+    /// Lowest value a re-run may give.
+    pub lower: f64,
+    /// Highest value a re-run may give.
+    pub upper: f64,
+    /// Absolute tolerance that replaces the band, when set.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub absolute_tolerance: Option<f64>,
+    /// Relative tolerance (of |value|) that replaces the band, when set.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub relative_tolerance: Option<f64>,
+}
+
+impl Figure {
+    /// The interval a re-run must fall in.
+    pub fn allowed(&self) -> (f64, f64) {
+        match (self.absolute_tolerance, self.relative_tolerance) {
+            (Some(a), _) => (self.value - a, self.value + a),
+            (None, Some(r)) => (
+                self.value - r * self.value.abs(),
+                self.value + r * self.value.abs(),
+            ),
+            (None, None) => (self.lower, self.upper),
+        }
+    }
+}
+
+/// A baseline file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Baseline {
+    /// Version of rvtol that wrote it.
+    pub rvtol_version: String,
+    /// Scenario name.
+    pub scenario: String,
+    /// The scenario file as it was, to point at what changed.
+    pub scenario_file: serde_json::Value,
+    /// Seed of the baseline run.
+    pub seed: u64,
+    /// Samples of the baseline run.
+    pub samples: u64,
+    /// Family-wise false-alarm level the bands are built for.
+    pub family_false_alarm: f64,
+    /// z of every band (Bonferroni over the figures).
+    pub z: f64,
+    /// The figures.
+    pub figures: Vec<Figure>,
+}
+
+impl Baseline {
+    /// Parses a baseline file, with the JSON path of any problem.
+    pub fn from_json(text: &str) -> Result<Baseline, ScenarioError> {
+        let mut deserializer = serde_json::Deserializer::from_str(text);
+        let baseline: Baseline =
+            serde_path_to_error::deserialize(&mut deserializer).map_err(|err| {
+                let path = err.path().to_string();
+                let inner = err.into_inner();
+                if inner.is_syntax() || inner.is_eof() {
+                    ScenarioError::new("JSON syntax", inner.to_string())
+                } else {
+                    ScenarioError::new(
+                        if path == "." { "(root)".into() } else { path },
+                        inner.to_string(),
+                    )
+                }
+            })?;
+        if baseline.samples == 0 {
+            return Err(ScenarioError::new("samples", "must be at least 1"));
+        }
+        if !(baseline.z.is_finite() && baseline.z > 0.0) {
+            return Err(ScenarioError::new(
+                "z",
+                format!("must be a positive number, got {}", baseline.z),
+            ));
+        }
+        for (i, figure) in baseline.figures.iter().enumerate() {
+            for (key, tolerance) in [
+                ("absolute_tolerance", figure.absolute_tolerance),
+                ("relative_tolerance", figure.relative_tolerance),
+            ] {
+                if let Some(t) = tolerance {
+                    if !(t.is_finite() && t >= 0.0) {
+                        return Err(ScenarioError::new(
+                            format!("figures[{i}].{key}"),
+                            format!("must be a finite number ≥ 0, got {t}"),
+                        ));
+                    }
+                }
+            }
+            if !(figure.lower <= figure.value && figure.value <= figure.upper) {
+                return Err(ScenarioError::new(
+                    format!("figures[{i}]"),
+                    "needs lower ≤ value ≤ upper",
+                ));
+            }
+        }
+        Ok(baseline)
+    }
+
+    /// The baseline file's text.
+    pub fn to_json(&self) -> String {
+        let mut text = serde_json::to_string_pretty(self).expect("baseline serialises");
+        text.push('\n');
+        text
+    }
+}
+
+/// Number of figures the gate watches in a scenario.
+pub fn gated_figure_count(scenario: &Scenario) -> usize {
+    scenario
+        .outputs
+        .iter()
+        .map(|o| match o.kind {
+            OutputKind::Indicator => 1,
+            OutputKind::Continuous => 2 + GATED_PERCENTS.len() + usize::from(o.spec.is_some()),
+        })
+        .sum()
+}
+
+/// The band quantile for `figures` figures at the family-wise level.
+pub fn band_z(figures: usize) -> f64 {
+    let normal = Normal::new(0.0, 1.0).expect("standard normal");
+    normal.inverse_cdf(1.0 - FAMILY_FALSE_ALARM / (2.0 * figures.max(1) as f64))
+}
+
+/// Runs the scenario (exact percentiles) and returns every gated figure with its band for
+/// a re-run at band quantile `z`.
+pub fn measure(
+    scenario: &Scenario,
+    samples: u64,
+    seed: u64,
+    z: f64,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<Vec<Figure>, ScenarioError> {
+    let settings = RunSettings {
+        samples,
+        seed,
+        exact_percentile_limit: u64::MAX,
+    };
+    let result = run(scenario, settings, progress)?;
+    let two_sample = std::f64::consts::SQRT_2 * z;
+    let mut figures = Vec::new();
+    let mut push = |output: &str, figure: &str, value: f64, below: f64, above: f64| {
+        figures.push(Figure {
+            output: output.to_string(),
+            figure: figure.to_string(),
+            value,
+            lower: value - below,
+            upper: value + above,
+            absolute_tolerance: None,
+            relative_tolerance: None,
+        });
+    };
+    for (info, acc) in scenario.outputs.iter().zip(result.outputs) {
+        let n = acc.moments.n;
+        if n < 2 {
+            return Err(ScenarioError::new(
+                format!("(output {})", info.name),
+                "fewer than 2 finite values: nothing to gate",
+            ));
+        }
+        let nf = n as f64;
+        let proportion_se = |events: u64| {
+            let p = (events as f64 / nf).max(1.0 / nf);
+            (p * (1.0 - p) / nf).sqrt()
+        };
+        if info.kind == OutputKind::Indicator {
+            let half = two_sample * proportion_se(acc.nonzero);
+            push(&info.name, "fraction", acc.nonzero as f64 / nf, half, half);
+            continue;
+        }
+        let (mean, sd) = (acc.moments.mean, acc.moments.sd());
+        let half = two_sample * sd / nf.sqrt();
+        push(&info.name, "mean", mean, half, half);
+        let kurtosis_term = (acc.moments.excess_kurtosis() + 2.0).max(0.0);
+        let half = two_sample * sd * (kurtosis_term / (4.0 * nf)).sqrt();
+        push(&info.name, "sd", sd, half, half);
+        let Distribution::Values(mut values) = acc.distribution else {
+            unreachable!("the gate runs with exact percentiles");
+        };
+        values.sort_unstable_by(f64::total_cmp);
+        let last = values.len() - 1;
+        for (name, percent) in GATED_PERCENTS {
+            let p = percent / 100.0;
+            // Type 7 on sorted values.
+            let h = last as f64 * p;
+            let low = h.floor() as usize;
+            let value =
+                values[low] + (h - low as f64) * (values[(low + 1).min(last)] - values[low]);
+            // Distribution-free one-sample interval [X_(l), X_(u)] at z.
+            let centre = nf * p;
+            let reach = z * (nf * p * (1.0 - p)).sqrt();
+            let lower_rank = ((centre - reach).floor().max(0.0) as usize).min(last);
+            let upper_rank = ((centre + reach).ceil() as usize).min(last);
+            let below = std::f64::consts::SQRT_2 * (value - values[lower_rank]).max(0.0);
+            let above = std::f64::consts::SQRT_2 * (values[upper_rank] - value).max(0.0);
+            push(&info.name, name, value, below, above);
+        }
+        if info.spec.is_some() {
+            let out = acc.below_lower + acc.above_upper;
+            let half = two_sample * proportion_se(out) * 1e6;
+            push(&info.name, "ppm_out", out as f64 / nf * 1e6, half, half);
+        }
+    }
+    Ok(figures)
+}
+
+/// Writes a baseline: the figures of a run of `scenario` (whose file text is
+/// `scenario_text`) with their bands.
+pub fn baseline(
+    scenario: &Scenario,
+    scenario_text: &str,
+    samples: u64,
+    seed: u64,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<Baseline, ScenarioError> {
+    let z = band_z(gated_figure_count(scenario));
+    let figures = measure(scenario, samples, seed, z, progress)?;
+    Ok(Baseline {
+        rvtol_version: env!("CARGO_PKG_VERSION").to_string(),
+        scenario: scenario.name.clone(),
+        scenario_file: serde_json::from_str(scenario_text)
+            .map_err(|err| ScenarioError::new("JSON syntax", err.to_string()))?,
+        seed,
+        samples,
+        family_false_alarm: FAMILY_FALSE_ALARM,
+        z,
+        figures,
+    })
+}
+
+/// One figure compared with its baseline.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Comparison {
+    /// Output name.
+    pub output: String,
+    /// Figure name.
+    pub figure: String,
+    /// Baseline value.
+    pub baseline: f64,
+    /// Value of the check run (null when the output or figure is gone).
+    pub value: Option<f64>,
+    /// Allowed interval.
+    pub allowed: [f64; 2],
+    /// Whether the check value lies in the allowed interval.
+    pub passed: bool,
+}
+
+/// The outcome of `rvtol check`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CheckReport {
+    /// Version of rvtol that checked.
+    pub rvtol_version: &'static str,
+    /// Scenario name.
+    pub scenario: String,
+    /// Seed of the check run.
+    pub seed: u64,
+    /// Samples of the check run.
+    pub samples: u64,
+    /// JSON paths where the scenario file differs from the baseline's copy.
+    pub scenario_changes: Vec<String>,
+    /// Every gated figure.
+    pub comparisons: Vec<Comparison>,
+    /// Whether every figure passed.
+    pub passed: bool,
+}
+
+/// JSON paths at which two documents differ (at most `limit`).
+pub fn json_differences(
+    old: &serde_json::Value,
+    new: &serde_json::Value,
+    limit: usize,
+) -> Vec<String> {
+    fn walk(
+        path: String,
+        old: &serde_json::Value,
+        new: &serde_json::Value,
+        out: &mut Vec<String>,
+        limit: usize,
+    ) {
+        use serde_json::Value;
+        if out.len() >= limit {
+            return;
+        }
+        match (old, new) {
+            (Value::Object(a), Value::Object(b)) => {
+                let keys: std::collections::BTreeSet<&String> = a.keys().chain(b.keys()).collect();
+                for key in keys {
+                    let child = if path.is_empty() {
+                        key.clone()
+                    } else {
+                        format!("{path}.{key}")
+                    };
+                    match (a.get(key), b.get(key)) {
+                        (Some(x), Some(y)) => walk(child, x, y, out, limit),
+                        _ => out.push(child),
+                    }
+                }
+            }
+            (Value::Array(a), Value::Array(b)) if a.len() == b.len() => {
+                for (i, (x, y)) in a.iter().zip(b).enumerate() {
+                    walk(format!("{path}[{i}]"), x, y, out, limit);
+                }
+            }
+            (a, b) if a == b => {}
+            _ => out.push(if path.is_empty() {
+                "(root)".into()
+            } else {
+                path
+            }),
+        }
+    }
+    let mut out = Vec::new();
+    walk(String::new(), old, new, &mut out, limit);
+    out
+}
+
+/// Re-runs the scenario and compares every figure with the baseline.
+pub fn check(
+    scenario: &Scenario,
+    scenario_text: &str,
+    baseline: &Baseline,
+    samples: u64,
+    seed: u64,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<CheckReport, ScenarioError> {
+    let current: serde_json::Value = serde_json::from_str(scenario_text)
+        .map_err(|err| ScenarioError::new("JSON syntax", err.to_string()))?;
+    let figures = measure(scenario, samples, seed, baseline.z, progress)?;
+    let comparisons: Vec<Comparison> = baseline
+        .figures
+        .iter()
+        .map(|old| {
+            let value = figures
+                .iter()
+                .find(|f| f.output == old.output && f.figure == old.figure)
+                .map(|f| f.value);
+            let (low, high) = old.allowed();
+            // The same seed and samples reproduce the value bit for bit; anything else must
+            // fall in the band.
+            let passed = value.is_some_and(|v| v == old.value || (low <= v && v <= high));
+            Comparison {
+                output: old.output.clone(),
+                figure: old.figure.clone(),
+                baseline: old.value,
+                value,
+                allowed: [low, high],
+                passed,
+            }
+        })
+        .collect();
+    Ok(CheckReport {
+        rvtol_version: env!("CARGO_PKG_VERSION"),
+        scenario: scenario.name.clone(),
+        seed,
+        samples,
+        scenario_changes: json_differences(&baseline.scenario_file, &current, 8),
+        passed: comparisons.iter().all(|c| c.passed),
+        comparisons,
+    })
+}
+
+fn xml_escape(text: &str) -> String {
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+        .replace('\'', "&apos;")
+}
+
+impl CheckReport {
+    /// One line per figure that moved (empty when all passed).
+    pub fn moved_lines(&self) -> Vec<String> {
+        let hint = if self.scenario_changes.is_empty() {
+            "scenario unchanged (different seed, samples or rvtol version)".to_string()
+        } else {
+            format!("scenario changed at {}", self.scenario_changes.join(", "))
+        };
+        self.comparisons
+            .iter()
+            .filter(|c| !c.passed)
+            .map(|c| {
+                let value = c
+                    .value
+                    .map_or("missing".to_string(), crate::report::format_sig);
+                format!(
+                    "moved: {} {}: {} -> {} (allowed {} .. {}); {hint}",
+                    c.output,
+                    c.figure,
+                    crate::report::format_sig(c.baseline),
+                    value,
+                    crate::report::format_sig(c.allowed[0]),
+                    crate::report::format_sig(c.allowed[1]),
+                )
+            })
+            .collect()
+    }
+
+    /// The summary printed by `rvtol check`.
+    pub fn to_text(&self) -> String {
+        let failed = self.comparisons.iter().filter(|c| !c.passed).count();
+        let mut lines = self.moved_lines();
+        lines.push(format!(
+            "rvtol check {}: {} of {} figures within their baseline bands ({} samples, seed {}){}",
+            self.scenario,
+            self.comparisons.len() - failed,
+            self.comparisons.len(),
+            self.samples,
+            self.seed,
+            if failed == 0 { "" } else { ": FAILED" }
+        ));
+        let mut text = lines.join("\n");
+        text.push('\n');
+        text
+    }
+
+    /// The JSON document.
+    pub fn to_json(&self) -> String {
+        let mut text = serde_json::to_string_pretty(self).expect("report serialises");
+        text.push('\n');
+        text
+    }
+
+    /// JUnit XML: one test case per figure.
+    pub fn to_junit(&self) -> String {
+        let failures = self.comparisons.iter().filter(|c| !c.passed).count();
+        let mut xml = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+        xml.push_str(&format!(
+            "<testsuites name=\"rvtol check\" tests=\"{}\" failures=\"{failures}\">\n  <testsuite name=\"{}\" tests=\"{}\" failures=\"{failures}\">\n",
+            self.comparisons.len(),
+            xml_escape(&self.scenario),
+            self.comparisons.len()
+        ));
+        let lines = self.moved_lines();
+        let mut moved = lines.iter();
+        for c in &self.comparisons {
+            let name = format!("{} {}", c.output, c.figure);
+            if c.passed {
+                xml.push_str(&format!(
+                    "    <testcase classname=\"{}\" name=\"{}\"/>\n",
+                    xml_escape(&self.scenario),
+                    xml_escape(&name)
+                ));
+            } else {
+                let message = moved.next().cloned().unwrap_or_default();
+                xml.push_str(&format!(
+                    "    <testcase classname=\"{}\" name=\"{}\">\n      <failure message=\"{}\"/>\n    </testcase>\n",
+                    xml_escape(&self.scenario),
+                    xml_escape(&name),
+                    xml_escape(&message)
+                ));
+            }
+        }
+        xml.push_str("  </testsuite>\n</testsuites>\n");
+        xml
+    }
+}
