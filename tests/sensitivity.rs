@@ -126,3 +126,67 @@ fn report_is_byte_identical_for_1_and_2_threads() {
     };
     assert_eq!(json(1), json(2));
 }
+
+/// Closed-form Shapley effects of y = aᵀx, x ~ N(μ, Σ) (Owen & Prieur 2017): with
+/// c(J) = a_Jᵀ(Σ_JJ − Σ_{J,K}Σ_KK⁻¹Σ_{K,J})a_J, K the complement of J,
+/// Sh_j = Σ_{S ⊆ −j} |S|!(d − |S| − 1)!/d! · (c(S ∪ {j}) − c(S)) / aᵀΣa.
+fn linear_gaussian_shapley(a: &[f64], cov: &nalgebra::DMatrix<f64>) -> Vec<f64> {
+    let d = a.len();
+    let cost = |set: u32| -> f64 {
+        let j: Vec<usize> = (0..d).filter(|i| set & (1 << i) != 0).collect();
+        let k: Vec<usize> = (0..d).filter(|i| set & (1 << i) == 0).collect();
+        if j.is_empty() {
+            return 0.0;
+        }
+        let sub = |r: &[usize], c: &[usize]| {
+            nalgebra::DMatrix::from_fn(r.len(), c.len(), |x, y| cov[(r[x], c[y])])
+        };
+        let mut conditional = sub(&j, &j);
+        if !k.is_empty() {
+            let inverse = sub(&k, &k).try_inverse().unwrap();
+            conditional -= sub(&j, &k) * inverse * sub(&k, &j);
+        }
+        let aj = nalgebra::DVector::from_iterator(j.len(), j.iter().map(|&i| a[i]));
+        (aj.transpose() * conditional * aj)[(0, 0)]
+    };
+    let factorial = |n: usize| (1..=n).product::<usize>() as f64;
+    let total = cost((1 << d) - 1);
+    (0..d)
+        .map(|j| {
+            (0u32..(1 << d))
+                .filter(|s| s & (1 << j) == 0)
+                .map(|s| {
+                    let size = s.count_ones() as usize;
+                    factorial(size) * factorial(d - size - 1) / factorial(d)
+                        * (cost(s | (1 << j)) - cost(s))
+                })
+                .sum::<f64>()
+                / total
+        })
+        .collect()
+}
+
+#[test]
+fn shapley_effects_of_a_linear_gaussian_model_match_the_closed_form() {
+    use rvtol_engine::shapley::{shapley_effects, ShapleySettings};
+    let scenario = Scenario::load(&scenario_path("shapley-linear-gaussian.json")).unwrap();
+    let (_, _, cov) = scenario.input_space.gaussian_specification();
+    let exact = linear_gaussian_shapley(&[1.0, 1.0, 0.5], cov);
+    assert!((exact.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+    let settings = ShapleySettings {
+        permutations: 600,
+        outer: 1000,
+        inner: 3,
+        seed: 9,
+    };
+    let effects = &shapley_effects(&scenario, settings).unwrap()[0].1;
+    for (effect, expected) in effects.iter().zip(&exact) {
+        // Issue acceptance: within 0.01 of the closed form.
+        assert!(
+            (effect.effect - expected).abs() < 0.01,
+            "{}: {} vs {expected}",
+            effect.input,
+            effect.effect
+        );
+    }
+}

@@ -14,6 +14,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rvtol_engine::gate;
 use rvtol_engine::sensitivity::{sobol_indices, SensitivitySettings};
 use rvtol_engine::sensitivity_report::SensitivityReport;
+use rvtol_engine::shapley::{shapley_effects, ShapleySettings};
 use rvtol_engine::{
     nominal, run, NominalReport, RunReport, RunSettings, Scenario, ScenarioError,
     DEFAULT_EXACT_PERCENTILE_LIMIT,
@@ -77,6 +78,16 @@ enum Command {
         /// Bootstrap resamples for the 95 % intervals.
         #[arg(long, default_value_t = 500)]
         bootstrap: usize,
+        /// Also estimate Shapley effects per source (exact for correlated inputs; needs
+        /// parts without the Eq. 11 constraint).
+        #[arg(long)]
+        shapley: bool,
+        /// Shapley: permutation budget (all orders when d! fits, repeated).
+        #[arg(long, default_value_t = 600)]
+        permutations: usize,
+        /// Shapley: outer draws per conditional-variance estimate.
+        #[arg(long, default_value_t = 256)]
+        outer: usize,
         /// Write the JSON report to PATH ("-" for stdout instead of the table).
         #[arg(long, value_name = "PATH")]
         json: Option<PathBuf>,
@@ -358,6 +369,9 @@ fn dispatch(cli: Cli) -> Result<()> {
             seed,
             threads,
             bootstrap,
+            shapley,
+            permutations,
+            outer,
             json,
             quiet,
         } => {
@@ -383,7 +397,23 @@ fn dispatch(cli: Cli) -> Result<()> {
                 .install(|| sobol_indices(&scenario, settings, &|n| bar.inc(n)))
                 .map_err(|err| bad_scenario(&path, err))?;
             bar.finish_and_clear();
-            let report = SensitivityReport::new(&scenario, settings, outputs);
+            let mut report = SensitivityReport::new(&scenario, settings, outputs);
+            if shapley {
+                let effects = pool
+                    .install(|| {
+                        shapley_effects(
+                            &scenario,
+                            ShapleySettings {
+                                permutations,
+                                outer,
+                                inner: 3,
+                                seed: settings.seed,
+                            },
+                        )
+                    })
+                    .map_err(|err| bad_scenario(&path, err))?;
+                report = report.with_shapley(effects);
+            }
             emit(json.as_deref(), || report.to_json(), || report.to_text())
         }
         Command::Baseline {

@@ -573,6 +573,11 @@ impl InputSpace {
         )
     }
 
+    /// The non-normal scalar columns with their distributions.
+    pub fn independent_columns(&self) -> &[(usize, ScalarDistribution)] {
+        &self.independent
+    }
+
     /// The row of means: every normal column at its mean, every other scalar at its mean
     /// (the constraint is not applied: the Eq. 10 mean lies on its boundary).
     pub fn mean_row(&self) -> Vec<f64> {

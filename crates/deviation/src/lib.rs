@@ -20,6 +20,7 @@
 //! No I/O, no serde, no threads: the engine owns those.
 
 mod cholesky;
+mod conditional;
 mod constraint;
 mod displacement;
 mod error;
@@ -29,6 +30,7 @@ mod part;
 mod scalar;
 
 pub use cholesky::{pivoted_cholesky, smallest_eigenvalue, CholeskyFactor};
+pub use conditional::ConditionalSampler;
 pub use constraint::TiltConstraint;
 pub use displacement::point_displacement;
 pub use error::DeviationError;

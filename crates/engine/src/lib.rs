@@ -13,6 +13,7 @@ pub mod run;
 pub mod scenario;
 pub mod sensitivity;
 pub mod sensitivity_report;
+pub mod shapley;
 pub mod stats;
 
 pub use report::{NominalReport, RunReport};

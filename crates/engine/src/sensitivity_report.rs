@@ -25,6 +25,17 @@ pub struct IndexReport {
     pub total_ci: [f64; 2],
 }
 
+/// One source's Shapley effect.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ShapleyReport {
+    /// The source (part or variable).
+    pub input: String,
+    /// Its share of the output variance.
+    pub effect: f64,
+    /// 95 % interval.
+    pub ci: [f64; 2],
+}
+
 /// One output's ranking.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct OutputSensitivityReport {
@@ -38,6 +49,9 @@ pub struct OutputSensitivityReport {
     pub non_finite_rows: u64,
     /// Indices, most important first.
     pub indices: Vec<IndexReport>,
+    /// Shapley effects per source, most important first, when computed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shapley: Option<Vec<ShapleyReport>>,
 }
 
 /// The report of a sensitivity analysis.
@@ -98,9 +112,33 @@ impl SensitivityReport {
                             total_ci: g.total.interval,
                         })
                         .collect(),
+                    shapley: None,
                 })
                 .collect(),
         }
+    }
+
+    /// Adds Shapley effects (`(output name, effects)` as from
+    /// [`crate::shapley::shapley_effects`]).
+    pub fn with_shapley(
+        mut self,
+        effects: Vec<(String, Vec<crate::shapley::ShapleyEffect>)>,
+    ) -> Self {
+        for (name, mut list) in effects {
+            list.sort_by(|a, b| b.effect.total_cmp(&a.effect));
+            if let Some(output) = self.outputs.iter_mut().find(|o| o.name == name) {
+                output.shapley = Some(
+                    list.into_iter()
+                        .map(|e| ShapleyReport {
+                            input: e.input,
+                            effect: e.effect,
+                            ci: e.interval,
+                        })
+                        .collect(),
+                );
+            }
+        }
+        self
     }
 
     /// The JSON document.
@@ -156,6 +194,20 @@ impl SensitivityReport {
                     format_sig(index.total),
                     interval(index.total_ci)
                 ));
+            }
+            if let Some(shapley) = &output.shapley {
+                lines.push(format!(
+                    "  {:<width$}  {:>9} {:<22}",
+                    "input", "Shapley", "interval"
+                ));
+                for effect in shapley {
+                    lines.push(format!(
+                        "  {:<width$}  {:>9} {:<22}",
+                        effect.input,
+                        format_sig(effect.effect),
+                        interval(effect.ci)
+                    ));
+                }
             }
             if output.non_finite_rows > 0 {
                 lines.push(format!(
