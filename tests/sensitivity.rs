@@ -190,3 +190,40 @@ fn shapley_effects_of_a_linear_gaussian_model_match_the_closed_form() {
         );
     }
 }
+
+#[test]
+fn screening_of_a_linear_stack_is_exact() {
+    // For y = c + aᵀx the central difference is the coefficient (to rounding), gᵀΣg is the
+    // closed-form variance 8.957994e-5 mm² (tests/engine.rs), the Euler shares sum to 1 and
+    // the regression fits exactly (R² = 1).
+    use rvtol_engine::screening::screening;
+    use rvtol_engine::shapley::players;
+    let scenario = Scenario::load(&scenario_path("linear-stack-correlated.json")).unwrap();
+    let result = screening(&scenario, &players(&scenario), 20_000, 3).unwrap();
+    let output = &result[0];
+    assert!((output.linearised_variance - 8.957994e-5).abs() < 1e-11);
+    assert!((output.r_squared - 1.0).abs() < 1e-9);
+    let shares: f64 = output.sources.iter().map(|s| s.contribution).sum();
+    assert!((shares - 1.0).abs() < 1e-12);
+    let expected = [
+        ("bore_depth", 1.0),
+        ("bearing_width", -1.0),
+        ("spacer_width", -1.0),
+        ("carrier.dw", -1.0),
+        ("carrier.dbeta", -40.0),
+        ("carrier.du", 0.0),
+    ];
+    for (column, coefficient) in expected {
+        let derivative = output
+            .sources
+            .iter()
+            .flat_map(|s| &s.derivatives)
+            .find(|(c, _)| c == column)
+            .unwrap()
+            .1;
+        assert!(
+            (derivative - coefficient).abs() < 1e-6,
+            "{column}: {derivative}"
+        );
+    }
+}

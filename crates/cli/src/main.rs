@@ -12,9 +12,10 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rvtol_engine::gate;
+use rvtol_engine::screening::screening;
 use rvtol_engine::sensitivity::{sobol_indices, SensitivitySettings};
 use rvtol_engine::sensitivity_report::SensitivityReport;
-use rvtol_engine::shapley::{shapley_effects, ShapleySettings};
+use rvtol_engine::shapley::{players as shapley_players, shapley_effects, ShapleySettings};
 use rvtol_engine::{
     nominal, run, NominalReport, RunReport, RunSettings, Scenario, ScenarioError,
     DEFAULT_EXACT_PERCENTILE_LIMIT,
@@ -397,7 +398,18 @@ fn dispatch(cli: Cli) -> Result<()> {
                 .install(|| sobol_indices(&scenario, settings, &|n| bar.inc(n)))
                 .map_err(|err| bad_scenario(&path, err))?;
             bar.finish_and_clear();
-            let mut report = SensitivityReport::new(&scenario, settings, outputs);
+            let screening = pool
+                .install(|| {
+                    screening(
+                        &scenario,
+                        &shapley_players(&scenario),
+                        samples.min(65_536),
+                        settings.seed,
+                    )
+                })
+                .map_err(|err| bad_scenario(&path, err))?;
+            let mut report =
+                SensitivityReport::new(&scenario, settings, outputs).with_screening(screening);
             if shapley {
                 let effects = pool
                     .install(|| {

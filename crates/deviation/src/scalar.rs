@@ -195,6 +195,38 @@ impl ScalarDistribution {
         }
     }
 
+    /// The variance of the distribution.
+    pub fn variance(&self) -> f64 {
+        match *self {
+            ScalarDistribution::Uniform { lower, upper } => (upper - lower).powi(2) / 12.0,
+            ScalarDistribution::Triangular { lower, mode, upper } => {
+                (lower * lower + mode * mode + upper * upper
+                    - lower * mode
+                    - lower * upper
+                    - mode * upper)
+                    / 18.0
+            }
+            ScalarDistribution::TruncatedNormal {
+                mean,
+                sd,
+                lower,
+                upper,
+            } => {
+                // Var = σ²·[1 + (aφ(a) − bφ(b))/Z − ((φ(a) − φ(b))/Z)²].
+                let (a, b) = ((lower - mean) / sd, (upper - mean) / sd);
+                let mass = if a > 0.0 {
+                    standard_normal_upper_tail(a) - standard_normal_upper_tail(b)
+                } else {
+                    standard_normal_cdf(b) - standard_normal_cdf(a)
+                };
+                let (pa, pb) = (standard_normal_density(a), standard_normal_density(b));
+                let shift = (pa - pb) / mass;
+                sd * sd * (1.0 + (a * pa - b * pb) / mass - shift * shift)
+            }
+            other => other.as_normal().map(|(_, sd)| sd * sd).unwrap_or(f64::NAN),
+        }
+    }
+
     /// The mean of the distribution (the "nominal" value).
     pub fn mean(&self) -> f64 {
         match *self {
@@ -332,6 +364,10 @@ mod tests {
         for (d, mean, var) in cases {
             d.validate("d").unwrap();
             assert!((d.mean() - mean).abs() < 1e-12, "{d:?} closed-form mean");
+            assert!(
+                (d.variance() - var).abs() < 1e-12,
+                "{d:?} closed-form variance"
+            );
             let (m, v) = sample_mean_and_variance(d, n);
             let se = (var / n as f64).sqrt();
             assert!((m - mean).abs() < 5.0 * se, "{d:?}: mean {m} vs {mean}");

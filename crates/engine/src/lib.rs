@@ -11,6 +11,7 @@ pub mod gate;
 pub mod report;
 pub mod run;
 pub mod scenario;
+pub mod screening;
 pub mod sensitivity;
 pub mod sensitivity_report;
 pub mod shapley;

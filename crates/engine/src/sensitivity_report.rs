@@ -36,6 +36,30 @@ pub struct ShapleyReport {
     pub ci: [f64; 2],
 }
 
+/// One source's screening figures.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ScreeningSourceReport {
+    /// The source.
+    pub input: String,
+    /// Share of the linearised variance, in percent.
+    pub contribution_percent: f64,
+    /// Sum of its squared standardized regression coefficients.
+    pub src_squared: f64,
+    /// Derivatives at the nominal point, keyed by column.
+    pub derivatives_at_nominal: crate::report::OrderedNumbers,
+}
+
+/// Screening figures of one output.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ScreeningReport {
+    /// gᵀΣg at the nominal point.
+    pub linearised_variance: f64,
+    /// R² of the linear regression on the random columns.
+    pub r_squared: f64,
+    /// Per source, by decreasing |contribution|.
+    pub sources: Vec<ScreeningSourceReport>,
+}
+
 /// One output's ranking.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct OutputSensitivityReport {
@@ -49,6 +73,9 @@ pub struct OutputSensitivityReport {
     pub non_finite_rows: u64,
     /// Indices, most important first.
     pub indices: Vec<IndexReport>,
+    /// Screening: contribution %, SRC² and derivatives at the nominal point, per source.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub screening: Option<ScreeningReport>,
     /// Shapley effects per source, most important first, when computed.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub shapley: Option<Vec<ShapleyReport>>,
@@ -112,10 +139,44 @@ impl SensitivityReport {
                             total_ci: g.total.interval,
                         })
                         .collect(),
+                    screening: None,
                     shapley: None,
                 })
                 .collect(),
         }
+    }
+
+    /// Adds the screening figures.
+    pub fn with_screening(mut self, screening: Vec<crate::screening::OutputScreening>) -> Self {
+        for output_screening in screening {
+            let mut sources: Vec<ScreeningSourceReport> = output_screening
+                .sources
+                .into_iter()
+                .map(|s| ScreeningSourceReport {
+                    input: s.input,
+                    contribution_percent: 100.0 * s.contribution,
+                    src_squared: s.src_squared,
+                    derivatives_at_nominal: crate::report::OrderedNumbers(s.derivatives),
+                })
+                .collect();
+            sources.sort_by(|a, b| {
+                b.contribution_percent
+                    .abs()
+                    .total_cmp(&a.contribution_percent.abs())
+            });
+            if let Some(output) = self
+                .outputs
+                .iter_mut()
+                .find(|o| o.name == output_screening.name)
+            {
+                output.screening = Some(ScreeningReport {
+                    linearised_variance: output_screening.linearised_variance,
+                    r_squared: output_screening.r_squared,
+                    sources,
+                });
+            }
+        }
+        self
     }
 
     /// Adds Shapley effects (`(output name, effects)` as from
@@ -194,6 +255,25 @@ impl SensitivityReport {
                     format_sig(index.total),
                     interval(index.total_ci)
                 ));
+            }
+            if let Some(screening) = &output.screening {
+                lines.push(format!(
+                    "  screening (linearised variance {}, regression R² {:.4}):",
+                    format_sig(screening.linearised_variance),
+                    screening.r_squared
+                ));
+                lines.push(format!(
+                    "  {:<width$}  {:>13} {:>9}",
+                    "input", "contribution", "SRC²"
+                ));
+                for source in &screening.sources {
+                    lines.push(format!(
+                        "  {:<width$}  {:>12}% {:>9}",
+                        source.input,
+                        format!("{:.2}", source.contribution_percent),
+                        format_sig(source.src_squared)
+                    ));
+                }
             }
             if let Some(shapley) = &output.shapley {
                 lines.push(format!(
