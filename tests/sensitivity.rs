@@ -227,3 +227,38 @@ fn screening_of_a_linear_stack_is_exact() {
         );
     }
 }
+
+#[test]
+fn user_defined_groups_replace_their_members() {
+    let text = std::fs::read_to_string(scenario_path("rv20e-hysteresis.json")).unwrap();
+    let grouped = text.replacen(
+        "\"spec_limits\"",
+        "\"sensitivity_groups\": [{ \"name\": \"cycloid_gear\", \"members\": [\"cycloid_radial_runout\", \"cycloid_cumulative_pitch_error\"] }],\n  \"spec_limits\"",
+        1,
+    );
+    let scenario = Scenario::from_json(&grouped, "grouped").unwrap();
+    let groups = independent_groups(&scenario);
+    assert_eq!(groups.len(), 9);
+    assert_eq!(groups[0].name, "cycloid_gear");
+    assert_eq!(groups[0].columns.len(), 2);
+    assert!(!groups.iter().any(|g| g.name == "cycloid_radial_runout"));
+
+    let unknown = grouped.replace(
+        "\"cycloid_radial_runout\", \"cycloid",
+        "\"cycloid_runout\", \"cycloid",
+    );
+    let err = Scenario::from_json(&unknown, "bad").err().unwrap();
+    assert_eq!(
+        err.to_string(),
+        "sensitivity_groups[0].members[0]: no part or variable named \"cycloid_runout\""
+    );
+    let twice = grouped.replace(
+        "\"members\": [\"cycloid_radial_runout\", \"cycloid_cumulative_pitch_error\"]",
+        "\"members\": [\"cycloid_radial_runout\", \"cycloid_radial_runout\"]",
+    );
+    let err = Scenario::from_json(&twice, "bad").err().unwrap();
+    assert_eq!(
+        err.to_string(),
+        "sensitivity_groups[0].members[1]: \"cycloid_radial_runout\" is already in a group"
+    );
+}

@@ -70,6 +70,15 @@ struct ScenarioFile {
     models: Vec<ModelFile>,
     #[serde(default)]
     spec_limits: BTreeMap<String, SpecFile>,
+    #[serde(default)]
+    sensitivity_groups: Vec<GroupFile>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct GroupFile {
+    name: String,
+    members: Vec<String>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -273,6 +282,9 @@ pub struct Scenario {
     pub columns: Vec<ColumnInfo>,
     /// The error sources: each part (its six columns) and each variable (its column).
     pub sources: Vec<InputGroup>,
+    /// The units of the Sobol' analysis: the scenario's `sensitivity_groups`, then every
+    /// source in none of them.
+    pub sensitivity_groups: Vec<InputGroup>,
     /// The models in scenario order.
     pub models: Vec<BoundModel>,
     /// All outputs, models in order.
@@ -702,6 +714,53 @@ fn compile(file: ScenarioFile, fallback_name: &str) -> Result<Scenario, Scenario
         });
     }
 
+    let mut sensitivity_groups: Vec<InputGroup> = Vec::new();
+    let mut grouped: Vec<&str> = Vec::new();
+    for (i, group) in file.sensitivity_groups.iter().enumerate() {
+        let path = format!("sensitivity_groups[{i}]");
+        check_name(&format!("{path}.name"), &group.name)?;
+        if group.members.is_empty() {
+            return Err(ScenarioError::new(
+                format!("{path}.members"),
+                "needs at least one member",
+            ));
+        }
+        if sources.iter().any(|s| s.name == group.name) && !group.members.contains(&group.name) {
+            return Err(ScenarioError::new(
+                format!("{path}.name"),
+                format!("{:?} is already the name of a part or variable", group.name),
+            ));
+        }
+        let mut columns = Vec::new();
+        for (k, member) in group.members.iter().enumerate() {
+            let member_path = format!("{path}.members[{k}]");
+            let source = sources.iter().find(|s| &s.name == member).ok_or_else(|| {
+                ScenarioError::new(
+                    &member_path,
+                    format!("no part or variable named {member:?}"),
+                )
+            })?;
+            if grouped.contains(&member.as_str()) {
+                return Err(ScenarioError::new(
+                    member_path,
+                    format!("{member:?} is already in a group"),
+                ));
+            }
+            grouped.push(member);
+            columns.extend(&source.columns);
+        }
+        sensitivity_groups.push(InputGroup {
+            name: group.name.clone(),
+            columns,
+        });
+    }
+    sensitivity_groups.extend(
+        sources
+            .iter()
+            .filter(|s| !grouped.contains(&s.name.as_str()))
+            .cloned(),
+    );
+
     Ok(Scenario {
         name: file.name.unwrap_or_else(|| fallback_name.to_string()),
         description: file.description.unwrap_or_default(),
@@ -710,6 +769,7 @@ fn compile(file: ScenarioFile, fallback_name: &str) -> Result<Scenario, Scenario
         input_space,
         columns,
         sources,
+        sensitivity_groups,
         models,
         outputs,
     })

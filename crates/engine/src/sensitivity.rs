@@ -83,18 +83,14 @@ pub struct OutputSensitivity {
     pub indices: Vec<GroupIndices>,
 }
 
-/// The error sources of the scenario as independent groups: sources that the scenario
-/// correlates are merged (names joined with `+`); sources with no random column are left
-/// out.
+/// The scenario's sensitivity groups (its `sensitivity_groups`, then each remaining
+/// source) made independent: groups that the scenario correlates are merged (names joined
+/// with `+`); groups with no random column are left out.
 pub fn independent_groups(scenario: &Scenario) -> Vec<InputGroup> {
     let (gaussian_columns, _, covariance) = scenario.input_space.gaussian_specification();
-    let source_of_column = |column: usize| {
-        scenario
-            .sources
-            .iter()
-            .position(|s| s.columns.contains(&column))
-    };
-    let mut parent: Vec<usize> = (0..scenario.sources.len()).collect();
+    let units = &scenario.sensitivity_groups;
+    let source_of_column = |column: usize| units.iter().position(|s| s.columns.contains(&column));
+    let mut parent: Vec<usize> = (0..units.len()).collect();
     fn root(parent: &mut [usize], mut x: usize) -> usize {
         while parent[x] != x {
             parent[x] = parent[parent[x]];
@@ -120,8 +116,8 @@ pub fn independent_groups(scenario: &Scenario) -> Vec<InputGroup> {
         None => true,
     };
     let mut groups: Vec<InputGroup> = Vec::new();
-    let mut group_of_root = vec![usize::MAX; scenario.sources.len()];
-    for (s, source) in scenario.sources.iter().enumerate() {
+    let mut group_of_root = vec![usize::MAX; units.len()];
+    for (s, source) in units.iter().enumerate() {
         if !source.columns.iter().any(|&c| random_column(c)) {
             continue;
         }
