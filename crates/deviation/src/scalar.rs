@@ -80,6 +80,15 @@ fn standard_normal_density(x: f64) -> f64 {
     (-0.5 * x * x).exp() / (2.0 * std::f64::consts::PI).sqrt()
 }
 
+/// Φ(b) − Φ(a), from the upper tails when a > 0 to keep precision far out.
+fn standard_normal_mass(a: f64, b: f64) -> f64 {
+    if a > 0.0 {
+        standard_normal_upper_tail(a) - standard_normal_upper_tail(b)
+    } else {
+        standard_normal_cdf(b) - standard_normal_cdf(a)
+    }
+}
+
 /// Φ⁻¹(p) for p in (0, 1).
 fn standard_normal_quantile(p: f64) -> f64 {
     -std::f64::consts::SQRT_2 * erfc_inv(2.0 * p)
@@ -161,11 +170,7 @@ impl ScalarDistribution {
                     ));
                 }
                 let (a, b) = ((lower - mean) / sd, (upper - mean) / sd);
-                let mass = if a > 0.0 {
-                    standard_normal_upper_tail(a) - standard_normal_upper_tail(b)
-                } else {
-                    standard_normal_cdf(b) - standard_normal_cdf(a)
-                };
+                let mass = standard_normal_mass(a, b);
                 if mass < 1e-300 || !mass.is_finite() {
                     return Err(DeviationError::invalid(
                         path,
@@ -214,11 +219,7 @@ impl ScalarDistribution {
             } => {
                 // Var = σ²·[1 + (aφ(a) − bφ(b))/Z − ((φ(a) − φ(b))/Z)²].
                 let (a, b) = ((lower - mean) / sd, (upper - mean) / sd);
-                let mass = if a > 0.0 {
-                    standard_normal_upper_tail(a) - standard_normal_upper_tail(b)
-                } else {
-                    standard_normal_cdf(b) - standard_normal_cdf(a)
-                };
+                let mass = standard_normal_mass(a, b);
                 let (pa, pb) = (standard_normal_density(a), standard_normal_density(b));
                 let shift = (pa - pb) / mass;
                 sd * sd * (1.0 + (a * pa - b * pb) / mass - shift * shift)
@@ -240,11 +241,7 @@ impl ScalarDistribution {
             } => {
                 // E[X] = μ + σ·(φ(a) − φ(b)) / (Φ(b) − Φ(a)).
                 let (a, b) = ((lower - mean) / sd, (upper - mean) / sd);
-                let mass = if a > 0.0 {
-                    standard_normal_upper_tail(a) - standard_normal_upper_tail(b)
-                } else {
-                    standard_normal_cdf(b) - standard_normal_cdf(a)
-                };
+                let mass = standard_normal_mass(a, b);
                 mean + sd * (standard_normal_density(a) - standard_normal_density(b)) / mass
             }
             other => other.as_normal().map(|(m, _)| m).unwrap_or(f64::NAN),

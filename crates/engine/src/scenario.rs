@@ -333,6 +333,13 @@ impl Scenario {
         compile(file, fallback_name)
     }
 
+    /// Indices of the continuous outputs (those with distributions to analyse).
+    pub fn continuous_outputs(&self) -> Vec<usize> {
+        (0..self.outputs.len())
+            .filter(|&o| self.outputs[o].kind == OutputKind::Continuous)
+            .collect()
+    }
+
     /// Index of an output by name.
     pub fn output_index(&self, name: &str) -> Option<usize> {
         self.outputs.iter().position(|o| o.name == name)

@@ -17,7 +17,6 @@
 use nalgebra::{DMatrix, DVector};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rvtol_models::OutputKind;
 
 use crate::evaluate::ChunkEvaluator;
 use crate::run::CHUNK_SIZE;
@@ -92,9 +91,7 @@ pub fn screening(
             ),
         ));
     }
-    let continuous: Vec<usize> = (0..scenario.outputs.len())
-        .filter(|&o| scenario.outputs[o].kind == OutputKind::Continuous)
-        .collect();
+    let continuous = scenario.continuous_outputs();
     let mut evaluator = ChunkEvaluator::new(scenario);
 
     // Derivatives at the nominal point.

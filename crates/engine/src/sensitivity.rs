@@ -26,7 +26,6 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
-use rvtol_models::OutputKind;
 
 use crate::evaluate::ChunkEvaluator;
 use crate::run::CHUNK_SIZE;
@@ -261,9 +260,7 @@ pub fn sobol_indices(
             "the scenario has no random input",
         ));
     }
-    let continuous: Vec<usize> = (0..scenario.outputs.len())
-        .filter(|&o| scenario.outputs[o].kind == OutputKind::Continuous)
-        .collect();
+    let continuous = scenario.continuous_outputs();
     let n_chunks = settings.base_samples.div_ceil(CHUNK_SIZE as u64);
     let chunks: Vec<ChunkValues> = (0..n_chunks as usize)
         .into_par_iter()

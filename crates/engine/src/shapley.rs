@@ -24,7 +24,6 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use rvtol_deviation::ConditionalSampler;
-use rvtol_models::OutputKind;
 
 use crate::evaluate::ChunkEvaluator;
 use crate::run::CHUNK_SIZE;
@@ -115,9 +114,7 @@ pub fn shapley_effects(
             "the scenario has no random input",
         ));
     }
-    let continuous: Vec<usize> = (0..scenario.outputs.len())
-        .filter(|&o| scenario.outputs[o].kind == OutputKind::Continuous)
-        .collect();
+    let continuous = scenario.continuous_outputs();
     let space = &scenario.input_space;
     let n_columns = space.n_columns();
 
