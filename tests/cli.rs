@@ -134,31 +134,47 @@ fn models_lists_inputs_outputs_and_units() {
     assert!(text.contains("hysteresis_arcmin"));
 }
 
-#[test]
-fn a_failed_run_leaves_no_report_behind() {
-    // The report is written to a temporary file and renamed: a run that fails (here on bad
-    // input) neither creates nor truncates the target.
-    let path = temp_path("atomic");
-    std::fs::write(&path, "previous report\n").unwrap();
-    let output = run_rvtol(&[
-        "run",
-        &scenario("rv20e-hysteresis.json"),
-        "--samples",
-        "0",
-        "--json",
-        path.to_str().unwrap(),
-    ]);
-    assert_eq!(output.status.code(), Some(2));
-    assert_eq!(std::fs::read_to_string(&path).unwrap(), "previous report\n");
-    std::fs::remove_file(&path).unwrap();
-    let leftovers = std::fs::read_dir(std::env::temp_dir())
+/// Temporary files left in `dir` by writes to `file_name` (`.NAME.tmp-PID`).
+fn leftover_temporaries(dir: &std::path::Path, file_name: &str) -> usize {
+    std::fs::read_dir(dir)
         .unwrap()
         .filter_map(|e| e.ok())
         .filter(|e| {
-            e.file_name()
-                .to_string_lossy()
-                .contains(&format!("rvtol-cli-atomic-{}.json.tmp", std::process::id()))
+            let name = e.file_name().to_string_lossy().into_owned();
+            name.starts_with(&format!(".{file_name}.tmp-"))
         })
-        .count();
-    assert_eq!(leftovers, 0);
+        .count()
+}
+
+#[test]
+fn reports_are_written_through_a_temporary_file() {
+    // A successful run replaces the target and leaves no temporary file; a run that fails
+    // (here on bad input) neither creates, truncates nor litters.
+    let path = temp_path("atomic");
+    let file_name = path.file_name().unwrap().to_string_lossy().into_owned();
+    let dir = path.parent().unwrap().to_path_buf();
+    std::fs::write(&path, "previous report\n").unwrap();
+    let arguments = |samples: &str| {
+        vec![
+            "run".to_string(),
+            scenario("rv20e-hysteresis.json"),
+            "--samples".into(),
+            samples.into(),
+            "--json".into(),
+            path.to_str().unwrap().into(),
+            "--quiet".into(),
+        ]
+    };
+    let output = run_rvtol(&arguments("0"));
+    assert_eq!(output.status.code(), Some(2));
+    assert_eq!(std::fs::read_to_string(&path).unwrap(), "previous report\n");
+    assert_eq!(leftover_temporaries(&dir, &file_name), 0);
+
+    let output = run_rvtol(&arguments("5000"));
+    assert_eq!(output.status.code(), Some(0));
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    assert_eq!(report["samples"], 5000);
+    assert_eq!(leftover_temporaries(&dir, &file_name), 0);
+    std::fs::remove_file(&path).unwrap();
 }

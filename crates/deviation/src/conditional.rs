@@ -100,10 +100,12 @@ impl InputSpace {
 }
 
 impl ConditionalSampler {
-    /// Overwrites the free columns of `row` with a draw given its other columns.
-    pub fn sample<R: Rng + ?Sized>(&self, rng: &mut R, row: &mut [f64]) {
+    /// Overwrites the free columns of `row` with a draw given its other columns. `z` is
+    /// scratch space, reused across calls so that a draw does not allocate.
+    pub fn sample<R: Rng + ?Sized>(&self, rng: &mut R, row: &mut [f64], z: &mut Vec<f64>) {
         let n_given = self.given.len();
-        let z: Vec<f64> = (0..self.rank).map(|_| rng.sample(StandardNormal)).collect();
+        z.clear();
+        z.extend((0..self.rank).map(|_| rng.sample::<f64, _>(StandardNormal)));
         for (i, &(column, mean)) in self.free.iter().enumerate() {
             let mut value = mean;
             for (j, &(given_column, given_mean)) in self.given.iter().enumerate() {
@@ -138,10 +140,11 @@ mod tests {
         let sampler = space.conditional_sampler(&[b]).unwrap();
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
         let n = 200_000;
+        let mut z = Vec::new();
         let draws: Vec<f64> = (0..n)
             .map(|_| {
                 let mut row = [1.5, 0.0];
-                sampler.sample(&mut rng, &mut row);
+                sampler.sample(&mut rng, &mut row, &mut z);
                 assert_eq!(row[0], 1.5);
                 row[1]
             })

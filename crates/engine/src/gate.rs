@@ -225,15 +225,13 @@ pub fn measure(
         let Distribution::Values(mut values) = acc.distribution else {
             unreachable!("the gate runs with exact percentiles");
         };
+        let percents: Vec<f64> = GATED_PERCENTS.iter().map(|(_, percent)| *percent).collect();
+        let estimates = crate::stats::percentiles_type7(&mut values, &percents);
         values.sort_unstable_by(f64::total_cmp);
         let last = values.len() - 1;
-        for (name, percent) in GATED_PERCENTS {
+        for ((name, percent), estimate) in GATED_PERCENTS.into_iter().zip(estimates) {
             let p = percent / 100.0;
-            // Type 7 on sorted values.
-            let h = last as f64 * p;
-            let low = h.floor() as usize;
-            let value =
-                values[low] + (h - low as f64) * (values[(low + 1).min(last)] - values[low]);
+            let value = estimate.unwrap_or(f64::NAN);
             // Distribution-free one-sample interval [X_(l), X_(u)] at z.
             let centre = nf * p;
             let reach = z * (nf * p * (1.0 - p)).sqrt();

@@ -224,15 +224,9 @@ fn indices(
 }
 
 fn percentile_interval(mut values: Vec<f64>, confidence: f64) -> [f64; 2] {
-    values.sort_by(f64::total_cmp);
-    let tail = 0.5 * (1.0 - confidence);
-    let at = |p: f64| {
-        let h = (values.len() - 1) as f64 * p;
-        let low = h.floor() as usize;
-        let high = (low + 1).min(values.len() - 1);
-        values[low] + (h - low as f64) * (values[high] - values[low])
-    };
-    [at(tail), at(1.0 - tail)]
+    let tail = 50.0 * (1.0 - confidence);
+    let ends = crate::stats::percentiles_type7(&mut values, &[tail, 100.0 - tail]);
+    [ends[0].unwrap_or(f64::NAN), ends[1].unwrap_or(f64::NAN)]
 }
 
 /// Computes the indices. `progress` receives base samples done.

@@ -165,6 +165,7 @@ pub fn shapley_effects(
             let mut delta = vec![vec![0.0; d]; continuous.len()];
             let mut previous = vec![0.0; continuous.len()];
             let mut free: Vec<usize> = Vec::new();
+            let mut z = Vec::new();
             for (k, &player) in order.iter().enumerate() {
                 let cost: Vec<f64> = if k + 1 == d {
                     variance.clone()
@@ -177,7 +178,7 @@ pub fn shapley_effects(
                             let start = (outer * settings.inner + inner) * n_columns;
                             let row = &mut rows[start..start + n_columns];
                             row.copy_from_slice(base);
-                            sampler.sample(&mut rng, row);
+                            sampler.sample(&mut rng, row, &mut z);
                         }
                     }
                     evaluator.evaluate(&rows, settings.outer * settings.inner);
