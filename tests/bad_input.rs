@@ -386,3 +386,201 @@ fn missing_scenario_file() {
     let run_line = assert_one_line_error("run missing file", &run, &[&name, "cannot read"]);
     assert_eq!(validate_line, run_line);
 }
+
+// ---------------------------------------------------------------------------------------
+// rvtol allocate: the allocation section (checked by validate and run too) and the
+// allocate arguments.
+
+/// The base scenario with an allocation section on x1 and x2 and spec limits on y.
+fn allocatable() -> Value {
+    let mut s = base();
+    s["allocation"] = json!({
+        "sources": {
+            "x1": { "min": 0.05, "max": 0.6, "cost": { "reciprocal": { "b": 1.0 } } },
+            "x2": { "cost": { "table": [[0.1, 5.0], [0.6, 2.0], [1.2, 1.0]] } }
+        }
+    });
+    s
+}
+
+fn allocatable_with(change: impl FnOnce(&mut Value)) -> String {
+    let mut scenario = allocatable();
+    change(&mut scenario);
+    serde_json::to_string_pretty(&scenario).expect("serialisable")
+}
+
+/// Runs `rvtol allocate` on `contents` with `args` (after the defaults `--output stack
+/// --target "sd <= 0.3"`, which later arguments override) and asserts the one-line error.
+fn assert_bad_allocate(label: &str, contents: &str, args: &[&str], needles: &[&str]) {
+    let file = TempScenario::new(&format!("bad-allocate-{label}"), contents);
+    let mut all = vec![
+        "allocate",
+        file.path().to_str().unwrap(),
+        "--samples",
+        "1000",
+        "--quiet",
+    ];
+    let has = |flag: &str| args.contains(&flag);
+    if !has("--output") {
+        all.extend(["--output", "stack"]);
+    }
+    if !has("--target") {
+        all.extend(["--target", "sd <= 0.3"]);
+    }
+    all.extend_from_slice(args);
+    let output = run_rvtol(&all);
+    assert_one_line_error(&format!("{label}: allocate"), &output, needles);
+}
+
+#[test]
+fn allocation_section_is_valid_and_allocates() {
+    let file = TempScenario::new("allocate-valid", &allocatable_with(|_| {}));
+    let output = run_rvtol(&[
+        "allocate",
+        file.path().to_str().unwrap(),
+        "--output",
+        "stack",
+        "--target",
+        "sd <= 0.3",
+        "--samples",
+        "2000",
+        "--quiet",
+    ]);
+    assert_eq!(output.status.code(), Some(0), "{}", text(&output.stderr));
+}
+
+#[test]
+fn allocation_source_unknown() {
+    let contents = allocatable_with(|s| {
+        s["allocation"]["sources"]["x9"] = s["allocation"]["sources"]["x1"].clone()
+    });
+    assert_bad_scenario(
+        "allocation-unknown",
+        &contents,
+        Some("allocation.sources.x9"),
+        &["no part or variable named \"x9\""],
+    );
+}
+
+#[test]
+fn allocation_bounds_reversed() {
+    let contents = allocatable_with(|s| s["allocation"]["sources"]["x1"]["max"] = json!(0.01));
+    assert_bad_scenario(
+        "allocation-bounds",
+        &contents,
+        Some("allocation.sources.x1.max"),
+        &["≥ min (0.05)"],
+    );
+}
+
+#[test]
+fn allocation_bound_missing_without_table() {
+    let contents = allocatable_with(|s| {
+        s["allocation"]["sources"]["x1"]
+            .as_object_mut()
+            .unwrap()
+            .remove("min");
+    });
+    assert_bad_scenario(
+        "allocation-no-min",
+        &contents,
+        Some("allocation.sources.x1.min"),
+        &["required"],
+    );
+}
+
+#[test]
+fn allocation_cost_table_rising() {
+    let contents = allocatable_with(|s| {
+        s["allocation"]["sources"]["x2"]["cost"]["table"][2] = json!([1.2, 9.0])
+    });
+    assert_bad_scenario(
+        "allocation-table",
+        &contents,
+        Some("allocation.sources.x2.cost.table[2]"),
+        &["cannot cost more"],
+    );
+}
+
+#[test]
+fn allocation_cost_table_short_of_the_bounds() {
+    let contents = allocatable_with(|s| s["allocation"]["sources"]["x2"]["max"] = json!(2.0));
+    assert_bad_scenario(
+        "allocation-table-range",
+        &contents,
+        Some("allocation.sources.x2.cost.table"),
+        &["must cover the bounds"],
+    );
+}
+
+#[test]
+fn allocate_without_allocation_section() {
+    assert_bad_allocate(
+        "no-section",
+        &scenario_with(|_| {}),
+        &[],
+        &[": allocation: missing"],
+    );
+}
+
+#[test]
+fn allocate_bad_target() {
+    let contents = allocatable_with(|_| {});
+    assert_bad_allocate(
+        "target",
+        &contents,
+        &["--target", "p99.865 < 1"],
+        &["--target: "],
+    );
+    assert_bad_allocate(
+        "target-cpk",
+        &contents,
+        &["--target", "cpk <= 2"],
+        &["--target: ", "cpk >= VALUE"],
+    );
+}
+
+#[test]
+fn allocate_unknown_output() {
+    assert_bad_allocate(
+        "output",
+        &allocatable_with(|_| {}),
+        &["--output", "z"],
+        &[": --output: no output named \"z\"; outputs: stack"],
+    );
+}
+
+#[test]
+fn allocate_capability_target_without_spec_limits() {
+    assert_bad_allocate(
+        "cpk-no-spec",
+        &allocatable_with(|_| {}),
+        &["--target", "cpk >= 1.33"],
+        &[": spec_limits.stack: ", "needs a lower or an upper limit"],
+    );
+}
+
+#[test]
+fn allocate_cost_model_choice() {
+    let both = allocatable_with(|s| {
+        s["allocation"]["sources"]["x1"]["cost"]["exponential"] = json!({ "b": 2.0, "rate": 5.0 })
+    });
+    assert_bad_allocate(
+        "cost-ambiguous",
+        &both,
+        &[],
+        &[": allocation.sources.x1.cost: ", "choose one with --cost"],
+    );
+    assert_bad_allocate(
+        "cost-missing",
+        &both,
+        &["--cost", "exponential"],
+        &[": allocation.sources.x2.cost: has no exponential model"],
+    );
+    assert_bad_allocate(
+        "cost-unknown",
+        &both,
+        &["--cost", "linear"],
+        &["--cost: unknown cost model"],
+    );
+}

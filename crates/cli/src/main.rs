@@ -11,6 +11,9 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rvtol_engine::allocation::report::AllocationReport;
+use rvtol_engine::allocation::spec::{CostKind, Target};
+use rvtol_engine::allocation::{allocate, default_samples, proposal_document, AllocationSettings};
 use rvtol_engine::gate;
 use rvtol_engine::screening::screening;
 use rvtol_engine::sensitivity::{sobol_indices, SensitivitySettings};
@@ -144,6 +147,45 @@ enum Command {
     Validate {
         /// Scenario file (JSON).
         scenario: PathBuf,
+    },
+    /// Find the cheapest tolerances, within the scenario's `allocation` bounds, that meet a
+    /// target on an output; verify them with an independent run (exit 1 when no
+    /// allocation meets the target).
+    Allocate {
+        /// Scenario file (JSON) with an `allocation` section.
+        scenario: PathBuf,
+        /// The output the target applies to.
+        #[arg(long)]
+        output: String,
+        /// The target: `p99.865 <= 1.0`, `cpk >= 1.33`, `ppm_out <= 100`, `sd <= 0.01`,
+        /// `mean <= x`, `cp >= 1.67`.
+        #[arg(long, value_name = "EXPR")]
+        target: String,
+        /// Cost model to use where a source gives several: reciprocal, exponential, table.
+        #[arg(long, value_name = "MODEL")]
+        cost: Option<String>,
+        /// Samples per Monte Carlo run (default: enough for about 100 samples in the
+        /// targeted tail; at least 200,000).
+        #[arg(long)]
+        samples: Option<u64>,
+        /// Seed of the optimisation runs (default: the scenario's `seed`, else 1).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Seed of the verification run (default: seed + 1).
+        #[arg(long)]
+        verify_seed: Option<u64>,
+        /// Worker threads (default: all cores). Results do not depend on it.
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Write the JSON report to PATH ("-" for stdout instead of the table).
+        #[arg(long, value_name = "PATH")]
+        json: Option<PathBuf>,
+        /// Write the scenario with the proposed tolerances to PATH.
+        #[arg(long, value_name = "PATH")]
+        write_scenario: Option<PathBuf>,
+        /// No progress display.
+        #[arg(long, short)]
+        quiet: bool,
     },
     /// List the models with their parameters, inputs and outputs.
     Models,
@@ -497,9 +539,87 @@ fn dispatch(cli: Cli) -> Result<()> {
                 Err(GateFailed.into())
             }
         }
+        Command::Allocate {
+            scenario: path,
+            output,
+            target,
+            cost,
+            samples,
+            seed,
+            verify_seed,
+            threads,
+            json,
+            write_scenario,
+            quiet,
+        } => {
+            let (scenario, text) = Scenario::read(&path).map_err(|err| bad_scenario(&path, err))?;
+            let target =
+                Target::parse(&target).map_err(|err| BadInput(format!("--target: {err}")))?;
+            let cost = cost
+                .map(|name| {
+                    CostKind::parse(&name).ok_or_else(|| {
+                        BadInput(format!(
+                            "--cost: unknown cost model {name:?}; use reciprocal, exponential or table"
+                        ))
+                    })
+                })
+                .transpose()?;
+            let seed = seed.unwrap_or(scenario.seed);
+            let settings = AllocationSettings {
+                samples: samples.unwrap_or_else(|| default_samples(&target)),
+                seed,
+                verification_seed: verify_seed.unwrap_or(seed.wrapping_add(1)),
+                cost,
+            };
+            let pool = thread_pool(threads)?;
+            let spinner = if quiet || !std::io::stderr().is_terminal() {
+                ProgressBar::hidden()
+            } else {
+                let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
+                bar.set_style(
+                    ProgressStyle::with_template(
+                        "{spinner} [{elapsed_precise}] allocating: {pos} Monte Carlo runs",
+                    )
+                    .expect("valid template"),
+                );
+                bar
+            };
+            let allocation = pool
+                .install(|| {
+                    allocate(&scenario, &text, &output, target, settings, &|n| {
+                        spinner.set_position(n as u64)
+                    })
+                })
+                .map_err(|err| bad_scenario(&path, err))?;
+            spinner.finish_and_clear();
+            if let Some(proposal) = &write_scenario {
+                let document = proposal_document(&text, &allocation)
+                    .map_err(|err| bad_scenario(&path, err))?;
+                write_atomically(proposal, &document)?;
+            }
+            let report = AllocationReport::new(&allocation);
+            emit(json.as_deref(), || report.to_json(), || report.to_text())?;
+            if allocation.status() == "met" {
+                Ok(())
+            } else {
+                Err(AllocationFailed(allocation.status()).into())
+            }
+        }
         Command::Models => command_models(),
     }
 }
+
+/// `rvtol allocate` found no verified allocation (exit code 1); its report is printed.
+#[derive(Debug)]
+struct AllocationFailed(&'static str);
+
+impl std::fmt::Display for AllocationFailed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "allocation {}", self.0)
+    }
+}
+
+impl std::error::Error for AllocationFailed {}
 
 fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
@@ -513,7 +633,9 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
             eprintln!("error: {err:#}");
-            if err.downcast_ref::<GateFailed>().is_some() {
+            if err.downcast_ref::<GateFailed>().is_some()
+                || err.downcast_ref::<AllocationFailed>().is_some()
+            {
                 ExitCode::from(1)
             } else {
                 // Bad input or usage: a scenario, a baseline, a path.

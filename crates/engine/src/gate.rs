@@ -228,17 +228,13 @@ pub fn measure(
         let percents: Vec<f64> = GATED_PERCENTS.iter().map(|(_, percent)| *percent).collect();
         let estimates = crate::stats::percentiles_type7(&mut values, &percents);
         values.sort_unstable_by(f64::total_cmp);
-        let last = values.len() - 1;
         for ((name, percent), estimate) in GATED_PERCENTS.into_iter().zip(estimates) {
-            let p = percent / 100.0;
             let value = estimate.unwrap_or(f64::NAN);
             // Distribution-free one-sample interval [X_(l), X_(u)] at z.
-            let centre = nf * p;
-            let reach = z * (nf * p * (1.0 - p)).sqrt();
-            let lower_rank = ((centre - reach).floor().max(0.0) as usize).min(last);
-            let upper_rank = ((centre + reach).ceil() as usize).min(last);
-            let below = std::f64::consts::SQRT_2 * (value - values[lower_rank]).max(0.0);
-            let above = std::f64::consts::SQRT_2 * (values[upper_rank] - value).max(0.0);
+            let (low, high) =
+                crate::stats::order_statistic_interval(&values, percent, z).expect("n ≥ 2 values");
+            let below = std::f64::consts::SQRT_2 * (value - low).max(0.0);
+            let above = std::f64::consts::SQRT_2 * (high - value).max(0.0);
             push(&info.name, name, value, below, above);
         }
         if info.spec.is_some() {

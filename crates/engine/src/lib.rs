@@ -6,6 +6,7 @@
 //! [`report`] turns the result into JSON and text. Nothing downstream reaches back into
 //! the scenario or the sampler, and the engine never prints.
 
+pub mod allocation;
 pub mod evaluate;
 pub mod gate;
 pub mod report;

@@ -14,6 +14,9 @@ use rvtol_deviation::{InputSpace, InputSpaceBuilder, PartSpec, ScalarDistributio
 use rvtol_models::{ErrorModel, ModelParams, OutputKind, ParamValue};
 use serde::Deserialize;
 
+use crate::allocation::spec::{
+    compile_allocation, AllocatableSource, AllocationFile, ToleranceKind, ToleranceSource,
+};
 use crate::stats::SpecLimits;
 
 /// Samples of a run when neither the scenario nor the command line sets them.
@@ -72,6 +75,8 @@ struct ScenarioFile {
     spec_limits: BTreeMap<String, SpecFile>,
     #[serde(default)]
     sensitivity_groups: Vec<GroupFile>,
+    #[serde(default)]
+    allocation: Option<AllocationFile>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -289,6 +294,9 @@ pub struct Scenario {
     pub models: Vec<BoundModel>,
     /// All outputs, models in order.
     pub outputs: Vec<OutputInfo>,
+    /// The sources `rvtol allocate` may change (the `allocation` section; empty without
+    /// one), in scenario order.
+    pub allocation: Vec<AllocatableSource>,
 }
 
 impl Scenario {
@@ -428,6 +436,48 @@ fn part_spec(path: &str, part: &PartFile) -> Result<PartSpec, ScenarioError> {
         None => std::array::from_fn(|i| std::array::from_fn(|j| if i == j { 1.0 } else { 0.0 })),
     };
     Ok(PartSpec::from_correlation(path, mean, sd, correlation)?)
+}
+
+/// A part's tolerance as `rvtol allocate` reads it (see [`crate::allocation::spec`]).
+fn part_tolerance(path: &str, part: &PartFile) -> ToleranceSource {
+    let (kind, current, unit) = match &part.tolerance_band {
+        Some(band) => (ToleranceKind::PartToleranceBand, band.delta_tau_mm, "mm"),
+        None if part.covariance.is_some() => (ToleranceKind::PartCovariance, 1.0, ""),
+        None => (ToleranceKind::PartSd, 1.0, ""),
+    };
+    ToleranceSource {
+        name: part.name.clone(),
+        path: path.to_string(),
+        kind,
+        current,
+        unit: unit.to_string(),
+    }
+}
+
+/// A variable's tolerance as `rvtol allocate` reads it (see [`crate::allocation::spec`]).
+fn variable_tolerance(path: &str, variable: &VariableFile) -> ToleranceSource {
+    let (kind, current) = match variable.distribution {
+        DistributionFile::Normal { sd, .. } => (ToleranceKind::VariableNormal, 3.0 * sd),
+        DistributionFile::ToleranceBand { lower, upper, .. } => {
+            (ToleranceKind::VariableToleranceBand, 0.5 * (upper - lower))
+        }
+        DistributionFile::Uniform { lower, upper } => {
+            (ToleranceKind::VariableUniform, 0.5 * (upper - lower))
+        }
+        DistributionFile::Triangular { lower, upper, .. } => {
+            (ToleranceKind::VariableTriangular, 0.5 * (upper - lower))
+        }
+        DistributionFile::TruncatedNormal { sd, .. } => {
+            (ToleranceKind::VariableTruncatedNormal, 3.0 * sd)
+        }
+    };
+    ToleranceSource {
+        name: variable.name.clone(),
+        path: path.to_string(),
+        kind,
+        current,
+        unit: variable.unit.clone().unwrap_or_default(),
+    }
 }
 
 fn distribution(d: &DistributionFile) -> (ScalarDistribution, &'static str) {
@@ -768,6 +818,22 @@ fn compile(file: ScenarioFile, fallback_name: &str) -> Result<Scenario, Scenario
             .cloned(),
     );
 
+    let allocation = match &file.allocation {
+        Some(section) => {
+            let tolerances: Vec<ToleranceSource> =
+                file.parts
+                    .iter()
+                    .enumerate()
+                    .map(|(i, part)| part_tolerance(&format!("parts[{i}]"), part))
+                    .chain(file.variables.iter().enumerate().map(|(i, variable)| {
+                        variable_tolerance(&format!("variables[{i}]"), variable)
+                    }))
+                    .collect();
+            compile_allocation(section, &tolerances)?
+        }
+        None => Vec::new(),
+    };
+
     Ok(Scenario {
         name: file.name.unwrap_or_else(|| fallback_name.to_string()),
         description: file.description.unwrap_or_default(),
@@ -779,5 +845,6 @@ fn compile(file: ScenarioFile, fallback_name: &str) -> Result<Scenario, Scenario
         sensitivity_groups,
         models,
         outputs,
+        allocation,
     })
 }

@@ -115,6 +115,20 @@ pub fn percentiles_type7(values: &mut [f64], percents: &[f64]) -> Vec<Option<f64
         .collect()
 }
 
+/// Distribution-free interval [X_(l), X_(u)] for the `percent` percentile from the sorted
+/// sample `sorted` (normal approximation to the binomial count of values below the
+/// percentile): ranks ⌊n·p − z·√(n·p·(1 − p))⌋ and ⌈n·p + z·√(n·p·(1 − p))⌉, clamped to
+/// the sample. `None` for an empty sample.
+pub fn order_statistic_interval(sorted: &[f64], percent: f64, z: f64) -> Option<(f64, f64)> {
+    let last = sorted.len().checked_sub(1)?;
+    let (nf, p) = (sorted.len() as f64, (percent / 100.0).clamp(0.0, 1.0));
+    let centre = nf * p;
+    let reach = z * (nf * p * (1.0 - p)).sqrt();
+    let lower_rank = ((centre - reach).floor().max(0.0) as usize).min(last);
+    let upper_rank = ((centre + reach).ceil() as usize).min(last);
+    Some((sorted[lower_rank], sorted[upper_rank]))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

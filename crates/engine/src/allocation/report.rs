@@ -1,0 +1,321 @@
+//! The report of `rvtol allocate`: JSON (a stable contract, documented in README.md) and
+//! a text table per source with the current and proposed tolerance, cost and share of
+//! variance, then the target figure before, after and in the verification run.
+
+use serde::Serialize;
+
+use super::{Allocation, Evaluation, MARGIN_Z};
+use crate::report::format_sig;
+
+/// One source's row.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SourceReport {
+    /// Part or variable name.
+    pub source: String,
+    /// What the tolerance number means (e.g. "± band half-width", "3σ").
+    pub tolerance: &'static str,
+    /// Unit of the tolerance ("" for a factor on the standard deviations).
+    pub unit: String,
+    /// Tolerance in the scenario.
+    pub current: f64,
+    /// The optimum before rounding.
+    pub optimum: f64,
+    /// Proposed tolerance: the optimum rounded to three significant digits (down where
+    /// the source matters), the value verified.
+    pub proposed: f64,
+    /// proposed / current.
+    pub factor: f64,
+    /// Bounds [min, max] from the scenario.
+    pub bounds: [f64; 2],
+    /// Cost model, in words.
+    pub cost_model: String,
+    /// Cost at the current tolerance (null outside a cost table's range).
+    pub current_cost: Option<f64>,
+    /// Cost at the proposed tolerance.
+    pub proposed_cost: f64,
+    /// Share of the output variance at the proposal (Euler allocation of the Monte Carlo
+    /// variance; a_k²σ_k²/σ² for a linear stack).
+    pub variance_share: f64,
+}
+
+/// A figure with its Monte Carlo uncertainty.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FigureReport {
+    /// The target figure.
+    pub value: f64,
+    /// Its 95 % interval.
+    pub ci: [f64; 2],
+    /// Its standard error.
+    pub standard_error: f64,
+    /// Output mean.
+    pub mean: f64,
+    /// Output standard deviation.
+    pub sd: f64,
+    /// Seed of the run.
+    pub seed: u64,
+    /// Finite samples.
+    pub n: u64,
+}
+
+impl FigureReport {
+    fn new(e: &Evaluation, seed: u64) -> FigureReport {
+        FigureReport {
+            value: e.figure,
+            ci: [e.interval.0, e.interval.1],
+            standard_error: e.standard_error,
+            mean: e.mean,
+            sd: e.sd,
+            seed,
+            n: e.n,
+        }
+    }
+}
+
+/// The common-scaling comparison.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CommonScaleReport {
+    /// One factor on every allocatable tolerance.
+    pub factor: f64,
+    /// Its total cost.
+    pub cost: f64,
+}
+
+/// The JSON report of `rvtol allocate`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct AllocationReport {
+    /// Version of rvtol.
+    pub rvtol_version: &'static str,
+    /// Scenario name.
+    pub scenario: String,
+    /// The constrained output.
+    pub output: String,
+    /// Its unit.
+    pub unit: String,
+    /// The target, normalised (`p99.865 <= 1`).
+    pub target: String,
+    /// "met" (verified), "not verified" (the independent run misses the target) or
+    /// "infeasible" (no tolerances within the bounds meet it).
+    pub status: &'static str,
+    /// Samples of every evaluation.
+    pub samples: u64,
+    /// Seed of the optimisation (common random numbers).
+    pub seed: u64,
+    /// Seed of the verification run.
+    pub verification_seed: u64,
+    /// Standard errors kept between the optimised figure and the target.
+    pub margin_standard_errors: f64,
+    /// One row per allocatable source, scenario order.
+    pub sources: Vec<SourceReport>,
+    /// Total cost today (null when a source's current cost is undefined).
+    pub current_cost: Option<f64>,
+    /// Total cost of the proposal.
+    pub proposed_cost: f64,
+    /// Every tolerance scaled by one factor instead (null when none meets the target).
+    pub common_scale: Option<CommonScaleReport>,
+    /// The figure at today's tolerances (optimisation seed).
+    pub current: FigureReport,
+    /// The figure at the proposal (optimisation seed).
+    pub proposed: FigureReport,
+    /// The figure of the independent verification run at the proposal.
+    pub verification: FigureReport,
+    /// Sequential Lagrange iterations.
+    pub iterations: usize,
+    /// Monte Carlo runs made.
+    pub evaluations: usize,
+}
+
+impl AllocationReport {
+    /// Builds the report.
+    pub fn new(a: &Allocation) -> AllocationReport {
+        AllocationReport {
+            rvtol_version: env!("CARGO_PKG_VERSION"),
+            scenario: a.scenario.clone(),
+            output: a.output.clone(),
+            unit: a.unit.clone(),
+            target: a.target.expression(),
+            status: a.status(),
+            samples: a.settings.samples,
+            seed: a.settings.seed,
+            verification_seed: a.settings.verification_seed,
+            margin_standard_errors: MARGIN_Z,
+            sources: a
+                .sources
+                .iter()
+                .map(|s| SourceReport {
+                    source: s.source.source.name.clone(),
+                    tolerance: s.source.source.kind.meaning(),
+                    unit: s.source.source.unit.clone(),
+                    current: s.source.source.current,
+                    optimum: s.optimum,
+                    proposed: s.proposed,
+                    factor: s.proposed / s.source.source.current,
+                    bounds: [s.source.min, s.source.max],
+                    cost_model: s.source.cost.describe(),
+                    current_cost: s.current_cost,
+                    proposed_cost: s.proposed_cost,
+                    variance_share: s.variance_share,
+                })
+                .collect(),
+            current_cost: a.current_cost,
+            proposed_cost: a.proposed_cost,
+            common_scale: a.common_scale.map(|c| CommonScaleReport {
+                factor: c.factor,
+                cost: c.cost,
+            }),
+            current: FigureReport::new(&a.current, a.settings.seed),
+            proposed: FigureReport::new(&a.proposed, a.settings.seed),
+            verification: FigureReport::new(&a.verification, a.settings.verification_seed),
+            iterations: a.iterations,
+            evaluations: a.evaluations,
+        }
+    }
+
+    /// Pretty JSON with a final newline.
+    pub fn to_json(&self) -> String {
+        let mut text = serde_json::to_string_pretty(self).expect("report serialises");
+        text.push('\n');
+        text
+    }
+
+    /// The human-readable table.
+    pub fn to_text(&self) -> String {
+        let mut out = String::new();
+        let unit = |u: &str| {
+            if u.is_empty() {
+                "×sd".to_string()
+            } else {
+                u.to_string()
+            }
+        };
+        out.push_str(&format!(
+            "rvtol {} | allocate {} | output {} | target {} | {} samples per run, seed {}\n\n",
+            self.rvtol_version,
+            self.scenario,
+            self.output,
+            self.target,
+            crate::report::group_thousands(self.samples),
+            self.seed
+        ));
+        let header = [
+            "source",
+            "tolerance",
+            "unit",
+            "current",
+            "proposed",
+            "change",
+            "bounds",
+            "cost now",
+            "cost new",
+            "var share",
+        ];
+        let mut rows: Vec<[String; 10]> = vec![header.map(str::to_string)];
+        for s in &self.sources {
+            rows.push([
+                s.source.clone(),
+                s.tolerance.to_string(),
+                unit(&s.unit),
+                format_sig(s.current),
+                format_sig(s.proposed),
+                format!("{:+.1} %", (s.factor - 1.0) * 100.0),
+                format!("{} .. {}", format_sig(s.bounds[0]), format_sig(s.bounds[1])),
+                s.current_cost.map_or("n/a".into(), format_sig),
+                format_sig(s.proposed_cost),
+                format!("{:.1} %", s.variance_share * 100.0),
+            ]);
+        }
+        let widths: Vec<usize> = (0..10)
+            .map(|c| rows.iter().map(|r| r[c].chars().count()).max().unwrap_or(0))
+            .collect();
+        for row in &rows {
+            let mut line = String::new();
+            for (c, cell) in row.iter().enumerate() {
+                let pad = widths[c] - cell.chars().count();
+                if c < 3 {
+                    line.push_str(cell);
+                    line.push_str(&" ".repeat(pad));
+                } else {
+                    line.push_str(&" ".repeat(pad));
+                    line.push_str(cell);
+                }
+                line.push_str("  ");
+            }
+            out.push_str(line.trim_end());
+            out.push('\n');
+        }
+        let rest: f64 = 1.0 - self.sources.iter().map(|s| s.variance_share).sum::<f64>();
+        out.push_str(&format!(
+            "rest of the variance (fixed sources, interactions, curvature): {:.1} %\n\n",
+            rest * 100.0
+        ));
+        out.push_str(&format!(
+            "total cost: {} today, {} proposed",
+            self.current_cost.map_or("n/a".into(), format_sig),
+            format_sig(self.proposed_cost)
+        ));
+        if let Some(now) = self.current_cost {
+            out.push_str(&format!(
+                " ({:+.1} %)",
+                (self.proposed_cost / now - 1.0) * 100.0
+            ));
+        }
+        out.push('\n');
+        match &self.common_scale {
+            Some(c) => out.push_str(&format!(
+                "every tolerance × {} instead: cost {}\n",
+                format_sig(c.factor),
+                format_sig(c.cost)
+            )),
+            None => out.push_str("no common factor on the tolerances meets the target\n"),
+        }
+        let figure = |label: &str, f: &FigureReport| {
+            format!(
+                "{label:<26} {} = {} (95 % CI {} .. {}), mean {}, sd {}, seed {}\n",
+                self.target.split_whitespace().next().unwrap_or(""),
+                format_sig(f.value),
+                format_sig(f.ci[0]),
+                format_sig(f.ci[1]),
+                format_sig(f.mean),
+                format_sig(f.sd),
+                f.seed
+            )
+        };
+        out.push('\n');
+        out.push_str(&figure("today:", &self.current));
+        out.push_str(&figure("proposed (optimisation):", &self.proposed));
+        out.push_str(&figure("proposed (verification):", &self.verification));
+        out.push_str(&format!(
+            "\n{}: {}\n",
+            self.status,
+            match self.status {
+                "met" => format!(
+                    "the independent run meets {} (optimised with a margin of {} standard errors; \
+                     {} iterations, {} Monte Carlo runs)",
+                    self.target, self.margin_standard_errors, self.iterations, self.evaluations
+                ),
+                "infeasible" => format!(
+                    "no tolerances within the bounds meet {}; shown: every source at its lower \
+                     bound. Widen the bounds or tighten sources outside the allocation section.",
+                    self.target
+                ),
+                _ => format!(
+                    "the independent run misses {} by Monte Carlo noise; rerun with more --samples",
+                    self.target
+                ),
+            }
+        ));
+        out
+    }
+}
+
+impl Allocation {
+    /// "met", "not verified" or "infeasible".
+    pub fn status(&self) -> &'static str {
+        if !self.feasible {
+            "infeasible"
+        } else if self.verified {
+            "met"
+        } else {
+            "not verified"
+        }
+    }
+}

@@ -1,0 +1,681 @@
+//! What `rvtol allocate` may change and what it must reach: the scenario's `allocation`
+//! section (per error source: the tolerance's bounds and its manufacturing cost model)
+//! and the `--target` expression.
+//!
+//! The tolerance of a source is one number in the source's own terms, so that bounds and
+//! cost tables read as a drawing does (scenarios/README.md, docs/models.md §9):
+//! - a `tolerance_band` variable: its half-width (the ± limit);
+//! - a `uniform` or `triangular` variable: its half-width;
+//! - a `normal` or `truncated_normal` variable: 3σ;
+//! - a part given by `tolerance_band`: Δτ (001 Eq. 9);
+//! - a part given by covariance or standard deviations: the factor on its standard
+//!   deviations (1 today).
+//!
+//! Scaling a tolerance by s scales the source's spread by s about its centre and keeps
+//! its shape (Cp, relative mean shift, truncation in σ units, correlations).
+
+use std::collections::BTreeMap;
+
+use serde::Deserialize;
+
+use crate::scenario::ScenarioError;
+
+/// How a source's tolerance is expressed and therefore how it is scaled.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ToleranceKind {
+    /// `parts[i]` with `tolerance_band`: the tolerance is Δτ.
+    PartToleranceBand,
+    /// `parts[i]` with `covariance`: the tolerance is a factor on the standard deviations.
+    PartCovariance,
+    /// `parts[i]` with `sd` (and `correlation`): a factor on the standard deviations.
+    PartSd,
+    /// `variables[i]` with `tolerance_band`: the half-width of the band.
+    VariableToleranceBand,
+    /// `variables[i]` with `normal`: 3σ.
+    VariableNormal,
+    /// `variables[i]` with `uniform`: the half-width.
+    VariableUniform,
+    /// `variables[i]` with `triangular`: the half-width.
+    VariableTriangular,
+    /// `variables[i]` with `truncated_normal`: 3σ.
+    VariableTruncatedNormal,
+}
+
+impl ToleranceKind {
+    /// What the tolerance number means, for reports.
+    pub fn meaning(self) -> &'static str {
+        match self {
+            ToleranceKind::PartToleranceBand => "tolerance band Δτ",
+            ToleranceKind::PartCovariance | ToleranceKind::PartSd => "factor on the sd",
+            ToleranceKind::VariableToleranceBand => "± band half-width",
+            ToleranceKind::VariableUniform | ToleranceKind::VariableTriangular => "± half-width",
+            ToleranceKind::VariableNormal | ToleranceKind::VariableTruncatedNormal => "3σ",
+        }
+    }
+}
+
+/// A part or variable of the scenario, described by its tolerance.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ToleranceSource {
+    /// The part or variable name.
+    pub name: String,
+    /// JSON path of its definition (`parts[0]`, `variables[3]`).
+    pub path: String,
+    /// How its tolerance is expressed.
+    pub kind: ToleranceKind,
+    /// Its tolerance in the scenario as written.
+    pub current: f64,
+    /// Unit of the tolerance ("" for a factor).
+    pub unit: String,
+}
+
+/// A manufacturing cost model: cost as a function of the tolerance t (in the source's
+/// tolerance unit). Every model is non-increasing in t: a looser tolerance never costs
+/// more.
+#[derive(Debug, Clone, PartialEq)]
+pub enum CostModel {
+    /// c = a + b / t (Chase & Greenwood 1988, reciprocal cost–tolerance model).
+    Reciprocal {
+        /// Fixed cost a.
+        a: f64,
+        /// Coefficient b ≥ 0.
+        b: f64,
+    },
+    /// c = a + b·exp(−rate·t) (Speckhart 1972, exponential cost–tolerance model).
+    Exponential {
+        /// Fixed cost a.
+        a: f64,
+        /// Coefficient b ≥ 0.
+        b: f64,
+        /// Rate > 0, per tolerance unit.
+        rate: f64,
+    },
+    /// Measured points [t, cost], t strictly increasing, cost non-increasing; linear
+    /// interpolation between them, no extrapolation.
+    Table(Vec<[f64; 2]>),
+}
+
+/// The kinds of cost model, as `--cost` names them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CostKind {
+    /// [`CostModel::Reciprocal`].
+    Reciprocal,
+    /// [`CostModel::Exponential`].
+    Exponential,
+    /// [`CostModel::Table`].
+    Table,
+}
+
+impl CostKind {
+    /// Parses `reciprocal`, `exponential` or `table`.
+    pub fn parse(text: &str) -> Option<CostKind> {
+        match text {
+            "reciprocal" => Some(CostKind::Reciprocal),
+            "exponential" => Some(CostKind::Exponential),
+            "table" => Some(CostKind::Table),
+            _ => None,
+        }
+    }
+
+    /// The name as written.
+    pub fn name(self) -> &'static str {
+        match self {
+            CostKind::Reciprocal => "reciprocal",
+            CostKind::Exponential => "exponential",
+            CostKind::Table => "table",
+        }
+    }
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ReciprocalFile {
+    #[serde(default)]
+    a: f64,
+    b: f64,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ExponentialFile {
+    #[serde(default)]
+    a: f64,
+    b: f64,
+    rate: f64,
+}
+
+/// A source's `cost`: one or more models; `--cost` picks one when there are several.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CostFile {
+    #[serde(default)]
+    reciprocal: Option<ReciprocalFile>,
+    #[serde(default)]
+    exponential: Option<ExponentialFile>,
+    #[serde(default)]
+    table: Option<Vec<[f64; 2]>>,
+}
+
+impl CostFile {
+    fn models(&self) -> Vec<CostModel> {
+        let mut models = Vec::new();
+        if let Some(r) = &self.reciprocal {
+            models.push(CostModel::Reciprocal { a: r.a, b: r.b });
+        }
+        if let Some(e) = &self.exponential {
+            models.push(CostModel::Exponential {
+                a: e.a,
+                b: e.b,
+                rate: e.rate,
+            });
+        }
+        if let Some(t) = &self.table {
+            models.push(CostModel::Table(t.clone()));
+        }
+        models
+    }
+}
+
+impl CostModel {
+    /// The cost at tolerance `t`; None outside a table's range.
+    pub fn cost(&self, t: f64) -> Option<f64> {
+        match self {
+            CostModel::Reciprocal { a, b } => Some(a + b / t),
+            CostModel::Exponential { a, b, rate } => Some(a + b * (-rate * t).exp()),
+            CostModel::Table(points) => {
+                let first = points.first()?;
+                let last = points.last()?;
+                // A relative slack so that bounds equal to the table's ends survive rounding.
+                let slack = 1e-12 * last[0].abs().max(first[0].abs());
+                if t < first[0] - slack || t > last[0] + slack {
+                    return None;
+                }
+                let t = t.clamp(first[0], last[0]);
+                let k = points
+                    .partition_point(|p| p[0] <= t)
+                    .clamp(1, points.len() - 1);
+                let (p0, p1) = (points[k - 1], points[k]);
+                let w = (t - p0[0]) / (p1[0] - p0[0]);
+                Some(p0[1] + w * (p1[1] - p0[1]))
+            }
+        }
+    }
+
+    /// The tolerance range on which the model is defined, if limited.
+    pub fn range(&self) -> Option<(f64, f64)> {
+        match self {
+            CostModel::Table(points) => Some((points.first()?[0], points.last()?[0])),
+            _ => None,
+        }
+    }
+
+    fn validate(&self, path: &str) -> Result<(), ScenarioError> {
+        let finite = |name: &str, v: f64| {
+            if v.is_finite() {
+                Ok(())
+            } else {
+                Err(ScenarioError::new(
+                    format!("{path}.{name}"),
+                    "must be a finite number",
+                ))
+            }
+        };
+        match self {
+            CostModel::Reciprocal { a, b } => {
+                finite("reciprocal.a", *a)?;
+                finite("reciprocal.b", *b)?;
+                if *b < 0.0 {
+                    return Err(ScenarioError::new(
+                        format!("{path}.reciprocal.b"),
+                        format!("must be ≥ 0 (a looser tolerance cannot cost more), got {b}"),
+                    ));
+                }
+            }
+            CostModel::Exponential { a, b, rate } => {
+                finite("exponential.a", *a)?;
+                finite("exponential.b", *b)?;
+                finite("exponential.rate", *rate)?;
+                if *b < 0.0 {
+                    return Err(ScenarioError::new(
+                        format!("{path}.exponential.b"),
+                        format!("must be ≥ 0 (a looser tolerance cannot cost more), got {b}"),
+                    ));
+                }
+                if *rate <= 0.0 {
+                    return Err(ScenarioError::new(
+                        format!("{path}.exponential.rate"),
+                        format!("must be > 0, got {rate}"),
+                    ));
+                }
+            }
+            CostModel::Table(points) => {
+                if points.len() < 2 {
+                    return Err(ScenarioError::new(
+                        format!("{path}.table"),
+                        "needs at least two [tolerance, cost] points",
+                    ));
+                }
+                for (k, p) in points.iter().enumerate() {
+                    let here = format!("{path}.table[{k}]");
+                    if !p[0].is_finite() || !p[1].is_finite() {
+                        return Err(ScenarioError::new(here, "must be two finite numbers"));
+                    }
+                    if p[0] <= 0.0 {
+                        return Err(ScenarioError::new(
+                            here,
+                            format!("tolerance must be > 0, got {}", p[0]),
+                        ));
+                    }
+                    if k > 0 {
+                        let q = points[k - 1];
+                        if p[0] <= q[0] {
+                            return Err(ScenarioError::new(
+                                here,
+                                format!(
+                                    "tolerances must increase strictly: {} follows {}",
+                                    p[0], q[0]
+                                ),
+                            ));
+                        }
+                        if p[1] > q[1] {
+                            return Err(ScenarioError::new(
+                                here,
+                                format!(
+                                    "cost {} at tolerance {} exceeds cost {} at the tighter {}: \
+                                     a looser tolerance cannot cost more",
+                                    p[1], p[0], q[1], q[0]
+                                ),
+                            ));
+                        }
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Its kind.
+    pub fn kind(&self) -> CostKind {
+        match self {
+            CostModel::Reciprocal { .. } => CostKind::Reciprocal,
+            CostModel::Exponential { .. } => CostKind::Exponential,
+            CostModel::Table(_) => CostKind::Table,
+        }
+    }
+
+    /// A one-line description, for reports.
+    pub fn describe(&self) -> String {
+        match self {
+            CostModel::Reciprocal { a, b } => format!("{a} + {b}/t"),
+            CostModel::Exponential { a, b, rate } => format!("{a} + {b}·exp(-{rate}·t)"),
+            CostModel::Table(points) => format!("table of {} points", points.len()),
+        }
+    }
+}
+
+/// The scenario's `allocation` section as written.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct AllocationFile {
+    /// Documentation for the reader of the file; not used.
+    #[serde(default)]
+    #[allow(dead_code)]
+    description: Option<String>,
+    sources: BTreeMap<String, AllocationSourceFile>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AllocationSourceFile {
+    #[serde(default)]
+    min: Option<f64>,
+    #[serde(default)]
+    max: Option<f64>,
+    cost: CostFile,
+}
+
+/// A source whose tolerance `rvtol allocate` may change.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AllocatableSource {
+    /// The source and its current tolerance.
+    pub source: ToleranceSource,
+    /// Smallest tolerance allowed.
+    pub min: f64,
+    /// Largest tolerance allowed.
+    pub max: f64,
+    /// Cost as a function of the tolerance: the scenario's model, or the one `--cost`
+    /// picks (see [`AllocatableSource::with_cost`]).
+    pub cost: CostModel,
+    /// Every cost model the scenario gives for the source.
+    pub cost_models: Vec<CostModel>,
+}
+
+impl AllocatableSource {
+    /// The source with the cost model of kind `kind` (when `Some`), or its only one.
+    pub fn with_cost(&self, kind: Option<CostKind>) -> Result<AllocatableSource, ScenarioError> {
+        let path = format!("allocation.sources.{}.cost", self.source.name);
+        let model = match kind {
+            Some(kind) => self
+                .cost_models
+                .iter()
+                .find(|m| m.kind() == kind)
+                .ok_or_else(|| {
+                    ScenarioError::new(&path, format!("has no {} model (--cost)", kind.name()))
+                })?,
+            None if self.cost_models.len() == 1 => &self.cost_models[0],
+            None => {
+                let kinds: Vec<&str> = self.cost_models.iter().map(|m| m.kind().name()).collect();
+                return Err(ScenarioError::new(
+                    &path,
+                    format!(
+                        "gives {} cost models ({}); choose one with --cost",
+                        kinds.len(),
+                        kinds.join(", ")
+                    ),
+                ));
+            }
+        };
+        Ok(AllocatableSource {
+            cost: model.clone(),
+            ..self.clone()
+        })
+    }
+}
+
+/// Validates the `allocation` section against the scenario's parts and variables.
+pub(crate) fn compile_allocation(
+    file: &AllocationFile,
+    sources: &[ToleranceSource],
+) -> Result<Vec<AllocatableSource>, ScenarioError> {
+    if file.sources.is_empty() {
+        return Err(ScenarioError::new(
+            "allocation.sources",
+            "name at least one part or variable whose tolerance may change",
+        ));
+    }
+    if let Some(unknown) = file
+        .sources
+        .keys()
+        .find(|name| !sources.iter().any(|s| &s.name == *name))
+    {
+        return Err(ScenarioError::new(
+            format!("allocation.sources.{unknown}"),
+            format!("no part or variable named {unknown:?}"),
+        ));
+    }
+    let mut allocatable = Vec::with_capacity(file.sources.len());
+    // In scenario order (parts, then variables), the order of every report.
+    for source in sources {
+        let Some(entry) = file.sources.get(&source.name) else {
+            continue;
+        };
+        let path = format!("allocation.sources.{}", source.name);
+        if !(source.current.is_finite() && source.current > 0.0) {
+            return Err(ScenarioError::new(
+                &path,
+                format!(
+                    "{} has no spread to scale (its {} is {})",
+                    source.name,
+                    source.kind.meaning(),
+                    source.current
+                ),
+            ));
+        }
+        let models = entry.cost.models();
+        if models.is_empty() {
+            return Err(ScenarioError::new(
+                format!("{path}.cost"),
+                "give a reciprocal, exponential or table cost model",
+            ));
+        }
+        for model in &models {
+            model.validate(&format!("{path}.cost"))?;
+        }
+        let range = models.iter().find_map(CostModel::range);
+        let min = entry.min.or(range.map(|r| r.0)).ok_or_else(|| {
+            ScenarioError::new(
+                format!("{path}.min"),
+                "required (the smallest tolerance the process can hold)",
+            )
+        })?;
+        let max = entry.max.or(range.map(|r| r.1)).ok_or_else(|| {
+            ScenarioError::new(
+                format!("{path}.max"),
+                "required (the largest tolerance the design may take)",
+            )
+        })?;
+        if !(min.is_finite() && min > 0.0) {
+            return Err(ScenarioError::new(
+                format!("{path}.min"),
+                format!("must be a finite number > 0, got {min}"),
+            ));
+        }
+        if !(max.is_finite() && max >= min) {
+            return Err(ScenarioError::new(
+                format!("{path}.max"),
+                format!("must be a finite number ≥ min ({min}), got {max}"),
+            ));
+        }
+        if let Some((lo, hi)) = range {
+            if lo > min || hi < max {
+                return Err(ScenarioError::new(
+                    format!("{path}.cost.table"),
+                    format!(
+                        "covers tolerances {lo} .. {hi} but the bounds are {min} .. {max}: \
+                         the table must cover the bounds"
+                    ),
+                ));
+            }
+        }
+        allocatable.push(AllocatableSource {
+            source: source.clone(),
+            min,
+            max,
+            cost: models[0].clone(),
+            cost_models: models,
+        });
+    }
+    Ok(allocatable)
+}
+
+/// A figure of an output's distribution that a target constrains.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum TargetFigure {
+    /// The percentile at this percent (0 < p < 100).
+    Percentile(f64),
+    /// The mean.
+    Mean,
+    /// The standard deviation.
+    Sd,
+    /// Cp from the moments (needs both spec limits).
+    Cp,
+    /// Cpk from the moments (needs a spec limit).
+    Cpk,
+    /// Parts per million outside the spec limits.
+    PpmOut,
+}
+
+impl TargetFigure {
+    /// The figure's name as written in a target.
+    pub fn label(self) -> String {
+        match self {
+            TargetFigure::Percentile(p) => format!("p{p}"),
+            TargetFigure::Mean => "mean".into(),
+            TargetFigure::Sd => "sd".into(),
+            TargetFigure::Cp => "cp".into(),
+            TargetFigure::Cpk => "cpk".into(),
+            TargetFigure::PpmOut => "ppm_out".into(),
+        }
+    }
+}
+
+/// `figure <= value` or `figure >= value`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Target {
+    /// The constrained figure.
+    pub figure: TargetFigure,
+    /// True for `<=`, false for `>=`.
+    pub at_most: bool,
+    /// The bound.
+    pub value: f64,
+}
+
+impl Target {
+    /// Parses `p99.865 <= 1.0`, `cpk >= 1.33`, `ppm_out <= 100`, `sd <= 0.01`,
+    /// `mean <= 0.8`, `cp >= 1.67`, `p0.135 >= 0.1`.
+    pub fn parse(text: &str) -> Result<Target, String> {
+        const USAGE: &str = "expected FIGURE <= VALUE or FIGURE >= VALUE with FIGURE one of \
+                             pPERCENT (e.g. p99.865), mean, sd, cp, cpk, ppm_out";
+        let (lhs, at_most, rhs) = if let Some((l, r)) = text.split_once("<=") {
+            (l, true, r)
+        } else if let Some((l, r)) = text.split_once(">=") {
+            (l, false, r)
+        } else {
+            return Err(format!("{text:?}: {USAGE}"));
+        };
+        let name = lhs.trim().to_ascii_lowercase();
+        let figure = match name.as_str() {
+            "mean" => TargetFigure::Mean,
+            "sd" => TargetFigure::Sd,
+            "cp" => TargetFigure::Cp,
+            "cpk" => TargetFigure::Cpk,
+            "ppm_out" | "ppm" => TargetFigure::PpmOut,
+            other => {
+                let percent = other
+                    .strip_prefix('p')
+                    .and_then(|p| p.parse::<f64>().ok())
+                    .ok_or_else(|| format!("{text:?}: unknown figure {other:?}; {USAGE}"))?;
+                if !(percent > 0.0 && percent < 100.0) {
+                    return Err(format!(
+                        "{text:?}: the percentile must lie strictly between 0 and 100"
+                    ));
+                }
+                TargetFigure::Percentile(percent)
+            }
+        };
+        let value: f64 = rhs
+            .trim()
+            .parse()
+            .map_err(|_| format!("{text:?}: {:?} is not a number; {USAGE}", rhs.trim()))?;
+        if !value.is_finite() {
+            return Err(format!("{text:?}: the bound must be finite"));
+        }
+        match figure {
+            TargetFigure::Cp | TargetFigure::Cpk if at_most => {
+                return Err(format!(
+                    "{text:?}: a capability target reads {} >= VALUE",
+                    figure.label()
+                ))
+            }
+            TargetFigure::Sd | TargetFigure::PpmOut if !at_most => {
+                return Err(format!(
+                    "{text:?}: a spread target reads {} <= VALUE",
+                    figure.label()
+                ))
+            }
+            TargetFigure::Sd | TargetFigure::PpmOut | TargetFigure::Cp | TargetFigure::Cpk
+                if value <= 0.0 =>
+            {
+                return Err(format!("{text:?}: the bound must be > 0"))
+            }
+            _ => {}
+        }
+        Ok(Target {
+            figure,
+            at_most,
+            value,
+        })
+    }
+
+    /// The expression, normalised.
+    pub fn expression(&self) -> String {
+        format!(
+            "{} {} {}",
+            self.figure.label(),
+            if self.at_most { "<=" } else { ">=" },
+            self.value
+        )
+    }
+
+    /// How far `figure` is on the wrong side of the bound (≤ 0 when met).
+    pub fn excess(&self, figure: f64) -> f64 {
+        if self.at_most {
+            figure - self.value
+        } else {
+            self.value - figure
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn targets_parse() {
+        let t = Target::parse("p99.865 <= 1.0").unwrap();
+        assert_eq!(t.figure, TargetFigure::Percentile(99.865));
+        assert!(t.at_most);
+        assert_eq!(t.value, 1.0);
+        let t = Target::parse(" CPK>=1.33").unwrap();
+        assert_eq!(
+            (t.figure, t.at_most, t.value),
+            (TargetFigure::Cpk, false, 1.33)
+        );
+        let t = Target::parse("ppm_out <= 100").unwrap();
+        assert_eq!(t.figure, TargetFigure::PpmOut);
+        assert_eq!(t.expression(), "ppm_out <= 100");
+        for bad in [
+            "p99.865 < 1",
+            "p100 <= 1",
+            "p0 <= 1",
+            "q5 <= 1",
+            "sd <= x",
+            "cpk <= 2",
+            "sd >= 1",
+            "ppm_out <= 0",
+            "sd <= inf",
+        ] {
+            assert!(Target::parse(bad).is_err(), "{bad} parsed");
+        }
+    }
+
+    #[test]
+    fn excess_sign() {
+        let le = Target::parse("sd <= 2").unwrap();
+        assert!(le.excess(1.5) < 0.0 && le.excess(2.5) > 0.0);
+        let ge = Target::parse("cpk >= 1.33").unwrap();
+        assert!(ge.excess(1.5) < 0.0 && ge.excess(1.0) > 0.0);
+    }
+
+    #[test]
+    fn table_cost_interpolates_and_stays_in_range() {
+        let table = CostModel::Table(vec![[0.01, 10.0], [0.02, 6.0], [0.04, 5.0]]);
+        assert_eq!(table.cost(0.01), Some(10.0));
+        assert_eq!(table.cost(0.015), Some(8.0));
+        assert_eq!(table.cost(0.03), Some(5.5));
+        assert_eq!(table.cost(0.04), Some(5.0));
+        assert_eq!(table.cost(0.005), None);
+        assert_eq!(table.cost(0.05), None);
+        let reciprocal = CostModel::Reciprocal { a: 1.0, b: 0.02 };
+        assert_eq!(reciprocal.cost(0.01), Some(3.0));
+        let exponential = CostModel::Exponential {
+            a: 0.0,
+            b: 2.0,
+            rate: 100.0,
+        };
+        assert!((exponential.cost(0.01).unwrap() - 2.0 * (-1.0f64).exp()).abs() < 1e-15);
+    }
+
+    #[test]
+    fn bad_costs_name_their_path() {
+        let err = CostModel::Table(vec![[0.01, 5.0], [0.02, 6.0]])
+            .validate("allocation.sources.x.cost")
+            .unwrap_err();
+        assert_eq!(err.path, "allocation.sources.x.cost.table[1]");
+        let err = CostModel::Reciprocal { a: 0.0, b: -1.0 }
+            .validate("c")
+            .unwrap_err();
+        assert_eq!(err.path, "c.reciprocal.b");
+    }
+}
