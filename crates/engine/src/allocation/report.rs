@@ -220,7 +220,8 @@ impl AllocationReport {
                 format!("{} .. {}", format_sig(s.bounds[0]), format_sig(s.bounds[1])),
                 s.current_cost.map_or("n/a".into(), format_sig),
                 format_sig(s.proposed_cost),
-                format!("{:.1} %", s.variance_share * 100.0),
+                // + 0.0 turns a negative zero into "0.0".
+                format!("{:.1} %", (s.variance_share * 1000.0).round() / 10.0 + 0.0),
             ]);
         }
         let widths: Vec<usize> = (0..10)
