@@ -178,3 +178,55 @@ fn reports_are_written_through_a_temporary_file() {
     assert_eq!(leftover_temporaries(&dir, &file_name), 0);
     std::fs::remove_file(&path).unwrap();
 }
+
+#[test]
+fn rv80e_contact_nominal_and_run() {
+    // Nominal: torque balance gives F_x = T_c/(e·z_c) = 0.55·800 000 N·mm / 58.5 mm
+    // exactly (docs/models.md §10), and the 003 modification engages 8–11 pins
+    // (validation.md 003).
+    let output = run_rvtol(&["nominal", &scenario("rv80e-contact.json"), "--json", "-"]);
+    assert_eq!(output.status.code(), Some(0));
+    let report: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+    let value = |name: &str| {
+        report["outputs"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|o| o["name"] == name)
+            .unwrap()["value"]
+            .as_f64()
+            .unwrap()
+    };
+    assert!((value("pin_force_x_n") - 440_000.0 / 58.5).abs() < 1e-9 * 7521.0);
+    assert!((8.0..=11.0).contains(&value("engaged_pins")));
+    assert!(
+        value("max_pin_force_n") > 752.14,
+        "modification concentrates the load"
+    );
+
+    // 1e5 samples: every sample solved (no non-finite value), the F_x identity holds in
+    // every sample, and the spread comes from the errors.
+    let output = run_rvtol(&[
+        "run",
+        &scenario("rv80e-contact.json"),
+        "--samples",
+        "100000",
+        "--json",
+        "-",
+        "--quiet",
+    ]);
+    assert_eq!(output.status.code(), Some(0));
+    let report: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+    for o in report["outputs"].as_array().unwrap() {
+        assert_eq!(o["non_finite"], 0, "{}", o["name"]);
+        assert_eq!(o["n"], 100_000);
+        let name = o["name"].as_str().unwrap();
+        let (min, max) = (o["min"].as_f64().unwrap(), o["max"].as_f64().unwrap());
+        match name {
+            "pin_force_x_n" => assert!((max - min) < 1e-9 * max),
+            "engaged_pins" => assert!(min >= 1.0 && max <= 40.0),
+            "pin_force_y_n" => assert!(o["sd"].as_f64().unwrap() > 0.0),
+            _ => assert!(min > 0.0 && o["sd"].as_f64().unwrap() > 0.0, "{name}"),
+        }
+    }
+}

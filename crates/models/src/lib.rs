@@ -7,11 +7,13 @@
 //!
 //! Adding a model touches three places: its file here, one line in [`all`], one scenario.
 
+mod cycloid_pin_contact;
 mod geometric_hysteresis;
 mod linear_stack;
 mod params;
 mod test_functions;
 
+pub use cycloid_pin_contact::{ContactSolution, CycloidPinContact};
 pub use geometric_hysteresis::{tilt_from_deflection, GeometricHysteresis};
 pub use linear_stack::LinearStack;
 pub use params::{ModelError, ModelParams, ParamValue};
@@ -119,6 +121,7 @@ pub struct ModelEntry {
 pub fn all() -> &'static [ModelEntry] {
     &[
         geometric_hysteresis::ENTRY,
+        cycloid_pin_contact::ENTRY,
         linear_stack::ENTRY,
         test_functions::ISHIGAMI_ENTRY,
         test_functions::SOBOL_G_ENTRY,
