@@ -234,3 +234,50 @@ fn rv20e_example_of_the_readme() {
         }
     }
 }
+
+#[test]
+fn a_source_the_output_ignores_is_loosened_and_a_narrow_one_still_counts() {
+    // x5 enters with coefficient 0: it can only cost, so it goes to its upper bound even
+    // when the tightest trust region misses the budget. x2 may move only within 3 %
+    // (less than the 5 % difference step): it still gets its weight and variance share.
+    let mut scenario: Value = serde_json::from_str(
+        &std::fs::read_to_string(workspace_dir().join("scenarios/allocation-linear.json")).unwrap(),
+    )
+    .unwrap();
+    scenario["variables"].as_array_mut().unwrap().push(serde_json::json!(
+        { "name": "x5", "unit": "mm", "distribution": { "normal": { "mean": 0.0, "sd": 0.01 } } }
+    ));
+    scenario["models"][0]["params"]["coefficients"]["x5"] = 0.0.into();
+    scenario["models"][0]["inputs"]["x5"] = "x5".into();
+    scenario["allocation"]["sources"]["x5"] =
+        serde_json::json!({ "min": 0.005, "max": 0.06, "cost": { "reciprocal": { "b": 0.01 } } });
+    scenario["allocation"]["sources"]["x2"]["min"] = 0.0295.into();
+    scenario["allocation"]["sources"]["x2"]["max"] = 0.0304.into();
+    let file = TempScenario::new("allocate-extra-source", &scenario.to_string());
+    let out = run_rvtol(&[
+        "allocate",
+        file.path().to_str().unwrap(),
+        "--output",
+        "gap_mm",
+        "--target",
+        "sd <= 0.022",
+        "--json",
+        "-",
+        "--quiet",
+    ]);
+    let report: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(out.status.code(), Some(0), "{report:#}");
+    let source = |name: &str| {
+        report["sources"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|s| s["source"] == name)
+            .unwrap()
+            .clone()
+    };
+    assert_eq!(source("x5")["proposed"], 0.06);
+    // x2 carries at least 4·0.00983² of the 0.022² budget: a share above 0.6 whatever
+    // the others' allocation, certainly not 0.
+    assert!(source("x2")["variance_share"].as_f64().unwrap() > 0.3);
+}

@@ -584,3 +584,27 @@ fn allocate_cost_model_choice() {
         &["--cost: unknown cost model"],
     );
 }
+
+#[test]
+fn allocate_with_too_few_samples_for_the_tail() {
+    let file = TempScenario::new("bad-allocate-samples", &allocatable_with(|_| {}));
+    let output = run_rvtol(&[
+        "allocate",
+        file.path().to_str().unwrap(),
+        "--output",
+        "stack",
+        "--target",
+        "p99.865 <= 1",
+        "--samples",
+        "1000",
+        "--quiet",
+    ]);
+    assert_one_line_error(
+        "allocate samples",
+        &output,
+        &[
+            ": --samples: 1000 samples leave 1.4 samples",
+            "use at least",
+        ],
+    );
+}

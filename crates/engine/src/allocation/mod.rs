@@ -32,7 +32,7 @@ use crate::run::{run, Distribution, RunSettings};
 use crate::scenario::{Scenario, ScenarioError};
 use crate::stats::{
     capability_from_moments, order_statistic_interval, out_of_spec_interval, percentile_type7,
-    SpecLimits,
+    Moments, SpecLimits,
 };
 use spec::{AllocatableSource, CostKind, Target, TargetFigure};
 
@@ -149,6 +149,8 @@ pub struct Allocation {
     pub current_cost: Option<f64>,
     /// Total cost of the proposal.
     pub proposed_cost: f64,
+    /// Total cost of the optimum before rounding.
+    pub optimum_cost: f64,
     /// The common-scaling comparison (None when no common factor meets the target).
     pub common_scale: Option<CommonScale>,
     /// Sequential Lagrange iterations run.
@@ -241,6 +243,25 @@ pub fn allocate(
             "--samples",
             "allocation needs at least 100 samples per evaluation",
         ));
+    }
+    let expected_tail = match target.figure {
+        TargetFigure::Percentile(p) => Some(settings.samples as f64 * p.min(100.0 - p) / 100.0),
+        TargetFigure::PpmOut => Some(settings.samples as f64 * target.value * 1e-6),
+        _ => None,
+    };
+    if let Some(tail) = expected_tail {
+        if tail < 10.0 {
+            let needed = (settings.samples as f64 * 10.0 / tail).ceil();
+            return Err(ScenarioError::new(
+                "--samples",
+                format!(
+                    "{} samples leave {tail:.1} samples in the tail {} constrains; use at \
+                     least {needed} (the default gives about 100)",
+                    settings.samples,
+                    target.expression()
+                ),
+            ));
+        }
     }
     if settings.seed == settings.verification_seed {
         return Err(ScenarioError::new(
@@ -340,17 +361,18 @@ impl Problem<'_> {
 
         // Refine against the Monte Carlo result: one factor on the sources that matter.
         let matters: Vec<bool> = weights.iter().map(|&w| w > 0.0).collect();
-        if let Some(refined) = self.level(&x.factors, &matters, seed)? {
+        if let Some((refined, _)) = self.level(&x.factors, &matters, seed)? {
             keep(&refined, &mut best);
         }
-        let common = self.level(&vec![1.0; k], &vec![true; k], seed)?.map(|p| {
-            let factor = p.factors.iter().cloned().fold(f64::NAN, f64::max);
-            keep(&p, &mut best);
-            CommonScale {
-                factor,
-                cost: p.cost,
-            }
-        });
+        let common = self
+            .level(&vec![1.0; k], &vec![true; k], seed)?
+            .map(|(p, factor)| {
+                keep(&p, &mut best);
+                CommonScale {
+                    factor,
+                    cost: p.cost,
+                }
+            });
 
         let feasible = best.is_some();
         // Infeasible: report the tightest point (every source at its lower bound).
@@ -362,8 +384,18 @@ impl Problem<'_> {
                 false,
             )?,
         };
-        let rounded = self.round(&chosen.factors, &matters);
-        let proposed = self.point(&rounded, seed, false)?;
+        // Rounded as described; if that breaks the constraint (a source rounded to
+        // nearest that mattered after all), every source rounded down; else unrounded.
+        let mut rounded = self.round(&chosen.factors, &matters);
+        let mut proposed = self.point(&rounded, seed, false)?;
+        if feasible && proposed.constraint > 0.0 {
+            rounded = self.round(&chosen.factors, &vec![true; k]);
+            proposed = self.point(&rounded, seed, false)?;
+            if proposed.constraint > 0.0 {
+                rounded = chosen.factors.clone();
+                proposed = chosen.clone();
+            }
+        }
         let (_, variance_gradient) = self.constraint_gradient(&proposed, seed)?;
         let variance = proposed.evaluation.sd.powi(2);
         let verification = self.point(&rounded, settings.verification_seed, true)?;
@@ -394,6 +426,7 @@ impl Problem<'_> {
             target: self.target,
             settings,
             proposed_cost: proposed.cost,
+            optimum_cost: chosen.cost,
             sources,
             current: current.evaluation,
             proposed: proposed.evaluation,
@@ -464,9 +497,7 @@ impl Problem<'_> {
         let evaluation = evaluate_figure(
             self.target.figure,
             &values,
-            accumulator.moments.mean,
-            accumulator.moments.sd(),
-            accumulator.moments.excess_kurtosis(),
+            &accumulator.moments,
             self.limits,
             verification.then_some(accumulator.below_lower + accumulator.above_upper),
         );
@@ -476,10 +507,17 @@ impl Problem<'_> {
                 "fewer than 2 finite values: nothing to allocate against",
             )
         })?;
+        let constraint =
+            self.target.excess(evaluation.figure) + MARGIN_Z * evaluation.standard_error;
         Ok(Point {
             factors: factors.to_vec(),
-            constraint: self.target.excess(evaluation.figure)
-                + MARGIN_Z * evaluation.standard_error,
+            // A figure without a finite margin (e.g. Cpk of a constant output) cannot be
+            // shown to meet the target.
+            constraint: if constraint.is_nan() {
+                f64::INFINITY
+            } else {
+                constraint
+            },
             cost: self.total_cost(factors),
             evaluation,
         })
@@ -495,24 +533,40 @@ impl Problem<'_> {
         let k = x.factors.len();
         let mut constraint = vec![0.0; k];
         let mut variance = vec![0.0; k];
-        let base_variance = x.evaluation.sd.powi(2);
         for j in 0..k {
             let (lo, hi) = self.bounds[j];
             let s = x.factors[j];
-            let up = s * (1.0 + DIFFERENCE_STEP);
-            let stepped = if up <= hi {
-                up
-            } else if s * (1.0 - DIFFERENCE_STEP) >= lo {
-                s * (1.0 - DIFFERENCE_STEP)
-            } else {
+            if hi <= lo {
                 continue; // a fixed source: no direction to move
+            }
+            // Central differences where both steps fit (the sd is concave in u, so a
+            // one-sided difference would bias the weights), else one step to the farther
+            // side, never beyond the bounds.
+            let (up, down) = (s * (1.0 + DIFFERENCE_STEP), s * (1.0 - DIFFERENCE_STEP));
+            let steps: Vec<f64> = if up <= hi && down >= lo {
+                vec![up, down]
+            } else if up <= hi {
+                vec![up]
+            } else if down >= lo {
+                vec![down]
+            } else if hi - s >= s - lo {
+                vec![hi]
+            } else {
+                vec![lo]
             };
-            let mut factors = x.factors.clone();
-            factors[j] = stepped;
-            let p = self.point(&factors, seed, false)?;
-            let du = stepped * stepped - s * s;
-            constraint[j] = (p.constraint - x.constraint) / du;
-            variance[j] = (p.evaluation.sd.powi(2) - base_variance) / du;
+            let mut evaluated = Vec::with_capacity(2);
+            for &stepped in &steps {
+                let mut factors = x.factors.clone();
+                factors[j] = stepped;
+                evaluated.push((stepped, self.point(&factors, seed, false)?));
+            }
+            let ((u1, p1), (u0, p0)) = match evaluated.as_slice() {
+                [(a, pa), (b, pb)] => ((a * a, pa), (b * b, pb)),
+                [(a, pa)] => ((a * a, pa), (s * s, x)),
+                _ => unreachable!("one or two steps"),
+            };
+            constraint[j] = (p1.constraint - p0.constraint) / (u1 - u0);
+            variance[j] = (p1.evaluation.sd.powi(2) - p0.evaluation.sd.powi(2)) / (u1 - u0);
         }
         Ok((constraint, variance))
     }
@@ -523,7 +577,16 @@ impl Problem<'_> {
     fn lagrange(&self, weights: &[f64], budget: f64, boxes: &[(f64, f64)]) -> Vec<f64> {
         let solve = |lambda: f64| -> Vec<f64> {
             (0..weights.len())
-                .map(|j| self.source_argmin(j, lambda * weights[j], boxes[j]))
+                .map(|j| {
+                    if weights[j] <= 0.0 {
+                        // Loosening cannot hurt the target: the cheapest point of the box.
+                        self.source_argmin(j, 0.0, boxes[j])
+                    } else if lambda.is_infinite() {
+                        boxes[j].0
+                    } else {
+                        self.source_argmin(j, lambda * weights[j], boxes[j])
+                    }
+                })
                 .collect()
         };
         let load = |s: &[f64]| -> f64 { s.iter().zip(weights).map(|(s, w)| w * s * s).sum() };
@@ -564,9 +627,6 @@ impl Problem<'_> {
     /// around the best grid point; no convexity needed).
     fn source_argmin(&self, j: usize, penalty: f64, (lo, hi): (f64, f64)) -> f64 {
         if hi <= lo {
-            return lo;
-        }
-        if penalty.is_infinite() {
             return lo;
         }
         let phi = |s: f64| self.source_cost(j, s) + penalty * s * s;
@@ -614,10 +674,10 @@ impl Problem<'_> {
         base: &[f64],
         scaled: &[bool],
         seed: u64,
-    ) -> Result<Option<Point>, ScenarioError> {
+    ) -> Result<Option<(Point, f64)>, ScenarioError> {
         if !scaled.iter().any(|&b| b) {
             let p = self.point(base, seed, false)?;
-            return Ok((p.constraint <= 0.0).then_some(p));
+            return Ok((p.constraint <= 0.0).then_some((p, 1.0)));
         }
         let at = |gamma: f64| -> Vec<f64> {
             base.iter()
@@ -638,20 +698,20 @@ impl Problem<'_> {
         let gamma_hi = range(|b| b.1, f64::max, 0.0);
         let loosest = self.point(&at(gamma_hi), seed, false)?;
         if loosest.constraint <= 0.0 {
-            return Ok(Some(loosest));
+            return Ok(Some((loosest, gamma_hi)));
         }
         let tightest = self.point(&at(gamma_lo), seed, false)?;
         if tightest.constraint > 0.0 {
             return Ok(None);
         }
         let (mut lo, mut hi) = (gamma_lo, gamma_hi);
-        let mut feasible = tightest;
+        let mut feasible = (tightest, gamma_lo);
         while hi / lo > 1.0 + 1e-4 {
             let mid = (lo * hi).sqrt();
             let p = self.point(&at(mid), seed, false)?;
             if p.constraint <= 0.0 {
                 lo = mid;
-                feasible = p;
+                feasible = (p, mid);
             } else {
                 hi = mid;
             }
@@ -669,14 +729,21 @@ impl Problem<'_> {
             .map(|(j, &s)| {
                 let source = &self.sources[j];
                 let t = s * source.source.current;
-                let magnitude = 10f64.powi(SIGNIFICANT_DIGITS - 1 - t.log10().floor() as i32);
-                let scaled = t * magnitude;
+                // t = m·10^e with 100 ≤ m < 1000 (three digits); scaling by 10^e rather
+                // than its inverse stays finite for any normal t.
+                let unit = 10f64.powi(t.log10().floor() as i32 - (SIGNIFICANT_DIGITS - 1));
+                let mantissa = t / unit;
                 let rounded = if matters[j] {
                     // A hair of slack so that exact decimals are not pushed one step down.
-                    (scaled * (1.0 + 1e-12)).floor()
+                    (mantissa * (1.0 + 1e-12)).floor()
                 } else {
-                    scaled.round()
-                } / magnitude;
+                    mantissa.round()
+                } * unit;
+                let rounded = if rounded.is_finite() && rounded > 0.0 {
+                    rounded
+                } else {
+                    t
+                };
                 (rounded.clamp(source.min, source.max) / source.source.current)
                     .clamp(self.bounds[j].0, self.bounds[j].1)
             })
@@ -715,12 +782,12 @@ pub fn proposal_document(
 fn evaluate_figure(
     figure: TargetFigure,
     sorted: &[f64],
-    mean: f64,
-    sd: f64,
-    excess_kurtosis: f64,
+    moments: &Moments,
     limits: Option<SpecLimits>,
     counted_out: Option<u64>,
 ) -> Option<Evaluation> {
+    let (mean, sd) = (moments.mean, moments.sd());
+    let (excess_kurtosis, skewness) = (moments.excess_kurtosis(), moments.skewness());
     let n = sorted.len();
     if n < 2 {
         return None;
@@ -743,12 +810,22 @@ fn evaluate_figure(
             symmetric(cp, cp * sd_relative_se)
         }
         TargetFigure::Cpk => {
-            let cpk = capability_from_moments(mean, sd, limits?).cpk;
-            // Bissell (1990): Var(Ĉpk) ≈ 1/(9n) + Cpk²/(2(n − 1)).
-            symmetric(
-                cpk,
-                (1.0 / (9.0 * nf) + cpk * cpk / (2.0 * (nf - 1.0))).sqrt(),
-            )
+            let limits = limits?;
+            let cpk = capability_from_moments(mean, sd, limits).cpk;
+            // Delta method on Cpk = ±(limit − mean)/(3σ), with Var(mean) = σ²/n,
+            // Var(s) = σ²(κ + 2)/(4n) and Cov(mean, s) = γ1·σ²/(2n):
+            // Var = 1/(9n) + Cpk²(κ + 2)/(4n) ± Cpk·γ1/(3n), + on the upper side. For a
+            // normal output (κ = γ1 = 0) this is Bissell's (1990) 1/(9n) + Cpk²/(2n).
+            let upper_side = match (limits.lower, limits.upper) {
+                (Some(l), Some(u)) => u - mean <= mean - l,
+                (None, Some(_)) => true,
+                _ => false,
+            };
+            let sign = if upper_side { 1.0 } else { -1.0 };
+            let variance = 1.0 / (9.0 * nf)
+                + cpk * cpk * (excess_kurtosis + 2.0).max(0.0) / (4.0 * nf)
+                + sign * cpk * skewness / (3.0 * nf);
+            symmetric(cpk, variance.max(1.0 / (9.0 * nf)).sqrt())
         }
         TargetFigure::PpmOut => {
             let limits = limits?;

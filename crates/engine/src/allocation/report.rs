@@ -110,6 +110,8 @@ pub struct AllocationReport {
     pub current_cost: Option<f64>,
     /// Total cost of the proposal.
     pub proposed_cost: f64,
+    /// Total cost of the optimum before rounding.
+    pub optimum_cost: f64,
     /// Every tolerance scaled by one factor instead (null when none meets the target).
     pub common_scale: Option<CommonScaleReport>,
     /// The figure at today's tolerances (optimisation seed).
@@ -158,6 +160,7 @@ impl AllocationReport {
                 .collect(),
             current_cost: a.current_cost,
             proposed_cost: a.proposed_cost,
+            optimum_cost: a.optimum_cost,
             common_scale: a.common_scale.map(|c| CommonScaleReport {
                 factor: c.factor,
                 cost: c.cost,
@@ -262,7 +265,7 @@ impl AllocationReport {
         out.push('\n');
         match &self.common_scale {
             Some(c) => out.push_str(&format!(
-                "every tolerance × {} instead: cost {}\n",
+                "every tolerance × {} instead (within its bounds): cost {}\n",
                 format_sig(c.factor),
                 format_sig(c.cost)
             )),
