@@ -374,18 +374,14 @@ impl CycloidPinContact {
     /// Solves the load sharing for one row of inputs (in the order of `inputs()`).
     pub fn solve(&self, inputs: &[f64]) -> ContactSolution {
         let n = self.pins;
-        let mut forces = [0.0; MAX_PINS];
-        let mut levers = [0.0; MAX_PINS];
-        let mut clearances = [0.0; MAX_PINS];
-        let mut curvature_factor = [0.0; MAX_PINS];
-        let summary = self.solve_into(
-            inputs,
-            &mut forces,
-            &mut levers,
-            &mut clearances,
-            &mut curvature_factor,
-        );
-        let face_width = self.face_width + inputs[6];
+        let PinState {
+            forces,
+            levers,
+            clearances,
+            curvature_factor,
+            face_width,
+            summary,
+        } = self.solve_pins(inputs);
         let stresses = (0..n)
             .map(|i| self.stress(forces[i], curvature_factor[i], face_width))
             .collect();
@@ -411,14 +407,35 @@ impl CycloidPinContact {
         (force * self.contact_modulus / (PI * face_width * radius)).sqrt()
     }
 
-    fn solve_into(
-        &self,
-        inputs: &[f64],
-        forces: &mut [f64; MAX_PINS],
-        levers: &mut [f64; MAX_PINS],
-        clearances: &mut [f64; MAX_PINS],
-        curvature_factor: &mut [f64; MAX_PINS],
-    ) -> Summary {
+    /// The per-pin arrays (on the stack) and the summary for one row of inputs.
+    fn solve_pins(&self, inputs: &[f64]) -> PinState {
+        let mut state = PinState {
+            forces: [0.0; MAX_PINS],
+            levers: [0.0; MAX_PINS],
+            clearances: [0.0; MAX_PINS],
+            curvature_factor: [0.0; MAX_PINS],
+            face_width: self.face_width + inputs[6],
+            summary: Summary {
+                rotation: 0.0,
+                resultant: (0.0, 0.0),
+                max_crank_bearing_force: 0.0,
+                iterations: 0,
+            },
+        };
+        state.summary = self.solve_into(inputs, &mut state);
+        state
+    }
+
+    fn solve_into(&self, inputs: &[f64], state: &mut PinState) -> Summary {
+        let PinState {
+            forces,
+            levers,
+            clearances,
+            curvature_factor,
+            face_width,
+            ..
+        } = state;
+        let face_width = *face_width;
         let n = self.pins;
         let zp = n as f64;
         let k1 = self.k1();
@@ -426,7 +443,6 @@ impl CycloidPinContact {
         let torque = self.load_share * inputs[0].abs() * 1000.0; // N·mm; either flank alike
         let (d_rp, d_p) = (inputs[1], inputs[2]);
         let (err_rp, err_rrp, err_e) = (inputs[3], inputs[4], inputs[5]);
-        let face_width = self.face_width + inputs[6];
         let pitch_radius = self.eccentricity * self.cycloid_teeth;
         for i in 0..n {
             let (sin, cos) = self.angles[i];
@@ -482,7 +498,19 @@ impl CycloidPinContact {
     }
 }
 
-/// What [`CycloidPinContact::solve_into`] returns besides the per-pin arrays.
+/// Per-pin arrays of one solve (pin order), kept on the stack: no allocation per sample.
+struct PinState {
+    forces: [f64; MAX_PINS],
+    levers: [f64; MAX_PINS],
+    clearances: [f64; MAX_PINS],
+    /// R*/r_rp per pin.
+    curvature_factor: [f64; MAX_PINS],
+    /// Disc face width of this row, mm.
+    face_width: f64,
+    summary: Summary,
+}
+
+/// What a solve gives besides the per-pin arrays.
 struct Summary {
     rotation: f64,
     resultant: (f64, f64),
@@ -556,18 +584,13 @@ impl ErrorModel for CycloidPinContact {
     }
 
     fn evaluate(&self, inputs: &[f64], outputs: &mut [f64]) {
-        let mut forces = [0.0; MAX_PINS];
-        let mut levers = [0.0; MAX_PINS];
-        let mut clearances = [0.0; MAX_PINS];
-        let mut curvature_factor = [0.0; MAX_PINS];
-        let summary = self.solve_into(
-            inputs,
-            &mut forces,
-            &mut levers,
-            &mut clearances,
-            &mut curvature_factor,
-        );
-        let face_width = self.face_width + inputs[6];
+        let PinState {
+            forces,
+            curvature_factor,
+            face_width,
+            summary,
+            ..
+        } = self.solve_pins(inputs);
         let (mut f_max, mut engaged, mut sigma_max) = (0.0_f64, 0.0, 0.0_f64);
         let threshold = 1e-9 * forces[..self.pins].iter().cloned().fold(0.0, f64::max);
         for i in 0..self.pins {
