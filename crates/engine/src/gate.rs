@@ -207,29 +207,25 @@ pub fn measure(
             ));
         }
         let nf = n as f64;
-        let proportion_se = |events: u64| {
-            let p = (events as f64 / nf).max(1.0 / nf);
-            (p * (1.0 - p) / nf).sqrt()
-        };
+        let proportion_se =
+            |events: u64| crate::stats::proportion_standard_error(events as f64 / nf, n);
         if info.kind == OutputKind::Indicator {
             let half = two_sample * proportion_se(acc.nonzero);
             push(&info.name, "fraction", acc.nonzero as f64 / nf, half, half);
             continue;
         }
         let (mean, sd) = (acc.moments.mean, acc.moments.sd());
-        let half = two_sample * sd / nf.sqrt();
+        let half = two_sample * acc.moments.mean_standard_error();
         push(&info.name, "mean", mean, half, half);
-        let kurtosis_term = (acc.moments.excess_kurtosis() + 2.0).max(0.0);
-        let half = two_sample * sd * (kurtosis_term / (4.0 * nf)).sqrt();
+        let half = two_sample * acc.moments.sd_standard_error();
         push(&info.name, "sd", sd, half, half);
         let Distribution::Values(mut values) = acc.distribution else {
             unreachable!("the gate runs with exact percentiles");
         };
-        let percents: Vec<f64> = GATED_PERCENTS.iter().map(|(_, percent)| *percent).collect();
-        let estimates = crate::stats::percentiles_type7(&mut values, &percents);
         values.sort_unstable_by(f64::total_cmp);
-        for ((name, percent), estimate) in GATED_PERCENTS.into_iter().zip(estimates) {
-            let value = estimate.unwrap_or(f64::NAN);
+        for (name, percent) in GATED_PERCENTS {
+            let value =
+                crate::stats::percentile_type7_of_sorted(&values, percent).unwrap_or(f64::NAN);
             // Distribution-free one-sample interval [X_(l), X_(u)] at z.
             let (low, high) =
                 crate::stats::order_statistic_interval(&values, percent, z).expect("n ≥ 2 values");

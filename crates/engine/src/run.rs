@@ -347,11 +347,13 @@ pub fn run(
             }
         }
     }
-    let min_chunks_per_split =
-        (WAVE_CHUNKS as usize / (4 * rayon::current_num_threads().max(1))).max(1);
     let mut wave_start = 0;
     while wave_start < n_chunks {
         let wave_end = (wave_start + WAVE_CHUNKS).min(n_chunks);
+        // About four splits per thread, from the chunks this wave really has (a short run
+        // with an expensive model must still reach every thread).
+        let min_chunks_per_split =
+            ((wave_end - wave_start) as usize / (4 * rayon::current_num_threads().max(1))).max(1);
         let partials: Vec<Partial> = (wave_start as usize..wave_end as usize)
             .into_par_iter()
             // A few splits per thread: each split allocates its scratch buffers and

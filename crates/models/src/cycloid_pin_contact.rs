@@ -202,8 +202,8 @@ pub struct CycloidPinContact {
     /// E* of the line contact, MPa.
     contact_modulus: f64,
     per_pin_errors: bool,
-    /// Per pin: (sin φ, cos φ).
-    angles: Vec<(f64, f64)>,
+    /// Per pin, everything that depends on the design geometry only.
+    geometry: Vec<PinGeometry>,
     inputs: Vec<InputSpec>,
     outputs: Vec<OutputSpec>,
 }
@@ -312,7 +312,7 @@ impl CycloidPinContact {
             description,
             kind: OutputKind::Continuous,
         };
-        Ok(CycloidPinContact {
+        let mut model = CycloidPinContact {
             pins,
             cycloid_teeth: cycloid_teeth as f64,
             pin_circle_radius,
@@ -324,9 +324,7 @@ impl CycloidPinContact {
             crank_circle_radius,
             contact_modulus: youngs / (2.0 * (1.0 - poisson * poisson)),
             per_pin_errors: per_pin == 1.0,
-            angles: (0..pins)
-                .map(|i| (2.0 * PI * i as f64 / pins as f64).sin_cos())
-                .collect(),
+            geometry: Vec::new(),
             inputs,
             outputs: vec![
                 output("max_pin_force_n", "N", "largest pin force F_max"),
@@ -336,7 +334,27 @@ impl CycloidPinContact {
                 output("pin_force_x_n", "N", "resultant of the forces on the pins, perpendicular to the eccentricity (003's F_x)"),
                 output("pin_force_y_n", "N", "resultant of the forces on the pins, along the eccentricity (003's F_y)"),
             ],
-        })
+        };
+        model.geometry = (0..pins).map(|i| model.pin_geometry(i)).collect();
+        Ok(model)
+    }
+
+    /// The design quantities of pin i (at φ = 2π·i/z_p, 0-based), see the module comment.
+    fn pin_geometry(&self, i: usize) -> PinGeometry {
+        let k1 = self.k1();
+        let (sin, cos) = (2.0 * PI * i as f64 / self.pins as f64).sin_cos();
+        let s = (1.0 + k1 * k1 - 2.0 * k1 * cos).sqrt();
+        PinGeometry {
+            lever: self.eccentricity * self.cycloid_teeth * sin / s,
+            equidistant: 1.0 - sin / s,
+            shift: -(1.0 - k1 * cos - (1.0 - k1 * k1).sqrt() * sin) / s,
+            radial: (1.0 - k1 * cos) / s,
+            eccentric: (k1 - cos) / s,
+            tangential: k1 * sin / s,
+            // R*/r_rp = 1 + r_rp/ρ0.
+            curvature_factor: 1.0 + self.pin_radius * self.inverse_curvature_radius(cos),
+            push: (sin / s, -(k1 - cos) / s),
+        }
     }
 
     /// K1 = e·z_p/r_p of the design.
@@ -347,21 +365,24 @@ impl CycloidPinContact {
     /// Signed curvature radius ρ0 of the theoretical profile at pin angle φ (validation.md
     /// 003; positive on the concave root side), mm.
     pub fn profile_curvature_radius(&self, phi: f64) -> f64 {
+        1.0 / self.inverse_curvature_radius(phi.cos())
+    }
+
+    /// 1/ρ0 at cos φ: finite everywhere, zero at the inflection point.
+    fn inverse_curvature_radius(&self, cos: f64) -> f64 {
         let k1 = self.k1();
         let zp = self.pins as f64;
-        let s = (1.0 + k1 * k1 - 2.0 * k1 * phi.cos()).sqrt();
-        self.pin_circle_radius * s.powi(3) / (k1 * (zp + 1.0) * phi.cos() - (1.0 + zp * k1 * k1))
+        let s = (1.0 + k1 * k1 - 2.0 * k1 * cos).sqrt();
+        (k1 * (zp + 1.0) * cos - (1.0 + zp * k1 * k1)) / (self.pin_circle_radius * s.powi(3))
     }
 
     /// Resultant (F_x, F_y) of the forces the disc exerts on the pins (003's sign: along
     /// −n_i), from the pin forces in pin order, N.
     pub fn pin_force_resultant(&self, forces: &[f64]) -> (f64, f64) {
-        let k1 = self.k1();
         let (mut fx, mut fy) = (0.0, 0.0);
-        for (&(sin, cos), &f) in self.angles.iter().zip(forces) {
-            let s = (1.0 + k1 * k1 - 2.0 * k1 * cos).sqrt();
-            fx += f * sin / s;
-            fy -= f * (k1 - cos) / s;
+        for (pin, &f) in self.geometry.iter().zip(forces) {
+            fx += f * pin.push.0;
+            fy += f * pin.push.1;
         }
         (fx, fy)
     }
@@ -374,107 +395,63 @@ impl CycloidPinContact {
     /// Solves the load sharing for one row of inputs (in the order of `inputs()`).
     pub fn solve(&self, inputs: &[f64]) -> ContactSolution {
         let n = self.pins;
-        let PinState {
-            forces,
-            levers,
-            clearances,
-            curvature_factor,
-            face_width,
-            summary,
-        } = self.solve_pins(inputs);
-        let stresses = (0..n)
-            .map(|i| self.stress(forces[i], curvature_factor[i], face_width))
-            .collect();
+        let solved = self.solve_pins(inputs);
         ContactSolution {
-            forces: forces[..n].to_vec(),
-            levers: levers[..n].to_vec(),
-            clearances: clearances[..n].to_vec(),
-            stresses,
-            rotation: summary.rotation,
-            resultant: summary.resultant,
-            max_crank_bearing_force: summary.max_crank_bearing_force,
-            iterations: summary.iterations,
+            forces: solved.forces[..n].to_vec(),
+            levers: self.geometry.iter().map(|pin| pin.lever).collect(),
+            clearances: solved.clearances[..n].to_vec(),
+            stresses: (0..n)
+                .map(|i| self.stress(i, solved.forces[i], solved.face_width))
+                .collect(),
+            rotation: solved.rotation,
+            resultant: solved.resultant,
+            max_crank_bearing_force: solved.max_crank_bearing_force,
+            iterations: solved.iterations,
         }
     }
 
-    /// Hertz line-contact stress for force F on a pin whose equivalent radius is
-    /// r_rp·`curvature_factor`.
-    fn stress(&self, force: f64, curvature_factor: f64, face_width: f64) -> f64 {
+    /// Hertz line-contact stress of pin i under force F.
+    fn stress(&self, i: usize, force: f64, face_width: f64) -> f64 {
         if force <= 0.0 {
             return 0.0;
         }
-        let radius = self.pin_radius * curvature_factor;
+        let radius = self.pin_radius * self.geometry[i].curvature_factor;
         (force * self.contact_modulus / (PI * face_width * radius)).sqrt()
     }
 
-    /// The per-pin arrays (on the stack) and the summary for one row of inputs.
-    fn solve_pins(&self, inputs: &[f64]) -> PinState {
-        let mut state = PinState {
-            forces: [0.0; MAX_PINS],
-            levers: [0.0; MAX_PINS],
-            clearances: [0.0; MAX_PINS],
-            curvature_factor: [0.0; MAX_PINS],
-            face_width: self.face_width + inputs[6],
-            summary: Summary {
-                rotation: 0.0,
-                resultant: (0.0, 0.0),
-                max_crank_bearing_force: 0.0,
-                iterations: 0,
-            },
-        };
-        state.summary = self.solve_into(inputs, &mut state);
-        state
-    }
-
-    fn solve_into(&self, inputs: &[f64], state: &mut PinState) -> Summary {
-        let PinState {
-            forces,
-            levers,
-            clearances,
-            curvature_factor,
-            face_width,
-            ..
-        } = state;
-        let face_width = *face_width;
+    /// Clearances, load sharing and resultants for one row of inputs; the per-pin arrays
+    /// live on the stack.
+    fn solve_pins(&self, inputs: &[f64]) -> Solved {
         let n = self.pins;
-        let zp = n as f64;
-        let k1 = self.k1();
-        let root = (1.0 - k1 * k1).sqrt();
         let torque = self.load_share * inputs[0].abs() * 1000.0; // N·mm; either flank alike
         let (d_rp, d_p) = (inputs[1], inputs[2]);
         let (err_rp, err_rrp, err_e) = (inputs[3], inputs[4], inputs[5]);
-        let pitch_radius = self.eccentricity * self.cycloid_teeth;
-        for i in 0..n {
-            let (sin, cos) = self.angles[i];
-            let s = (1.0 + k1 * k1 - 2.0 * k1 * cos).sqrt();
-            levers[i] = pitch_radius * sin / s;
-            let radial = (1.0 - k1 * cos) / s;
-            let mut clearance = d_rp * (1.0 - sin / s) - d_p * (1.0 - k1 * cos - root * sin) / s
-                + err_rp * radial
+        let face_width = self.face_width + inputs[6];
+        let mut levers = [0.0; MAX_PINS];
+        let mut clearances = [0.0; MAX_PINS];
+        for (i, pin) in self.geometry.iter().enumerate() {
+            levers[i] = pin.lever;
+            let mut clearance = d_rp * pin.equidistant + d_p * pin.shift + err_rp * pin.radial
                 - err_rrp
-                + err_e * (k1 - cos) / s;
+                + err_e * pin.eccentric;
             if self.per_pin_errors {
-                clearance += inputs[7 + i] * radial + inputs[7 + n + i] * k1 * sin / s;
+                clearance += inputs[7 + i] * pin.radial + inputs[7 + n + i] * pin.tangential;
             }
             clearances[i] = clearance;
-            // R* / r_rp = 1 + r_rp/ρ0, with 1/ρ0 from the curvature formula.
-            let inverse_rho = (k1 * (zp + 1.0) * cos - (1.0 + zp * k1 * k1))
-                / (self.pin_circle_radius * s.powi(3));
-            curvature_factor[i] = 1.0 + self.pin_radius * inverse_rho;
         }
-        let levers = &levers[..n];
-        let clearances = &clearances[..n];
-        let mut f_max = 4.0 * torque / (zp * pitch_radius);
+        let (levers, active_clearances) = (&levers[..n], &clearances[..n]);
+        let mut forces = [0.0; MAX_PINS];
+        let mut f_max = 4.0 * torque / (n as f64 * self.eccentricity * self.cycloid_teeth);
         let mut rotation = 0.0;
         let mut iterations = 0;
         if torque > 0.0 {
             for _ in 0..100 {
                 iterations += 1;
                 let stiffness = f_max / self.approach(f_max, face_width);
-                rotation = solve_rotation(levers, clearances, torque / stiffness);
+                rotation = solve_rotation(levers, active_clearances, torque / stiffness);
                 let mut largest: f64 = 0.0;
                 for i in 0..n {
-                    let f = stiffness * (levers[i] * rotation - clearances[i]).max(0.0);
+                    let f = stiffness * (levers[i] * rotation - active_clearances[i]).max(0.0);
                     forces[i] = f;
                     largest = largest.max(f);
                 }
@@ -484,34 +461,50 @@ impl CycloidPinContact {
                     break;
                 }
             }
-        } else {
-            forces[..n].fill(0.0);
         }
-        let (fx, fy) = self.pin_force_resultant(&forces[..n]);
+        let resultant = self.pin_force_resultant(&forces[..n]);
         let tangential = torque / (self.cranks * self.crank_circle_radius);
-        Summary {
+        Solved {
+            forces,
+            clearances,
+            face_width,
             rotation,
-            resultant: (fx, fy),
-            max_crank_bearing_force: tangential + fx.hypot(fy) / self.cranks,
+            resultant,
+            max_crank_bearing_force: tangential + resultant.0.hypot(resultant.1) / self.cranks,
             iterations,
         }
     }
 }
 
-/// Per-pin arrays of one solve (pin order), kept on the stack: no allocation per sample.
-struct PinState {
-    forces: [f64; MAX_PINS],
-    levers: [f64; MAX_PINS],
-    clearances: [f64; MAX_PINS],
-    /// R*/r_rp per pin.
-    curvature_factor: [f64; MAX_PINS],
-    /// Disc face width of this row, mm.
-    face_width: f64,
-    summary: Summary,
+/// The design quantities of one pin: lever arm l_i and the factors that project each
+/// clearance term and error on the normal n_i (module comment).
+#[derive(Debug, Clone, Copy)]
+struct PinGeometry {
+    /// l_i = e·z_c·sin φ/S, mm.
+    lever: f64,
+    /// Factor of Δr_rp: 1 − sin φ/S.
+    equidistant: f64,
+    /// Factor of Δr_p: −(1 − K1·cos φ − √(1 − K1²)·sin φ)/S.
+    shift: f64,
+    /// Factor of a radial pin displacement: (1 − K1·cos φ)/S.
+    radial: f64,
+    /// Factor of the eccentricity error: (K1 − cos φ)/S.
+    eccentric: f64,
+    /// Factor of a tangential pin displacement: K1·sin φ/S.
+    tangential: f64,
+    /// R*/r_rp = 1 + r_rp/ρ0.
+    curvature_factor: f64,
+    /// Unit vector along which the disc pushes the pin (−n_i), in 003's axes.
+    push: (f64, f64),
 }
 
-/// What a solve gives besides the per-pin arrays.
-struct Summary {
+/// One solve: per-pin arrays (pin order, on the stack: no allocation per sample) and what
+/// follows from them.
+struct Solved {
+    forces: [f64; MAX_PINS],
+    clearances: [f64; MAX_PINS],
+    /// Disc face width of this row, mm.
+    face_width: f64,
     rotation: f64,
     resultant: (f64, f64),
     max_crank_bearing_force: f64,
@@ -584,29 +577,23 @@ impl ErrorModel for CycloidPinContact {
     }
 
     fn evaluate(&self, inputs: &[f64], outputs: &mut [f64]) {
-        let PinState {
-            forces,
-            curvature_factor,
-            face_width,
-            summary,
-            ..
-        } = self.solve_pins(inputs);
+        let solved = self.solve_pins(inputs);
+        let forces = &solved.forces[..self.pins];
         let (mut f_max, mut engaged, mut sigma_max) = (0.0_f64, 0.0, 0.0_f64);
-        let threshold = 1e-9 * forces[..self.pins].iter().cloned().fold(0.0, f64::max);
-        for i in 0..self.pins {
-            let f = forces[i];
+        let threshold = 1e-9 * forces.iter().cloned().fold(0.0, f64::max);
+        for (i, &f) in forces.iter().enumerate() {
             if f > threshold {
                 engaged += 1.0;
                 f_max = f_max.max(f);
-                sigma_max = sigma_max.max(self.stress(f, curvature_factor[i], face_width));
+                sigma_max = sigma_max.max(self.stress(i, f, solved.face_width));
             }
         }
         outputs[0] = f_max;
         outputs[1] = engaged;
         outputs[2] = sigma_max;
-        outputs[3] = summary.max_crank_bearing_force;
-        outputs[4] = summary.resultant.0;
-        outputs[5] = summary.resultant.1;
+        outputs[3] = solved.max_crank_bearing_force;
+        outputs[4] = solved.resultant.0;
+        outputs[5] = solved.resultant.1;
     }
 }
 

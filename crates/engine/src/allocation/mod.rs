@@ -31,8 +31,8 @@ use serde_json::Value;
 use crate::run::{run, Distribution, RunSettings};
 use crate::scenario::{Scenario, ScenarioError};
 use crate::stats::{
-    capability_from_moments, order_statistic_interval, out_of_spec_interval, percentile_type7,
-    Moments, SpecLimits,
+    capability_from_moments, order_statistic_interval, out_of_spec_interval,
+    percentile_type7_of_sorted, proportion_standard_error, Moments, SpecLimits,
 };
 use spec::{AllocatableSource, CostKind, Target, TargetFigure};
 
@@ -65,13 +65,18 @@ pub struct AllocationSettings {
 /// The default sample count for a target: enough for about 100 samples beyond a tail
 /// percentile or out of spec, at least 200,000 and at most 4,000,000.
 pub fn default_samples(target: &Target) -> u64 {
-    // 100 / tail fraction, written to stay exact for round inputs.
-    let samples = match target.figure {
-        TargetFigure::Percentile(p) => 1e4 / p.min(100.0 - p),
-        TargetFigure::PpmOut => 1e8 / target.value,
-        _ => 0.0,
-    };
+    let samples = tail_fraction(target).map_or(0.0, |tail| 100.0 / tail);
     (samples.ceil() as u64).clamp(200_000, 4_000_000)
+}
+
+/// The fraction of samples in the tail a percentile or ppm target constrains; None for
+/// the moment-based targets.
+fn tail_fraction(target: &Target) -> Option<f64> {
+    match target.figure {
+        TargetFigure::Percentile(p) => Some(p.min(100.0 - p) / 100.0),
+        TargetFigure::PpmOut => Some(target.value / 1e6),
+        _ => None,
+    }
 }
 
 /// One Monte Carlo evaluation of the target figure.
@@ -244,12 +249,7 @@ pub fn allocate(
             "allocation needs at least 100 samples per evaluation",
         ));
     }
-    let expected_tail = match target.figure {
-        TargetFigure::Percentile(p) => Some(settings.samples as f64 * p.min(100.0 - p) / 100.0),
-        TargetFigure::PpmOut => Some(settings.samples as f64 * target.value * 1e-6),
-        _ => None,
-    };
-    if let Some(tail) = expected_tail {
+    if let Some(tail) = tail_fraction(&target).map(|f| settings.samples as f64 * f) {
         if tail < 10.0 {
             let needed = (settings.samples as f64 * 10.0 / tail).ceil();
             return Err(ScenarioError::new(
@@ -293,20 +293,20 @@ pub fn allocate(
         progress,
         evaluations: std::cell::Cell::new(0),
     };
-    problem.solve(settings, &scenario.name, &info.unit)
+    problem.solve(settings, &info.unit)
 }
 
 impl Problem<'_> {
-    fn solve(
-        &self,
-        settings: AllocationSettings,
-        scenario_name: &str,
-        unit: &str,
-    ) -> Result<Allocation, ScenarioError> {
+    fn solve(&self, settings: AllocationSettings, unit: &str) -> Result<Allocation, ScenarioError> {
         let k = self.sources.len();
         let seed = settings.seed;
         let current = self.point(&vec![1.0; k], seed, false)?;
-        let mut x = self.point(&self.clamp(&vec![1.0; k]), seed, false)?;
+        let start = self.clamp(&vec![1.0; k]);
+        let mut x = if start == current.factors {
+            current.clone()
+        } else {
+            self.point(&start, seed, false)?
+        };
         let mut best: Option<Point> = None;
         let keep = |candidate: &Point, best: &mut Option<Point>| {
             if candidate.constraint <= 0.0 && best.as_ref().is_none_or(|b| candidate.cost < b.cost)
@@ -420,7 +420,7 @@ impl Problem<'_> {
             .collect::<Vec<_>>();
         let current_cost = sources.iter().map(|s| s.current_cost).sum::<Option<f64>>();
         Ok(Allocation {
-            scenario: scenario_name.to_string(),
+            scenario: self.name.to_string(),
             output: self.output_name.to_string(),
             unit: unit.to_string(),
             target: self.target,
@@ -477,7 +477,7 @@ impl Problem<'_> {
         verification: bool,
     ) -> Result<Point, ScenarioError> {
         let scenario = self.scenario(factors)?;
-        let result = run(
+        let mut result = run(
             &scenario,
             RunSettings {
                 samples: self.samples,
@@ -488,11 +488,10 @@ impl Problem<'_> {
         )?;
         self.evaluations.set(self.evaluations.get() + 1);
         (self.progress)(self.evaluations.get());
-        let accumulator = &result.outputs[self.output];
-        let Distribution::Values(values) = &accumulator.distribution else {
+        let accumulator = result.outputs.swap_remove(self.output);
+        let Distribution::Values(mut values) = accumulator.distribution else {
             unreachable!("allocation runs keep every value");
         };
-        let mut values = values.clone();
         values.sort_unstable_by(f64::total_cmp);
         let evaluation = evaluate_figure(
             self.target.figure,
@@ -794,16 +793,19 @@ fn evaluate_figure(
     }
     let nf = n as f64;
     const Z95: f64 = 1.959963984540054;
-    let sd_relative_se = ((excess_kurtosis + 2.0).max(0.0) / (4.0 * nf)).sqrt();
+    let sd_relative_se = if sd > 0.0 {
+        moments.sd_standard_error() / sd
+    } else {
+        0.0
+    };
     let symmetric = |value: f64, se: f64| (value, se, (value - Z95 * se, value + Z95 * se));
     let (value, se, interval) = match figure {
         TargetFigure::Percentile(p) => {
-            let mut copy = sorted.to_vec();
-            let value = percentile_type7(&mut copy, p)?;
+            let value = percentile_type7_of_sorted(sorted, p)?;
             let interval = order_statistic_interval(sorted, p, Z95)?;
             (value, (interval.1 - interval.0) / (2.0 * Z95), interval)
         }
-        TargetFigure::Mean => symmetric(mean, sd / nf.sqrt()),
+        TargetFigure::Mean => symmetric(mean, moments.mean_standard_error()),
         TargetFigure::Sd => symmetric(sd, sd * sd_relative_se),
         TargetFigure::Cp => {
             let cp = capability_from_moments(mean, sd, limits?).cp?;
@@ -839,8 +841,7 @@ fn evaluate_figure(
                     below + above
                 }
             };
-            let p = fraction.max(1.0 / nf);
-            let se = 1e6 * (p * (1.0 - p) / nf).sqrt();
+            let se = 1e6 * proportion_standard_error(fraction, n as u64);
             let interval = match counted_out {
                 Some(out) => {
                     let e = out_of_spec_interval(out, n as u64, 0.95);
@@ -893,7 +894,7 @@ mod tests {
     fn interpolated_cdf_inverts_type7() {
         let sorted: Vec<f64> = (0..101).map(|i| (i as f64).powf(1.5)).collect();
         for p in [3.0, 17.5, 50.0, 99.2] {
-            let x = percentile_type7(&mut sorted.clone(), p).unwrap();
+            let x = percentile_type7_of_sorted(&sorted, p).unwrap();
             assert!((interpolated_cdf(&sorted, x) - p / 100.0).abs() < 1e-12);
         }
         assert_eq!(interpolated_cdf(&sorted, -1.0), 0.0);

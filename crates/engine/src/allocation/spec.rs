@@ -220,27 +220,26 @@ impl CostModel {
                 ))
             }
         };
+        // b scales the part of the cost that a looser tolerance saves.
+        let saving = |name: &str, b: f64| {
+            finite(name, b)?;
+            if b < 0.0 {
+                return Err(ScenarioError::new(
+                    format!("{path}.{name}"),
+                    format!("must be ≥ 0 (a looser tolerance cannot cost more), got {b}"),
+                ));
+            }
+            Ok(())
+        };
         match self {
             CostModel::Reciprocal { a, b } => {
                 finite("reciprocal.a", *a)?;
-                finite("reciprocal.b", *b)?;
-                if *b < 0.0 {
-                    return Err(ScenarioError::new(
-                        format!("{path}.reciprocal.b"),
-                        format!("must be ≥ 0 (a looser tolerance cannot cost more), got {b}"),
-                    ));
-                }
+                saving("reciprocal.b", *b)?;
             }
             CostModel::Exponential { a, b, rate } => {
                 finite("exponential.a", *a)?;
-                finite("exponential.b", *b)?;
+                saving("exponential.b", *b)?;
                 finite("exponential.rate", *rate)?;
-                if *b < 0.0 {
-                    return Err(ScenarioError::new(
-                        format!("{path}.exponential.b"),
-                        format!("must be ≥ 0 (a looser tolerance cannot cost more), got {b}"),
-                    ));
-                }
                 if *rate <= 0.0 {
                     return Err(ScenarioError::new(
                         format!("{path}.exponential.rate"),

@@ -7,7 +7,8 @@
 //!
 //! Order statistics are found with `select_nth_unstable_by(f64::total_cmp)`
 //! (expected linear time), never with a full sort. The slice is reordered;
-//! no function here assumes anything about its order on entry.
+//! no function here assumes anything about its order on entry, except the
+//! `_of_sorted` ones and [`order_statistic_interval`], which take a sorted slice.
 
 /// 0-based position h = (n − 1)·p of percent `percent` (clamped into
 /// [0, 100]) among `count` values; `None` for NaN.
@@ -115,6 +116,18 @@ pub fn percentiles_type7(values: &mut [f64], percents: &[f64]) -> Vec<Option<f64
         .collect()
 }
 
+/// Type 7 percentile of an already sorted slice (ascending by `f64::total_cmp`): the
+/// same value as [`percentile_type7`], read off without selection. `None` for an empty
+/// slice or NaN `percent`.
+pub fn percentile_type7_of_sorted(sorted: &[f64], percent: f64) -> Option<f64> {
+    let (lower_rank, weight) = type7_position(sorted.len(), percent)?;
+    let upper = sorted
+        .get(lower_rank + 1)
+        .copied()
+        .unwrap_or(sorted[lower_rank]);
+    Some(interpolate(sorted[lower_rank], upper, weight))
+}
+
 /// Distribution-free interval [X_(l), X_(u)] for the `percent` percentile from the sorted
 /// sample `sorted` (normal approximation to the binomial count of values below the
 /// percentile): ranks ⌊n·p − z·√(n·p·(1 − p))⌋ and ⌈n·p + z·√(n·p·(1 − p))⌉, clamped to
@@ -132,6 +145,24 @@ pub fn order_statistic_interval(sorted: &[f64], percent: f64, z: f64) -> Option<
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn sorted_percentiles_equal_the_selected_ones() {
+        let values: Vec<f64> = (0..101)
+            .map(|i| ((i * 37) % 101) as f64 * 0.5 - 3.0)
+            .collect();
+        let mut sorted = values.clone();
+        sorted.sort_unstable_by(f64::total_cmp);
+        for percent in [0.0, 0.135, 2.5, 50.0, 97.725, 99.865, 100.0] {
+            let selected = percentile_type7(&mut values.clone(), percent);
+            assert_eq!(
+                percentile_type7_of_sorted(&sorted, percent),
+                selected,
+                "{percent}"
+            );
+        }
+        assert_eq!(percentile_type7_of_sorted(&[], 50.0), None);
+    }
 
     fn one_to_ten() -> Vec<f64> {
         // Shuffled on purpose: the functions must not rely on order.

@@ -21,7 +21,9 @@ pub use capability::{
     capability_from_moments, capability_percentile_method, out_of_spec_interval, MomentCapability,
     ProportionEstimate, SpecLimits,
 };
-pub use exact::{order_statistic_interval, percentile_type7, percentiles_type7};
+pub use exact::{
+    order_statistic_interval, percentile_type7, percentile_type7_of_sorted, percentiles_type7,
+};
 pub use histogram::Histogram;
-pub use moments::Moments;
+pub use moments::{proportion_standard_error, Moments};
 pub use quantile_sketch::{QuantileSketch, SketchMismatch};

@@ -220,6 +220,31 @@ impl Moments {
         }
         self.n as f64 * self.m4 / (self.m2 * self.m2) - 3.0
     }
+
+    /// Standard error of the mean, σ/√n (0 when n == 0).
+    pub fn mean_standard_error(&self) -> f64 {
+        if self.n == 0 {
+            return 0.0;
+        }
+        self.sd() / (self.n as f64).sqrt()
+    }
+
+    /// Standard error of the standard deviation by the delta method, σ·√((κ + 2)/(4n))
+    /// with κ the excess kurtosis (σ/√(2n) for a normal sample); 0 when n == 0.
+    pub fn sd_standard_error(&self) -> f64 {
+        if self.n == 0 {
+            return 0.0;
+        }
+        self.sd() * ((self.excess_kurtosis() + 2.0).max(0.0) / (4.0 * self.n as f64)).sqrt()
+    }
+}
+
+/// Binomial standard error √(p(1 − p)/n) of an estimated fraction, with p raised to at
+/// least 1/n so that a fraction of 0 still has an error of one count's worth.
+pub fn proportion_standard_error(fraction: f64, n: u64) -> f64 {
+    let nf = n.max(1) as f64;
+    let p = fraction.max(1.0 / nf);
+    (p * (1.0 - p) / nf).sqrt()
 }
 
 #[cfg(test)]
