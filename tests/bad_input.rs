@@ -608,3 +608,119 @@ fn allocate_with_too_few_samples_for_the_tail() {
         ],
     );
 }
+
+// ---- Physical models of issue 4: bad parameters and a torque that engages no pin ----
+
+/// A shipped scenario after `change`.
+fn shipped_with(file: &str, change: impl FnOnce(&mut Value)) -> String {
+    let path = common::workspace_dir().join("scenarios").join(file);
+    let mut scenario: Value =
+        serde_json::from_str(&std::fs::read_to_string(path).expect("shipped scenario"))
+            .expect("shipped scenario is JSON");
+    change(&mut scenario);
+    serde_json::to_string_pretty(&scenario).expect("serialisable")
+}
+
+#[test]
+fn contact_with_fewer_pins_than_teeth_plus_one() {
+    let contents = shipped_with("rv80e-contact.json", |s| {
+        s["models"][0]["params"]["cycloid_teeth"] = json!(40)
+    });
+    assert_bad_scenario(
+        "contact-pins",
+        &contents,
+        Some("models[0].params.cycloid_teeth"),
+        &["pin_count − 1"],
+    );
+}
+
+#[test]
+fn transmission_error_with_k1_at_or_above_one() {
+    let contents = shipped_with("rv40e-transmission.json", |s| {
+        s["models"][0]["params"]["eccentricity_mm"] = json!(1.6)
+    });
+    assert_bad_scenario(
+        "te-k1",
+        &contents,
+        Some("models[0].params.eccentricity_mm"),
+        &["K1", "below 1"],
+    );
+}
+
+#[test]
+fn transmission_error_with_too_few_points() {
+    let contents = shipped_with("rv40e-transmission.json", |s| {
+        s["models"][0]["params"]["points_per_revolution"] = json!(2048)
+    });
+    assert_bad_scenario(
+        "te-points",
+        &contents,
+        Some("models[0].params.points_per_revolution"),
+        &["power of two above 3120"],
+    );
+}
+
+#[test]
+fn contact_with_zero_face_width() {
+    let contents = shipped_with("rv80e-contact.json", |s| {
+        s["models"][0]["params"]["disc_face_width_mm"] = json!(0.0)
+    });
+    assert_bad_scenario(
+        "contact-face-width",
+        &contents,
+        Some("models[0].params.disc_face_width_mm"),
+        &["must be positive"],
+    );
+}
+
+#[test]
+fn elastic_with_negative_stiffness() {
+    let contents = shipped_with("rv40e-elastic.json", |s| {
+        s["models"][0]["params"]["crank_bearing_stiffness_n_per_mm"] = json!(-3e5)
+    });
+    assert_bad_scenario(
+        "elastic-stiffness",
+        &contents,
+        Some("models[0].params.crank_bearing_stiffness_n_per_mm"),
+        &["must be positive"],
+    );
+}
+
+#[test]
+fn torsion_with_zero_rated_torque() {
+    let contents = shipped_with("rv20e-torsion.json", |s| {
+        s["models"][0]["params"]["rated_torque_nm"] = json!(0.0)
+    });
+    assert_bad_scenario(
+        "torsion-rated",
+        &contents,
+        Some("models[0].params.rated_torque_nm"),
+        &["must be positive"],
+    );
+}
+
+#[test]
+fn contact_with_a_torque_that_engages_no_pin() {
+    let contents = shipped_with("rv80e-contact.json", |s| {
+        s["models"][0]["inputs"]["output_torque_nm"] = json!(0.0)
+    });
+    assert_bad_scenario(
+        "contact-torque",
+        &contents,
+        Some("models[0].inputs.output_torque_nm"),
+        &["engages no pin"],
+    );
+}
+
+#[test]
+fn elastic_with_a_torque_that_engages_no_pin() {
+    let contents = shipped_with("rv40e-elastic.json", |s| {
+        s["models"][0]["inputs"]["output_torque_nm"] = json!(0)
+    });
+    assert_bad_scenario(
+        "elastic-torque",
+        &contents,
+        Some("models[0].inputs.output_torque_nm"),
+        &["engages no pin"],
+    );
+}

@@ -230,3 +230,134 @@ fn rv80e_contact_nominal_and_run() {
         }
     }
 }
+
+/// The `value` of a named output of a `nominal --json -` report.
+fn nominal_value(report: &serde_json::Value, name: &str) -> f64 {
+    report["outputs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|o| o["name"] == name)
+        .unwrap_or_else(|| panic!("{name}"))["value"]
+        .as_f64()
+        .unwrap()
+}
+
+fn nominal_report(file: &str) -> serde_json::Value {
+    let output = run_rvtol(&["nominal", &scenario(file), "--json", "-"]);
+    assert_eq!(
+        output.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    serde_json::from_slice(&output.stdout).unwrap()
+}
+
+/// A short run's JSON with `threads` workers.
+fn run_json(file: &str, samples: &str, threads: &str) -> Vec<u8> {
+    let output = run_rvtol(&[
+        "run",
+        &scenario(file),
+        "--samples",
+        samples,
+        "--threads",
+        threads,
+        "--json",
+        "-",
+        "--quiet",
+    ]);
+    assert_eq!(
+        output.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    output.stdout
+}
+
+#[test]
+fn new_physical_models_run_reproducibly_with_every_sample_finite() {
+    // The transmission-error model keeps per-thread work buffers: the reproducibility
+    // contract (same seed, same bytes, whatever the thread count) must still hold.
+    for (file, samples) in [
+        ("rv40e-transmission.json", "600"),
+        ("rv40e-elastic.json", "3000"),
+        ("rv20e-torsion.json", "3000"),
+    ] {
+        let one = run_json(file, samples, "1");
+        assert_eq!(one, run_json(file, samples, "2"), "{file}");
+        let report: serde_json::Value = serde_json::from_slice(&one).unwrap();
+        for o in report["outputs"].as_array().unwrap() {
+            assert_eq!(o["non_finite"], 0, "{file} {}", o["name"]);
+        }
+    }
+}
+
+#[test]
+fn rv40e_elastic_nominal_is_the_closed_form() {
+    // docs/models.md §11: with equal crank-bearing stiffness the lag is
+    // arctan(T_disc/(2·k·a0²)) for every angle and eccentricity (validation.md 004);
+    // the scenario: 412 N·m, share 0.5, k = 3e5 N/mm, a0 = 36 mm.
+    let report = nominal_report("rv40e-elastic.json");
+    let lag =
+        (206_000.0_f64 / (2.0 * 3e5 * 36.0 * 36.0)).atan() * 180.0 * 60.0 / std::f64::consts::PI;
+    assert!((nominal_value(&report, "elastic_error_arcmin") - lag).abs() < 1e-12);
+    assert!(nominal_value(&report, "elastic_error_ripple_arcmin").abs() < 1e-12);
+    let stiffness = nominal_value(&report, "torsional_stiffness_nm_per_arcmin");
+    assert!((stiffness - 412.0 / lag).abs() < 1e-9 * stiffness);
+}
+
+#[test]
+fn rv20e_torsion_nominal_hysteresis_loss_is_the_000_clearance() {
+    // docs/models.md §13 (frictionless reading): the loop width at zero torque is the
+    // geometric hysteresis of document 000 for the same deviations, which the RV-20E
+    // hysteresis scenario gives at its nominal (0.548 arcmin, within 1 % of 000's 0.5467).
+    let torsion = nominal_report("rv20e-torsion.json");
+    let hysteresis = nominal_report("rv20e-hysteresis.json");
+    let c = nominal_value(&hysteresis, "hysteresis_arcmin");
+    assert!((nominal_value(&torsion, "hysteresis_loss_arcmin") - c).abs() < 1e-12);
+    assert!(nominal_value(&torsion, "lost_motion_arcmin") > c);
+}
+
+#[test]
+fn curve_writes_csv_and_svg_for_the_transmission_error_and_torsion_models() {
+    let dir = temp_path("curves");
+    for file in ["rv40e-transmission.json", "rv20e-torsion.json"] {
+        let output = run_rvtol(&["curve", &scenario(file), "--out-dir", dir.to_str().unwrap()]);
+        assert_eq!(
+            output.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+    }
+    for stem in [
+        "transmission_error",
+        "transmission_error_spectrum",
+        "torsion_curve",
+    ] {
+        let svg = std::fs::read_to_string(dir.join(format!("{stem}.svg"))).unwrap();
+        assert!(
+            svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"),
+            "{stem}"
+        );
+        let csv = std::fs::read_to_string(dir.join(format!("{stem}.csv"))).unwrap();
+        let rows = csv.lines().count() - 1;
+        match stem {
+            // 4096 points per revolution; orders 1..2048.
+            "transmission_error" => assert_eq!(rows, 4096),
+            "transmission_error_spectrum" => assert_eq!(rows, 2048),
+            _ => assert!(rows > 100),
+        }
+    }
+    // A scenario without curve-drawing models is bad input.
+    let output = run_rvtol(&[
+        "curve",
+        &scenario("ishigami.json"),
+        "--out-dir",
+        dir.to_str().unwrap(),
+    ]);
+    assert_eq!(output.status.code(), Some(2));
+    std::fs::remove_dir_all(&dir).ok();
+}

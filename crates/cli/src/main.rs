@@ -4,6 +4,8 @@
 //!
 //! Exit codes: 0 success; 1 a check or gate failed; 2 bad input or usage.
 
+mod plot;
+
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -20,7 +22,7 @@ use rvtol_engine::sensitivity::{sobol_indices, SensitivitySettings};
 use rvtol_engine::sensitivity_report::SensitivityReport;
 use rvtol_engine::shapley::{players as shapley_players, shapley_effects, ShapleySettings};
 use rvtol_engine::{
-    nominal, run, NominalReport, RunReport, RunSettings, Scenario, ScenarioError,
+    nominal, nominal_curves, run, NominalReport, RunReport, RunSettings, Scenario, ScenarioError,
     DEFAULT_EXACT_PERCENTILE_LIMIT,
 };
 
@@ -187,6 +189,16 @@ enum Command {
         #[arg(long, short)]
         quiet: bool,
     },
+    /// Write the curves of the scenario's models with every deviation at its mean (the
+    /// transmission-error trace and its order spectrum, the torsion curve): a CSV and an
+    /// SVG plot per curve.
+    Curve {
+        /// Scenario file (JSON).
+        scenario: PathBuf,
+        /// Directory for the files (created when missing).
+        #[arg(long, value_name = "DIR", default_value = ".")]
+        out_dir: PathBuf,
+    },
     /// List the models with their parameters, inputs and outputs.
     Models,
 }
@@ -331,6 +343,37 @@ fn command_run(
     Ok(())
 }
 
+fn command_curve(scenario_path: &Path, out_dir: &Path) -> Result<()> {
+    let scenario = load(scenario_path)?;
+    let drawn = nominal_curves(&scenario);
+    if drawn.is_empty() {
+        return Err(BadInput(format!(
+            "{}: none of its models draws a curve (transmission_error and torsion_curve do)",
+            scenario_path.display()
+        ))
+        .into());
+    }
+    std::fs::create_dir_all(out_dir)
+        .with_context(|| format!("cannot create {}", out_dir.display()))?;
+    let mut stdout = std::io::stdout().lock();
+    for (model, curves) in drawn {
+        for curve in curves {
+            let stem = out_dir.join(&curve.name);
+            let (csv, svg) = (stem.with_extension("csv"), stem.with_extension("svg"));
+            write_atomically(&csv, &plot::to_csv(&curve))?;
+            write_atomically(&svg, &plot::to_svg(&curve))?;
+            writeln!(
+                stdout,
+                "{model}: {} -> {}, {}",
+                curve.title,
+                csv.display(),
+                svg.display()
+            )?;
+        }
+    }
+    Ok(())
+}
+
 fn command_models() -> Result<()> {
     let mut out = String::new();
     for entry in rvtol_models::all() {
@@ -395,6 +438,7 @@ fn dispatch(cli: Cli) -> Result<()> {
             let report = NominalReport::new(&scenario, &nominal(&scenario));
             emit(json.as_deref(), || report.to_json(), || report.to_text())
         }
+        Command::Curve { scenario, out_dir } => command_curve(&scenario, &out_dir),
         Command::Validate { scenario: path } => {
             let scenario = load(&path)?;
             println!(

@@ -19,5 +19,7 @@ pub mod shapley;
 pub mod stats;
 
 pub use report::{NominalReport, RunReport};
-pub use run::{nominal, run, RunResult, RunSettings, DEFAULT_EXACT_PERCENTILE_LIMIT};
+pub use run::{
+    nominal, nominal_curves, run, RunResult, RunSettings, DEFAULT_EXACT_PERCENTILE_LIMIT,
+};
 pub use scenario::{Scenario, ScenarioError};

@@ -20,10 +20,10 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use rvtol_deviation::ConstraintCounts;
-use rvtol_models::OutputKind;
+use rvtol_models::{Curve, OutputKind};
 
 use crate::evaluate::ChunkEvaluator;
-use crate::scenario::{Scenario, ScenarioError};
+use crate::scenario::{BoundModel, Scenario, ScenarioError};
 use crate::stats::{Moments, QuantileSketch, SpecLimits};
 
 /// Samples per chunk (part of the reproducibility contract: changing it changes results).
@@ -449,10 +449,7 @@ pub fn nominal(scenario: &Scenario) -> Vec<f64> {
     let row = scenario.input_space.mean_row();
     let mut values = vec![0.0; scenario.outputs.len()];
     for bound in &scenario.models {
-        let mut inputs = bound.constant_template();
-        for (input, column) in bound.column_bindings() {
-            inputs[input] = row[column];
-        }
+        let inputs = model_inputs(bound, &row);
         let n_out = bound.model.outputs().len();
         bound.model.evaluate(
             &inputs,
@@ -460,4 +457,30 @@ pub fn nominal(scenario: &Scenario) -> Vec<f64> {
         );
     }
     values
+}
+
+/// The curves of every model that draws any (`rvtol curve`), with every deviation at its
+/// mean: (model name, its curves) in scenario order.
+pub fn nominal_curves(scenario: &Scenario) -> Vec<(&'static str, Vec<Curve>)> {
+    let row = scenario.input_space.mean_row();
+    scenario
+        .models
+        .iter()
+        .map(|bound| {
+            (
+                bound.model.name(),
+                bound.model.curves(&model_inputs(bound, &row)),
+            )
+        })
+        .filter(|(_, curves)| !curves.is_empty())
+        .collect()
+}
+
+/// A model's input row from a row of the input space.
+fn model_inputs(bound: &BoundModel, row: &[f64]) -> Vec<f64> {
+    let mut inputs = bound.constant_template();
+    for (input, column) in bound.column_bindings() {
+        inputs[input] = row[column];
+    }
+    inputs
 }

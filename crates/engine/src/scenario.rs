@@ -673,6 +673,10 @@ fn compile(file: ScenarioFile, fallback_name: &str) -> Result<Scenario, Scenario
                     if !v.is_finite() {
                         return Err(ScenarioError::new(binding_path, "must be a finite number"));
                     }
+                    let index = bindings.len();
+                    model
+                        .check_constant(index, v)
+                        .map_err(|reason| ScenarioError::new(&binding_path, reason))?;
                     Binding::Constant(v)
                 }
                 serde_json::Value::String(name) => {

@@ -387,6 +387,32 @@ impl CycloidPinContact {
         (fx, fy)
     }
 
+    /// Resultant (F_x, F_y) of the pin forces for one row of inputs (in the order of
+    /// `inputs()`), without allocating: the per-sample entry point for models that build on
+    /// this one (`crank_elastic_error`). Same value as [`Self::solve`]'s `resultant`.
+    pub(crate) fn resultant(&self, inputs: &[f64]) -> (f64, f64) {
+        self.solve_pins(inputs).resultant
+    }
+
+    /// Disc rotation β under load (rad, [`Self::solve`]'s `rotation`) and the rotation at
+    /// which the driving flank first touches, min over pins with l_i > 0 of Δ_i/l_i (rad;
+    /// NaN when a clearance is not finite), for one row of inputs, without allocating: the
+    /// per-sample entry point of `torsion_curve`. With zero torque only the clearances are
+    /// formed (no load solve).
+    pub(crate) fn rotation_and_first_contact(&self, inputs: &[f64]) -> (f64, f64) {
+        let solved = self.solve_pins(inputs);
+        let mut first_contact = f64::INFINITY;
+        for (pin, &clearance) in self.geometry.iter().zip(&solved.clearances[..self.pins]) {
+            if !clearance.is_finite() {
+                return (solved.rotation, f64::NAN);
+            }
+            if pin.lever > 0.0 {
+                first_contact = first_contact.min(clearance / pin.lever);
+            }
+        }
+        (solved.rotation, first_contact)
+    }
+
     /// Contact approach δ(F) of one pin (two Palmgren line contacts in series), mm.
     pub fn approach(&self, force: f64, face_width: f64) -> f64 {
         CONTACTS_PER_PIN * PALMGREN * force.powf(0.9) / face_width.powf(0.8)
@@ -516,6 +542,10 @@ struct Solved {
 /// is found by doubling and the root by Newton steps on the current loaded set, kept in
 /// the bracket by bisection.
 fn solve_rotation(levers: &[f64], clearances: &[f64], target: f64) -> f64 {
+    // A non-finite row has no root; the bracket search below would never end.
+    if !target.is_finite() || clearances.iter().any(|d| !d.is_finite()) {
+        return f64::NAN;
+    }
     let g = |beta: f64| -> (f64, f64) {
         let (mut value, mut slope) = (0.0, 0.0);
         for (&l, &d) in levers.iter().zip(clearances) {
@@ -576,8 +606,26 @@ impl ErrorModel for CycloidPinContact {
         &self.outputs
     }
 
+    fn check_constant(&self, input: usize, value: f64) -> Result<(), String> {
+        match input {
+            0 if value == 0.0 => Err("a torque of 0 N·m engages no pin".into()),
+            6 if self.face_width + value <= 0.0 => Err(format!(
+                "leaves a disc face width of {} mm; it must stay positive",
+                self.face_width + value
+            )),
+            _ => Ok(()),
+        }
+    }
+
     fn evaluate(&self, inputs: &[f64], outputs: &mut [f64]) {
         let solved = self.solve_pins(inputs);
+        if inputs.iter().any(|v| !v.is_finite())
+            || !solved.rotation.is_finite()
+            || !solved.resultant.0.is_finite()
+        {
+            outputs.iter_mut().for_each(|o| *o = f64::NAN);
+            return;
+        }
         let forces = &solved.forces[..self.pins];
         let (mut f_max, mut engaged, mut sigma_max) = (0.0_f64, 0.0, 0.0_f64);
         let threshold = 1e-9 * forces.iter().cloned().fold(0.0, f64::max);
@@ -612,6 +660,18 @@ mod tests {
     /// Inputs: torque, Δr_rp, Δr_p, then every error 0.
     fn row(torque: f64, equidistant: f64, shift: f64) -> Vec<f64> {
         vec![torque, equidistant, shift, 0.0, 0.0, 0.0, 0.0]
+    }
+
+    #[test]
+    fn a_non_finite_row_gives_nan_outputs() {
+        let model = rv80e(0.5);
+        let mut out = [0.0; 6];
+        for bad in [f64::NAN, f64::INFINITY] {
+            model.evaluate(&row(800.0, bad, -0.008), &mut out);
+            assert!(out.iter().all(|v| v.is_nan()), "{out:?}");
+            model.evaluate(&row(bad, 0.004, -0.008), &mut out);
+            assert!(out.iter().all(|v| v.is_nan()), "{out:?}");
+        }
     }
 
     #[test]

@@ -7,20 +7,31 @@
 //!
 //! Adding a model touches three places: its file here, one line in [`all`], one scenario.
 
+mod crank_elastic_error;
 mod cycloid_pin_contact;
 mod geometric_hysteresis;
 mod linear_stack;
 mod params;
+mod spectrum;
 mod test_functions;
+mod torsion_curve;
+mod transmission_error;
 
+pub use crank_elastic_error::{CrankElasticError, CrankForces, DiscForces, DiscLoad};
 pub use cycloid_pin_contact::{ContactSolution, CycloidPinContact};
 pub use geometric_hysteresis::{tilt_from_deflection, GeometricHysteresis};
 pub use linear_stack::LinearStack;
 pub use params::{ModelError, ModelParams, ParamValue};
+pub use spectrum::RealFft;
 pub use test_functions::{Ishigami, SobolG};
+pub use torsion_curve::TorsionCurve;
+pub use transmission_error::TransmissionError;
 
 /// Arcminutes per radian, 180·60/π (000 Eq. 5, 13, 18 carry this factor).
 pub const ARCMIN_PER_RAD: f64 = 180.0 * 60.0 / std::f64::consts::PI;
+
+/// Arcseconds per radian, 180·3600/π.
+pub const ARCSEC_PER_RAD: f64 = 180.0 * 3600.0 / std::f64::consts::PI;
 
 /// A named model input with its unit.
 #[derive(Debug, Clone, PartialEq)]
@@ -101,6 +112,57 @@ pub trait ErrorModel: Send + Sync {
             self.evaluate(row, out);
         }
     }
+
+    /// Checks input `input` where the scenario binds it to the constant `value` (the
+    /// engine calls it once per constant binding): `Err(reason)` for a value the model
+    /// cannot work with, such as a torque that engages no pin. Inputs bound to variables
+    /// are not checked here: a sample outside the model's domain gives NaN outputs, which
+    /// the engine counts and reports.
+    fn check_constant(&self, _input: usize, _value: f64) -> Result<(), String> {
+        Ok(())
+    }
+
+    /// The curves this model draws for one input row (`rvtol curve`); none by default.
+    fn curves(&self, _inputs: &[f64]) -> Vec<Curve> {
+        Vec::new()
+    }
+}
+
+/// How a curve is drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CurveStyle {
+    /// Points joined by lines.
+    Lines,
+    /// A vertical stem per point (a spectrum), on a logarithmic x axis.
+    LogStems,
+}
+
+/// One named series of (x, y) points of a [`Curve`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Series {
+    /// Legend label.
+    pub label: String,
+    /// The points in drawing order.
+    pub points: Vec<(f64, f64)>,
+}
+
+/// A curve a model draws for one input row (`rvtol curve`): a transmission-error trace,
+/// its order spectrum, a torsion curve.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Curve {
+    /// File stem of its CSV and SVG (`transmission_error_curve`).
+    pub name: String,
+    /// Plot title.
+    pub title: String,
+    /// x axis label with unit.
+    pub x_label: String,
+    /// y axis label with unit.
+    pub y_label: String,
+    /// Lines or stems.
+    pub style: CurveStyle,
+    /// Its series; the CSV has one x column and one y column per series when every
+    /// series shares the x values, else x,y pairs per series.
+    pub series: Vec<Series>,
 }
 
 /// How a model is built from its scenario parameters, and how it is described.
@@ -122,6 +184,9 @@ pub fn all() -> &'static [ModelEntry] {
     &[
         geometric_hysteresis::ENTRY,
         cycloid_pin_contact::ENTRY,
+        crank_elastic_error::ENTRY,
+        torsion_curve::ENTRY,
+        transmission_error::ENTRY,
         linear_stack::ENTRY,
         test_functions::ISHIGAMI_ENTRY,
         test_functions::SOBOL_G_ENTRY,

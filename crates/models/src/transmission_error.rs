@@ -1,0 +1,1231 @@
+//! `transmission_error`: the kinematic transmission error of an RV reducer over one output
+//! revolution by the action-line increment principle (document 002, RV40E), with the
+//! corrections of validation.md; its peak-to-peak, rms and order amplitudes by FFT.
+//!
+//! Kinematics (validation.md 002; docs/models.md §11). Pins fixed in the housing, output
+//! (carrier) angle Θ. The crank's eccentric direction turns at ψ = −z_c·Θ in the housing,
+//! i.e. at −z_p·Θ relative to the carrier; the disc turns with the output (Θ); the sun
+//! turns at i·Θ with i = 1 + (z_pl/z_s)·z_p (121 for the RV40E; 002's
+//! (1 + z_r/z_s)·z_p = 160 is wrong), i.e. at (i − 1)·Θ relative to the carrier.
+//!
+//! Frames of the error sources, and of the action lines they are projected on:
+//! - sun runout s: sun frame; sun–planet action lines: carrier frame.
+//! - planet runout p_k: planet k = crank k frame; centre-distance error c_k: carrier frame,
+//!   along the line of centres.
+//! - crank eccentric error q_k (along the eccentric: magnitude; perpendicular: phase):
+//!   crank frame; crank-axis position error b_k (radial, tangential on the crank circle):
+//!   carrier frame.
+//! - pins (radial, tangential position errors; pin circle and pin radius errors): housing.
+//! - cycloid profile errors (all teeth; per tooth space): disc frame.
+//! - output runout o (eccentricity of the output pin-hole circle): output frame, projected
+//!   on an action line fixed in the housing (the only reading under which 002's δ41 gives
+//!   its once-per-revolution sinusoid; turning with the output, a radial error projects to
+//!   exactly zero).
+//!
+//! Stages (002's four sub-mechanisms), each reduced to the output angle ΔΘ:
+//! 1. Involute stage (002 Δθ1): the mesh gap of planet k along its action line
+//!    n_k = sin α·u_k + cos α·t_k is g_k = n_k·(c_k·u_k + R(−z_p·Θ)·p_k − R((i−1)·Θ)·s);
+//!    the planet (crank) lags by g_k/(r2·cos α); the mean over the cranks reaches the
+//!    output divided by D = z_p + z_s/z_pl = i·z_s/z_pl (121/3 for the RV40E: the
+//!    planet-carrier feedback of 002; D = z_p without it).
+//! 2. Crank stage (002 Δθ2): the disc centre moves by d = mean_k(q_k) +
+//!    R(z_p·Θ)·mean_k(R(β_k)·b_k) in the eccentric frame; its component d_t
+//!    perpendicular to the eccentric advances the disc's revolution by d_t/a, the output by
+//!    d_t/(a·z_c) (002: Δθ2/i_cycloidal).
+//! 3. Cycloid–pin stage (002 Δθ3, with validation.md's correction: δ_n/(r·cos α3), where
+//!    r·cos α3 is the lever l of the action line about the disc centre): pin i at
+//!    φ_i = γ_i − ψ from the eccentric has lever l_i = a·z_c·sin φ_i/S_i (document 003)
+//!    and clearance along its normal g_i = the standard modification clearance (003) +
+//!    d_r·(K1 − cos φ_i)/S_i + pin errors projected as in 003 + the profile error of the
+//!    tooth space at pin i. Under a light driving load the disc turns until the first pin
+//!    touches: the output lags by min over pins with l_i > 0 of g_i/l_i.
+//! 4. Output mechanism (002 Δθ4): ΔΘ4 = n14·R(Θ)·o/r6.
+//!
+//! TE(Θ) = ΔΘ1 + ΔΘ2 + ΔΘ3 + ΔΘ4, positive when the output is ahead. The curve is
+//! sampled at N points per output revolution (N a power of two above twice the cycloid
+//! mesh order z_c·z_p and the first-stage mesh order z_s·(i − 1)); outputs are its
+//! peak-to-peak, its rms about the mean, its mean and the FFT semi-amplitudes of orders
+//! 1, z_c and z_p.
+
+use std::cell::RefCell;
+use std::f64::consts::PI;
+
+use crate::spectrum::{Complex, RealFft};
+use crate::{
+    Curve, CurveStyle, ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputKind,
+    OutputSpec, ParamSpec, Series, ARCSEC_PER_RAD,
+};
+
+/// Largest crank count.
+const MAX_CRANKS: usize = 6;
+/// Inputs per crank, in order.
+const CRANK_INPUTS: [(&str, &str); 7] = [
+    (
+        "planet_runout_x_mm",
+        "planet runout, planet frame, along the crank's eccentric",
+    ),
+    (
+        "planet_runout_y_mm",
+        "planet runout, planet frame, perpendicular to the eccentric",
+    ),
+    (
+        "center_distance_error_mm",
+        "sun–planet centre distance error, carrier frame (002 δ11)",
+    ),
+    (
+        "crank_eccentricity_error_mm",
+        "eccentric magnitude error, crank frame (002 δ21)",
+    ),
+    (
+        "crank_phase_error_mm",
+        "eccentric position error perpendicular to the eccentric, crank frame",
+    ),
+    (
+        "crank_axis_radial_error_mm",
+        "crank bore position error, carrier frame, radial",
+    ),
+    (
+        "crank_axis_tangential_error_mm",
+        "crank bore position error, carrier frame, tangential",
+    ),
+];
+/// The fixed inputs, in order.
+const FIXED_INPUTS: [(&str, &str); 9] = [
+    ("sun_runout_x_mm", "sun (input shaft) runout, sun frame"),
+    ("sun_runout_y_mm", "sun (input shaft) runout, sun frame"),
+    (
+        "equidistant_modification_mm",
+        "Δr_rp, equidistant modification (003; positive: clearance)",
+    ),
+    (
+        "shift_modification_mm",
+        "Δr_p, shift modification (003; negative: clearance)",
+    ),
+    (
+        "profile_normal_error_mm",
+        "cycloid profile error normal to the profile, every tooth (002 δ31; positive: clearance)",
+    ),
+    (
+        "pin_circle_radius_error_mm",
+        "δr_p, pin circle radius minus design",
+    ),
+    ("pin_radius_error_mm", "δr_rp, pin radius minus design"),
+    (
+        "output_runout_x_mm",
+        "eccentricity of the output pin-hole circle, output frame (002 δ41)",
+    ),
+    (
+        "output_runout_y_mm",
+        "eccentricity of the output pin-hole circle, output frame",
+    ),
+];
+
+const PARAMS: &[ParamSpec] = &[
+    ParamSpec {
+        name: "sun_teeth",
+        unit: "",
+        description: "z_s",
+        default: None,
+    },
+    ParamSpec {
+        name: "planet_teeth",
+        unit: "",
+        description: "z_pl, teeth of each planet (spur gear on a crank)",
+        default: None,
+    },
+    ParamSpec {
+        name: "module_mm",
+        unit: "mm",
+        description: "module of the involute stage (planet pitch radius r2 = m·z_pl/2)",
+        default: None,
+    },
+    ParamSpec {
+        name: "pressure_angle_deg",
+        unit: "deg",
+        description: "α of the involute stage",
+        default: Some(20.0),
+    },
+    ParamSpec {
+        name: "pin_count",
+        unit: "",
+        description: "z_p, pins",
+        default: None,
+    },
+    ParamSpec {
+        name: "cycloid_teeth",
+        unit: "",
+        description: "z_c = z_p − 1",
+        default: None,
+    },
+    ParamSpec {
+        name: "pin_circle_radius_mm",
+        unit: "mm",
+        description: "r_p",
+        default: None,
+    },
+    ParamSpec {
+        name: "eccentricity_mm",
+        unit: "mm",
+        description: "a, crank eccentricity",
+        default: None,
+    },
+    ParamSpec {
+        name: "output_pin_circle_radius_mm",
+        unit: "mm",
+        description: "r6, radius of the output pin holes",
+        default: None,
+    },
+    ParamSpec {
+        name: "crank_count",
+        unit: "",
+        description: "cranks (= planets), evenly spaced",
+        default: Some(2.0),
+    },
+    ParamSpec {
+        name: "points_per_revolution",
+        unit: "",
+        description: "N, samples of the curve over one output revolution (power of two)",
+        default: Some(4096.0),
+    },
+    ParamSpec {
+        name: "carrier_feedback",
+        unit: "",
+        description:
+            "1: the planet-carrier feedback of 002 (divisor z_p + z_s/z_pl); 0: divisor z_p",
+        default: Some(1.0),
+    },
+    ParamSpec {
+        name: "pin_position_errors",
+        unit: "",
+        description: "1: add inputs pin_radial_error_mm_i and pin_tangential_error_mm_i per pin",
+        default: Some(0.0),
+    },
+    ParamSpec {
+        name: "tooth_profile_errors",
+        unit: "",
+        description: "1: add an input tooth_profile_error_mm_j per tooth space of the disc",
+        default: Some(0.0),
+    },
+];
+
+/// Registry entry.
+pub const ENTRY: ModelEntry = ModelEntry {
+    name: "transmission_error",
+    summary: "kinematic transmission error over one output revolution by the action-line increment principle (document 002): peak-to-peak, rms, FFT order amplitudes",
+    params: PARAMS,
+    build: |params| Ok(Box::new(TransmissionError::from_params(params)?)),
+    example_params: rv40e_params,
+};
+
+/// The RV40E of document 002 Table 1.
+fn rv40e_params() -> ModelParams {
+    ModelParams::new()
+        .with_number("sun_teeth", 9.0)
+        .with_number("planet_teeth", 27.0)
+        .with_number("module_mm", 2.0)
+        .with_number("pin_count", 40.0)
+        .with_number("cycloid_teeth", 39.0)
+        .with_number("pin_circle_radius_mm", 64.0)
+        .with_number("eccentricity_mm", 1.25)
+        .with_number("output_pin_circle_radius_mm", 27.0)
+}
+
+/// The pins with a positive lever at every phase of the curve, as columns (structure of
+/// arrays, phase-major, slot s ascending within a phase): pin slot s of phase p sits at
+/// φ = 2π(s + p·g/N)/z_p from the eccentric; pin i is in slot (i − 1 + k_j) mod z_p at
+/// point j. Each clearance factor is stored divided by the lever l, so that a row's
+/// clearance ratio g/l is a sum of products.
+#[derive(Debug, Clone, Default)]
+struct PinTable {
+    /// 1/l, 1/mm.
+    inverse_lever: Vec<f64>,
+    /// (1 − sin φ/S)/l: factor of Δr_rp.
+    equidistant: Vec<f64>,
+    /// −(1 − K1·cos φ − √(1 − K1²)·sin φ)/(S·l): factor of Δr_p.
+    shift: Vec<f64>,
+    /// (K1 − cos φ)/(S·l): factor of a disc displacement along the eccentric.
+    eccentric: Vec<f64>,
+    /// (1 − K1·cos φ)/(S·l): factor of a radial pin displacement.
+    radial: Vec<f64>,
+    /// K1·sin φ/(S·l): factor of a tangential pin displacement.
+    tangential: Vec<f64>,
+    /// Per phase, its runs of entries (see [`Run`]).
+    runs: Vec<Run>,
+    /// Per phase, its range in `runs`.
+    phase_runs: Vec<(u32, u32)>,
+}
+
+/// Consecutive entries of one phase whose pins and tooth spaces are both consecutive, so
+/// that the per-pin and per-tooth errors of the run are contiguous slices.
+#[derive(Debug, Clone, Copy)]
+struct Run {
+    /// First entry in the table.
+    start: u32,
+    /// Entries.
+    len: u32,
+    /// Slot s of the first entry.
+    slot: u32,
+    /// Tooth space of the first entry when the eccentric has turned no whole pin pitch
+    /// (k_j = 0): round(z_c·λ/2π − phase fraction) mod z_c, λ the pin's polar angle about
+    /// the disc centre from the eccentric; at point j it is this minus k_j (mod z_c).
+    tooth: u32,
+}
+
+/// Per curve point: the angles and indices of point j.
+#[derive(Debug, Clone, Copy)]
+struct Point {
+    /// (sin, cos) of Θ.
+    output: (f64, f64),
+    /// (sin, cos) of z_p·Θ (crank against carrier).
+    crank: (f64, f64),
+    /// (sin, cos) of (i − 1)·Θ (sun against carrier).
+    sun: (f64, f64),
+    /// Whole pin pitches the eccentric has turned, k_j, modulo z_p.
+    pin_shift: u32,
+    /// k_j modulo z_c.
+    tooth_shift: u32,
+    /// Index of the fractional pitch into the phase table.
+    phase: u32,
+    /// Its index j on the curve (points are stored grouped by phase, so that one row reads
+    /// the pin table once, in order).
+    index: u32,
+}
+
+/// The stage contributions at one point, rad.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StageErrors {
+    /// ΔΘ1, involute stage with the carrier feedback.
+    pub involute: f64,
+    /// ΔΘ2, crank (parallel-linkage input) stage.
+    pub crank: f64,
+    /// ΔΘ3, cycloid–pin stage.
+    pub cycloid: f64,
+    /// ΔΘ4, output mechanism.
+    pub output: f64,
+}
+
+impl StageErrors {
+    /// The total, rad.
+    pub fn total(&self) -> f64 {
+        self.involute + self.crank + self.cycloid + self.output
+    }
+}
+
+/// The transmission-error model with its design geometry and precomputed tables.
+#[derive(Debug, Clone)]
+pub struct TransmissionError {
+    sun_teeth: f64,
+    planet_teeth: f64,
+    pins: usize,
+    cycloid_teeth: usize,
+    eccentricity: f64,
+    output_radius: f64,
+    cranks: usize,
+    points: usize,
+    /// r2·cos α, mm.
+    base_radius: f64,
+    /// sin α, cos α.
+    pressure: (f64, f64),
+    /// Divisor from the crank rotation to the output.
+    divisor: f64,
+    per_pin: bool,
+    per_tooth: bool,
+    table: PinTable,
+    curve_points: Vec<Point>,
+    fft: RealFft,
+    inputs: Vec<InputSpec>,
+    outputs: Vec<OutputSpec>,
+}
+
+/// Per-thread work buffers of one curve (no allocation per sample).
+struct Scratch {
+    curve: Vec<f64>,
+    work: Vec<Complex>,
+}
+
+/// Per-thread work state of the first-contact search, refilled for every row: the smooth
+/// part of every table entry's clearance ratio, and the per-pin and per-tooth errors laid
+/// out twice (pins) and three times (teeth) in a row, so that a run's shifted errors are
+/// one contiguous slice (zeros when the model has no such inputs).
+#[derive(Debug, Default)]
+struct Search {
+    smooth: Vec<f64>,
+    /// Per phase, the range of table entries that can hold the first contact in this row.
+    window: Vec<(u32, u32)>,
+    pin_radial: Vec<f64>,
+    pin_tangential: Vec<f64>,
+    tooth: Vec<f64>,
+}
+
+thread_local! {
+    static SEARCH: RefCell<Search> = RefCell::new(Search::default());
+    static SCRATCH: RefCell<Scratch> = const { RefCell::new(Scratch { curve: Vec::new(), work: Vec::new() }) };
+}
+
+fn gcd(a: usize, b: usize) -> usize {
+    if b == 0 {
+        a
+    } else {
+        gcd(b, a % b)
+    }
+}
+
+fn flag(params: &ModelParams, key: &str, default: f64) -> Result<bool, ModelError> {
+    let value = params.number(key, Some(default))?;
+    if value != 0.0 && value != 1.0 {
+        return Err(ModelError::new(key, format!("must be 0 or 1, got {value}")));
+    }
+    Ok(value == 1.0)
+}
+
+impl TransmissionError {
+    /// Builds the model from its parameters.
+    pub fn from_params(params: &ModelParams) -> Result<Self, ModelError> {
+        let sun_teeth = params.count("sun_teeth", None)? as f64;
+        let planet_teeth = params.count("planet_teeth", None)? as f64;
+        let module = params.positive("module_mm", None)?;
+        let alpha = params.positive("pressure_angle_deg", Some(20.0))?;
+        if alpha >= 45.0 {
+            return Err(ModelError::new(
+                "pressure_angle_deg",
+                format!("must be below 45, got {alpha}"),
+            ));
+        }
+        let pins = params.count("pin_count", None)? as usize;
+        if !(3..=256).contains(&pins) {
+            return Err(ModelError::new(
+                "pin_count",
+                format!("must be between 3 and 256, got {pins}"),
+            ));
+        }
+        let cycloid_teeth = params.count("cycloid_teeth", None)? as usize;
+        if cycloid_teeth + 1 != pins {
+            return Err(ModelError::new(
+                "cycloid_teeth",
+                format!(
+                    "must be pin_count − 1 = {} (one tooth fewer than pins)",
+                    pins - 1
+                ),
+            ));
+        }
+        let pin_circle_radius = params.positive("pin_circle_radius_mm", None)?;
+        let eccentricity = params.positive("eccentricity_mm", None)?;
+        let k1 = eccentricity * pins as f64 / pin_circle_radius;
+        if k1 >= 1.0 {
+            return Err(ModelError::new(
+                "eccentricity_mm",
+                format!("K1 = e·z_p/r_p = {k1} must be below 1 (a curtate cycloid)"),
+            ));
+        }
+        let output_radius = params.positive("output_pin_circle_radius_mm", None)?;
+        let cranks = params.count("crank_count", Some(2.0))? as usize;
+        if cranks > MAX_CRANKS {
+            return Err(ModelError::new(
+                "crank_count",
+                format!("must be at most {MAX_CRANKS}, got {cranks}"),
+            ));
+        }
+        let ratio = 1.0 + planet_teeth / sun_teeth * pins as f64;
+        let points = params.count("points_per_revolution", Some(4096.0))? as usize;
+        let cycloid_mesh = cycloid_teeth * pins;
+        let first_mesh = ((ratio - 1.0) * sun_teeth).round() as usize;
+        let needed = 2 * cycloid_mesh.max(first_mesh);
+        if !points.is_power_of_two() || points <= needed || points > 1 << 16 {
+            return Err(ModelError::new(
+                "points_per_revolution",
+                format!(
+                    "must be a power of two above {needed} (twice the highest mesh order, {} ) and at most 65536, got {points}",
+                    cycloid_mesh.max(first_mesh)
+                ),
+            ));
+        }
+        let feedback = flag(params, "carrier_feedback", 1.0)?;
+        let per_pin = flag(params, "pin_position_errors", 0.0)?;
+        let per_tooth = flag(params, "tooth_profile_errors", 0.0)?;
+        params.reject_unknown(&PARAMS.iter().map(|p| p.name).collect::<Vec<_>>())?;
+
+        let mut inputs: Vec<InputSpec> = FIXED_INPUTS
+            .iter()
+            .map(|(name, description)| InputSpec {
+                name: name.to_string(),
+                unit: "mm".into(),
+                description,
+            })
+            .collect();
+        for k in 1..=cranks {
+            for (name, description) in CRANK_INPUTS {
+                inputs.push(InputSpec {
+                    name: format!("{name}_{k}"),
+                    unit: "mm".into(),
+                    description,
+                });
+            }
+        }
+        if per_pin {
+            for i in 1..=pins {
+                inputs.push(InputSpec {
+                    name: format!("pin_radial_error_mm_{i}"),
+                    unit: "mm".into(),
+                    description: "radial position error of pin i (outward), housing frame",
+                });
+            }
+            for i in 1..=pins {
+                inputs.push(InputSpec {
+                    name: format!("pin_tangential_error_mm_{i}"),
+                    unit: "mm".into(),
+                    description: "tangential position error of pin i, housing frame",
+                });
+            }
+        }
+        if per_tooth {
+            for j in 1..=cycloid_teeth {
+                inputs.push(InputSpec { name: format!("tooth_profile_error_mm_{j}"), unit: "mm".into(), description: "normal profile error of tooth space j of the disc, disc frame (positive: clearance)" });
+            }
+        }
+        let output = |name: String, description: &'static str| OutputSpec {
+            name,
+            unit: "arcsec".into(),
+            description,
+            kind: OutputKind::Continuous,
+        };
+        let outputs = vec![
+            output("te_peak_to_peak_arcsec".into(), "peak-to-peak transmission error over one output revolution"),
+            output("te_rms_arcsec".into(), "rms of the transmission error about its mean"),
+            output("te_mean_arcsec".into(), "mean of the transmission error (a constant angular offset; negative: the output lags)"),
+            output("te_order_1_arcsec".into(), "FFT semi-amplitude of order 1 (once per output revolution)"),
+            output(format!("te_order_{cycloid_teeth}_arcsec"), "FFT semi-amplitude of order z_c (pin-borne errors)"),
+            output(format!("te_order_{pins}_arcsec"), "FFT semi-amplitude of order z_p (crank- and disc-borne errors)"),
+        ];
+
+        // Phase table: the fractional pin pitch of the eccentric at point j takes
+        // N/gcd(z_c·z_p, N) values.
+        let g = gcd(cycloid_mesh, points);
+        let phases = points / g;
+        let mut table = PinTable::default();
+        let sqrt = (1.0 - k1 * k1).sqrt();
+        let zc = cycloid_teeth as i64;
+        for p in 0..phases {
+            let first_run = table.runs.len() as u32;
+            let fraction = p as f64 * g as f64 / points as f64;
+            let mut previous: Option<(u32, i64)> = None;
+            for s in 0..pins {
+                let phi = 2.0 * PI * (s as f64 + fraction) / pins as f64;
+                let (sin, cos) = phi.sin_cos();
+                if sin <= 1e-12 {
+                    continue;
+                }
+                let root = (1.0 + k1 * k1 - 2.0 * k1 * cos).sqrt();
+                let inverse_lever = root / (eccentricity * cycloid_teeth as f64 * sin);
+                let polar = (pin_circle_radius * sin).atan2(pin_circle_radius * cos - eccentricity);
+                let tooth = ((cycloid_teeth as f64 * polar / (2.0 * PI) - fraction).round() as i64)
+                    .rem_euclid(zc);
+                let entry = table.inverse_lever.len() as u32;
+                table.inverse_lever.push(inverse_lever);
+                table.equidistant.push((1.0 - sin / root) * inverse_lever);
+                table
+                    .shift
+                    .push(-(1.0 - k1 * cos - sqrt * sin) / root * inverse_lever);
+                table.eccentric.push((k1 - cos) / root * inverse_lever);
+                table.radial.push((1.0 - k1 * cos) / root * inverse_lever);
+                table.tangential.push(k1 * sin / root * inverse_lever);
+                let continues = matches!(previous, Some((slot, space))
+                    if slot + 1 == s as u32 && (space + 1).rem_euclid(zc) == tooth);
+                if continues {
+                    table.runs.last_mut().expect("a run is open").len += 1;
+                } else {
+                    table.runs.push(Run {
+                        start: entry,
+                        len: 1,
+                        slot: s as u32,
+                        tooth: tooth as u32,
+                    });
+                }
+                previous = Some((s as u32, tooth));
+            }
+            table.phase_runs.push((first_run, table.runs.len() as u32));
+        }
+        let mut curve_points: Vec<Point> = (0..points)
+            .map(|j| {
+                let theta = 2.0 * PI * j as f64 / points as f64;
+                let turns = cycloid_mesh * j;
+                Point {
+                    output: theta.sin_cos(),
+                    crank: (pins as f64 * theta).sin_cos(),
+                    sun: ((ratio - 1.0) * theta).sin_cos(),
+                    pin_shift: ((turns / points) % pins) as u32,
+                    tooth_shift: ((turns / points) % cycloid_teeth) as u32,
+                    phase: ((turns % points) / g) as u32,
+                    index: j as u32,
+                }
+            })
+            .collect();
+        curve_points.sort_by_key(|point| (point.phase, point.index));
+        let alpha = alpha.to_radians();
+        Ok(TransmissionError {
+            sun_teeth,
+            planet_teeth,
+            pins,
+            cycloid_teeth,
+            eccentricity,
+            output_radius,
+            cranks,
+            points,
+            base_radius: module * planet_teeth / 2.0 * alpha.cos(),
+            pressure: alpha.sin_cos(),
+            divisor: if feedback {
+                pins as f64 + sun_teeth / planet_teeth
+            } else {
+                pins as f64
+            },
+            per_pin,
+            per_tooth,
+            table,
+            curve_points,
+            fft: RealFft::new(points),
+            inputs,
+            outputs,
+        })
+    }
+
+    /// Overall ratio i = 1 + (z_pl/z_s)·z_p (validation.md 002: 121 for the RV40E).
+    pub fn ratio(&self) -> f64 {
+        1.0 + self.planet_teeth / self.sun_teeth * self.pins as f64
+    }
+
+    /// Divisor from a crank rotation error to the output: z_p + z_s/z_pl with the carrier
+    /// feedback (121/3 for the RV40E), z_p without.
+    pub fn crank_divisor(&self) -> f64 {
+        self.divisor
+    }
+
+    /// Points of the curve per output revolution.
+    pub fn points(&self) -> usize {
+        self.points
+    }
+
+    /// Index of a named input.
+    pub fn input_index(&self, name: &str) -> Option<usize> {
+        self.inputs.iter().position(|i| i.name == name)
+    }
+
+    /// Calls `sink(j, stages)` for every point j of the curve (stage errors in rad).
+    pub fn trace(&self, inputs: &[f64], sink: impl FnMut(usize, StageErrors)) {
+        SEARCH.with(|search| self.trace_with(inputs, &mut search.borrow_mut(), sink))
+    }
+
+    /// [`Self::trace`] with an explicit work state.
+    fn trace_with(
+        &self,
+        inputs: &[f64],
+        search: &mut Search,
+        mut sink: impl FnMut(usize, StageErrors),
+    ) {
+        let n_fixed = FIXED_INPUTS.len();
+        let (sun_x, sun_y) = (inputs[0], inputs[1]);
+        let (d_rp, d_p, profile) = (inputs[2], inputs[3], inputs[4]);
+        let (err_rp, err_rrp) = (inputs[5], inputs[6]);
+        let (out_x, out_y) = (inputs[7], inputs[8]);
+        let m = self.cranks as f64;
+        let (sin_a, cos_a) = self.pressure;
+        // Per crank k at β_k = 2π(k − 1)/m on the carrier: its action line n_k, and the
+        // mean eccentric error and crank-bore error (the latter in the carrier frame).
+        let mut normals = [(0.0, 0.0); MAX_CRANKS];
+        let mut runouts = [(0.0, 0.0); MAX_CRANKS];
+        let mut involute_constant = 0.0;
+        let (mut q_r, mut q_t, mut b_x, mut b_y) = (0.0, 0.0, 0.0, 0.0);
+        let mut normal_sum = (0.0, 0.0);
+        for k in 0..self.cranks {
+            let row = &inputs[n_fixed + 7 * k..n_fixed + 7 * (k + 1)];
+            let (sb, cb) = (2.0 * PI * k as f64 / m).sin_cos();
+            // u_k = (cb, sb), t_k = (−sb, cb); n_k = sin α·u_k + cos α·t_k.
+            let n = (sin_a * cb - cos_a * sb, sin_a * sb + cos_a * cb);
+            normals[k] = n;
+            normal_sum = (normal_sum.0 + n.0, normal_sum.1 + n.1);
+            runouts[k] = (row[0], row[1]);
+            involute_constant += row[2] * sin_a; // n_k·(c_k·u_k)
+            q_r += row[3];
+            q_t += row[4];
+            b_x += row[5] * cb - row[6] * sb;
+            b_y += row[5] * sb + row[6] * cb;
+        }
+        let (q_r, q_t, b_x, b_y) = (q_r / m, q_t / m, b_x / m, b_y / m);
+        let lever_base = self.eccentricity * self.cycloid_teeth as f64;
+        let involute_scale = -1.0 / (m * self.base_radius * self.divisor);
+        let constant = profile - err_rrp;
+        let pin_base = n_fixed + 7 * self.cranks;
+        let tooth_base = pin_base + if self.per_pin { 2 * self.pins } else { 0 };
+        let pin_radial = &inputs[pin_base..if self.per_pin {
+            pin_base + self.pins
+        } else {
+            pin_base
+        }];
+        let pin_tangential = &inputs[if self.per_pin {
+            pin_base + self.pins
+        } else {
+            pin_base
+        }..tooth_base];
+        let tooth_errors = &inputs[tooth_base..if self.per_tooth {
+            tooth_base + self.cycloid_teeth
+        } else {
+            tooth_base
+        }];
+        let table = &self.table;
+        search.smooth.clear();
+        search.smooth.extend(
+            table
+                .inverse_lever
+                .iter()
+                .zip(&table.equidistant)
+                .zip(&table.shift)
+                .zip(&table.radial)
+                .map(|(((inverse_lever, equidistant), shift), radial)| {
+                    d_rp * equidistant + d_p * shift + err_rp * radial + constant * inverse_lever
+                }),
+        );
+        let repeat = |target: &mut Vec<f64>, values: &[f64], len: usize, times: usize| {
+            target.clear();
+            for _ in 0..times {
+                if values.is_empty() {
+                    target.extend(std::iter::repeat_n(0.0, len));
+                } else {
+                    target.extend_from_slice(values);
+                }
+            }
+        };
+        repeat(&mut search.pin_radial, pin_radial, self.pins, 2);
+        repeat(&mut search.pin_tangential, pin_tangential, self.pins, 2);
+        repeat(&mut search.tooth, tooth_errors, self.cycloid_teeth, 3);
+        // Exact pruning: an entry's ratio is smooth + rest with |rest| ≤ bound from the
+        // row's largest errors; an entry whose smooth − bound exceeds the smallest
+        // smooth + bound of its phase can never be the first contact.
+        let largest = |values: &[f64]| values.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        let (radial_max, tangential_max, tooth_max) = (
+            largest(pin_radial),
+            largest(pin_tangential),
+            largest(tooth_errors),
+        );
+        let displacement_max = q_r.abs() + b_x.hypot(b_y);
+        let bound = |e: usize| {
+            displacement_max * table.eccentric[e].abs()
+                + radial_max * table.radial[e].abs()
+                + tangential_max * table.tangential[e].abs()
+                + tooth_max * table.inverse_lever[e]
+        };
+        search.window.clear();
+        for &(first, last) in &table.phase_runs {
+            let (first, last) = (&table.runs[first as usize], &table.runs[last as usize - 1]);
+            let entries = first.start as usize..(last.start + last.len) as usize;
+            let best = entries
+                .clone()
+                .map(|e| search.smooth[e] + bound(e))
+                .fold(f64::INFINITY, f64::min);
+            let keep = best + 1e-9 * best.abs();
+            let (mut lo, mut hi) = (entries.end, entries.start);
+            for e in entries {
+                if search.smooth[e] - bound(e) <= keep {
+                    lo = lo.min(e);
+                    hi = e + 1;
+                }
+            }
+            search.window.push((lo as u32, hi as u32));
+        }
+        let (pins, teeth) = (self.pins as u32, self.cycloid_teeth as u32);
+        for point in &self.curve_points {
+            let j = point.index as usize;
+            // 1. Involute stage.
+            let (sx, cx) = point.crank; // planet frame at −z_p·Θ in the carrier
+            let (ss, cs) = point.sun; // sun frame at (i − 1)·Θ in the carrier
+            let sun = (sun_x * cs - sun_y * ss, sun_x * ss + sun_y * cs);
+            let mut gap = involute_constant - (normal_sum.0 * sun.0 + normal_sum.1 * sun.1);
+            for k in 0..self.cranks {
+                let (px, py) = runouts[k];
+                let planet = (px * cx + py * sx, -px * sx + py * cx);
+                gap += normals[k].0 * planet.0 + normals[k].1 * planet.1;
+            }
+            let involute = gap * involute_scale;
+            // 2. Crank stage: disc displacement in the eccentric frame.
+            let d_r = q_r + b_x * cx - b_y * sx;
+            let d_t = q_t + b_x * sx + b_y * cx;
+            let crank = d_t / lever_base;
+            // 3. Cycloid–pin stage: first contact.
+            // Every pin with a positive lever, run by run: the smallest clearance ratio.
+            let (first, last) = table.phase_runs[point.phase as usize];
+            let (pin_offset, tooth_offset) = (pins - point.pin_shift, teeth - point.tooth_shift);
+            let mut lag = f64::INFINITY;
+            let (window_lo, window_hi) = search.window[point.phase as usize];
+            for run in &table.runs[first as usize..last as usize] {
+                let start = run.start.max(window_lo);
+                let end = (run.start + run.len).min(window_hi);
+                if start >= end {
+                    continue;
+                }
+                let skip = start - run.start;
+                let entries = start as usize..end as usize;
+                let len = (end - start) as usize;
+                let pin = (run.slot + skip + pin_offset) as usize;
+                let space = (run.tooth + skip + tooth_offset) as usize;
+                lag = lag.min(smallest_ratio(
+                    [
+                        &search.smooth[entries.clone()],
+                        &table.eccentric[entries.clone()],
+                        &table.radial[entries.clone()],
+                        &table.tangential[entries.clone()],
+                        &table.inverse_lever[entries],
+                        &search.pin_radial[pin..pin + len],
+                        &search.pin_tangential[pin..pin + len],
+                        &search.tooth[space..space + len],
+                    ],
+                    d_r,
+                ));
+            }
+            // 4. Output mechanism: n14 fixed in the housing, o turning with the output.
+            let (so, co) = point.output;
+            let output = (out_x * so + out_y * co) / self.output_radius;
+            sink(
+                j,
+                StageErrors {
+                    involute,
+                    crank,
+                    cycloid: -lag,
+                    output,
+                },
+            );
+        }
+    }
+
+    /// Fills `curve` with TE(Θ_j) in arcsec.
+    fn fill_curve(&self, inputs: &[f64], curve: &mut [f64]) {
+        self.trace(inputs, |j, stages| {
+            curve[j] = stages.total() * ARCSEC_PER_RAD
+        });
+    }
+
+    /// TE(Θ_j) in arcsec at Θ_j = 2πj/N.
+    pub fn curve(&self, inputs: &[f64]) -> Vec<f64> {
+        let mut curve = vec![0.0; self.points];
+        self.fill_curve(inputs, &mut curve);
+        curve
+    }
+
+    /// Semi-amplitudes of orders 0..N/2 of a curve (order 0: the mean), arcsec.
+    pub fn spectrum(&self, curve: &[f64]) -> Vec<f64> {
+        let mut work = vec![(0.0, 0.0); self.points / 2];
+        self.fft.transform(curve, &mut work);
+        let mut amplitudes: Vec<f64> = (0..=self.points / 2)
+            .map(|k| self.fft.amplitude(&work, k))
+            .collect();
+        amplitudes[0] = self.fft.bin(&work, 0).0 / self.points as f64;
+        amplitudes
+    }
+}
+
+/// min over k of smooth + d_r·eccentric + pin_radial·radial + pin_tangential·tangential +
+/// tooth·inverse_lever, over columns of equal length (in that order). Four independent
+/// minima let the loop vectorise; `<` selects compile to plain min instructions.
+#[inline]
+fn smallest_ratio(columns: [&[f64]; 8], d_r: f64) -> f64 {
+    let len = columns[0].len();
+    let [smooth, eccentric, radial, tangential, inverse_lever, pin_radial, pin_tangential, tooth] =
+        columns.map(|c| &c[..len]);
+    let ratio = |k: usize| {
+        smooth[k]
+            + d_r * eccentric[k]
+            + pin_radial[k] * radial[k]
+            + pin_tangential[k] * tangential[k]
+            + tooth[k] * inverse_lever[k]
+    };
+    let mut lanes = [f64::INFINITY; 4];
+    let mut k = 0;
+    while k + 4 <= len {
+        for (lane, best) in lanes.iter_mut().enumerate() {
+            let v = ratio(k + lane);
+            *best = if v < *best { v } else { *best };
+        }
+        k += 4;
+    }
+    for k in k..len {
+        let v = ratio(k);
+        lanes[0] = if v < lanes[0] { v } else { lanes[0] };
+    }
+    lanes[0].min(lanes[1]).min(lanes[2].min(lanes[3]))
+}
+
+impl ErrorModel for TransmissionError {
+    fn name(&self) -> &'static str {
+        "transmission_error"
+    }
+
+    fn inputs(&self) -> &[InputSpec] {
+        &self.inputs
+    }
+
+    fn outputs(&self) -> &[OutputSpec] {
+        &self.outputs
+    }
+
+    fn evaluate(&self, inputs: &[f64], outputs: &mut [f64]) {
+        SCRATCH.with(|scratch| {
+            let scratch = &mut *scratch.borrow_mut();
+            scratch.curve.resize(self.points, 0.0);
+            scratch.work.resize(self.points / 2, (0.0, 0.0));
+            self.fill_curve(inputs, &mut scratch.curve);
+            let curve = &scratch.curve;
+            let n = curve.len() as f64;
+            let (mut lo, mut hi, mut sum) = (f64::INFINITY, f64::NEG_INFINITY, 0.0);
+            for &v in curve {
+                lo = lo.min(v);
+                hi = hi.max(v);
+                sum += v;
+            }
+            let mean = sum / n;
+            let var = curve.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n;
+            self.fft.transform(curve, &mut scratch.work);
+            outputs[0] = hi - lo;
+            outputs[1] = var.sqrt();
+            outputs[2] = mean;
+            outputs[3] = self.fft.amplitude(&scratch.work, 1);
+            outputs[4] = self.fft.amplitude(&scratch.work, self.cycloid_teeth);
+            outputs[5] = self.fft.amplitude(&scratch.work, self.pins);
+            if !(hi - lo).is_finite() {
+                outputs.iter_mut().for_each(|o| *o = f64::NAN);
+            }
+        });
+    }
+
+    fn curves(&self, inputs: &[f64]) -> Vec<Curve> {
+        let n = self.points;
+        let mut stages = vec![StageErrors::default(); n];
+        self.trace(inputs, |j, s| stages[j] = s);
+        let degrees = |j: usize| 360.0 * j as f64 / n as f64;
+        let series = |label: &str, pick: fn(&StageErrors) -> f64| Series {
+            label: label.into(),
+            points: stages
+                .iter()
+                .enumerate()
+                .map(|(j, s)| (degrees(j), pick(s) * ARCSEC_PER_RAD))
+                .collect(),
+        };
+        let total: Vec<f64> = stages.iter().map(|s| s.total() * ARCSEC_PER_RAD).collect();
+        let spectrum = self.spectrum(&total);
+        vec![
+            Curve {
+                name: "transmission_error".into(),
+                title: "Transmission error over one output revolution".into(),
+                x_label: "output angle (deg)".into(),
+                y_label: "transmission error (arcsec)".into(),
+                style: CurveStyle::Lines,
+                series: vec![
+                    series("total", |s| s.total()),
+                    series("involute stage", |s| s.involute),
+                    series("crank stage", |s| s.crank),
+                    series("cycloid–pin stage", |s| s.cycloid),
+                    series("output mechanism", |s| s.output),
+                ],
+            },
+            Curve {
+                name: "transmission_error_spectrum".into(),
+                title: "Order spectrum of the transmission error".into(),
+                x_label: "order (cycles per output revolution)".into(),
+                y_label: "semi-amplitude (arcsec)".into(),
+                style: CurveStyle::LogStems,
+                series: vec![Series {
+                    label: "FFT".into(),
+                    points: spectrum
+                        .iter()
+                        .enumerate()
+                        .skip(1)
+                        .map(|(k, &a)| (k as f64, a))
+                        .collect(),
+                }],
+            },
+        ]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rv40e() -> TransmissionError {
+        TransmissionError::from_params(&rv40e_params()).unwrap()
+    }
+
+    fn with(params: ModelParams) -> TransmissionError {
+        TransmissionError::from_params(&params).unwrap()
+    }
+
+    /// A zero row with the named inputs set.
+    fn row(model: &TransmissionError, set: &[(&str, f64)]) -> Vec<f64> {
+        let mut row = vec![0.0; model.inputs().len()];
+        for (name, value) in set {
+            row[model.input_index(name).unwrap_or_else(|| panic!("{name}"))] = *value;
+        }
+        row
+    }
+
+    fn outputs(model: &TransmissionError, row: &[f64]) -> Vec<f64> {
+        let mut out = vec![0.0; model.outputs().len()];
+        model.evaluate(row, &mut out);
+        out
+    }
+
+    /// 5 µm, the error size of 002 Table 2.
+    const DELTA: f64 = 0.005;
+
+    #[test]
+    fn ratio_and_feedback_divisor() {
+        let model = rv40e();
+        // validation.md 002: 121 = 1 + (27/9)·40; the feedback divisor 121/3.
+        assert_eq!(model.ratio(), 121.0);
+        assert!((model.crank_divisor() - 121.0 / 3.0).abs() < 1e-12);
+        let plain = with(rv40e_params().with_number("carrier_feedback", 0.0));
+        assert_eq!(plain.crank_divisor(), 40.0);
+    }
+
+    #[test]
+    fn perfect_reducer_has_no_error() {
+        let model = rv40e();
+        let curve = model.curve(&row(&model, &[]));
+        assert!(curve.iter().all(|v| *v == 0.0));
+    }
+
+    #[test]
+    fn output_pin_circle_lever_is_delta_over_r6_at_order_1() {
+        // validation.md 002: δ/r6 = 38.197″ for 5 µm (semi-amplitude, order 1).
+        let model = rv40e();
+        let lever = DELTA / 27.0 * ARCSEC_PER_RAD;
+        assert!((lever - 38.197).abs() < 5e-4);
+        let out = outputs(&model, &row(&model, &[("output_runout_x_mm", DELTA)]));
+        assert!((out[3] - lever).abs() < 1e-9, "{}", out[3]);
+        assert!((out[0] - 2.0 * lever).abs() < 1e-9);
+        assert!(out[4] < 1e-9 && out[5] < 1e-9);
+        assert!((out[1] - lever / 2f64.sqrt()).abs() < 1e-9);
+    }
+
+    #[test]
+    fn profile_normal_error_lever_is_delta_over_a_zc() {
+        // validation.md 002: δ/(a·z_c) = 21.155″ for 5 µm. The disc turns until the pin
+        // with the largest lever touches; max l_i ≤ a·z_c, reached to within the pin
+        // spacing, so |TE| lies in [21.155, 21.155/0.995] and its mean lag is 21.155 to
+        // within 0.3 %.
+        let model = rv40e();
+        let lever = DELTA / (1.25 * 39.0) * ARCSEC_PER_RAD;
+        assert!((lever - 21.155).abs() < 5e-4);
+        let curve = model.curve(&row(&model, &[("profile_normal_error_mm", DELTA)]));
+        for v in &curve {
+            assert!(*v <= -lever * (1.0 - 1e-12) && *v >= -lever / 0.995, "{v}");
+        }
+        let mean = curve.iter().sum::<f64>() / curve.len() as f64;
+        assert!((mean / -lever - 1.0).abs() < 3e-3, "{mean}");
+    }
+
+    #[test]
+    fn crank_phase_error_lever_is_delta_over_a_zc() {
+        // validation.md 002: the crank-stage lever δ/(a·z_c) = 21.155″ (002's Δθ2 divided
+        // by the cycloid ratio), halved when one of the two cranks is in error (10.6″).
+        let model = rv40e();
+        let lever = DELTA / (1.25 * 39.0) * ARCSEC_PER_RAD;
+        let both = model.curve(&row(
+            &model,
+            &[
+                ("crank_phase_error_mm_1", DELTA),
+                ("crank_phase_error_mm_2", DELTA),
+            ],
+        ));
+        assert!(both.iter().all(|v| (v - lever).abs() < 1e-9));
+        let one = model.curve(&row(&model, &[("crank_phase_error_mm_1", DELTA)]));
+        assert!(one.iter().all(|v| (v - lever / 2.0).abs() < 1e-9));
+        assert!((lever / 2.0 - 10.578).abs() < 1e-3);
+    }
+
+    #[test]
+    fn involute_centre_distance_lever_with_and_without_feedback() {
+        // validation.md 002: δ·tan α/(r2·z_p) = 0.348″ for 5 µm (r2 = 27 mm, module 2);
+        // the carrier feedback divides by 121/3 instead of 40.
+        let set = [
+            ("center_distance_error_mm_1", DELTA),
+            ("center_distance_error_mm_2", DELTA),
+        ];
+        let plain = with(rv40e_params().with_number("carrier_feedback", 0.0));
+        let lever = DELTA * 20f64.to_radians().tan() / (27.0 * 40.0) * ARCSEC_PER_RAD;
+        assert!((lever - 0.348).abs() < 5e-4, "{lever}");
+        let without = plain.curve(&row(&plain, &set));
+        assert!(without.iter().all(|v| (v + lever).abs() < 1e-12));
+        let model = rv40e();
+        let with_feedback = model.curve(&row(&model, &set));
+        assert!(with_feedback
+            .iter()
+            .all(|v| (v + lever * 120.0 / 121.0).abs() < 1e-12));
+    }
+
+    /// Largest semi-amplitude at an order that is not a multiple of `order`, below 400.
+    /// The first contact switches pins abruptly, so the curve's harmonics fall off slowly
+    /// and the high ones alias (the mesh order's second harmonic 3120 at 976, order
+    /// 39·100 at 196): a few tenths of a percent of the fundamental, hence the 1 % bound.
+    fn largest_off_harmonic(spectrum: &[f64], order: usize) -> f64 {
+        (1..400)
+            .filter(|k| k % order != 0)
+            .map(|k| spectrum[k])
+            .fold(0.0, f64::max)
+    }
+
+    fn modified() -> [(&'static str, f64); 2] {
+        [
+            ("equidistant_modification_mm", 0.01),
+            ("shift_modification_mm", -0.008),
+        ]
+    }
+
+    #[test]
+    fn pin_errors_appear_at_order_39_disc_errors_at_40() {
+        // validation.md 002: pin-borne errors at z_c = 39 per revolution (the eccentric
+        // passes a housing-fixed pin 39 times), disc- and crank-borne at z_p = 40.
+        let params = rv40e_params()
+            .with_number("pin_position_errors", 1.0)
+            .with_number("tooth_profile_errors", 1.0);
+        let model = with(params);
+        let mut set = modified().to_vec();
+        set.push(("pin_radial_error_mm_1", -0.004));
+        let spectrum = model.spectrum(&model.curve(&row(&model, &set)));
+        assert!(spectrum[39] > 0.05, "{}", spectrum[39]);
+        assert!(largest_off_harmonic(&spectrum, 39) < 1e-2 * spectrum[39]);
+        let mut set = modified().to_vec();
+        set.push(("tooth_profile_error_mm_7", -0.004));
+        let spectrum = model.spectrum(&model.curve(&row(&model, &set)));
+        assert!(spectrum[40] > 0.05, "{}", spectrum[40]);
+        assert!(largest_off_harmonic(&spectrum, 40) < 1e-2 * spectrum[40]);
+        // A crank-bore error of one crank turns against the eccentric: order 40.
+        let mut set = modified().to_vec();
+        set.push(("crank_axis_radial_error_mm_1", DELTA));
+        let spectrum = model.spectrum(&model.curve(&row(&model, &set)));
+        let peak = (1..spectrum.len())
+            .max_by(|a, b| spectrum[*a].total_cmp(&spectrum[*b]))
+            .unwrap();
+        assert_eq!(peak, 40);
+    }
+
+    #[test]
+    fn table_2_ordering_of_four_5_micron_errors() {
+        // 002 Table 2, used for its ordering only (validation.md): output mechanism >
+        // cycloid profile > crank eccentricity (one of two cranks) > involute stage, by the
+        // largest change of the curve over a revolution, with 003-style modification.
+        let model = rv40e();
+        let base = model.curve(&row(&model, &modified()));
+        let effect = |name: &str| {
+            let mut set = modified().to_vec();
+            set.push((name, DELTA));
+            let curve = model.curve(&row(&model, &set));
+            curve
+                .iter()
+                .zip(&base)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max)
+        };
+        let output = effect("output_runout_x_mm");
+        let profile = effect("profile_normal_error_mm");
+        let crank = effect("crank_axis_radial_error_mm_1");
+        let involute = effect("center_distance_error_mm_1");
+        assert!(
+            output > profile && profile > crank && crank > involute,
+            "{output} {profile} {crank} {involute}"
+        );
+    }
+
+    #[test]
+    fn table_driven_first_contact_equals_direct_geometry() {
+        // The cycloid–pin stage recomputed from scratch at every point: pin angles from Θ,
+        // the 003 factors, the tooth space from the pin's polar angle about the disc
+        // centre, and the minimum of g/l over the pins with a positive lever.
+        let model = with(
+            rv40e_params()
+                .with_number("pin_position_errors", 1.0)
+                .with_number("tooth_profile_errors", 1.0),
+        );
+        let (zp, zc, rp, e) = (40usize, 39usize, 64.0, 1.25);
+        let k1 = e * zp as f64 / rp;
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let n = model.inputs().len();
+        let mut row = vec![0.0; n];
+        let pin_base = FIXED_INPUTS.len() + 2 * CRANK_INPUTS.len();
+        for v in &mut row[pin_base..] {
+            *v = 0.006 * next();
+        }
+        let (d_rp, d_p, profile, err_rp, err_rrp, q_r) =
+            (0.011, -0.007, 0.001, 0.002, -0.001, 0.002);
+        row[2..7].copy_from_slice(&[d_rp, d_p, profile, err_rp, err_rrp]);
+        row[FIXED_INPUTS.len() + 3] = q_r; // both cranks' eccentric magnitude: d_r = q_r
+        row[FIXED_INPUTS.len() + 7 + 3] = q_r;
+        let mut traced = vec![0.0; 4096];
+        model.trace(&row, |j, s| traced[j] = s.cycloid);
+        for j in (0..4096).step_by(7) {
+            let theta = 2.0 * PI * j as f64 / 4096.0;
+            let mut lag = f64::INFINITY;
+            for i in 0..zp {
+                let phi =
+                    (2.0 * PI * i as f64 / zp as f64 + zc as f64 * theta).rem_euclid(2.0 * PI);
+                let (sin, cos) = phi.sin_cos();
+                if sin <= 1e-9 {
+                    continue;
+                }
+                let root = (1.0 + k1 * k1 - 2.0 * k1 * cos).sqrt();
+                let lever = e * zc as f64 * sin / root;
+                let polar = (rp * sin).atan2(rp * cos - e);
+                let space = ((zc as f64 * (polar - zp as f64 * theta) / (2.0 * PI)).round() as i64)
+                    .rem_euclid(zc as i64) as usize;
+                let g = d_rp * (1.0 - sin / root)
+                    - d_p * (1.0 - k1 * cos - (1.0 - k1 * k1).sqrt() * sin) / root
+                    + q_r * (k1 - cos) / root
+                    + (err_rp + row[pin_base + i]) * (1.0 - k1 * cos) / root
+                    + row[pin_base + zp + i] * k1 * sin / root
+                    + profile
+                    - err_rrp
+                    + row[pin_base + 2 * zp + space];
+                lag = lag.min(g / lever);
+            }
+            assert!(
+                (traced[j] + lag).abs() < 1e-9 * lag.abs().max(1e-6),
+                "point {j}: {} vs {}",
+                traced[j],
+                -lag
+            );
+        }
+    }
+
+    #[test]
+    fn bad_parameters_name_their_key() {
+        let fails = |params: ModelParams, key: &str| {
+            let error = TransmissionError::from_params(&params).unwrap_err();
+            assert_eq!(error.key, key, "{error:?}");
+        };
+        fails(
+            rv40e_params().with_number("cycloid_teeth", 40.0),
+            "cycloid_teeth",
+        );
+        fails(
+            rv40e_params().with_number("eccentricity_mm", 1.7),
+            "eccentricity_mm",
+        );
+        fails(
+            rv40e_params().with_number("points_per_revolution", 2048.0),
+            "points_per_revolution",
+        );
+        fails(
+            rv40e_params().with_number("points_per_revolution", 5000.0),
+            "points_per_revolution",
+        );
+        fails(
+            rv40e_params().with_number("output_pin_circle_radius_mm", 0.0),
+            "output_pin_circle_radius_mm",
+        );
+        fails(
+            rv40e_params().with_number("carrier_feedback", 2.0),
+            "carrier_feedback",
+        );
+    }
+}
