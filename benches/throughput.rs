@@ -1,6 +1,7 @@
 //! Criterion benchmarks: nanoseconds per sample of each stage of a run on the RV-20E
 //! hysteresis scenario (sampler, model, statistics), the normal generator against
-//! rand_distr's, and whole-run throughput.
+//! rand_distr's, whole-run throughput, and the time per sample of every physical model on
+//! rows drawn from its shipped scenario.
 //!
 //! Run with `cargo bench -p rvtol-benches`; each figure is per sample (Throughput::Elements).
 
@@ -103,5 +104,52 @@ fn whole_run(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, normals, stages, whole_run);
+/// Model input rows drawn from a scenario's input space (its first model).
+fn model_rows(scenario: &Scenario, rows: usize) -> Vec<f64> {
+    let space = &scenario.input_space;
+    let bound = &scenario.models[0];
+    let n_columns = space.n_columns();
+    let mut sampled = vec![0.0; rows * n_columns];
+    let mut counts = space.new_constraint_counts();
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    space
+        .sample_rows(&mut rng, &mut sampled, &mut counts)
+        .expect("shipped scenario samples");
+    let n_in = bound.model.inputs().len();
+    let mut inputs = bound.constant_template().repeat(rows);
+    for (dst, row) in inputs
+        .chunks_exact_mut(n_in)
+        .zip(sampled.chunks_exact(n_columns))
+    {
+        for (input, column) in bound.column_bindings() {
+            dst[input] = row[column];
+        }
+    }
+    inputs
+}
+
+/// Time per sample of each physical model (issue targets: contact ≤ 20 µs, transmission
+/// error with its curve and FFT ≤ 100 µs).
+fn models(c: &mut Criterion) {
+    let mut group = c.benchmark_group("model_per_sample");
+    for (file, rows) in [
+        ("rv20e-hysteresis.json", 4096),
+        ("rv80e-contact.json", 256),
+        ("rv40e-elastic.json", 256),
+        ("rv40e-transmission.json", 16),
+        ("rv20e-torsion.json", 256),
+    ] {
+        let scenario = Scenario::load(&scenario_path(file)).expect("shipped scenario loads");
+        let inputs = model_rows(&scenario, rows);
+        let bound = &scenario.models[0];
+        let mut outputs = vec![0.0; rows * bound.model.outputs().len()];
+        group.throughput(Throughput::Elements(rows as u64));
+        group.bench_function(bound.model.name(), |b| {
+            b.iter(|| bound.model.evaluate_batch(&inputs, &mut outputs))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, normals, stages, whole_run, models);
 criterion_main!(benches);
