@@ -385,7 +385,7 @@ fn command_models() -> Result<()> {
                 .map(|d| format!(" (default {d})"))
                 .unwrap_or_default();
             out.push_str(&format!(
-                "    {:<34} {:<6} {}{default}\n",
+                "    {:<36} {:<6} {}{default}\n",
                 p.name, p.unit, p.description
             ));
         }
@@ -394,14 +394,14 @@ fn command_models() -> Result<()> {
         out.push_str("  inputs:\n");
         for i in model.inputs() {
             out.push_str(&format!(
-                "    {:<34} {:<6} {}\n",
+                "    {:<36} {:<6} {}\n",
                 i.name, i.unit, i.description
             ));
         }
         out.push_str("  outputs:\n");
         for o in model.outputs() {
             out.push_str(&format!(
-                "    {:<34} {:<8} {}\n",
+                "    {:<36} {:<8} {}\n",
                 o.name, o.unit, o.description
             ));
         }
