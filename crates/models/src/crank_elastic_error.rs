@@ -73,6 +73,7 @@ use std::f64::consts::PI;
 
 use nalgebra::{SMatrix, SVector};
 
+use crate::cycloid::CycloidStage;
 use crate::cycloid_pin_contact::{CycloidPinContact, MAX_PINS};
 use crate::{
     ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputKind, OutputSpec, ParamSpec,
@@ -378,30 +379,10 @@ impl CrankElasticError {
 
     /// Builds the model, checking every parameter once.
     pub fn from_params(params: &ModelParams) -> Result<Self, ModelError> {
-        let pins = params.count("pin_count", None)? as usize;
-        if !(3..=MAX_PINS).contains(&pins) {
-            return Err(ModelError::new(
-                "pin_count",
-                format!("must be between 3 and {MAX_PINS}, got {pins}"),
-            ));
-        }
-        let cycloid_teeth = params.count("cycloid_teeth", None)? as usize;
-        if cycloid_teeth + 1 != pins {
-            return Err(ModelError::new(
-                "cycloid_teeth",
-                format!("must be pin_count − 1 = {}, got {cycloid_teeth}", pins - 1),
-            ));
-        }
-        let pin_circle_radius = params.positive("pin_circle_radius_mm", None)?;
+        let stage = CycloidStage::from_params(params, MAX_PINS)?;
+        let (pins, cycloid_teeth) = (stage.pins, stage.teeth);
+        let (pin_circle_radius, eccentricity) = (stage.pin_circle_radius, stage.eccentricity);
         let pin_radius = params.positive("pin_radius_mm", None)?;
-        let eccentricity = params.positive("eccentricity_mm", None)?;
-        let k1 = eccentricity * pins as f64 / pin_circle_radius;
-        if k1 >= 1.0 {
-            return Err(ModelError::new(
-                "eccentricity_mm",
-                format!("K1 = e·z_p/r_p = {k1} must be below 1 (a curtate cycloid)"),
-            ));
-        }
         let face_width = params.positive("disc_face_width_mm", None)?;
         let load_share = params.positive("disc_load_share", Some(0.5))?;
         if load_share > 1.0 {

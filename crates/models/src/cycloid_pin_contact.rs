@@ -46,6 +46,7 @@
 
 use std::f64::consts::PI;
 
+use crate::cycloid::CycloidStage;
 use crate::{
     ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputKind, OutputSpec, ParamSpec,
 };
@@ -232,30 +233,10 @@ pub struct ContactSolution {
 impl CycloidPinContact {
     /// Builds the model from its parameters.
     pub fn from_params(params: &ModelParams) -> Result<Self, ModelError> {
-        let pins = params.count("pin_count", None)? as usize;
-        if !(3..=MAX_PINS).contains(&pins) {
-            return Err(ModelError::new(
-                "pin_count",
-                format!("must be between 3 and {MAX_PINS}, got {pins}"),
-            ));
-        }
-        let cycloid_teeth = params.count("cycloid_teeth", None)? as usize;
-        if cycloid_teeth + 1 != pins {
-            return Err(ModelError::new(
-                "cycloid_teeth",
-                format!("must be pin_count − 1 = {} (003's table swaps the counts: 40 pins, 39 teeth give the ratio 121)", pins - 1),
-            ));
-        }
-        let pin_circle_radius = params.positive("pin_circle_radius_mm", None)?;
+        let stage = CycloidStage::from_params(params, MAX_PINS)?;
+        let (pins, cycloid_teeth) = (stage.pins, stage.teeth);
+        let (pin_circle_radius, eccentricity) = (stage.pin_circle_radius, stage.eccentricity);
         let pin_radius = params.positive("pin_radius_mm", None)?;
-        let eccentricity = params.positive("eccentricity_mm", None)?;
-        let k1 = eccentricity * pins as f64 / pin_circle_radius;
-        if k1 >= 1.0 {
-            return Err(ModelError::new(
-                "eccentricity_mm",
-                format!("e·z_p/r_p = {k1} must be below 1 (a curtate cycloid)"),
-            ));
-        }
         let face_width = params.positive("disc_face_width_mm", None)?;
         let load_share = params.positive("disc_load_share", Some(0.5))?;
         if load_share > 1.0 {

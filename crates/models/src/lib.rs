@@ -8,6 +8,7 @@
 //! Adding a model touches three places: its file here, one line in [`all`], one scenario.
 
 mod crank_elastic_error;
+mod cycloid;
 mod cycloid_pin_contact;
 mod geometric_hysteresis;
 mod linear_stack;

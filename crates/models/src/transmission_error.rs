@@ -50,6 +50,7 @@
 use std::cell::RefCell;
 use std::f64::consts::PI;
 
+use crate::cycloid::CycloidStage;
 use crate::spectrum::{Complex, RealFft};
 use crate::{
     Curve, CurveStyle, ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputKind,
@@ -391,32 +392,10 @@ impl TransmissionError {
                 format!("must be below 45, got {alpha}"),
             ));
         }
-        let pins = params.count("pin_count", None)? as usize;
-        if !(3..=256).contains(&pins) {
-            return Err(ModelError::new(
-                "pin_count",
-                format!("must be between 3 and 256, got {pins}"),
-            ));
-        }
-        let cycloid_teeth = params.count("cycloid_teeth", None)? as usize;
-        if cycloid_teeth + 1 != pins {
-            return Err(ModelError::new(
-                "cycloid_teeth",
-                format!(
-                    "must be pin_count − 1 = {} (one tooth fewer than pins)",
-                    pins - 1
-                ),
-            ));
-        }
-        let pin_circle_radius = params.positive("pin_circle_radius_mm", None)?;
-        let eccentricity = params.positive("eccentricity_mm", None)?;
-        let k1 = eccentricity * pins as f64 / pin_circle_radius;
-        if k1 >= 1.0 {
-            return Err(ModelError::new(
-                "eccentricity_mm",
-                format!("K1 = e·z_p/r_p = {k1} must be below 1 (a curtate cycloid)"),
-            ));
-        }
+        let stage = CycloidStage::from_params(params, 256)?;
+        let (pins, cycloid_teeth) = (stage.pins, stage.teeth);
+        let (pin_circle_radius, eccentricity) = (stage.pin_circle_radius, stage.eccentricity);
+        let k1 = stage.k1();
         let output_radius = params.positive("output_pin_circle_radius_mm", None)?;
         let cranks = params.count("crank_count", Some(2.0))? as usize;
         if cranks > MAX_CRANKS {
