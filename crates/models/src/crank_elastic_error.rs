@@ -574,6 +574,13 @@ impl CrankElasticError {
         })
     }
 
+    /// 004's four-bar lag with parallel cranks (docs/models.md §11): the disc's crank-hole
+    /// line turns by arctan((Δl1 + Δl3)/(2a)) against the carrier when its two crank holes
+    /// deflect tangentially by Δl1 + Δl3 in all (mm), a the crank circle radius (mm); rad.
+    pub(crate) fn four_bar_lag(deflection: f64, a: f64) -> f64 {
+        (deflection / (2.0 * a)).atan()
+    }
+
     /// Outputs for one disc load and the two crank stiffnesses (N/mm, > 0).
     fn over_turn(&self, load: &DiscLoad, k1: f64, k3: f64) -> [f64; 5] {
         let a = load.crank_half_distance;
@@ -585,7 +592,7 @@ impl CrankElasticError {
             let forces = self.disc_forces_at(load, sin, cos);
             let deflection = 0.5 * sum * compliance_sum
                 + 0.5 * (forces.f_t43 - forces.f_t4p3) * compliance_difference;
-            let lag = (deflection / (2.0 * a)).atan();
+            let lag = Self::four_bar_lag(deflection, a);
             lag_sum += lag;
             lag_min = lag_min.min(lag);
             lag_max = lag_max.max(lag);
@@ -623,10 +630,11 @@ impl ErrorModel for CrankElasticError {
     }
 
     fn check_constant(&self, input: usize, value: f64) -> Result<(), String> {
-        if input == 0 && value == 0.0 {
-            return Err("a torque of 0 N·m engages no pin".into());
+        // The torque is the contact model's first input as well.
+        match input {
+            0 => self.contact.check_constant(0, value),
+            _ => Ok(()),
         }
-        Ok(())
     }
 
     fn evaluate(&self, inputs: &[f64], outputs: &mut [f64]) {

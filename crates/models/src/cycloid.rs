@@ -1,6 +1,8 @@
 //! The cycloid–pin stage geometry shared by the models that have one (contact, elastic
 //! error, transmission error): pin count z_p, tooth count z_c = z_p − 1, pin circle radius
-//! r_p and eccentricity e, checked once with errors naming the parameter key.
+//! r_p and eccentricity e, checked once with errors naming the parameter key, and the
+//! factors of a pin's contact normal (documents 003 and validation.md 003), in the one
+//! place both the contact and the transmission-error model take them from.
 
 use crate::{ModelError, ModelParams};
 
@@ -64,4 +66,38 @@ impl CycloidStage {
     pub fn k1(&self) -> f64 {
         self.eccentricity * self.pins as f64 / self.pin_circle_radius
     }
+
+    /// The factors of the pin at φ from the eccentric (docs/models.md §10): with
+    /// S = √(1 + K1² − 2K1·cos φ), its lever l = e·z_c·sin φ/S about the disc centre and
+    /// the projections on its contact normal of each clearance term and displacement.
+    pub fn pin_factors(&self, phi: f64) -> PinFactors {
+        let k1 = self.k1();
+        let (sin, cos) = phi.sin_cos();
+        let s = (1.0 + k1 * k1 - 2.0 * k1 * cos).sqrt();
+        PinFactors {
+            lever: self.eccentricity * self.teeth as f64 * sin / s,
+            equidistant: 1.0 - sin / s,
+            shift: -(1.0 - k1 * cos - (1.0 - k1 * k1).sqrt() * sin) / s,
+            radial: (1.0 - k1 * cos) / s,
+            eccentric: (k1 - cos) / s,
+            tangential: k1 * sin / s,
+        }
+    }
+}
+
+/// The lever and normal projections of one pin, see [`CycloidStage::pin_factors`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct PinFactors {
+    /// l = e·z_c·sin φ/S, mm.
+    pub lever: f64,
+    /// Factor of the equidistant modification Δr_rp: 1 − sin φ/S (003 standard form).
+    pub equidistant: f64,
+    /// Factor of the shift modification Δr_p: −(1 − K1·cos φ − √(1 − K1²)·sin φ)/S.
+    pub shift: f64,
+    /// Factor of a radial (outward) pin displacement: (1 − K1·cos φ)/S.
+    pub radial: f64,
+    /// Factor of a disc-centre displacement along the eccentric: (K1 − cos φ)/S.
+    pub eccentric: f64,
+    /// Factor of a tangential pin displacement (towards increasing φ): K1·sin φ/S.
+    pub tangential: f64,
 }

@@ -203,6 +203,8 @@ pub struct CycloidPinContact {
     /// E* of the line contact, MPa.
     contact_modulus: f64,
     per_pin_errors: bool,
+    /// The checked stage geometry (pins, teeth, r_p, e).
+    stage: CycloidStage,
     /// Per pin, everything that depends on the design geometry only.
     geometry: Vec<PinGeometry>,
     inputs: Vec<InputSpec>,
@@ -255,13 +257,7 @@ impl CycloidPinContact {
                 format!("must lie in [0, 0.5), got {poisson}"),
             ));
         }
-        let per_pin = params.number("pin_position_errors", Some(0.0))?;
-        if per_pin != 0.0 && per_pin != 1.0 {
-            return Err(ModelError::new(
-                "pin_position_errors",
-                format!("must be 0 or 1, got {per_pin}"),
-            ));
-        }
+        let per_pin = params.flag("pin_position_errors", false)?;
         params.reject_unknown(&PARAMS.iter().map(|p| p.name).collect::<Vec<_>>())?;
         let mut inputs: Vec<InputSpec> = FIXED_INPUTS
             .iter()
@@ -271,7 +267,7 @@ impl CycloidPinContact {
                 description,
             })
             .collect();
-        if per_pin == 1.0 {
+        if per_pin {
             for i in 1..=pins {
                 inputs.push(InputSpec {
                     name: format!("pin_radial_error_mm_{i}"),
@@ -304,7 +300,8 @@ impl CycloidPinContact {
             cranks,
             crank_circle_radius,
             contact_modulus: youngs / (2.0 * (1.0 - poisson * poisson)),
-            per_pin_errors: per_pin == 1.0,
+            per_pin_errors: per_pin,
+            stage,
             geometry: Vec::new(),
             inputs,
             outputs: vec![
@@ -322,25 +319,29 @@ impl CycloidPinContact {
 
     /// The design quantities of pin i (at φ = 2π·i/z_p, 0-based), see the module comment.
     fn pin_geometry(&self, i: usize) -> PinGeometry {
-        let k1 = self.k1();
-        let (sin, cos) = (2.0 * PI * i as f64 / self.pins as f64).sin_cos();
-        let s = (1.0 + k1 * k1 - 2.0 * k1 * cos).sqrt();
+        let phi = 2.0 * PI * i as f64 / self.pins as f64;
+        let factors = self.stage.pin_factors(phi);
         PinGeometry {
-            lever: self.eccentricity * self.cycloid_teeth * sin / s,
-            equidistant: 1.0 - sin / s,
-            shift: -(1.0 - k1 * cos - (1.0 - k1 * k1).sqrt() * sin) / s,
-            radial: (1.0 - k1 * cos) / s,
-            eccentric: (k1 - cos) / s,
-            tangential: k1 * sin / s,
+            lever: factors.lever,
+            equidistant: factors.equidistant,
+            shift: factors.shift,
+            radial: factors.radial,
+            eccentric: factors.eccentric,
+            tangential: factors.tangential,
             // R*/r_rp = 1 + r_rp/ρ0.
-            curvature_factor: 1.0 + self.pin_radius * self.inverse_curvature_radius(cos),
-            push: (sin / s, -(k1 - cos) / s),
+            curvature_factor: 1.0 + self.pin_radius * self.inverse_curvature_radius(phi.cos()),
+            // The disc pushes the pin along −n_i = (sin φ, −(K1 − cos φ))/S: its x part is
+            // l/(e·z_c), its y part −(eccentric factor).
+            push: (
+                factors.lever / (self.eccentricity * self.cycloid_teeth),
+                -factors.eccentric,
+            ),
         }
     }
 
     /// K1 = e·z_p/r_p of the design.
     pub fn k1(&self) -> f64 {
-        self.eccentricity * self.pins as f64 / self.pin_circle_radius
+        self.stage.k1()
     }
 
     /// Signed curvature radius ρ0 of the theoretical profile at pin angle φ (validation.md

@@ -100,6 +100,15 @@ impl ModelParams {
         }
     }
 
+    /// A switch given as 0 or 1 (the default when absent).
+    pub fn flag(&self, key: &str, default: bool) -> Result<bool, ModelError> {
+        let value = self.number(key, Some(if default { 1.0 } else { 0.0 }))?;
+        if value != 0.0 && value != 1.0 {
+            return Err(ModelError::new(key, format!("must be 0 or 1, got {value}")));
+        }
+        Ok(value == 1.0)
+    }
+
     /// A number that must be a positive whole number (a tooth or pin count).
     pub fn count(&self, key: &str, default: Option<f64>) -> Result<u32, ModelError> {
         let value = self.number(key, default)?;

@@ -48,6 +48,7 @@
 //! - A row with a non-finite input, a non-finite clearance or k·(1 + x_k) ≤ 0 gives NaN
 //!   outputs (the engine counts them).
 
+use crate::crank_elastic_error::CrankElasticError;
 use crate::cycloid_pin_contact::CycloidPinContact;
 use crate::geometric_hysteresis::{self, GeometricHysteresis};
 use crate::{
@@ -386,7 +387,9 @@ impl TorsionCurve {
         let contact = rotation - state.first_contact;
         let a = self.crank_circle_radius;
         let disc_torque = self.load_share * torque * 1000.0; // N·mm
-        let crank = (disc_torque / (2.0 * state.stiffness * a * a)).atan();
+                                                             // Equal stiffness on both cranks: the tangential forces sum to T_disc/a (004), so
+                                                             // the two holes deflect by T_disc/(a·k) in all.
+        let crank = CrankElasticError::four_bar_lag(disc_torque / (a * state.stiffness), a);
         (contact + crank) * ARCMIN_PER_RAD
     }
 
@@ -516,7 +519,6 @@ mod tests {
     use std::f64::consts::PI;
 
     use super::*;
-    use crate::crank_elastic_error::CrankElasticError;
 
     fn rv20e() -> TorsionCurve {
         TorsionCurve::from_params(&TorsionCurve::rv20e_params()).unwrap()

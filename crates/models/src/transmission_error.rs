@@ -351,6 +351,8 @@ struct Scratch {
 #[derive(Debug, Default)]
 struct Search {
     smooth: Vec<f64>,
+    /// Per entry, the bound of the rest of its ratio for this row.
+    bound: Vec<f64>,
     /// Per phase, the range of table entries that can hold the first contact in this row.
     window: Vec<(u32, u32)>,
     pin_radial: Vec<f64>,
@@ -371,14 +373,6 @@ fn gcd(a: usize, b: usize) -> usize {
     }
 }
 
-fn flag(params: &ModelParams, key: &str, default: f64) -> Result<bool, ModelError> {
-    let value = params.number(key, Some(default))?;
-    if value != 0.0 && value != 1.0 {
-        return Err(ModelError::new(key, format!("must be 0 or 1, got {value}")));
-    }
-    Ok(value == 1.0)
-}
-
 impl TransmissionError {
     /// Builds the model from its parameters.
     pub fn from_params(params: &ModelParams) -> Result<Self, ModelError> {
@@ -395,7 +389,6 @@ impl TransmissionError {
         let stage = CycloidStage::from_params(params, 256)?;
         let (pins, cycloid_teeth) = (stage.pins, stage.teeth);
         let (pin_circle_radius, eccentricity) = (stage.pin_circle_radius, stage.eccentricity);
-        let k1 = stage.k1();
         let output_radius = params.positive("output_pin_circle_radius_mm", None)?;
         let cranks = params.count("crank_count", Some(2.0))? as usize;
         if cranks > MAX_CRANKS {
@@ -418,9 +411,9 @@ impl TransmissionError {
                 ),
             ));
         }
-        let feedback = flag(params, "carrier_feedback", 1.0)?;
-        let per_pin = flag(params, "pin_position_errors", 0.0)?;
-        let per_tooth = flag(params, "tooth_profile_errors", 0.0)?;
+        let feedback = params.flag("carrier_feedback", true)?;
+        let per_pin = params.flag("pin_position_errors", false)?;
+        let per_tooth = params.flag("tooth_profile_errors", false)?;
         params.reject_unknown(&PARAMS.iter().map(|p| p.name).collect::<Vec<_>>())?;
 
         let mut inputs: Vec<InputSpec> = FIXED_INPUTS
@@ -481,7 +474,6 @@ impl TransmissionError {
         let g = gcd(cycloid_mesh, points);
         let phases = points / g;
         let mut table = PinTable::default();
-        let sqrt = (1.0 - k1 * k1).sqrt();
         let zc = cycloid_teeth as i64;
         for p in 0..phases {
             let first_run = table.runs.len() as u32;
@@ -493,20 +485,18 @@ impl TransmissionError {
                 if sin <= 1e-12 {
                     continue;
                 }
-                let root = (1.0 + k1 * k1 - 2.0 * k1 * cos).sqrt();
-                let inverse_lever = root / (eccentricity * cycloid_teeth as f64 * sin);
+                let factors = stage.pin_factors(phi);
+                let inverse_lever = 1.0 / factors.lever;
                 let polar = (pin_circle_radius * sin).atan2(pin_circle_radius * cos - eccentricity);
                 let tooth = ((cycloid_teeth as f64 * polar / (2.0 * PI) - fraction).round() as i64)
                     .rem_euclid(zc);
                 let entry = table.inverse_lever.len() as u32;
                 table.inverse_lever.push(inverse_lever);
-                table.equidistant.push((1.0 - sin / root) * inverse_lever);
-                table
-                    .shift
-                    .push(-(1.0 - k1 * cos - sqrt * sin) / root * inverse_lever);
-                table.eccentric.push((k1 - cos) / root * inverse_lever);
-                table.radial.push((1.0 - k1 * cos) / root * inverse_lever);
-                table.tangential.push(k1 * sin / root * inverse_lever);
+                table.equidistant.push(factors.equidistant * inverse_lever);
+                table.shift.push(factors.shift * inverse_lever);
+                table.eccentric.push(factors.eccentric * inverse_lever);
+                table.radial.push(factors.radial * inverse_lever);
+                table.tangential.push(factors.tangential * inverse_lever);
                 let continues = matches!(previous, Some((slot, space))
                     if slot + 1 == s as u32 && (space + 1).rem_euclid(zc) == tooth);
                 if continues {
@@ -684,24 +674,25 @@ impl TransmissionError {
             largest(tooth_errors),
         );
         let displacement_max = q_r.abs() + b_x.hypot(b_y);
-        let bound = |e: usize| {
+        search.bound.clear();
+        search.bound.extend((0..table.inverse_lever.len()).map(|e| {
             displacement_max * table.eccentric[e].abs()
                 + radial_max * table.radial[e].abs()
                 + tangential_max * table.tangential[e].abs()
                 + tooth_max * table.inverse_lever[e]
-        };
+        }));
         search.window.clear();
         for &(first, last) in &table.phase_runs {
             let (first, last) = (&table.runs[first as usize], &table.runs[last as usize - 1]);
             let entries = first.start as usize..(last.start + last.len) as usize;
             let best = entries
                 .clone()
-                .map(|e| search.smooth[e] + bound(e))
+                .map(|e| search.smooth[e] + search.bound[e])
                 .fold(f64::INFINITY, f64::min);
             let keep = best + 1e-9 * best.abs();
             let (mut lo, mut hi) = (entries.end, entries.start);
             for e in entries {
-                if search.smooth[e] - bound(e) <= keep {
+                if search.smooth[e] - search.bound[e] <= keep {
                     lo = lo.min(e);
                     hi = e + 1;
                 }
