@@ -51,7 +51,7 @@ use std::cell::RefCell;
 use std::f64::consts::PI;
 
 use crate::cycloid::CycloidStage;
-use crate::spectrum::{Complex, RealFft};
+use crate::spectrum::{OrderBins, RealFft};
 use crate::{
     Curve, CurveStyle, ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputKind,
     OutputSpec, ParamSpec, Series, ARCSEC_PER_RAD,
@@ -231,13 +231,17 @@ fn rv40e_params() -> ModelParams {
         .with_number("output_pin_circle_radius_mm", 27.0)
 }
 
-/// The pins with a positive lever at every phase of the curve, as columns (structure of
-/// arrays, phase-major, slot s ascending within a phase): pin slot s of phase p sits at
-/// φ = 2π(s + p·g/N)/z_p from the eccentric; pin i is in slot (i − 1 + k_j) mod z_p at
-/// point j. Each clearance factor is stored divided by the lever l, so that a row's
-/// clearance ratio g/l is a sum of products.
+/// The pin slots of every phase of the curve, as columns (structure of arrays) in blocks of
+/// `width` entries per phase: entry e of phase p is pin slot s = e, at φ = 2π(s + p·g/N)/z_p
+/// from the eccentric; pin i is in slot (i − 1 + k_j) mod z_p at point j. Slots whose lever
+/// is not positive are padding (`blocked` = +∞, every factor 0). Each clearance factor is
+/// stored divided by the lever l, so that a row's clearance ratio g/l is a sum of products.
 #[derive(Debug, Clone, Default)]
 struct PinTable {
+    /// Entries per phase: one more than the highest slot with a positive lever.
+    width: usize,
+    /// 0 for a pin with a positive lever, +∞ for padding.
+    blocked: Vec<f64>,
     /// 1/l, 1/mm.
     inverse_lever: Vec<f64>,
     /// (1 − sin φ/S)/l: factor of Δr_rp.
@@ -250,26 +254,10 @@ struct PinTable {
     radial: Vec<f64>,
     /// K1·sin φ/(S·l): factor of a tangential pin displacement.
     tangential: Vec<f64>,
-    /// Per phase, its runs of entries (see [`Run`]).
-    runs: Vec<Run>,
-    /// Per phase, its range in `runs`.
-    phase_runs: Vec<(u32, u32)>,
-}
-
-/// Consecutive entries of one phase whose pins and tooth spaces are both consecutive, so
-/// that the per-pin and per-tooth errors of the run are contiguous slices.
-#[derive(Debug, Clone, Copy)]
-struct Run {
-    /// First entry in the table.
-    start: u32,
-    /// Entries.
-    len: u32,
-    /// Slot s of the first entry.
-    slot: u32,
-    /// Tooth space of the first entry when the eccentric has turned no whole pin pitch
-    /// (k_j = 0): round(z_c·λ/2π − phase fraction) mod z_c, λ the pin's polar angle about
-    /// the disc centre from the eccentric; at point j it is this minus k_j (mod z_c).
-    tooth: u32,
+    /// Tooth space in contact when the eccentric has turned no whole pin pitch (k_j = 0):
+    /// round(z_c·λ/2π − phase fraction) mod z_c, λ the pin's polar angle about the disc
+    /// centre from the eccentric; at point j it is this minus k_j (mod z_c).
+    tooth: Vec<u32>,
 }
 
 /// Per curve point: the angles and indices of point j.
@@ -277,7 +265,8 @@ struct Run {
 struct Point {
     /// (sin, cos) of Θ.
     output: (f64, f64),
-    /// (sin, cos) of z_p·Θ (crank against carrier).
+    /// (sin, cos) of z_p·Θ (crank against carrier), from z_p·j reduced modulo N, so that
+    /// the points of a group have the same bits.
     crank: (f64, f64),
     /// (sin, cos) of (i − 1)·Θ (sun against carrier).
     sun: (f64, f64),
@@ -285,11 +274,21 @@ struct Point {
     pin_shift: u32,
     /// k_j modulo z_c.
     tooth_shift: u32,
-    /// Index of the fractional pitch into the phase table.
-    phase: u32,
-    /// Its index j on the curve (points are stored grouped by phase, so that one row reads
-    /// the pin table once, in order).
+    /// Its index j on the curve.
     index: u32,
+}
+
+/// Points of the curve that see the same pin slots (the same fractional pin pitch), the
+/// same disc displacement along the eccentric (the same z_p·Θ modulo 2π) and the same tooth
+/// spaces in those slots (the same k_j modulo z_c): they differ only in which pin sits in
+/// each slot. For the RV40E (N = 4096, z_c·z_p = 1560) the 4096 points form 512 groups of 8.
+#[derive(Debug, Clone, Copy)]
+struct Group {
+    /// Block of the pin table.
+    phase: u32,
+    /// Range of its points in `curve_points`.
+    start: u32,
+    end: u32,
 }
 
 /// The stage contributions at one point, rad.
@@ -332,37 +331,34 @@ pub struct TransmissionError {
     per_pin: bool,
     per_tooth: bool,
     table: PinTable,
+    /// The curve points, grouped (see [`Group`]).
     curve_points: Vec<Point>,
+    groups: Vec<Group>,
     fft: RealFft,
+    orders: OrderBins,
     inputs: Vec<InputSpec>,
     outputs: Vec<OutputSpec>,
 }
 
-/// Per-thread work buffers of one curve (no allocation per sample).
-struct Scratch {
-    curve: Vec<f64>,
-    work: Vec<Complex>,
-}
-
-/// Per-thread work state of the first-contact search, refilled for every row: the smooth
-/// part of every table entry's clearance ratio, and the per-pin and per-tooth errors laid
-/// out twice (pins) and three times (teeth) in a row, so that a run's shifted errors are
-/// one contiguous slice (zeros when the model has no such inputs).
+/// Per-thread work state of the first-contact search, refilled for every row: the per-pin
+/// and per-tooth errors laid out twice in a row, so that the errors seen by consecutive
+/// slots are one contiguous slice whatever the shift (zeros when the model has no such
+/// inputs), and one group's ratios without the pin errors.
 #[derive(Debug, Default)]
 struct Search {
-    smooth: Vec<f64>,
-    /// Per entry, the bound of the rest of its ratio for this row.
-    bound: Vec<f64>,
-    /// Per phase, the range of table entries that can hold the first contact in this row.
-    window: Vec<(u32, u32)>,
     pin_radial: Vec<f64>,
     pin_tangential: Vec<f64>,
     tooth: Vec<f64>,
+    /// Per entry of the current group's block, the part of its ratio common to all the
+    /// group's points (everything but the pin errors).
+    head: Vec<f64>,
+    /// The curve of the row, arcsec.
+    curve: Vec<f64>,
 }
 
+// Per-thread work state (no allocation per sample).
 thread_local! {
     static SEARCH: RefCell<Search> = RefCell::new(Search::default());
-    static SCRATCH: RefCell<Scratch> = const { RefCell::new(Scratch { curve: Vec::new(), work: Vec::new() }) };
 }
 
 fn gcd(a: usize, b: usize) -> usize {
@@ -470,19 +466,33 @@ impl TransmissionError {
         ];
 
         // Phase table: the fractional pin pitch of the eccentric at point j takes
-        // N/gcd(z_c·z_p, N) values.
+        // N/gcd(z_c·z_p, N) values. A slot s has a positive lever while 0 < s + f < z_p/2.
         let g = gcd(cycloid_mesh, points);
         let phases = points / g;
-        let mut table = PinTable::default();
+        let width = pins.div_ceil(2).next_multiple_of(4);
+        let mut table = PinTable {
+            width,
+            ..PinTable::default()
+        };
         let zc = cycloid_teeth as i64;
         for p in 0..phases {
-            let first_run = table.runs.len() as u32;
             let fraction = p as f64 * g as f64 / points as f64;
-            let mut previous: Option<(u32, i64)> = None;
-            for s in 0..pins {
+            for s in 0..width {
                 let phi = 2.0 * PI * (s as f64 + fraction) / pins as f64;
                 let (sin, cos) = phi.sin_cos();
                 if sin <= 1e-12 {
+                    table.blocked.push(f64::INFINITY);
+                    for column in [
+                        &mut table.inverse_lever,
+                        &mut table.equidistant,
+                        &mut table.shift,
+                        &mut table.eccentric,
+                        &mut table.radial,
+                        &mut table.tangential,
+                    ] {
+                        column.push(0.0);
+                    }
+                    table.tooth.push(0);
                     continue;
                 }
                 let factors = stage.pin_factors(phi);
@@ -490,45 +500,47 @@ impl TransmissionError {
                 let polar = (pin_circle_radius * sin).atan2(pin_circle_radius * cos - eccentricity);
                 let tooth = ((cycloid_teeth as f64 * polar / (2.0 * PI) - fraction).round() as i64)
                     .rem_euclid(zc);
-                let entry = table.inverse_lever.len() as u32;
+                table.blocked.push(0.0);
                 table.inverse_lever.push(inverse_lever);
                 table.equidistant.push(factors.equidistant * inverse_lever);
                 table.shift.push(factors.shift * inverse_lever);
                 table.eccentric.push(factors.eccentric * inverse_lever);
                 table.radial.push(factors.radial * inverse_lever);
                 table.tangential.push(factors.tangential * inverse_lever);
-                let continues = matches!(previous, Some((slot, space))
-                    if slot + 1 == s as u32 && (space + 1).rem_euclid(zc) == tooth);
-                if continues {
-                    table.runs.last_mut().expect("a run is open").len += 1;
-                } else {
-                    table.runs.push(Run {
-                        start: entry,
-                        len: 1,
-                        slot: s as u32,
-                        tooth: tooth as u32,
-                    });
-                }
-                previous = Some((s as u32, tooth));
+                table.tooth.push(tooth as u32);
             }
-            table.phase_runs.push((first_run, table.runs.len() as u32));
         }
-        let mut curve_points: Vec<Point> = (0..points)
+        let angle = |step: usize| (2.0 * PI * (step % points) as f64 / points as f64).sin_cos();
+        let mut keyed: Vec<((usize, usize, usize), Point)> = (0..points)
             .map(|j| {
                 let theta = 2.0 * PI * j as f64 / points as f64;
                 let turns = cycloid_mesh * j;
-                Point {
-                    output: theta.sin_cos(),
-                    crank: (pins as f64 * theta).sin_cos(),
+                let point = Point {
+                    output: angle(j),
+                    crank: angle(pins * j),
                     sun: ((ratio - 1.0) * theta).sin_cos(),
                     pin_shift: ((turns / points) % pins) as u32,
                     tooth_shift: ((turns / points) % cycloid_teeth) as u32,
-                    phase: ((turns % points) / g) as u32,
                     index: j as u32,
-                }
+                };
+                let phase = (turns % points) / g;
+                let key = (phase, (pins * j) % points, point.tooth_shift as usize);
+                (key, point)
             })
             .collect();
-        curve_points.sort_by_key(|point| (point.phase, point.index));
+        keyed.sort_by_key(|(key, point)| (*key, point.index));
+        let mut groups: Vec<Group> = Vec::new();
+        for (k, (key, _)) in keyed.iter().enumerate() {
+            match groups.last_mut() {
+                Some(group) if keyed[group.start as usize].0 == *key => group.end += 1,
+                _ => groups.push(Group {
+                    phase: key.0 as u32,
+                    start: k as u32,
+                    end: k as u32 + 1,
+                }),
+            }
+        }
+        let curve_points: Vec<Point> = keyed.into_iter().map(|(_, point)| point).collect();
         let alpha = alpha.to_radians();
         Ok(TransmissionError {
             sun_teeth,
@@ -550,7 +562,9 @@ impl TransmissionError {
             per_tooth,
             table,
             curve_points,
+            groups,
             fft: RealFft::new(points),
+            orders: OrderBins::new(points),
             inputs,
             outputs,
         })
@@ -583,6 +597,7 @@ impl TransmissionError {
     }
 
     /// [`Self::trace`] with an explicit work state.
+    #[inline(always)]
     fn trace_with(
         &self,
         inputs: &[f64],
@@ -598,9 +613,11 @@ impl TransmissionError {
         let (sin_a, cos_a) = self.pressure;
         // Per crank k at β_k = 2π(k − 1)/m on the carrier: its action line n_k, and the
         // mean eccentric error and crank-bore error (the latter in the carrier frame).
-        let mut normals = [(0.0, 0.0); MAX_CRANKS];
-        let mut runouts = [(0.0, 0.0); MAX_CRANKS];
+        // The planet runouts p_k turn at −z_p·Θ in the carrier and the sun runout s at
+        // (i − 1)·Θ: n_k·R(−z_p·Θ)·p_k = cos(z_p·Θ)·(n_k·p_k) + sin(z_p·Θ)·(n_k × p_k) and
+        // n·R((i − 1)·Θ)·s = cos((i − 1)·Θ)·(n·s) + sin((i − 1)·Θ)·(n × s), n = Σ n_k.
         let mut involute_constant = 0.0;
+        let (mut planet_cos, mut planet_sin) = (0.0, 0.0);
         let (mut q_r, mut q_t, mut b_x, mut b_y) = (0.0, 0.0, 0.0, 0.0);
         let mut normal_sum = (0.0, 0.0);
         for k in 0..self.cranks {
@@ -608,9 +625,10 @@ impl TransmissionError {
             let (sb, cb) = (2.0 * PI * k as f64 / m).sin_cos();
             // u_k = (cb, sb), t_k = (−sb, cb); n_k = sin α·u_k + cos α·t_k.
             let n = (sin_a * cb - cos_a * sb, sin_a * sb + cos_a * cb);
-            normals[k] = n;
             normal_sum = (normal_sum.0 + n.0, normal_sum.1 + n.1);
-            runouts[k] = (row[0], row[1]);
+            let (px, py) = (row[0], row[1]);
+            planet_cos += n.0 * px + n.1 * py;
+            planet_sin += n.0 * py - n.1 * px;
             involute_constant += row[2] * sin_a; // n_k·(c_k·u_k)
             q_r += row[3];
             q_t += row[4];
@@ -618,6 +636,8 @@ impl TransmissionError {
             b_y += row[5] * sb + row[6] * cb;
         }
         let (q_r, q_t, b_x, b_y) = (q_r / m, q_t / m, b_x / m, b_y / m);
+        let sun_cos = normal_sum.0 * sun_x + normal_sum.1 * sun_y;
+        let sun_sin = normal_sum.1 * sun_x - normal_sum.0 * sun_y;
         let lever_base = self.eccentricity * self.cycloid_teeth as f64;
         let involute_scale = -1.0 / (m * self.base_radius * self.divisor);
         let constant = profile - err_rrp;
@@ -639,21 +659,9 @@ impl TransmissionError {
             tooth_base
         }];
         let table = &self.table;
-        search.smooth.clear();
-        search.smooth.extend(
-            table
-                .inverse_lever
-                .iter()
-                .zip(&table.equidistant)
-                .zip(&table.shift)
-                .zip(&table.radial)
-                .map(|(((inverse_lever, equidistant), shift), radial)| {
-                    d_rp * equidistant + d_p * shift + err_rp * radial + constant * inverse_lever
-                }),
-        );
-        let repeat = |target: &mut Vec<f64>, values: &[f64], len: usize, times: usize| {
+        let double = |target: &mut Vec<f64>, values: &[f64], len: usize| {
             target.clear();
-            for _ in 0..times {
+            for _ in 0..2 {
                 if values.is_empty() {
                     target.extend(std::iter::repeat_n(0.0, len));
                 } else {
@@ -661,106 +669,144 @@ impl TransmissionError {
                 }
             }
         };
-        repeat(&mut search.pin_radial, pin_radial, self.pins, 2);
-        repeat(&mut search.pin_tangential, pin_tangential, self.pins, 2);
-        repeat(&mut search.tooth, tooth_errors, self.cycloid_teeth, 3);
-        // Exact pruning: an entry's ratio is smooth + rest with |rest| ≤ bound from the
-        // row's largest errors; an entry whose smooth − bound exceeds the smallest
-        // smooth + bound of its phase can never be the first contact.
-        let largest = |values: &[f64]| values.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-        let (radial_max, tangential_max, tooth_max) = (
-            largest(pin_radial),
-            largest(pin_tangential),
-            largest(tooth_errors),
-        );
-        let displacement_max = q_r.abs() + b_x.hypot(b_y);
-        search.bound.clear();
-        search.bound.extend((0..table.inverse_lever.len()).map(|e| {
-            displacement_max * table.eccentric[e].abs()
-                + radial_max * table.radial[e].abs()
-                + tangential_max * table.tangential[e].abs()
-                + tooth_max * table.inverse_lever[e]
-        }));
-        search.window.clear();
-        for &(first, last) in &table.phase_runs {
-            let (first, last) = (&table.runs[first as usize], &table.runs[last as usize - 1]);
-            let entries = first.start as usize..(last.start + last.len) as usize;
-            let best = entries
-                .clone()
-                .map(|e| search.smooth[e] + search.bound[e])
-                .fold(f64::INFINITY, f64::min);
-            let keep = best + 1e-9 * best.abs();
-            let (mut lo, mut hi) = (entries.end, entries.start);
-            for e in entries {
-                if search.smooth[e] - search.bound[e] <= keep {
-                    lo = lo.min(e);
-                    hi = e + 1;
-                }
-            }
-            search.window.push((lo as u32, hi as u32));
-        }
+        double(&mut search.pin_radial, pin_radial, self.pins);
+        double(&mut search.pin_tangential, pin_tangential, self.pins);
+        double(&mut search.tooth, tooth_errors, self.cycloid_teeth);
+        let width = table.width;
+        let Search {
+            pin_radial,
+            pin_tangential,
+            tooth,
+            head,
+            ..
+        } = search;
+        head.resize(width, 0.0);
         let (pins, teeth) = (self.pins as u32, self.cycloid_teeth as u32);
-        for point in &self.curve_points {
-            let j = point.index as usize;
-            // 1. Involute stage.
-            let (sx, cx) = point.crank; // planet frame at −z_p·Θ in the carrier
-            let (ss, cs) = point.sun; // sun frame at (i − 1)·Θ in the carrier
-            let sun = (sun_x * cs - sun_y * ss, sun_x * ss + sun_y * cs);
-            let mut gap = involute_constant - (normal_sum.0 * sun.0 + normal_sum.1 * sun.1);
-            for k in 0..self.cranks {
-                let (px, py) = runouts[k];
-                let planet = (px * cx + py * sx, -px * sx + py * cx);
-                gap += normals[k].0 * planet.0 + normals[k].1 * planet.1;
-            }
-            let involute = gap * involute_scale;
-            // 2. Crank stage: disc displacement in the eccentric frame.
+        for group in &self.groups {
+            let points = &self.curve_points[group.start as usize..group.end as usize];
+            let block = group.phase as usize * width..(group.phase as usize + 1) * width;
+            let blocked = &table.blocked[block.clone()];
+            let inverse_lever = &table.inverse_lever[block.clone()];
+            let equidistant = &table.equidistant[block.clone()];
+            let shift = &table.shift[block.clone()];
+            let eccentric = &table.eccentric[block.clone()];
+            let radial = &table.radial[block.clone()];
+            let tangential = &table.tangential[block.clone()];
+            let tooth_of = &table.tooth[block];
+            // The disc displacement along the eccentric and the tooth spaces of the group.
+            let (sx, cx) = points[0].crank;
             let d_r = q_r + b_x * cx - b_y * sx;
-            let d_t = q_t + b_x * sx + b_y * cx;
-            let crank = d_t / lever_base;
-            // 3. Cycloid–pin stage: first contact.
-            // Every pin with a positive lever, run by run: the smallest clearance ratio.
-            let (first, last) = table.phase_runs[point.phase as usize];
-            let (pin_offset, tooth_offset) = (pins - point.pin_shift, teeth - point.tooth_shift);
-            let mut lag = f64::INFINITY;
-            let (window_lo, window_hi) = search.window[point.phase as usize];
-            for run in &table.runs[first as usize..last as usize] {
-                let start = run.start.max(window_lo);
-                let end = (run.start + run.len).min(window_hi);
-                if start >= end {
-                    continue;
-                }
-                let skip = start - run.start;
-                let entries = start as usize..end as usize;
-                let len = (end - start) as usize;
-                let pin = (run.slot + skip + pin_offset) as usize;
-                let space = (run.tooth + skip + tooth_offset) as usize;
-                lag = lag.min(smallest_ratio(
-                    [
-                        &search.smooth[entries.clone()],
-                        &table.eccentric[entries.clone()],
-                        &table.radial[entries.clone()],
-                        &table.tangential[entries.clone()],
-                        &table.inverse_lever[entries],
-                        &search.pin_radial[pin..pin + len],
-                        &search.pin_tangential[pin..pin + len],
-                        &search.tooth[space..space + len],
-                    ],
-                    d_r,
-                ));
+            let space = &tooth[(teeth - points[0].tooth_shift) as usize..];
+            // Without pin errors the first contact is the smallest head at every point.
+            for (value, &t) in head.iter_mut().zip(tooth_of) {
+                *value = space[t as usize];
             }
-            // 4. Output mechanism: n14 fixed in the housing, o turning with the output.
-            let (so, co) = point.output;
-            let output = (out_x * so + out_y * co) / self.output_radius;
-            sink(
-                j,
-                StageErrors {
-                    involute,
-                    crank,
-                    cycloid: -lag,
-                    output,
-                },
+            let mut lanes = [f64::INFINITY; 4];
+            let chunks = width / 4;
+            let (blocked, inverse_lever, equidistant, shift, eccentric, radial_4) = (
+                quads(blocked, chunks),
+                quads(inverse_lever, chunks),
+                quads(equidistant, chunks),
+                quads(shift, chunks),
+                quads(eccentric, chunks),
+                quads(radial, chunks),
             );
+            for (c, head) in head.as_chunks_mut::<4>().0.iter_mut().enumerate() {
+                for lane in 0..4 {
+                    let value = d_rp * equidistant[c][lane]
+                        + d_p * shift[c][lane]
+                        + err_rp * radial_4[c][lane]
+                        + constant * inverse_lever[c][lane]
+                        + d_r * eccentric[c][lane]
+                        + head[lane] * inverse_lever[c][lane]
+                        + blocked[c][lane];
+                    head[lane] = value;
+                    lanes[lane] = if value < lanes[lane] {
+                        value
+                    } else {
+                        lanes[lane]
+                    };
+                }
+            }
+            let best = lanes[0].min(lanes[1]).min(lanes[2].min(lanes[3]));
+            for point in points {
+                let j = point.index as usize;
+                // 1. Involute stage.
+                let (sx, cx) = point.crank; // planet frame at −z_p·Θ in the carrier
+                let (ss, cs) = point.sun; // sun frame at (i − 1)·Θ in the carrier
+                let gap = involute_constant + planet_cos * cx + planet_sin * sx
+                    - (sun_cos * cs + sun_sin * ss);
+                let involute = gap * involute_scale;
+                // 2. Crank stage: disc displacement across the eccentric.
+                let d_t = q_t + b_x * sx + b_y * cx;
+                let crank = d_t / lever_base;
+                // 3. Cycloid–pin stage: the smallest clearance ratio over the slots.
+                let lag = if self.per_pin {
+                    let pin = (pins - point.pin_shift) as usize;
+                    smallest_ratio(
+                        head,
+                        radial,
+                        tangential,
+                        &pin_radial[pin..pin + width],
+                        &pin_tangential[pin..pin + width],
+                    )
+                } else {
+                    best
+                };
+                // 4. Output mechanism: n14 fixed in the housing, o turning with the output.
+                let (so, co) = point.output;
+                let output = (out_x * so + out_y * co) / self.output_radius;
+                sink(
+                    j,
+                    StageErrors {
+                        involute,
+                        crank,
+                        cycloid: -lag,
+                        output,
+                    },
+                );
+            }
         }
+    }
+
+    /// [`ErrorModel::evaluate`] with an explicit work state: the curve, its peak-to-peak,
+    /// rms and mean, and the amplitudes of orders 1, z_c and z_p.
+    #[inline(always)]
+    fn evaluate_with(&self, inputs: &[f64], search: &mut Search, outputs: &mut [f64]) {
+        let mut curve = std::mem::take(&mut search.curve);
+        curve.resize(self.points, 0.0);
+        self.trace_with(inputs, search, |j, stages| {
+            curve[j] = stages.total() * ARCSEC_PER_RAD
+        });
+        let n = curve.len() as f64;
+        let (mut lo, mut hi, mut sum) = (f64::INFINITY, f64::NEG_INFINITY, 0.0);
+        for &v in &curve {
+            lo = lo.min(v);
+            hi = hi.max(v);
+            sum += v;
+        }
+        let mean = sum / n;
+        let var = curve.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n;
+        let [first, cycloid, pins] = self
+            .orders
+            .amplitudes(&curve, [1, self.cycloid_teeth, self.pins]);
+        outputs[..6].copy_from_slice(&[hi - lo, var.sqrt(), mean, first, cycloid, pins]);
+        if !(hi - lo).is_finite() {
+            outputs.iter_mut().for_each(|o| *o = f64::NAN);
+        }
+        search.curve = curve;
+    }
+
+    /// [`Self::evaluate_with`] compiled for AVX2: the same operations in the same order
+    /// (Rust never fuses a multiply and an add), so the same bits, on wider registers.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    #[allow(unsafe_code)]
+    unsafe fn evaluate_avx2(&self, inputs: &[f64], search: &mut Search, outputs: &mut [f64]) {
+        self.evaluate_with(inputs, search, outputs)
     }
 
     /// Fills `curve` with TE(Θ_j) in arcsec.
@@ -789,33 +835,42 @@ impl TransmissionError {
     }
 }
 
-/// min over k of smooth + d_r·eccentric + pin_radial·radial + pin_tangential·tangential +
-/// tooth·inverse_lever, over columns of equal length (in that order). Four independent
-/// minima let the loop vectorise; `<` selects compile to plain min instructions.
-#[inline]
-fn smallest_ratio(columns: [&[f64]; 8], d_r: f64) -> f64 {
-    let len = columns[0].len();
-    let [smooth, eccentric, radial, tangential, inverse_lever, pin_radial, pin_tangential, tooth] =
-        columns.map(|c| &c[..len]);
-    let ratio = |k: usize| {
-        smooth[k]
-            + d_r * eccentric[k]
-            + pin_radial[k] * radial[k]
-            + pin_tangential[k] * tangential[k]
-            + tooth[k] * inverse_lever[k]
-    };
-    let mut lanes = [f64::INFINITY; 4];
-    let mut k = 0;
-    while k + 4 <= len {
-        for (lane, best) in lanes.iter_mut().enumerate() {
-            let v = ratio(k + lane);
-            *best = if v < *best { v } else { *best };
-        }
-        k += 4;
+/// The first `chunks` quadruples of a column.
+#[inline(always)]
+fn quads(column: &[f64], chunks: usize) -> &[[f64; 4]] {
+    &column.as_chunks::<4>().0[..chunks]
+}
+
+/// min over k of head + pin_radial·radial + pin_tangential·tangential, over columns of
+/// equal length, a multiple of 4. Four independent minima in fixed-size chunks let the loop
+/// vectorise; `<` selects compile to plain min instructions.
+#[inline(always)]
+fn smallest_ratio(
+    head: &[f64],
+    radial: &[f64],
+    tangential: &[f64],
+    pin_radial: &[f64],
+    pin_tangential: &[f64],
+) -> f64 {
+    let len = head.len();
+    debug_assert_eq!(len % 4, 0);
+    fn chunks(column: &[f64], len: usize) -> &[[f64; 4]] {
+        column[..len].as_chunks::<4>().0
     }
-    for k in k..len {
-        let v = ratio(k);
-        lanes[0] = if v < lanes[0] { v } else { lanes[0] };
+    let mut lanes = [f64::INFINITY; 4];
+    for ((((head, radial), tangential), pin_radial), pin_tangential) in chunks(head, len)
+        .iter()
+        .zip(chunks(radial, len))
+        .zip(chunks(tangential, len))
+        .zip(chunks(pin_radial, len))
+        .zip(chunks(pin_tangential, len))
+    {
+        for lane in 0..4 {
+            let v = head[lane]
+                + pin_radial[lane] * radial[lane]
+                + pin_tangential[lane] * tangential[lane];
+            lanes[lane] = if v < lanes[lane] { v } else { lanes[lane] };
+        }
     }
     lanes[0].min(lanes[1]).min(lanes[2].min(lanes[3]))
 }
@@ -833,33 +888,19 @@ impl ErrorModel for TransmissionError {
         &self.outputs
     }
 
+    // The workspace's one use of unsafe: calling the AVX2 build of the row after checking
+    // at run time that the CPU has AVX2.
+    #[allow(unsafe_code)]
     fn evaluate(&self, inputs: &[f64], outputs: &mut [f64]) {
-        SCRATCH.with(|scratch| {
-            let scratch = &mut *scratch.borrow_mut();
-            scratch.curve.resize(self.points, 0.0);
-            scratch.work.resize(self.points / 2, (0.0, 0.0));
-            self.fill_curve(inputs, &mut scratch.curve);
-            let curve = &scratch.curve;
-            let n = curve.len() as f64;
-            let (mut lo, mut hi, mut sum) = (f64::INFINITY, f64::NEG_INFINITY, 0.0);
-            for &v in curve {
-                lo = lo.min(v);
-                hi = hi.max(v);
-                sum += v;
+        SEARCH.with_borrow_mut(|search| {
+            #[cfg(target_arch = "x86_64")]
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: evaluate_avx2 requires AVX2, which the CPU has (checked just above).
+                unsafe { self.evaluate_avx2(inputs, search, outputs) };
+                return;
             }
-            let mean = sum / n;
-            let var = curve.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n;
-            self.fft.transform(curve, &mut scratch.work);
-            outputs[0] = hi - lo;
-            outputs[1] = var.sqrt();
-            outputs[2] = mean;
-            outputs[3] = self.fft.amplitude(&scratch.work, 1);
-            outputs[4] = self.fft.amplitude(&scratch.work, self.cycloid_teeth);
-            outputs[5] = self.fft.amplitude(&scratch.work, self.pins);
-            if !(hi - lo).is_finite() {
-                outputs.iter_mut().for_each(|o| *o = f64::NAN);
-            }
-        });
+            self.evaluate_with(inputs, search, outputs)
+        })
     }
 
     fn curves(&self, inputs: &[f64]) -> Vec<Curve> {
@@ -1102,6 +1143,38 @@ mod tests {
     }
 
     #[test]
+    #[allow(unsafe_code)]
+    fn avx2_build_gives_the_same_bits_as_the_portable_one() {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            let model = with(
+                rv40e_params()
+                    .with_number("pin_position_errors", 1.0)
+                    .with_number("tooth_profile_errors", 1.0),
+            );
+            let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+            let mut next = || {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+            };
+            let mut search = Search::default();
+            for _ in 0..20 {
+                let row: Vec<f64> = (0..model.inputs().len())
+                    .map(|i| if i == 2 { 0.01 } else { 0.01 * next() })
+                    .collect();
+                let (mut portable, mut wide) = ([0.0; 6], [0.0; 6]);
+                model.evaluate_with(&row, &mut search, &mut portable);
+                // SAFETY: the CPU has AVX2 (checked above).
+                unsafe { model.evaluate_avx2(&row, &mut search, &mut wide) };
+                assert!(portable.iter().all(|v| v.is_finite() && *v != 0.0));
+                assert_eq!(portable.map(f64::to_bits), wide.map(f64::to_bits));
+            }
+        }
+    }
+
+    #[test]
     fn table_driven_first_contact_equals_direct_geometry() {
         // The cycloid–pin stage recomputed from scratch at every point: pin angles from Θ,
         // the 003 factors, the tooth space from the pin's polar angle about the disc
@@ -1129,12 +1202,20 @@ mod tests {
         let (d_rp, d_p, profile, err_rp, err_rrp, q_r) =
             (0.011, -0.007, 0.001, 0.002, -0.001, 0.002);
         row[2..7].copy_from_slice(&[d_rp, d_p, profile, err_rp, err_rrp]);
-        row[FIXED_INPUTS.len() + 3] = q_r; // both cranks' eccentric magnitude: d_r = q_r
+        row[FIXED_INPUTS.len() + 3] = q_r; // both cranks' eccentric magnitude
         row[FIXED_INPUTS.len() + 7 + 3] = q_r;
+        // Crank bores (carrier frame): crank 1 at β = 0 radial 3 µm, crank 2 at β = π radial
+        // 1 µm and tangential 2 µm: the mean bore error is b = (1, −1) µm, and the disc moves
+        // along the eccentric by d_r = q_r + b_x·cos(z_p·Θ) − b_y·sin(z_p·Θ).
+        row[FIXED_INPUTS.len() + 5] = 0.003;
+        row[FIXED_INPUTS.len() + 7 + 5] = 0.001;
+        row[FIXED_INPUTS.len() + 7 + 6] = 0.002;
+        let (b_x, b_y) = (0.001, -0.001);
         let mut traced = vec![0.0; 4096];
         model.trace(&row, |j, s| traced[j] = s.cycloid);
-        for j in (0..4096).step_by(7) {
+        for (j, &traced) in traced.iter().enumerate() {
             let theta = 2.0 * PI * j as f64 / 4096.0;
+            let d_r = q_r + b_x * (zp as f64 * theta).cos() - b_y * (zp as f64 * theta).sin();
             let mut lag = f64::INFINITY;
             for i in 0..zp {
                 let phi =
@@ -1150,7 +1231,7 @@ mod tests {
                     .rem_euclid(zc as i64) as usize;
                 let g = d_rp * (1.0 - sin / root)
                     - d_p * (1.0 - k1 * cos - (1.0 - k1 * k1).sqrt() * sin) / root
-                    + q_r * (k1 - cos) / root
+                    + d_r * (k1 - cos) / root
                     + (err_rp + row[pin_base + i]) * (1.0 - k1 * cos) / root
                     + row[pin_base + zp + i] * k1 * sin / root
                     + profile
@@ -1159,9 +1240,9 @@ mod tests {
                 lag = lag.min(g / lever);
             }
             assert!(
-                (traced[j] + lag).abs() < 1e-9 * lag.abs().max(1e-6),
+                (traced + lag).abs() < 1e-9 * lag.abs().max(1e-6),
                 "point {j}: {} vs {}",
-                traced[j],
+                traced,
                 -lag
             );
         }
