@@ -1,5 +1,4 @@
-//! Order spectrum of a curve sampled over one revolution: a radix-2 real FFT for the whole
-//! spectrum, and the direct sum for a few orders.
+//! Order spectrum of a curve sampled over one revolution: a radix-2 real FFT.
 //!
 //! A curve x_0..x_{N−1} sampled at N equally spaced angles of one revolution (N a power
 //! of two) has the discrete Fourier transform X_k = Σ_j x_j·e^{−2πijk/N}; the order-k
@@ -11,10 +10,6 @@
 //! decimation-in-time FFT and separates the halves:
 //! X_k = ½(Z_k + Z̄_{M−k}) − ½i·e^{−2πik/N}·(Z_k − Z̄_{M−k}), M = N/2. Twiddles and the
 //! bit-reversal permutation are computed once per plan; a transform allocates nothing.
-//!
-//! A handful of orders (the per-sample outputs of a model) costs less by the definition:
-//! [`OrderBins`] sums x_j·e^{−2πijk/N} for K orders in one pass over the curve, with the
-//! twiddle of order k at sample j read from one table at (j·k) mod N.
 
 use std::f64::consts::PI;
 
@@ -125,45 +120,6 @@ impl RealFft {
     }
 }
 
-/// The semi-amplitudes of a few orders by the direct sum, for curves of one length.
-#[derive(Debug, Clone)]
-pub struct OrderBins {
-    /// (cos, −sin) of 2πm/N, m < N.
-    twiddles: Vec<Complex>,
-}
-
-impl OrderBins {
-    /// A table for curves of `n` samples; `n` must be a power of two.
-    pub fn new(n: usize) -> OrderBins {
-        assert!(n.is_power_of_two(), "curve length {n}");
-        OrderBins {
-            twiddles: (0..n)
-                .map(|m| {
-                    let (s, c) = (-2.0 * PI * m as f64 / n as f64).sin_cos();
-                    (c, s)
-                })
-                .collect(),
-        }
-    }
-
-    /// A_k = 2|X_k|/N for each of `orders` (each below N/2), in one pass over `x`.
-    #[inline(always)]
-    pub fn amplitudes<const K: usize>(&self, x: &[f64], orders: [usize; K]) -> [f64; K] {
-        let n = self.twiddles.len();
-        assert_eq!(x.len(), n);
-        let mask = n - 1;
-        let mut sums = [(0.0, 0.0); K];
-        for (j, &v) in x.iter().enumerate() {
-            for (sum, order) in sums.iter_mut().zip(orders) {
-                let (c, s) = self.twiddles[(j * order) & mask];
-                sum.0 += v * c;
-                sum.1 += v * s;
-            }
-        }
-        sums.map(|(re, im)| 2.0 * re.hypot(im) / n as f64)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -197,23 +153,6 @@ mod tests {
     }
 
     #[test]
-    fn order_bins_match_the_fft() {
-        let n = 4096;
-        let x: Vec<f64> = (0..n)
-            .map(|j| ((j * 7919) % 113) as f64 / 17.0 - 3.0)
-            .collect();
-        let fft = RealFft::new(n);
-        let mut work = vec![(0.0, 0.0); n / 2];
-        fft.transform(&x, &mut work);
-        let orders = [1, 39, 40, 1080, 2047];
-        let direct = OrderBins::new(n).amplitudes(&x, orders);
-        for (k, a) in orders.into_iter().zip(direct) {
-            let b = fft.amplitude(&work, k);
-            assert!((a - b).abs() < 1e-12 * b.max(1.0), "order {k}: {a} vs {b}");
-        }
-    }
-
-    #[test]
     fn a_sinusoid_has_its_semi_amplitude_at_its_order() {
         let n = 4096;
         let x: Vec<f64> = (0..n)
@@ -229,9 +168,5 @@ mod tests {
         assert!((fft.amplitude(&work, 1) - 0.7).abs() < 1e-12);
         assert!(fft.amplitude(&work, 40) < 1e-12);
         assert!((fft.bin(&work, 0).0 / n as f64 - 4.0).abs() < 1e-12);
-        let direct = OrderBins::new(n).amplitudes(&x, [39, 1, 40]);
-        assert!((direct[0] - 2.5).abs() < 1e-12);
-        assert!((direct[1] - 0.7).abs() < 1e-12);
-        assert!(direct[2] < 1e-12);
     }
 }

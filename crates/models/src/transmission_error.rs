@@ -51,7 +51,7 @@ use std::cell::RefCell;
 use std::f64::consts::PI;
 
 use crate::cycloid::CycloidStage;
-use crate::spectrum::{OrderBins, RealFft};
+use crate::spectrum::{Complex, RealFft};
 use crate::{
     Curve, CurveStyle, ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputKind,
     OutputSpec, ParamSpec, Series, ARCSEC_PER_RAD,
@@ -335,7 +335,6 @@ pub struct TransmissionError {
     curve_points: Vec<Point>,
     groups: Vec<Group>,
     fft: RealFft,
-    orders: OrderBins,
     inputs: Vec<InputSpec>,
     outputs: Vec<OutputSpec>,
 }
@@ -354,6 +353,8 @@ struct Search {
     head: Vec<f64>,
     /// The curve of the row, arcsec.
     curve: Vec<f64>,
+    /// The FFT's work buffer.
+    work: Vec<Complex>,
 }
 
 // Per-thread work state (no allocation per sample).
@@ -564,7 +565,6 @@ impl TransmissionError {
             curve_points,
             groups,
             fft: RealFft::new(points),
-            orders: OrderBins::new(points),
             inputs,
             outputs,
         })
@@ -697,38 +697,39 @@ impl TransmissionError {
             let (sx, cx) = points[0].crank;
             let d_r = q_r + b_x * cx - b_y * sx;
             let space = &tooth[(teeth - points[0].tooth_shift) as usize..];
-            // Without pin errors the first contact is the smallest head at every point.
             for (value, &t) in head.iter_mut().zip(tooth_of) {
                 *value = space[t as usize];
             }
-            let mut lanes = [f64::INFINITY; 4];
-            let chunks = width / 4;
-            let (blocked, inverse_lever, equidistant, shift, eccentric, radial_4) = (
-                quads(blocked, chunks),
-                quads(inverse_lever, chunks),
-                quads(equidistant, chunks),
-                quads(shift, chunks),
-                quads(eccentric, chunks),
-                quads(radial, chunks),
+            let head = &mut head[..width];
+            let (blocked, inverse_lever, equidistant, shift, eccentric) = (
+                &blocked[..width],
+                &inverse_lever[..width],
+                &equidistant[..width],
+                &shift[..width],
+                &eccentric[..width],
             );
-            for (c, head) in head.as_chunks_mut::<4>().0.iter_mut().enumerate() {
+            let (radial, tangential) = (&radial[..width], &tangential[..width]);
+            for e in 0..width {
+                head[e] = d_rp * equidistant[e]
+                    + d_p * shift[e]
+                    + err_rp * radial[e]
+                    + constant * inverse_lever[e]
+                    + d_r * eccentric[e]
+                    + head[e] * inverse_lever[e]
+                    + blocked[e];
+            }
+            // Without pin errors the first contact is the smallest head at every point.
+            let mut lanes = [f64::INFINITY; 4];
+            for quad in head.as_chunks::<4>().0 {
                 for lane in 0..4 {
-                    let value = d_rp * equidistant[c][lane]
-                        + d_p * shift[c][lane]
-                        + err_rp * radial_4[c][lane]
-                        + constant * inverse_lever[c][lane]
-                        + d_r * eccentric[c][lane]
-                        + head[lane] * inverse_lever[c][lane]
-                        + blocked[c][lane];
-                    head[lane] = value;
-                    lanes[lane] = if value < lanes[lane] {
-                        value
+                    lanes[lane] = if quad[lane] < lanes[lane] {
+                        quad[lane]
                     } else {
                         lanes[lane]
                     };
                 }
             }
-            let best = lanes[0].min(lanes[1]).min(lanes[2].min(lanes[3]));
+            let best = smallest_lane(lanes);
             for point in points {
                 let j = point.index as usize;
                 // 1. Involute stage.
@@ -771,42 +772,46 @@ impl TransmissionError {
 
     /// [`ErrorModel::evaluate`] with an explicit work state: the curve, its peak-to-peak,
     /// rms and mean, and the amplitudes of orders 1, z_c and z_p.
-    #[inline(always)]
     fn evaluate_with(&self, inputs: &[f64], search: &mut Search, outputs: &mut [f64]) {
         let mut curve = std::mem::take(&mut search.curve);
         curve.resize(self.points, 0.0);
         self.trace_with(inputs, search, |j, stages| {
             curve[j] = stages.total() * ARCSEC_PER_RAD
         });
+        // Four lanes (N is a multiple of 4), so that the passes vectorise.
         let n = curve.len() as f64;
-        let (mut lo, mut hi, mut sum) = (f64::INFINITY, f64::NEG_INFINITY, 0.0);
-        for &v in &curve {
-            lo = lo.min(v);
-            hi = hi.max(v);
-            sum += v;
+        let quads = curve.as_chunks::<4>().0;
+        let (mut lo, mut hi, mut sum) = ([f64::INFINITY; 4], [f64::NEG_INFINITY; 4], [0.0; 4]);
+        for quad in quads {
+            for lane in 0..4 {
+                let v = quad[lane];
+                lo[lane] = if v < lo[lane] { v } else { lo[lane] };
+                hi[lane] = if v > hi[lane] { v } else { hi[lane] };
+                sum[lane] += v;
+            }
         }
+        let (lo, hi) = (
+            lo.into_iter().fold(f64::INFINITY, f64::min),
+            hi.into_iter().fold(f64::NEG_INFINITY, f64::max),
+        );
+        let sum = (sum[0] + sum[1]) + (sum[2] + sum[3]);
         let mean = sum / n;
-        let var = curve.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n;
-        let [first, cycloid, pins] = self
-            .orders
-            .amplitudes(&curve, [1, self.cycloid_teeth, self.pins]);
+        let mut squares = [0.0; 4];
+        for quad in quads {
+            for lane in 0..4 {
+                squares[lane] += (quad[lane] - mean) * (quad[lane] - mean);
+            }
+        }
+        let var = ((squares[0] + squares[1]) + (squares[2] + squares[3])) / n;
+        search.work.resize(self.points / 2, (0.0, 0.0));
+        self.fft.transform(&curve, &mut search.work);
+        let [first, cycloid, pins] =
+            [1, self.cycloid_teeth, self.pins].map(|k| self.fft.amplitude(&search.work, k));
         outputs[..6].copy_from_slice(&[hi - lo, var.sqrt(), mean, first, cycloid, pins]);
-        if !(hi - lo).is_finite() {
+        if !(hi - lo).is_finite() || !sum.is_finite() {
             outputs.iter_mut().for_each(|o| *o = f64::NAN);
         }
         search.curve = curve;
-    }
-
-    /// [`Self::evaluate_with`] compiled for AVX2: the same operations in the same order
-    /// (Rust never fuses a multiply and an add), so the same bits, on wider registers.
-    ///
-    /// # Safety
-    /// The CPU must support AVX2.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    #[allow(unsafe_code)]
-    unsafe fn evaluate_avx2(&self, inputs: &[f64], search: &mut Search, outputs: &mut [f64]) {
-        self.evaluate_with(inputs, search, outputs)
     }
 
     /// Fills `curve` with TE(Θ_j) in arcsec.
@@ -852,27 +857,31 @@ fn smallest_ratio(
     pin_radial: &[f64],
     pin_tangential: &[f64],
 ) -> f64 {
-    let len = head.len();
-    debug_assert_eq!(len % 4, 0);
-    fn chunks(column: &[f64], len: usize) -> &[[f64; 4]] {
-        column[..len].as_chunks::<4>().0
-    }
+    let count = head.len() / 4;
+    let (head, radial, tangential) = (
+        quads(head, count),
+        quads(radial, count),
+        quads(tangential, count),
+    );
+    let (pin_radial, pin_tangential) = (quads(pin_radial, count), quads(pin_tangential, count));
     let mut lanes = [f64::INFINITY; 4];
-    for ((((head, radial), tangential), pin_radial), pin_tangential) in chunks(head, len)
-        .iter()
-        .zip(chunks(radial, len))
-        .zip(chunks(tangential, len))
-        .zip(chunks(pin_radial, len))
-        .zip(chunks(pin_tangential, len))
-    {
+    for c in 0..count {
         for lane in 0..4 {
-            let v = head[lane]
-                + pin_radial[lane] * radial[lane]
-                + pin_tangential[lane] * tangential[lane];
+            let v = head[c][lane]
+                + pin_radial[c][lane] * radial[c][lane]
+                + pin_tangential[c][lane] * tangential[c][lane];
             lanes[lane] = if v < lanes[lane] { v } else { lanes[lane] };
         }
     }
-    lanes[0].min(lanes[1]).min(lanes[2].min(lanes[3]))
+    smallest_lane(lanes)
+}
+
+/// The smallest of four lanes, by `<` selects (plain min instructions; a NaN lane is
+/// passed over, as in the lanes themselves).
+#[inline(always)]
+fn smallest_lane(lanes: [f64; 4]) -> f64 {
+    let select = |a: f64, b: f64| if b < a { b } else { a };
+    select(select(lanes[0], lanes[1]), select(lanes[2], lanes[3]))
 }
 
 impl ErrorModel for TransmissionError {
@@ -888,19 +897,8 @@ impl ErrorModel for TransmissionError {
         &self.outputs
     }
 
-    // The workspace's one use of unsafe: calling the AVX2 build of the row after checking
-    // at run time that the CPU has AVX2.
-    #[allow(unsafe_code)]
     fn evaluate(&self, inputs: &[f64], outputs: &mut [f64]) {
-        SEARCH.with_borrow_mut(|search| {
-            #[cfg(target_arch = "x86_64")]
-            if std::arch::is_x86_feature_detected!("avx2") {
-                // SAFETY: evaluate_avx2 requires AVX2, which the CPU has (checked just above).
-                unsafe { self.evaluate_avx2(inputs, search, outputs) };
-                return;
-            }
-            self.evaluate_with(inputs, search, outputs)
-        })
+        SEARCH.with_borrow_mut(|search| self.evaluate_with(inputs, search, outputs))
     }
 
     fn curves(&self, inputs: &[f64]) -> Vec<Curve> {
@@ -1140,38 +1138,6 @@ mod tests {
             output > profile && profile > crank && crank > involute,
             "{output} {profile} {crank} {involute}"
         );
-    }
-
-    #[test]
-    #[allow(unsafe_code)]
-    fn avx2_build_gives_the_same_bits_as_the_portable_one() {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            let model = with(
-                rv40e_params()
-                    .with_number("pin_position_errors", 1.0)
-                    .with_number("tooth_profile_errors", 1.0),
-            );
-            let mut state = 0x9e37_79b9_7f4a_7c15_u64;
-            let mut next = || {
-                state ^= state << 13;
-                state ^= state >> 7;
-                state ^= state << 17;
-                (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-            };
-            let mut search = Search::default();
-            for _ in 0..20 {
-                let row: Vec<f64> = (0..model.inputs().len())
-                    .map(|i| if i == 2 { 0.01 } else { 0.01 * next() })
-                    .collect();
-                let (mut portable, mut wide) = ([0.0; 6], [0.0; 6]);
-                model.evaluate_with(&row, &mut search, &mut portable);
-                // SAFETY: the CPU has AVX2 (checked above).
-                unsafe { model.evaluate_avx2(&row, &mut search, &mut wide) };
-                assert!(portable.iter().all(|v| v.is_finite() && *v != 0.0));
-                assert_eq!(portable.map(f64::to_bits), wide.map(f64::to_bits));
-            }
-        }
     }
 
     #[test]
