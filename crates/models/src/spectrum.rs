@@ -20,7 +20,9 @@ pub type Complex = (f64, f64);
 #[derive(Debug, Clone)]
 pub struct RealFft {
     n: usize,
-    /// e^{−2πij/M}, j < M/2, for the half-length complex transform.
+    /// The twiddles of the half-length complex transform stage by stage: the stage that
+    /// combines blocks of `half` points uses e^{−2πij/(2·half)}, j < half, stored at
+    /// `half − 1 ..= 2·half − 2` (M − 1 in all), so that each stage reads them in order.
     twiddles: Vec<Complex>,
     /// e^{−2πik/N}, k ≤ M, for the separation step.
     unpack: Vec<Complex>,
@@ -37,10 +39,13 @@ impl RealFft {
         let angle = |k: usize, of: usize| -2.0 * PI * k as f64 / of as f64;
         RealFft {
             n,
-            twiddles: (0..m / 2)
-                .map(|j| {
-                    let (s, c) = angle(j, m).sin_cos();
-                    (c, s)
+            twiddles: (0..bits)
+                .flat_map(|stage| {
+                    let half = 1usize << stage;
+                    (0..half).map(move |j| {
+                        let (s, c) = angle(j, 2 * half).sin_cos();
+                        (c, s)
+                    })
                 })
                 .collect(),
             unpack: (0..=m)
@@ -82,14 +87,12 @@ impl RealFft {
         }
         let mut half = 1;
         while half < m {
-            let stride = m / (2 * half);
-            for start in (0..m).step_by(2 * half) {
-                for j in 0..half {
-                    let w = self.twiddles[j * stride];
-                    let (a, b) = (work[start + j], work[start + j + half]);
+            let twiddles = &self.twiddles[half - 1..2 * half - 1];
+            for block in work.chunks_exact_mut(2 * half) {
+                let (lower, upper) = block.split_at_mut(half);
+                for ((a, b), w) in lower.iter_mut().zip(upper.iter_mut()).zip(twiddles) {
                     let t = (b.0 * w.0 - b.1 * w.1, b.0 * w.1 + b.1 * w.0);
-                    work[start + j] = (a.0 + t.0, a.1 + t.1);
-                    work[start + j + half] = (a.0 - t.0, a.1 - t.1);
+                    (*a, *b) = ((a.0 + t.0, a.1 + t.1), (a.0 - t.0, a.1 - t.1));
                 }
             }
             half *= 2;

@@ -638,7 +638,10 @@ impl TransmissionError {
         let (q_r, q_t, b_x, b_y) = (q_r / m, q_t / m, b_x / m, b_y / m);
         let sun_cos = normal_sum.0 * sun_x + normal_sum.1 * sun_y;
         let sun_sin = normal_sum.1 * sun_x - normal_sum.0 * sun_y;
-        let lever_base = self.eccentricity * self.cycloid_teeth as f64;
+        // Per-point divisions become products: 1/(a·z_c) for the crank stage and the
+        // output runout over r6, both once per row.
+        let inverse_lever_base = 1.0 / (self.eccentricity * self.cycloid_teeth as f64);
+        let (out_x, out_y) = (out_x / self.output_radius, out_y / self.output_radius);
         let involute_scale = -1.0 / (m * self.base_radius * self.divisor);
         let constant = profile - err_rrp;
         let pin_base = n_fixed + 7 * self.cranks;
@@ -740,7 +743,7 @@ impl TransmissionError {
                 let involute = gap * involute_scale;
                 // 2. Crank stage: disc displacement across the eccentric.
                 let d_t = q_t + b_x * sx + b_y * cx;
-                let crank = d_t / lever_base;
+                let crank = d_t * inverse_lever_base;
                 // 3. Cycloid–pin stage: the smallest clearance ratio over the slots.
                 let lag = if self.per_pin {
                     let pin = (pins - point.pin_shift) as usize;
@@ -756,7 +759,7 @@ impl TransmissionError {
                 };
                 // 4. Output mechanism: n14 fixed in the housing, o turning with the output.
                 let (so, co) = point.output;
-                let output = (out_x * so + out_y * co) / self.output_radius;
+                let output = out_x * so + out_y * co;
                 sink(
                     j,
                     StageErrors {
