@@ -238,7 +238,8 @@ fn rv40e_params() -> ModelParams {
 /// stored divided by the lever l, so that a row's clearance ratio g/l is a sum of products.
 #[derive(Debug, Clone, Default)]
 struct PinTable {
-    /// Entries per phase: one more than the highest slot with a positive lever.
+    /// Entries per phase: the ⌈z_p/2⌉ slots that can have a positive lever, rounded up to
+    /// a multiple of 4 (the chunk of the vectorised scans).
     width: usize,
     /// 0 for a pin with a positive lever, +∞ for padding.
     blocked: Vec<f64>,
@@ -776,6 +777,11 @@ impl TransmissionError {
     /// [`ErrorModel::evaluate`] with an explicit work state: the curve, its peak-to-peak,
     /// rms and mean, and the amplitudes of orders 1, z_c and z_p.
     fn evaluate_with(&self, inputs: &[f64], search: &mut Search, outputs: &mut [f64]) {
+        // The scans pass over a NaN ratio, so a non-finite input must not reach them.
+        if inputs.iter().any(|v| !v.is_finite()) {
+            outputs.iter_mut().for_each(|o| *o = f64::NAN);
+            return;
+        }
         let mut curve = std::mem::take(&mut search.curve);
         curve.resize(self.points, 0.0);
         self.trace_with(inputs, search, |j, stages| {
@@ -999,6 +1005,21 @@ mod tests {
         let model = rv40e();
         let curve = model.curve(&row(&model, &[]));
         assert!(curve.iter().all(|v| *v == 0.0));
+    }
+
+    #[test]
+    fn a_non_finite_input_gives_nan_outputs() {
+        // One tooth space's error NaN: the scans would pass over its ratios and report a
+        // finite, wrong curve; the outputs must be NaN so the engine counts the sample.
+        let model = with(rv40e_params().with_number("tooth_profile_errors", 1.0));
+        let mut row = row(&model, &[("equidistant_modification_mm", 0.01)]);
+        let mut outputs = vec![0.0; 6];
+        model.evaluate(&row, &mut outputs);
+        assert!(outputs.iter().all(|v| v.is_finite()));
+        let tooth = model.input_index("tooth_profile_error_mm_7").unwrap();
+        row[tooth] = f64::NAN;
+        model.evaluate(&row, &mut outputs);
+        assert!(outputs.iter().all(|v| v.is_nan()), "{outputs:?}");
     }
 
     #[test]
