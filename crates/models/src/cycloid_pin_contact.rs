@@ -46,13 +46,27 @@
 
 use std::f64::consts::PI;
 
-use crate::cycloid::CycloidStage;
+use crate::cycloid::{CycloidStage, PinFactors};
 use crate::{
     ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputKind, OutputSpec, ParamSpec,
 };
 
 /// Largest pin count the model accepts (per-sample arrays live on the stack).
 pub const MAX_PINS: usize = 128;
+/// The parameters of one disc and its pins: what a model that embeds this one (the crank
+/// elastic error, the torsion curve) hands over under the same keys, so that this model
+/// checks them and names them in its errors. The embedding model sets the crank layout.
+pub(crate) const DISC_KEYS: [&str; 9] = [
+    "pin_count",
+    "cycloid_teeth",
+    "pin_circle_radius_mm",
+    "pin_radius_mm",
+    "eccentricity_mm",
+    "disc_face_width_mm",
+    "disc_load_share",
+    "youngs_modulus_mpa",
+    "poisson_ratio",
+];
 /// Palmgren's line-contact coefficient, mm·N^−0.9·mm^0.8.
 const PALMGREN: f64 = 3.84e-5;
 /// Line contacts in series per pin: disc–pin and pin–housing.
@@ -191,11 +205,7 @@ pub const ENTRY: ModelEntry = ModelEntry {
 /// The contact model with its design geometry.
 #[derive(Debug, Clone)]
 pub struct CycloidPinContact {
-    pins: usize,
-    cycloid_teeth: f64,
-    pin_circle_radius: f64,
     pin_radius: f64,
-    eccentricity: f64,
     face_width: f64,
     load_share: f64,
     cranks: f64,
@@ -207,6 +217,8 @@ pub struct CycloidPinContact {
     stage: CycloidStage,
     /// Per pin, everything that depends on the design geometry only.
     geometry: Vec<PinGeometry>,
+    /// Per pin, its lever l_i (the column the load solve reads as one slice).
+    levers: Vec<f64>,
     inputs: Vec<InputSpec>,
     outputs: Vec<OutputSpec>,
 }
@@ -236,8 +248,7 @@ impl CycloidPinContact {
     /// Builds the model from its parameters.
     pub fn from_params(params: &ModelParams) -> Result<Self, ModelError> {
         let stage = CycloidStage::from_params(params, MAX_PINS)?;
-        let (pins, cycloid_teeth) = (stage.pins, stage.teeth);
-        let (pin_circle_radius, eccentricity) = (stage.pin_circle_radius, stage.eccentricity);
+        let pins = stage.pins;
         let pin_radius = params.positive("pin_radius_mm", None)?;
         let face_width = params.positive("disc_face_width_mm", None)?;
         let load_share = params.positive("disc_load_share", Some(0.5))?;
@@ -290,11 +301,7 @@ impl CycloidPinContact {
             kind: OutputKind::Continuous,
         };
         let mut model = CycloidPinContact {
-            pins,
-            cycloid_teeth: cycloid_teeth as f64,
-            pin_circle_radius,
             pin_radius,
-            eccentricity,
             face_width,
             load_share,
             cranks,
@@ -303,6 +310,7 @@ impl CycloidPinContact {
             per_pin_errors: per_pin,
             stage,
             geometry: Vec::new(),
+            levers: Vec::new(),
             inputs,
             outputs: vec![
                 output("max_pin_force_n", "N", "largest pin force F_max"),
@@ -314,29 +322,35 @@ impl CycloidPinContact {
             ],
         };
         model.geometry = (0..pins).map(|i| model.pin_geometry(i)).collect();
+        model.levers = model.geometry.iter().map(|pin| pin.factors.lever).collect();
         Ok(model)
     }
 
     /// The design quantities of pin i (at φ = 2π·i/z_p, 0-based), see the module comment.
     fn pin_geometry(&self, i: usize) -> PinGeometry {
-        let phi = 2.0 * PI * i as f64 / self.pins as f64;
+        let phi = 2.0 * PI * i as f64 / self.stage.pins as f64;
         let factors = self.stage.pin_factors(phi);
         PinGeometry {
-            lever: factors.lever,
-            equidistant: factors.equidistant,
-            shift: factors.shift,
-            radial: factors.radial,
-            eccentric: factors.eccentric,
-            tangential: factors.tangential,
+            factors,
             // R*/r_rp = 1 + r_rp/ρ0.
             curvature_factor: 1.0 + self.pin_radius * self.inverse_curvature_radius(phi.cos()),
             // The disc pushes the pin along −n_i = (sin φ, −(K1 − cos φ))/S: its x part is
             // l/(e·z_c), its y part −(eccentric factor).
             push: (
-                factors.lever / (self.eccentricity * self.cycloid_teeth),
+                factors.lever / (self.stage.eccentricity * self.stage.teeth as f64),
                 -factors.eccentric,
             ),
         }
+    }
+
+    /// The checked cycloid–pin stage geometry (z_p, z_c, r_p, e).
+    pub(crate) fn stage(&self) -> &CycloidStage {
+        &self.stage
+    }
+
+    /// Share of the output torque carried by one disc.
+    pub(crate) fn load_share(&self) -> f64 {
+        self.load_share
     }
 
     /// K1 = e·z_p/r_p of the design.
@@ -353,9 +367,9 @@ impl CycloidPinContact {
     /// 1/ρ0 at cos φ: finite everywhere, zero at the inflection point.
     fn inverse_curvature_radius(&self, cos: f64) -> f64 {
         let k1 = self.k1();
-        let zp = self.pins as f64;
+        let zp = self.stage.pins as f64;
         let s = (1.0 + k1 * k1 - 2.0 * k1 * cos).sqrt();
-        (k1 * (zp + 1.0) * cos - (1.0 + zp * k1 * k1)) / (self.pin_circle_radius * s.powi(3))
+        (k1 * (zp + 1.0) * cos - (1.0 + zp * k1 * k1)) / (self.stage.pin_circle_radius * s.powi(3))
     }
 
     /// Resultant (F_x, F_y) of the forces the disc exerts on the pins (003's sign: along
@@ -376,23 +390,27 @@ impl CycloidPinContact {
         self.solve_pins(inputs).resultant
     }
 
-    /// Disc rotation β under load (rad, [`Self::solve`]'s `rotation`) and the rotation at
-    /// which the driving flank first touches, min over pins with l_i > 0 of Δ_i/l_i (rad;
-    /// NaN when a clearance is not finite), for one row of inputs, without allocating: the
-    /// per-sample entry point of `torsion_curve`. With zero torque only the clearances are
-    /// formed (no load solve).
-    pub(crate) fn rotation_and_first_contact(&self, inputs: &[f64]) -> (f64, f64) {
-        let solved = self.solve_pins(inputs);
+    /// Disc rotation β under load (rad, [`Self::solve`]'s `rotation`) for one row of
+    /// inputs, without allocating: a per-sample entry point of `torsion_curve`.
+    pub(crate) fn rotation(&self, inputs: &[f64]) -> f64 {
+        self.solve_pins(inputs).rotation
+    }
+
+    /// The rotation at which the driving flank first touches, min over pins with l_i > 0 of
+    /// Δ_i/l_i (rad; NaN when a clearance is not finite), for one row of inputs (its torque
+    /// is not used): the clearances only, no load solve.
+    pub(crate) fn first_contact(&self, inputs: &[f64]) -> f64 {
+        let clearances = self.clearances(inputs);
         let mut first_contact = f64::INFINITY;
-        for (pin, &clearance) in self.geometry.iter().zip(&solved.clearances[..self.pins]) {
+        for (&lever, &clearance) in self.levers.iter().zip(&clearances) {
             if !clearance.is_finite() {
-                return (solved.rotation, f64::NAN);
+                return f64::NAN;
             }
-            if pin.lever > 0.0 {
-                first_contact = first_contact.min(clearance / pin.lever);
+            if lever > 0.0 {
+                first_contact = first_contact.min(clearance / lever);
             }
         }
-        (solved.rotation, first_contact)
+        first_contact
     }
 
     /// Contact approach δ(F) of one pin (two Palmgren line contacts in series), mm.
@@ -402,11 +420,11 @@ impl CycloidPinContact {
 
     /// Solves the load sharing for one row of inputs (in the order of `inputs()`).
     pub fn solve(&self, inputs: &[f64]) -> ContactSolution {
-        let n = self.pins;
+        let n = self.stage.pins;
         let solved = self.solve_pins(inputs);
         ContactSolution {
             forces: solved.forces[..n].to_vec(),
-            levers: self.geometry.iter().map(|pin| pin.lever).collect(),
+            levers: self.levers.clone(),
             clearances: solved.clearances[..n].to_vec(),
             stresses: (0..n)
                 .map(|i| self.stress(i, solved.forces[i], solved.face_width))
@@ -427,29 +445,36 @@ impl CycloidPinContact {
         (force * self.contact_modulus / (PI * face_width * radius)).sqrt()
     }
 
-    /// Clearances, load sharing and resultants for one row of inputs; the per-pin arrays
-    /// live on the stack.
-    fn solve_pins(&self, inputs: &[f64]) -> Solved {
-        let n = self.pins;
-        let torque = self.load_share * inputs[0].abs() * 1000.0; // N·mm; either flank alike
+    /// The clearance Δ_i of every pin along its normal for one row of inputs (pin order,
+    /// on the stack).
+    fn clearances(&self, inputs: &[f64]) -> [f64; MAX_PINS] {
+        let n = self.stage.pins;
         let (d_rp, d_p) = (inputs[1], inputs[2]);
         let (err_rp, err_rrp, err_e) = (inputs[3], inputs[4], inputs[5]);
-        let face_width = self.face_width + inputs[6];
-        let mut levers = [0.0; MAX_PINS];
         let mut clearances = [0.0; MAX_PINS];
         for (i, pin) in self.geometry.iter().enumerate() {
-            levers[i] = pin.lever;
-            let mut clearance = d_rp * pin.equidistant + d_p * pin.shift + err_rp * pin.radial
-                - err_rrp
-                + err_e * pin.eccentric;
+            let f = &pin.factors;
+            let mut clearance = d_rp * f.equidistant + d_p * f.shift + err_rp * f.radial - err_rrp
+                + err_e * f.eccentric;
             if self.per_pin_errors {
-                clearance += inputs[7 + i] * pin.radial + inputs[7 + n + i] * pin.tangential;
+                clearance += inputs[7 + i] * f.radial + inputs[7 + n + i] * f.tangential;
             }
             clearances[i] = clearance;
         }
-        let (levers, active_clearances) = (&levers[..n], &clearances[..n]);
+        clearances
+    }
+
+    /// Clearances, load sharing and resultants for one row of inputs; the per-pin arrays
+    /// live on the stack.
+    fn solve_pins(&self, inputs: &[f64]) -> Solved {
+        let n = self.stage.pins;
+        let torque = self.load_share * inputs[0].abs() * 1000.0; // N·mm; either flank alike
+        let face_width = self.face_width + inputs[6];
+        let clearances = self.clearances(inputs);
+        let (levers, active_clearances) = (&self.levers[..], &clearances[..n]);
         let mut forces = [0.0; MAX_PINS];
-        let mut f_max = 4.0 * torque / (n as f64 * self.eccentricity * self.cycloid_teeth);
+        let mut f_max =
+            4.0 * torque / (n as f64 * self.stage.eccentricity * self.stage.teeth as f64);
         let mut rotation = 0.0;
         let mut iterations = 0;
         if torque > 0.0 {
@@ -485,21 +510,10 @@ impl CycloidPinContact {
 }
 
 /// The design quantities of one pin: lever arm l_i and the factors that project each
-/// clearance term and error on the normal n_i (module comment).
+/// clearance term and error on the normal n_i (module comment), and its contact geometry.
 #[derive(Debug, Clone, Copy)]
 struct PinGeometry {
-    /// l_i = e·z_c·sin φ/S, mm.
-    lever: f64,
-    /// Factor of Δr_rp: 1 − sin φ/S.
-    equidistant: f64,
-    /// Factor of Δr_p: −(1 − K1·cos φ − √(1 − K1²)·sin φ)/S.
-    shift: f64,
-    /// Factor of a radial pin displacement: (1 − K1·cos φ)/S.
-    radial: f64,
-    /// Factor of the eccentricity error: (K1 − cos φ)/S.
-    eccentric: f64,
-    /// Factor of a tangential pin displacement: K1·sin φ/S.
-    tangential: f64,
+    factors: PinFactors,
     /// R*/r_rp = 1 + r_rp/ρ0.
     curvature_factor: f64,
     /// Unit vector along which the disc pushes the pin (−n_i), in 003's axes.
@@ -608,7 +622,7 @@ impl ErrorModel for CycloidPinContact {
             outputs.iter_mut().for_each(|o| *o = f64::NAN);
             return;
         }
-        let forces = &solved.forces[..self.pins];
+        let forces = &solved.forces[..self.stage.pins];
         let (mut f_max, mut engaged, mut sigma_max) = (0.0_f64, 0.0, 0.0_f64);
         let threshold = 1e-9 * forces.iter().cloned().fold(0.0, f64::max);
         for (i, &f) in forces.iter().enumerate() {
@@ -750,11 +764,11 @@ mod tests {
     /// θ/z_c; the curve it traces is the theoretical profile.
     fn profile_point(model: &CycloidPinContact, theta: f64) -> (f64, f64) {
         let (ox, oy) = (
-            model.eccentricity * theta.sin(),
-            model.eccentricity * theta.cos(),
+            model.stage.eccentricity * theta.sin(),
+            model.stage.eccentricity * theta.cos(),
         );
-        let (dx, dy) = (-ox, model.pin_circle_radius - oy);
-        let (s, c) = (-theta / model.cycloid_teeth).sin_cos();
+        let (dx, dy) = (-ox, model.stage.pin_circle_radius - oy);
+        let (s, c) = (-theta / model.stage.teeth as f64).sin_cos();
         (c * dx - s * dy, s * dx + c * dy)
     }
 

@@ -142,6 +142,20 @@ impl ModelParams {
         }
     }
 
+    /// The values under `keys` that are present, for a sub-model: absent keys stay absent,
+    /// so the sub-model applies its own default or names the missing key, and checks the
+    /// values under the same keys. Whether the keys are allowed here is up to this model's
+    /// own [`Self::reject_unknown`] list.
+    pub fn subset(&self, keys: &[&str]) -> ModelParams {
+        let mut to = ModelParams::new();
+        for &key in keys {
+            if let Some(value) = self.values.get(key) {
+                to.insert(key.to_string(), value.clone());
+            }
+        }
+        to
+    }
+
     /// Fails on the first key that no accessor read (call after building).
     pub fn reject_unknown(&self, known: &[&str]) -> Result<(), ModelError> {
         let read = self.read.borrow();

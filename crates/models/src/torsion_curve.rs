@@ -49,7 +49,7 @@
 //!   outputs (the engine counts them).
 
 use crate::crank_elastic_error::CrankElasticError;
-use crate::cycloid_pin_contact::CycloidPinContact;
+use crate::cycloid_pin_contact::{CycloidPinContact, DISC_KEYS};
 use crate::geometric_hysteresis::{self, GeometricHysteresis};
 use crate::{
     Curve, CurveStyle, ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputKind,
@@ -109,17 +109,6 @@ const OUTPUTS: [(&str, &str, &str); 5] = [
         "arcmin",
         "output angle at rated torque: c/2 + E(T_r)",
     ),
-];
-
-/// Parameters of the contact model (003) taken from the merged set under the same keys.
-const CONTACT_KEYS: [&str; 7] = [
-    "pin_count",
-    "cycloid_teeth",
-    "pin_circle_radius_mm",
-    "pin_radius_mm",
-    "eccentricity_mm",
-    "disc_face_width_mm",
-    "disc_load_share",
 ];
 
 const PARAMS: &[ParamSpec] = &[
@@ -246,26 +235,10 @@ pub struct TorsionCurve {
     /// Load sharing of one disc, 2 cranks on the crank circle, no per-pin errors.
     contact: CycloidPinContact,
     rated_torque: f64,
-    load_share: f64,
     crank_circle_radius: f64,
     crank_stiffness: f64,
     inputs: Vec<InputSpec>,
     outputs: Vec<OutputSpec>,
-}
-
-/// Copies the numbers under `keys` that `from` has; absent keys stay absent, so the
-/// sub-model applies its own default or names the missing key.
-fn copy_numbers(from: &ModelParams, keys: &[&str]) -> Result<ModelParams, ModelError> {
-    let mut to = ModelParams::new();
-    for &key in keys {
-        // `number` returns the default untouched when the key is absent and rejects a
-        // present non-finite value, so NaN marks "absent".
-        let value = from.number(key, Some(f64::NAN))?;
-        if !value.is_nan() {
-            to = to.with_number(key, value);
-        }
-    }
-    Ok(to)
 }
 
 impl TorsionCurve {
@@ -291,18 +264,17 @@ impl TorsionCurve {
             .iter()
             .map(|p| p.name)
             .collect();
-        let hysteresis =
-            GeometricHysteresis::from_params(&copy_numbers(params, &hysteresis_keys)?)?;
+        let hysteresis = GeometricHysteresis::from_params(&params.subset(&hysteresis_keys))?;
         // 000 has checked center_distance_mm (present and positive).
         let center_distance = params.positive("center_distance_mm", None)?;
         let crank_circle_radius =
             params.positive("crank_circle_radius_mm", Some(center_distance))?;
         let contact = CycloidPinContact::from_params(
-            &copy_numbers(params, &CONTACT_KEYS)?
+            &params
+                .subset(&DISC_KEYS)
                 .with_number("crank_count", 2.0)
                 .with_number("crank_circle_radius_mm", crank_circle_radius),
         )?;
-        let load_share = params.positive("disc_load_share", Some(0.5))?;
         let crank_stiffness = params.positive("crank_bearing_stiffness_n_per_mm", None)?;
         let rated_torque = params.positive("rated_torque_nm", None)?;
         params.reject_unknown(&PARAMS.iter().map(|p| p.name).collect::<Vec<_>>())?;
@@ -324,7 +296,6 @@ impl TorsionCurve {
             hysteresis,
             contact,
             rated_torque,
-            load_share,
             crank_circle_radius,
             crank_stiffness,
             inputs,
@@ -367,8 +338,7 @@ impl TorsionCurve {
             x[ECCENTRICITY_ERROR],
             0.0,
         ];
-        // Zero torque: the clearances only, no load solve.
-        let (_, first_contact) = self.contact.rotation_and_first_contact(&row);
+        let first_contact = self.contact.first_contact(&row);
         first_contact.is_finite().then_some(ElasticState {
             row,
             first_contact,
@@ -383,12 +353,11 @@ impl TorsionCurve {
         }
         let mut row = state.row;
         row[0] = torque;
-        let (rotation, _) = self.contact.rotation_and_first_contact(&row);
-        let contact = rotation - state.first_contact;
+        let contact = self.contact.rotation(&row) - state.first_contact;
         let a = self.crank_circle_radius;
-        let disc_torque = self.load_share * torque * 1000.0; // N·mm
-                                                             // Equal stiffness on both cranks: the tangential forces sum to T_disc/a (004), so
-                                                             // the two holes deflect by T_disc/(a·k) in all.
+        // Equal stiffness on both cranks: the tangential forces sum to T_disc/a (004), so
+        // the two holes deflect by T_disc/(a·k) in all.
+        let disc_torque = self.contact.load_share() * torque * 1000.0; // N·mm
         let crank = CrankElasticError::four_bar_lag(disc_torque / (a * state.stiffness), a);
         (contact + crank) * ARCMIN_PER_RAD
     }
@@ -698,10 +667,10 @@ mod tests {
     }
 
     #[test]
-    fn crank_part_is_the_four_bar_lag_of_004() {
-        // 004's model on the RV-20E geometry with equal stiffness: its mean lag
-        // arctan(T_disc/(2k·a0²)) is the crank part of E (unmodified profile: E minus the
-        // closed-form contact part is tested above, here E's crank term itself).
+    fn reference_crank_lag_is_the_four_bar_lag_of_004() {
+        // The tests above check E's crank part against `crank_lag`, arctan(T_disc/(2k·a0²)).
+        // That reference must be what 004's model gives on the same RV-20E geometry with
+        // equal stiffness: the crank_elastic_error model's mean lag equals it.
         let params = ModelParams::new()
             .with_number("pin_count", 40.0)
             .with_number("cycloid_teeth", 39.0)

@@ -594,7 +594,7 @@ impl TransmissionError {
 
     /// Calls `sink(j, stages)` for every point j of the curve (stage errors in rad).
     pub fn trace(&self, inputs: &[f64], sink: impl FnMut(usize, StageErrors)) {
-        SEARCH.with(|search| self.trace_with(inputs, &mut search.borrow_mut(), sink))
+        SEARCH.with_borrow_mut(|search| self.trace_with(inputs, search, sink))
     }
 
     /// [`Self::trace`] with an explicit work state.
@@ -645,23 +645,16 @@ impl TransmissionError {
         let (out_x, out_y) = (out_x / self.output_radius, out_y / self.output_radius);
         let involute_scale = -1.0 / (m * self.base_radius * self.divisor);
         let constant = profile - err_rrp;
-        let pin_base = n_fixed + 7 * self.cranks;
-        let tooth_base = pin_base + if self.per_pin { 2 * self.pins } else { 0 };
-        let pin_radial = &inputs[pin_base..if self.per_pin {
-            pin_base + self.pins
+        // Per-pin and per-tooth inputs follow the cranks' (empty when the model has none).
+        let n_pins = if self.per_pin { self.pins } else { 0 };
+        let n_teeth = if self.per_tooth {
+            self.cycloid_teeth
         } else {
-            pin_base
-        }];
-        let pin_tangential = &inputs[if self.per_pin {
-            pin_base + self.pins
-        } else {
-            pin_base
-        }..tooth_base];
-        let tooth_errors = &inputs[tooth_base..if self.per_tooth {
-            tooth_base + self.cycloid_teeth
-        } else {
-            tooth_base
-        }];
+            0
+        };
+        let (pin_inputs, tooth_errors) = inputs[n_fixed + 7 * self.cranks..].split_at(2 * n_pins);
+        let (pin_radial, pin_tangential) = pin_inputs.split_at(n_pins);
+        let tooth_errors = &tooth_errors[..n_teeth];
         let table = &self.table;
         let double = |target: &mut Vec<f64>, values: &[f64], len: usize| {
             target.clear();
@@ -784,9 +777,7 @@ impl TransmissionError {
         }
         let mut curve = std::mem::take(&mut search.curve);
         curve.resize(self.points, 0.0);
-        self.trace_with(inputs, search, |j, stages| {
-            curve[j] = stages.total() * ARCSEC_PER_RAD
-        });
+        self.fill_curve(inputs, search, &mut curve);
         // Four lanes (N is a multiple of 4), so that the passes vectorise.
         let n = curve.len() as f64;
         let quads = curve.as_chunks::<4>().0;
@@ -823,9 +814,10 @@ impl TransmissionError {
         search.curve = curve;
     }
 
-    /// Fills `curve` with TE(Θ_j) in arcsec.
-    fn fill_curve(&self, inputs: &[f64], curve: &mut [f64]) {
-        self.trace(inputs, |j, stages| {
+    /// Fills `curve` (N values) with TE(Θ_j) in arcsec.
+    #[inline(always)]
+    fn fill_curve(&self, inputs: &[f64], search: &mut Search, curve: &mut [f64]) {
+        self.trace_with(inputs, search, |j, stages| {
             curve[j] = stages.total() * ARCSEC_PER_RAD
         });
     }
@@ -833,7 +825,7 @@ impl TransmissionError {
     /// TE(Θ_j) in arcsec at Θ_j = 2πj/N.
     pub fn curve(&self, inputs: &[f64]) -> Vec<f64> {
         let mut curve = vec![0.0; self.points];
-        self.fill_curve(inputs, &mut curve);
+        SEARCH.with_borrow_mut(|search| self.fill_curve(inputs, search, &mut curve));
         curve
     }
 
