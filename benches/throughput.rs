@@ -13,6 +13,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rvtol_benches::scenario_path;
 use rvtol_deviation::Ziggurat;
+use rvtol_engine::scenario::BoundModel;
 use rvtol_engine::stats::{Moments, QuantileSketch};
 use rvtol_engine::{run, RunSettings, Scenario};
 
@@ -60,17 +61,8 @@ fn stages(c: &mut Criterion) {
         b.iter(|| space.sample_rows(&mut rng, &mut rows, &mut counts).unwrap())
     });
 
-    let n_in = bound.model.inputs().len();
     let n_out = bound.model.outputs().len();
-    let mut inputs = bound.constant_template().repeat(ROWS);
-    for (dst, row) in inputs
-        .chunks_exact_mut(n_in)
-        .zip(rows.chunks_exact(n_columns))
-    {
-        for (input, column) in bound.column_bindings() {
-            dst[input] = row[column];
-        }
-    }
+    let inputs = model_inputs(bound, &rows, n_columns);
     let mut outputs = vec![0.0; ROWS * n_out];
     group.bench_function("model", |b| {
         b.iter(|| bound.model.evaluate_batch(&inputs, &mut outputs))
@@ -115,17 +107,15 @@ fn model_rows(scenario: &Scenario, rows: usize) -> Vec<f64> {
     space
         .sample_rows(&mut rng, &mut sampled, &mut counts)
         .expect("shipped scenario samples");
-    let n_in = bound.model.inputs().len();
-    let mut inputs = bound.constant_template().repeat(rows);
-    for (dst, row) in inputs
-        .chunks_exact_mut(n_in)
-        .zip(sampled.chunks_exact(n_columns))
-    {
-        for (input, column) in bound.column_bindings() {
-            dst[input] = row[column];
-        }
-    }
-    inputs
+    model_inputs(bound, &sampled, n_columns)
+}
+
+/// The model's input rows for sampled rows of `n_columns` variables.
+fn model_inputs(bound: &BoundModel, sampled: &[f64], n_columns: usize) -> Vec<f64> {
+    sampled
+        .chunks_exact(n_columns)
+        .flat_map(|row| bound.inputs_of_row(row))
+        .collect()
 }
 
 /// Time per sample of each physical model (issue targets: contact ≤ 20 µs, transmission

@@ -587,21 +587,11 @@ fn allocate_cost_model_choice() {
 
 #[test]
 fn allocate_with_too_few_samples_for_the_tail() {
-    let file = TempScenario::new("bad-allocate-samples", &allocatable_with(|_| {}));
-    let output = run_rvtol(&[
-        "allocate",
-        file.path().to_str().unwrap(),
-        "--output",
-        "stack",
-        "--target",
-        "p99.865 <= 1",
-        "--samples",
-        "1000",
-        "--quiet",
-    ]);
-    assert_one_line_error(
-        "allocate samples",
-        &output,
+    // assert_bad_allocate runs with --samples 1000: too few for a 99.865 % tail.
+    assert_bad_allocate(
+        "samples",
+        &allocatable_with(|_| {}),
+        &["--target", "p99.865 <= 1"],
         &[
             ": --samples: 1000 samples leave 1.4 samples",
             "use at least",

@@ -120,11 +120,13 @@ fn escape(text: &str) -> String {
 /// The curve as a standalone SVG document.
 pub fn to_svg(curve: &Curve) -> String {
     let log_x = curve.style == CurveStyle::LogStems;
+    // A point is drawn when both coordinates are finite and, on a log axis, x > 0.
+    let plottable = |&&(x, y): &&(f64, f64)| x.is_finite() && y.is_finite() && (!log_x || x > 0.0);
     let points = curve
         .series
         .iter()
         .flat_map(|s| s.points.iter())
-        .filter(|(x, y)| x.is_finite() && y.is_finite() && (!log_x || *x > 0.0));
+        .filter(plottable);
     let (mut x_lo, mut x_hi, mut y_lo, mut y_hi) = (
         f64::INFINITY,
         f64::NEG_INFINITY,
@@ -224,10 +226,7 @@ pub fn to_svg(curve: &Curve) -> String {
     // Data.
     for (i, series) in curve.series.iter().enumerate() {
         let colour = COLOURS[i % COLOURS.len()];
-        let finite = series
-            .points
-            .iter()
-            .filter(|(x, y)| x.is_finite() && y.is_finite() && (!log_x || *x > 0.0));
+        let finite = series.points.iter().filter(plottable);
         match curve.style {
             CurveStyle::Lines => {
                 let path: Vec<String> = finite

@@ -23,7 +23,7 @@ use rvtol_deviation::ConstraintCounts;
 use rvtol_models::{Curve, OutputKind};
 
 use crate::evaluate::ChunkEvaluator;
-use crate::scenario::{BoundModel, Scenario, ScenarioError};
+use crate::scenario::{Scenario, ScenarioError};
 use crate::stats::{Moments, QuantileSketch, SpecLimits};
 
 /// Samples per chunk (part of the reproducibility contract: changing it changes results).
@@ -449,7 +449,7 @@ pub fn nominal(scenario: &Scenario) -> Vec<f64> {
     let row = scenario.input_space.mean_row();
     let mut values = vec![0.0; scenario.outputs.len()];
     for bound in &scenario.models {
-        let inputs = model_inputs(bound, &row);
+        let inputs = bound.inputs_of_row(&row);
         let n_out = bound.model.outputs().len();
         bound.model.evaluate(
             &inputs,
@@ -469,18 +469,9 @@ pub fn nominal_curves(scenario: &Scenario) -> Vec<(&'static str, Vec<Curve>)> {
         .map(|bound| {
             (
                 bound.model.name(),
-                bound.model.curves(&model_inputs(bound, &row)),
+                bound.model.curves(&bound.inputs_of_row(&row)),
             )
         })
         .filter(|(_, curves)| !curves.is_empty())
         .collect()
-}
-
-/// A model's input row from a row of the input space.
-fn model_inputs(bound: &BoundModel, row: &[f64]) -> Vec<f64> {
-    let mut inputs = bound.constant_template();
-    for (input, column) in bound.column_bindings() {
-        inputs[input] = row[column];
-    }
-    inputs
 }

@@ -235,6 +235,17 @@ impl BoundModel {
             })
             .collect()
     }
+
+    /// The model's input row for one row of the input space: constants and columns.
+    pub fn inputs_of_row(&self, row: &[f64]) -> Vec<f64> {
+        self.bindings
+            .iter()
+            .map(|b| match b {
+                Binding::Constant(v) => *v,
+                Binding::Column(column) => row[*column],
+            })
+            .collect()
+    }
 }
 
 /// One output of the scenario (of one of its models).

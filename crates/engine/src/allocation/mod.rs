@@ -806,7 +806,7 @@ fn evaluate_figure(
             (value, (interval.1 - interval.0) / (2.0 * Z95), interval)
         }
         TargetFigure::Mean => symmetric(mean, moments.mean_standard_error()),
-        TargetFigure::Sd => symmetric(sd, sd * sd_relative_se),
+        TargetFigure::Sd => symmetric(sd, moments.sd_standard_error()),
         TargetFigure::Cp => {
             let cp = capability_from_moments(mean, sd, limits?).cp?;
             symmetric(cp, cp * sd_relative_se)
