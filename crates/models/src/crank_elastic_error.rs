@@ -73,7 +73,7 @@ use std::f64::consts::PI;
 
 use nalgebra::{SMatrix, SVector};
 
-use crate::cycloid_pin_contact::{CycloidPinContact, DISC_KEYS};
+use crate::cycloid_pin_contact::CycloidPinContact;
 use crate::{
     ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputKind, OutputSpec, ParamSpec,
     ARCMIN_PER_RAD,
@@ -378,12 +378,7 @@ impl CrankElasticError {
         let crank_half_distance = params.positive("crank_center_distance_half_mm", None)?;
         // The disc and pin parameters go to the contact model, which checks them under
         // their own keys; its two cranks sit on the circle a0.
-        let contact = CycloidPinContact::from_params(
-            &params
-                .subset(&DISC_KEYS)
-                .with_number("crank_count", 2.0)
-                .with_number("crank_circle_radius_mm", crank_half_distance),
-        )?;
+        let contact = CycloidPinContact::of_two_crank_disc(params, crank_half_distance)?;
         let planet_pitch_radius = params.positive("planet_pitch_radius_mm", None)?;
         let pressure_angle = params.number("pressure_angle_deg", Some(20.0))?;
         if !(pressure_angle > 0.0 && pressure_angle < 90.0) {

@@ -53,10 +53,9 @@ use crate::{
 
 /// Largest pin count the model accepts (per-sample arrays live on the stack).
 pub const MAX_PINS: usize = 128;
-/// The parameters of one disc and its pins: what a model that embeds this one (the crank
-/// elastic error, the torsion curve) hands over under the same keys, so that this model
-/// checks them and names them in its errors. The embedding model sets the crank layout.
-pub(crate) const DISC_KEYS: [&str; 9] = [
+/// The parameters of one disc and its pins: what a model that embeds this one hands over
+/// under the same keys (see [`CycloidPinContact::of_two_crank_disc`]).
+const DISC_KEYS: [&str; 9] = [
     "pin_count",
     "cycloid_teeth",
     "pin_circle_radius_mm",
@@ -341,6 +340,22 @@ impl CycloidPinContact {
                 -factors.eccentric,
             ),
         }
+    }
+
+    /// The contact model of one disc of a two-crank reducer, for a model that embeds it
+    /// (the crank elastic error, the torsion curve): the disc and pin parameters
+    /// ([`DISC_KEYS`]) are taken from the embedding model's own, so that this model checks
+    /// them and names them in its errors; the cranks sit on `crank_circle_radius`.
+    pub(crate) fn of_two_crank_disc(
+        params: &ModelParams,
+        crank_circle_radius: f64,
+    ) -> Result<Self, ModelError> {
+        Self::from_params(
+            &params
+                .subset(&DISC_KEYS)
+                .with_number("crank_count", 2.0)
+                .with_number("crank_circle_radius_mm", crank_circle_radius),
+        )
     }
 
     /// The checked cycloid–pin stage geometry (z_p, z_c, r_p, e).

@@ -49,7 +49,7 @@
 //!   outputs (the engine counts them).
 
 use crate::crank_elastic_error::CrankElasticError;
-use crate::cycloid_pin_contact::{CycloidPinContact, DISC_KEYS};
+use crate::cycloid_pin_contact::CycloidPinContact;
 use crate::geometric_hysteresis::{self, GeometricHysteresis};
 use crate::{
     Curve, CurveStyle, ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputKind,
@@ -269,12 +269,7 @@ impl TorsionCurve {
         let center_distance = params.positive("center_distance_mm", None)?;
         let crank_circle_radius =
             params.positive("crank_circle_radius_mm", Some(center_distance))?;
-        let contact = CycloidPinContact::from_params(
-            &params
-                .subset(&DISC_KEYS)
-                .with_number("crank_count", 2.0)
-                .with_number("crank_circle_radius_mm", crank_circle_radius),
-        )?;
+        let contact = CycloidPinContact::of_two_crank_disc(params, crank_circle_radius)?;
         let crank_stiffness = params.positive("crank_bearing_stiffness_n_per_mm", None)?;
         let rated_torque = params.positive("rated_torque_nm", None)?;
         params.reject_unknown(&PARAMS.iter().map(|p| p.name).collect::<Vec<_>>())?;
