@@ -226,3 +226,67 @@ fn eq11_constraint_holds_and_its_acceptance_is_one_quarter() {
     let joint = counts.acceptance_rate();
     assert!((joint - 0.25).abs() < 0.01, "{joint}");
 }
+
+#[test]
+fn eq11_conditioned_law_matches_the_truncated_normal_closed_form() {
+    // One Eq. 11 inequality over independent x ~ N(μx, σx²), y ~ N(μy, σy²):
+    // s = x + (L1/2)·y ≤ Δτ with E s = Δτ (Eq. 10 means), so z_s = (s − μs)/σs is a
+    // standard normal truncated to z_s ≤ 0: E z_s = −√(2/π), Var z_s = 1 − 2/π. With
+    // k_x = σx²/σs and k_y = (L1/2)·σy²/σs (the regression of x and y on z_s), the
+    // conditioned law has E x = μx + k_x·E z_s, Var x = σx² − k_x²·(2/π),
+    // Cov(x, y) = −k_x·k_y·(2/π), and likewise for y. Bounds: 5 standard errors of a
+    // mean (σ/√n) and of a second moment (√(m4 − m2²)/√n, from the sample itself).
+    let (dt, l1) = (0.004, 120.0);
+    let part = PartSpec::from_tolerance_band("parts[0]", dt, l1, true).unwrap();
+    let mut builder = InputSpaceBuilder::new();
+    builder.add_part("parts[0]", &part);
+    let space = builder.build("correlations").unwrap();
+    let rows = draw(&space, 15);
+    let sd = part.sd();
+    let two_over_pi = 2.0 / std::f64::consts::PI;
+    // (Δu, Δβ) and (Δv, Δα): columns (0, 4) and (1, 3).
+    for (cx, cy) in [(0, 4), (1, 3)] {
+        let (mx, my, sx, sy) = (part.mean[cx], part.mean[cy], sd[cx], sd[cy]);
+        let b = l1 / 2.0;
+        let sigma_s = sx.hypot(b * sy);
+        let (kx, ky) = (sx * sx / sigma_s, b * sy * sy / sigma_s);
+        let mean_z = -two_over_pi.sqrt();
+        let expected_mean = [mx + kx * mean_z, my + ky * mean_z];
+        let expected_var = [
+            sx * sx - kx * kx * two_over_pi,
+            sy * sy - ky * ky * two_over_pi,
+        ];
+        let expected_cov = -kx * ky * two_over_pi;
+        let xs: Vec<[f64; 2]> = rows.chunks_exact(6).map(|r| [r[cx], r[cy]]).collect();
+        let n = xs.len() as f64;
+        let mean = [0, 1].map(|k| xs.iter().map(|p| p[k]).sum::<f64>() / n);
+        for k in 0..2 {
+            let se = expected_var[k].sqrt() / n.sqrt();
+            assert!(
+                (mean[k] - expected_mean[k]).abs() <= SIGMA_BOUND * se,
+                "columns ({cx}, {cy}) mean {k}: {} vs {}",
+                mean[k],
+                expected_mean[k]
+            );
+        }
+        let second = |f: &dyn Fn(&[f64; 2]) -> f64| {
+            let values: Vec<f64> = xs.iter().map(f).collect();
+            let m = values.iter().sum::<f64>() / n;
+            let m2 = values.iter().map(|v| (v - m).powi(2)).sum::<f64>() / n;
+            (m, (m2 / n).sqrt())
+        };
+        for k in 0..2 {
+            let (var, se) = second(&|p| (p[k] - mean[k]).powi(2));
+            assert!(
+                (var - expected_var[k]).abs() <= SIGMA_BOUND * se,
+                "columns ({cx}, {cy}) variance {k}: {var} vs {}",
+                expected_var[k]
+            );
+        }
+        let (cov, se) = second(&|p| (p[0] - mean[0]) * (p[1] - mean[1]));
+        assert!(
+            (cov - expected_cov).abs() <= SIGMA_BOUND * se,
+            "columns ({cx}, {cy}) covariance: {cov} vs {expected_cov}"
+        );
+    }
+}

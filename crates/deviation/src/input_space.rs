@@ -26,7 +26,7 @@ use rand::{Rng, SeedableRng};
 use crate::cholesky::pivoted_cholesky;
 use crate::constraint::{LinearInequality, TiltConstraint};
 use crate::error::DeviationError;
-use crate::normal::Ziggurat;
+use crate::normal::{Ziggurat, ZigguratScratch};
 use crate::part::{check_covariance, PartSpec};
 use crate::scalar::ScalarDistribution;
 
@@ -331,7 +331,7 @@ impl InputSpaceBuilder {
             }
         }
         space.constrained_groups = group_inequalities(inequalities, constrained_blocks);
-        space.check_acceptance()?;
+        space.measure_acceptance()?;
         Ok(space)
     }
 }
@@ -358,6 +358,12 @@ impl GaussianBlock {
         for value in z.iter_mut() {
             *value = normal.sample(rng);
         }
+        self.apply(z, row);
+    }
+
+    /// Writes μ + L·z into the block's columns of `row` (`z` holds `rank` draws).
+    #[inline]
+    fn apply(&self, z: &[f64], row: &mut [f64]) {
         for (i, (&column, &mean)) in self.columns.iter().zip(&self.means).enumerate() {
             let factor_row = &self.factor[i * self.rank..(i + 1) * self.rank];
             let mut value = mean;
@@ -381,6 +387,158 @@ struct ConstrainedGroup {
     /// diagonal covariance of 001 Eq. 12): drawn for a whole chunk at once without
     /// data-dependent branches.
     slot_inequalities: Option<Vec<LinearInequality>>,
+    /// The rotated form, when the group is one inequality over two singles (each half of
+    /// 001 Eq. 11 for a diagonal covariance).
+    pair: Option<RotatedPair>,
+    /// Acceptance rate measured by the build's pilot: sizes the candidate batches.
+    pilot_acceptance: f64,
+}
+
+/// Candidates drawn for `remaining` unfilled rows at acceptance rate `acceptance`: the
+/// expected number needed plus two, so that most blocks fill in one batch and few
+/// candidates are left over (they are discarded; the stream stays deterministic).
+fn batch_size(remaining: usize, acceptance: f64) -> usize {
+    (remaining as f64 / acceptance.max(MIN_ACCEPTANCE_RATE)).ceil() as usize + 2
+}
+
+/// One inequality a·x + b·y ≤ c over two independent normals x ~ N(μx, σx²),
+/// y ~ N(μy, σy²), drawn without rejecting the direction it does not constrain. With
+/// u = (x − μx)/σx, v = (y − μy)/σy and σs = √(a²σx² + b²σy²), the rotation
+/// z_s = c1·u + c2·v, z_t = −c2·u + c1·v (c1 = aσx/σs, c2 = bσy/σs) gives independent
+/// standard normals with a·x + b·y = μs + σs·z_s. The inequality is z_s ≤ τ =
+/// (c − μs)/σs, so only z_s is redrawn until it holds; z_t is drawn once, and
+/// u = c1·z_s − c2·z_t, v = c2·z_s + c1·z_t. The joint law is the same as redrawing
+/// (x, y) together (the conditioned normal), at one draw fewer per accepted row for a
+/// 50 % acceptance.
+#[derive(Debug, Clone, Copy)]
+struct RotatedPair {
+    columns: [usize; 2],
+    means: [f64; 2],
+    sds: [f64; 2],
+    /// (c1, c2).
+    rotation: [f64; 2],
+    /// τ, the bound on z_s.
+    threshold: f64,
+}
+
+impl RotatedPair {
+    fn new(singles: &[(usize, f64, f64)], q: &LinearInequality) -> Option<RotatedPair> {
+        let [(cx, mx, sx), (cy, my, sy)] = match singles {
+            [first, second] if first.0 == q.columns[0] && second.0 == q.columns[1] => {
+                [*first, *second]
+            }
+            [first, second] if first.0 == q.columns[1] && second.0 == q.columns[0] => {
+                [*second, *first]
+            }
+            _ => return None,
+        };
+        let [a, b] = q.coefficients;
+        let sigma_s = (a * sx).hypot(b * sy);
+        if !(sigma_s > 0.0 && sigma_s.is_finite()) {
+            return None;
+        }
+        Some(RotatedPair {
+            columns: [cx, cy],
+            means: [mx, my],
+            sds: [sx, sy],
+            rotation: [a * sx / sigma_s, b * sy / sigma_s],
+            threshold: (q.bound - a * mx - b * my) / sigma_s,
+        })
+    }
+
+    /// Fills the pair's columns of every row; returns the candidate draws of z_s, or `Err`
+    /// after [`MAX_REJECTIONS_PER_ROW`] consecutive rejections. Stream: batches of z_s
+    /// candidates ([`batch_size`] for the rows still unfilled; those left once every row
+    /// is filled are discarded) until every row is filled; then z_t.
+    fn fill_rows<R: Rng + ?Sized>(
+        &self,
+        acceptance: f64,
+        normal: &Ziggurat,
+        rng: &mut R,
+        rows: &mut [f64],
+        n_columns: usize,
+        scratch: &mut SamplerScratch,
+    ) -> Result<u64, ()> {
+        let n_rows = rows.len() / n_columns;
+        let SamplerScratch {
+            candidates,
+            accepted,
+            ziggurat,
+            ..
+        } = scratch;
+        // Room for every candidate of the last batch past the rows: the candidates drawn
+        // after the last row is filled land there and are discarded.
+        let accepted_z = prefix(accepted, n_rows + batch_size(n_rows, acceptance));
+        let (mut filled, mut attempts, mut rejected_run) = (0, 0u64, 0u64);
+        while filled < n_rows {
+            let needed = n_rows - filled;
+            let batch = prefix(candidates, batch_size(needed, acceptance));
+            normal.fill(rng, batch, ziggurat);
+            let start = filled;
+            for &z in batch.iter() {
+                // Branch-free compaction: each candidate goes to the next unfilled row,
+                // which advances only on acceptance.
+                accepted_z[filled] = z;
+                filled += usize::from(z <= self.threshold);
+            }
+            if filled - start >= needed {
+                // Attempts end at the candidate that filled the last row.
+                let mut seen = 0;
+                let last = batch
+                    .iter()
+                    .position(|&z| {
+                        seen += usize::from(z <= self.threshold);
+                        seen == needed
+                    })
+                    .expect("the batch accepted enough candidates");
+                attempts += last as u64 + 1;
+                filled = n_rows;
+            } else {
+                attempts += batch.len() as u64;
+                // Consecutive rejections, counted in whole batches that accepted none.
+                rejected_run = if filled == start {
+                    rejected_run + batch.len() as u64
+                } else {
+                    0
+                };
+                if rejected_run >= MAX_REJECTIONS_PER_ROW {
+                    return Err(());
+                }
+            }
+        }
+        let free_z = prefix(candidates, n_rows);
+        normal.fill(rng, free_z, ziggurat);
+        let [c1, c2] = self.rotation;
+        let [cx, cy] = self.columns;
+        for ((row, &z_s), &z_t) in rows
+            .chunks_exact_mut(n_columns)
+            .zip(accepted_z.iter())
+            .zip(free_z.iter())
+        {
+            row[cx] = self.means[0] + self.sds[0] * (c1 * z_s - c2 * z_t);
+            row[cy] = self.means[1] + self.sds[1] * (c2 * z_s + c1 * z_t);
+        }
+        Ok(attempts)
+    }
+}
+
+/// The first `n` values of `buffer`, grown (never shrunk) as needed: no memset per call.
+fn prefix(buffer: &mut Vec<f64>, n: usize) -> &mut [f64] {
+    if buffer.len() < n {
+        buffer.resize(n, 0.0);
+    }
+    &mut buffer[..n]
+}
+
+/// Reusable buffers of [`InputSpace::sample_rows_with`], so a hot loop that samples block
+/// after block does not allocate.
+#[derive(Debug, Clone, Default)]
+pub struct SamplerScratch {
+    normals: Vec<f64>,
+    candidates: Vec<f64>,
+    accepted: Vec<f64>,
+    block_z: Vec<f64>,
+    ziggurat: ZigguratScratch,
 }
 
 /// Most singles a group may hold for the chunk-wide candidate path.
@@ -390,7 +548,9 @@ impl ConstrainedGroup {
     /// Fills this group's columns of every row by rejection, for a group of singles only:
     /// each candidate is written to the next unfilled row, whose index advances only when
     /// the candidate satisfies every inequality (branch-free compaction, so a 50 %
-    /// acceptance costs no branch mispredictions). Returns candidate draws.
+    /// acceptance costs no branch mispredictions). Stream: batches of candidates
+    /// ([`batch_size`] for the rows still unfilled, each candidate's draws consecutive;
+    /// those left once every row is filled are discarded). Returns candidate draws.
     fn fill_rows_of_singles<R: Rng + ?Sized>(
         &self,
         slot_inequalities: &[LinearInequality],
@@ -398,25 +558,37 @@ impl ConstrainedGroup {
         rng: &mut R,
         rows: &mut [f64],
         n_columns: usize,
+        scratch: &mut SamplerScratch,
     ) -> Result<u64, ()> {
         let n_rows = rows.len() / n_columns;
+        let k = self.singles.len();
         let mut candidate = [0.0f64; MAX_SLOT_SINGLES];
-        let (mut filled, mut attempts, mut consecutive) = (0usize, 0u64, 0u64);
+        let (mut filled, mut attempts, mut consecutive, mut too_many) = (0, 0u64, 0u64, false);
         while filled < n_rows {
-            attempts += 1;
-            for (value, &(_, mean, sd)) in candidate.iter_mut().zip(&self.singles) {
-                *value = mean + sd * normal.sample(rng);
+            let batch = batch_size(n_rows - filled, self.pilot_acceptance);
+            let draws = prefix(&mut scratch.candidates, batch * k);
+            normal.fill(rng, draws, &mut scratch.ziggurat);
+            for z in draws.chunks_exact(k) {
+                if filled == n_rows {
+                    break;
+                }
+                for ((value, &(_, mean, sd)), &z) in candidate.iter_mut().zip(&self.singles).zip(z)
+                {
+                    *value = mean + sd * z;
+                }
+                let accepted = slot_inequalities
+                    .iter()
+                    .fold(true, |all, q| all & q.holds(&candidate));
+                let row = &mut rows[filled * n_columns..(filled + 1) * n_columns];
+                for (value, &(column, _, _)) in candidate.iter().zip(&self.singles) {
+                    row[column] = *value;
+                }
+                attempts += 1;
+                filled += usize::from(accepted);
+                consecutive = (consecutive + 1) * u64::from(!accepted);
+                too_many |= consecutive >= MAX_REJECTIONS_PER_ROW;
             }
-            let accepted = slot_inequalities
-                .iter()
-                .fold(true, |all, q| all & q.holds(&candidate));
-            let row = &mut rows[filled * n_columns..(filled + 1) * n_columns];
-            for (value, &(column, _, _)) in candidate.iter().zip(&self.singles) {
-                row[column] = *value;
-            }
-            filled += accepted as usize;
-            consecutive = (consecutive + 1) * u64::from(!accepted);
-            if consecutive >= MAX_REJECTIONS_PER_ROW {
+            if too_many {
                 return Err(());
             }
         }
@@ -514,11 +686,17 @@ fn group_inequalities(
                         .collect::<Option<Vec<_>>>()
                 })
                 .flatten();
+            let pair = match (blocks.is_empty(), inequalities.as_slice()) {
+                (true, [q]) => RotatedPair::new(&singles, q),
+                _ => None,
+            };
             ConstrainedGroup {
                 singles,
                 blocks,
                 inequalities,
                 slot_inequalities,
+                pair,
+                pilot_acceptance: 1.0,
             }
         })
         .collect()
@@ -599,45 +777,111 @@ impl InputSpace {
         rows: &mut [f64],
         counts: &mut ConstraintCounts,
     ) -> Result<(), DeviationError> {
+        self.sample_rows_with(rng, rows, counts, &mut SamplerScratch::default())
+    }
+
+    /// [`InputSpace::sample_rows`] with caller-owned buffers (no allocation once they have
+    /// grown to the block size).
+    ///
+    /// Stream layout (part of the reproducibility contract, through the run's chunks):
+    /// 1. the standard normals of every unconstrained single and block as one
+    ///    [`Ziggurat::fill`]: each single's draws for all rows in turn, then each block's
+    ///    draws, `rank` per row, row after row;
+    /// 2. the non-normal scalars, row after row;
+    /// 3. each constraint group in turn: batches of candidates (see [`RotatedPair`] and
+    ///    the compaction of singles), or row by row for groups with dense blocks.
+    pub fn sample_rows_with<R: Rng + ?Sized>(
+        &self,
+        rng: &mut R,
+        rows: &mut [f64],
+        counts: &mut ConstraintCounts,
+        scratch: &mut SamplerScratch,
+    ) -> Result<(), DeviationError> {
         if self.n_columns == 0 {
             return Ok(());
         }
         let normal = Ziggurat::get();
-        let mut z = vec![0.0; self.max_rank.max(1)];
-        for row in rows.chunks_exact_mut(self.n_columns) {
-            for &(column, mean) in &self.fixed {
+        let n_rows = rows.len() / self.n_columns;
+        let block_draws: usize = self.blocks.iter().map(|b| b.rank).sum();
+        let n_free = self.singles.len() + block_draws;
+        let z = prefix(&mut scratch.normals, n_rows * n_free);
+        normal.fill(rng, z, &mut scratch.ziggurat);
+        let (single_z, block_z) = z.split_at(n_rows * self.singles.len());
+        for &(column, mean) in &self.fixed {
+            for row in rows.chunks_exact_mut(self.n_columns) {
                 row[column] = mean;
             }
-            for &(column, mean, sd) in &self.singles {
-                row[column] = mean + sd * normal.sample(rng);
+        }
+        // Singles column by column: their draws are laid out one column after another.
+        for (&(column, mean, sd), z) in self
+            .singles
+            .iter()
+            .zip(single_z.chunks_exact(n_rows.max(1)))
+        {
+            for (row, &z) in rows.chunks_exact_mut(self.n_columns).zip(z) {
+                row[column] = mean + sd * z;
             }
-            for block in &self.blocks {
-                block.draw(normal, rng, &mut z, row);
+        }
+        // Blocks row by row: each row's `rank` draws of a block are consecutive.
+        let mut block_z = block_z;
+        for block in &self.blocks {
+            let (this, rest) = block_z.split_at(n_rows * block.rank);
+            for (row, z) in rows
+                .chunks_exact_mut(self.n_columns)
+                .zip(this.chunks_exact(block.rank))
+            {
+                block.apply(z, row);
             }
-            for (column, distribution) in &self.independent {
-                row[*column] = distribution.sample(rng);
+            block_z = rest;
+        }
+        if !self.independent.is_empty() {
+            for row in rows.chunks_exact_mut(self.n_columns) {
+                for (column, distribution) in &self.independent {
+                    row[*column] = distribution.sample(rng);
+                }
             }
         }
         if counts.groups.len() < self.constrained_groups.len() {
             counts.groups.resize(self.constrained_groups.len(), (0, 0));
         }
-        let n_rows = (rows.len() / self.n_columns) as u64;
         for (group, tally) in self.constrained_groups.iter().zip(counts.groups.iter_mut()) {
-            match &group.slot_inequalities {
-                Some(slot_inequalities) => {
-                    let attempts = group
-                        .fill_rows_of_singles(slot_inequalities, normal, rng, rows, self.n_columns)
-                        .map_err(|()| self.rejection_error())?;
-                    tally.0 += attempts;
-                    tally.1 += n_rows;
+            let attempts = if let Some(pair) = &group.pair {
+                pair.fill_rows(
+                    group.pilot_acceptance,
+                    normal,
+                    rng,
+                    rows,
+                    self.n_columns,
+                    scratch,
+                )
+                .map_err(|()| self.rejection_error())?
+            } else if let Some(slot_inequalities) = &group.slot_inequalities {
+                group
+                    .fill_rows_of_singles(
+                        slot_inequalities,
+                        normal,
+                        rng,
+                        rows,
+                        self.n_columns,
+                        scratch,
+                    )
+                    .map_err(|()| self.rejection_error())?
+            } else {
+                scratch.block_z.resize(self.max_rank.max(1), 0.0);
+                let mut attempts = 0;
+                for row in rows.chunks_exact_mut(self.n_columns) {
+                    attempts += self.draw_group_by_rejection(
+                        group,
+                        normal,
+                        rng,
+                        &mut scratch.block_z,
+                        row,
+                    )?;
                 }
-                None => {
-                    for row in rows.chunks_exact_mut(self.n_columns) {
-                        tally.0 += self.draw_group_by_rejection(group, normal, rng, &mut z, row)?;
-                        tally.1 += 1;
-                    }
-                }
-            }
+                attempts
+            };
+            tally.0 += attempts;
+            tally.1 += n_rows as u64;
         }
         Ok(())
     }
@@ -666,9 +910,10 @@ impl InputSpace {
         Err(self.rejection_error())
     }
 
-    /// Measures the acceptance rate of the constraints on a fixed pilot stream and rejects
-    /// the space when it is below [`MIN_ACCEPTANCE_RATE`].
-    fn check_acceptance(&self) -> Result<(), DeviationError> {
+    /// Measures the acceptance rate of each constraint group on a fixed pilot stream (kept
+    /// to size the candidate batches) and rejects the space when the product is below
+    /// [`MIN_ACCEPTANCE_RATE`].
+    fn measure_acceptance(&mut self) -> Result<(), DeviationError> {
         if self.constrained_groups.is_empty() {
             return Ok(());
         }
@@ -676,11 +921,12 @@ impl InputSpace {
         let mut z = vec![0.0; self.max_rank.max(1)];
         let mut row = self.mean_row();
         let mut rate = 1.0;
-        for group in &self.constrained_groups {
+        for group in &mut self.constrained_groups {
             let accepted = (0..PILOT_DRAWS)
                 .filter(|_| group.draw_candidate(Ziggurat::get(), &mut rng, &mut z, &mut row))
                 .count();
-            rate *= accepted as f64 / PILOT_DRAWS as f64;
+            group.pilot_acceptance = accepted as f64 / PILOT_DRAWS as f64;
+            rate *= group.pilot_acceptance;
         }
         if rate < MIN_ACCEPTANCE_RATE {
             return Err(DeviationError::invalid(

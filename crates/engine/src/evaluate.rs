@@ -44,17 +44,24 @@ impl<'a> ChunkEvaluator<'a> {
     /// Evaluates every model on the first `m` rows (row-major, `n_columns` per row) and
     /// fills `output_columns[o][..m]`. `m` ≤ [`CHUNK_SIZE`].
     pub fn evaluate(&mut self, rows: &[f64], m: usize) {
+        self.evaluate_at(rows, m, 0);
+    }
+
+    /// Like [`ChunkEvaluator::evaluate`], but fills `output_columns[o][first..first + m]`:
+    /// a chunk evaluated block by block (`first + m` ≤ [`CHUNK_SIZE`]).
+    pub fn evaluate_at(&mut self, rows: &[f64], m: usize, first: usize) {
         let n_columns = self.scenario.input_space.n_columns().max(1);
         for (model_index, bound) in self.scenario.models.iter().enumerate() {
             let n_in = bound.model.inputs().len();
             let n_out = bound.model.outputs().len();
             let inputs = &mut self.model_inputs[model_index][..m * n_in];
             if n_in > 0 {
-                for (dst, row) in inputs
-                    .chunks_exact_mut(n_in)
-                    .zip(rows.chunks_exact(n_columns))
-                {
-                    for &(input, column) in &self.gathers[model_index] {
+                // One bound input at a time: a tight strided copy per input.
+                for &(input, column) in &self.gathers[model_index] {
+                    for (dst, row) in inputs
+                        .chunks_exact_mut(n_in)
+                        .zip(rows.chunks_exact(n_columns))
+                    {
                         dst[input] = row[column];
                     }
                 }
@@ -63,7 +70,7 @@ impl<'a> ChunkEvaluator<'a> {
             bound.model.evaluate_batch(inputs, outputs);
             for j in 0..n_out {
                 let column = &mut self.output_columns[bound.first_output + j];
-                for (r, value) in column[..m].iter_mut().enumerate() {
+                for (r, value) in column[first..first + m].iter_mut().enumerate() {
                     *value = outputs[r * n_out + j];
                 }
             }

@@ -19,7 +19,7 @@
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
-use rvtol_deviation::ConstraintCounts;
+use rvtol_deviation::{ConstraintCounts, SamplerScratch};
 use rvtol_models::{Curve, OutputKind};
 
 use crate::evaluate::ChunkEvaluator;
@@ -28,6 +28,9 @@ use crate::stats::{Moments, QuantileSketch, SpecLimits};
 
 /// Samples per chunk (part of the reproducibility contract: changing it changes results).
 pub const CHUNK_SIZE: usize = 4096;
+/// Rows sampled and evaluated at a time inside a chunk (part of the stream layout): small
+/// enough that a block's rows, model inputs and outputs stay in the core's caches.
+pub const BLOCK_ROWS: usize = 64;
 /// Chunks per wave: bounds the memory of in-flight partial results.
 pub const WAVE_CHUNKS: u64 = 1024;
 /// Relative accuracy of the quantile sketch used beyond the exact-percentile limit.
@@ -115,6 +118,7 @@ pub struct RunResult {
 /// Per-thread scratch buffers and partial results.
 struct Partial<'a> {
     rows: Vec<f64>,
+    sampler: SamplerScratch,
     evaluator: ChunkEvaluator<'a>,
     finite: Vec<f64>,
     standardised: Vec<f64>,
@@ -142,7 +146,8 @@ impl<'a> Plan<'a> {
     fn partial(&self) -> Partial<'a> {
         let n_out = self.scenario.outputs.len();
         Partial {
-            rows: vec![0.0; CHUNK_SIZE * self.scenario.input_space.n_columns()],
+            rows: vec![0.0; BLOCK_ROWS * self.scenario.input_space.n_columns()],
+            sampler: SamplerScratch::default(),
             evaluator: ChunkEvaluator::new(self.scenario),
             finite: Vec::with_capacity(CHUNK_SIZE),
             standardised: Vec::with_capacity(CHUNK_SIZE),
@@ -185,12 +190,20 @@ impl<'a> Plan<'a> {
         let n_columns = space.n_columns();
         let mut rng = ChaCha8Rng::seed_from_u64(self.settings.seed);
         rng.set_stream(chunk);
-        let rows = &mut partial.rows[..m * n_columns];
-        if let Err(err) = space.sample_rows(&mut rng, rows, &mut partial.constraint_counts) {
-            partial.error = Some((chunk, err.into()));
-            return None;
+        for first in (0..m).step_by(BLOCK_ROWS) {
+            let block = (m - first).min(BLOCK_ROWS);
+            let rows = &mut partial.rows[..block * n_columns];
+            if let Err(err) = space.sample_rows_with(
+                &mut rng,
+                rows,
+                &mut partial.constraint_counts,
+                &mut partial.sampler,
+            ) {
+                partial.error = Some((chunk, err.into()));
+                return None;
+            }
+            partial.evaluator.evaluate_at(rows, block, first);
         }
-        partial.evaluator.evaluate(rows, m);
         Some(m)
     }
 

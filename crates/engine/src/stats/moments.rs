@@ -79,17 +79,36 @@ impl Moments {
         let mut maxs = [f64::NEG_INFINITY; LANES];
         let chunks = values.chunks_exact(LANES);
         let remainder = chunks.remainder();
+        // Compare-and-select rather than f64::min/max: one instruction per lane (a NaN
+        // value compares false and is skipped, as with f64::min).
         for chunk in chunks {
             for lane in 0..LANES {
-                sums[lane] += chunk[lane];
-                mins[lane] = mins[lane].min(chunk[lane]);
-                maxs[lane] = maxs[lane].max(chunk[lane]);
+                let value = chunk[lane];
+                sums[lane] += value;
+                mins[lane] = if value < mins[lane] {
+                    value
+                } else {
+                    mins[lane]
+                };
+                maxs[lane] = if value > maxs[lane] {
+                    value
+                } else {
+                    maxs[lane]
+                };
             }
         }
         for (lane, &value) in remainder.iter().enumerate() {
             sums[lane] += value;
-            mins[lane] = mins[lane].min(value);
-            maxs[lane] = maxs[lane].max(value);
+            mins[lane] = if value < mins[lane] {
+                value
+            } else {
+                mins[lane]
+            };
+            maxs[lane] = if value > maxs[lane] {
+                value
+            } else {
+                maxs[lane]
+            };
         }
         let sum = (sums[0] + sums[1]) + (sums[2] + sums[3]);
         let min = mins.iter().fold(f64::INFINITY, |a, &b| a.min(b));
