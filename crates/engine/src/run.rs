@@ -121,7 +121,6 @@ struct Partial<'a> {
     sampler: SamplerScratch,
     evaluator: ChunkEvaluator<'a>,
     finite: Vec<f64>,
-    standardised: Vec<f64>,
     chunk_moments: Vec<(u64, Vec<Moments>)>,
     non_finite: Vec<u64>,
     below_lower: Vec<u64>,
@@ -150,7 +149,6 @@ impl<'a> Plan<'a> {
             sampler: SamplerScratch::default(),
             evaluator: ChunkEvaluator::new(self.scenario),
             finite: Vec::with_capacity(CHUNK_SIZE),
-            standardised: Vec::with_capacity(CHUNK_SIZE),
             chunk_moments: Vec::new(),
             non_finite: vec![0; n_out],
             below_lower: vec![0; n_out],
@@ -286,12 +284,7 @@ impl<'a> Plan<'a> {
                     center,
                     scale,
                 } => {
-                    let inverse_scale = 1.0 / *scale;
-                    partial.standardised.clear();
-                    partial
-                        .standardised
-                        .extend(values.iter().map(|&v| (v - *center) * inverse_scale));
-                    sketch.insert_slice(&partial.standardised);
+                    sketch.insert_standardised(values, *center, 1.0 / *scale);
                 }
                 Distribution::Indicator => {}
             }

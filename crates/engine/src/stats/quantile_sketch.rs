@@ -271,37 +271,68 @@ impl QuantileSketch {
 
     /// Adds every value of `xs` (same rules as [`QuantileSketch::insert`]).
     pub fn insert_slice(&mut self, xs: &[f64]) {
-        // Two passes per piece: classify every value and compact the bucket indices by
-        // sign without a data-dependent branch (centred data has a random sign), then
-        // grow each store once to the piece's range and count.
+        self.insert_mapped(xs, |x| x);
+    }
+
+    /// Adds (x − center)·inverse_scale for every x of `xs`, without a buffer of the
+    /// standardised values (same rules as [`QuantileSketch::insert`] on the result).
+    pub fn insert_standardised(&mut self, xs: &[f64], center: f64, inverse_scale: f64) {
+        self.insert_mapped(xs, |x| (x - center) * inverse_scale);
+    }
+
+    #[inline(always)]
+    fn insert_mapped(&mut self, xs: &[f64], map: impl Fn(f64) -> f64) {
+        // Two passes per piece: compact the bucket indices by sign without a
+        // data-dependent branch (centred data has a random sign), then count them with
+        // each store's range in registers.
         let zero_bits = ZERO_THRESHOLD.to_bits();
         let clamp_bits = CLAMP_MAGNITUDE.to_bits();
-        let infinity_bits = f64::INFINITY.to_bits();
         let mut positive = [0i64; INSERT_PIECE];
         let mut negative = [0i64; INSERT_PIECE];
         for piece in xs.chunks(INSERT_PIECE) {
-            let (mut n_positive, mut n_negative, mut zeros) = (0usize, 0usize, 0u64);
+            let (mut n_positive, mut n_negative) = (0usize, 0usize);
             for &x in piece {
-                let bits = x.to_bits();
+                let bits = map(x).to_bits();
                 let magnitude = bits & !SIGN_BIT;
-                let is_zero = magnitude < zero_bits;
-                let is_counted = !is_zero & (magnitude <= infinity_bits);
-                let index = (magnitude.min(clamp_bits) >> self.shift) as i64;
+                if !(zero_bits..=clamp_bits).contains(&magnitude) {
+                    // Rare: zero, tiny, huge, infinite or NaN.
+                    self.insert_outside_range(f64::from_bits(bits));
+                    continue;
+                }
+                let index = (magnitude >> self.shift) as i64;
                 let is_negative = bits >> 63 != 0;
                 // Both writes stay in bounds: each count is at most the values seen so far.
                 positive[n_positive & (INSERT_PIECE - 1)] = index;
                 negative[n_negative & (INSERT_PIECE - 1)] = index;
-                n_positive += usize::from(is_counted & !is_negative);
-                n_negative += usize::from(is_counted & is_negative);
-                zeros += u64::from(is_zero);
+                n_positive += usize::from(!is_negative);
+                n_negative += usize::from(is_negative);
             }
             let (lowest, highest) = (self.lowest_index, self.highest_index);
             self.positive
                 .add_all(&positive[..n_positive], lowest, highest);
             self.negative
                 .add_all(&negative[..n_negative], lowest, highest);
-            self.zero_count += zeros;
-            self.count += zeros + (n_positive + n_negative) as u64;
+            self.count += (n_positive + n_negative) as u64;
+        }
+    }
+
+    /// A value whose magnitude lies outside [ZERO_THRESHOLD, CLAMP_MAGNITUDE]: the zero
+    /// count, the top bucket (clamped), or nothing (NaN).
+    #[cold]
+    fn insert_outside_range(&mut self, x: f64) {
+        let magnitude = x.abs();
+        if magnitude < ZERO_THRESHOLD {
+            self.zero_count += 1;
+            self.count += 1;
+        } else if magnitude > CLAMP_MAGNITUDE {
+            let index = (CLAMP_MAGNITUDE.to_bits() >> self.shift) as i64;
+            let store = if x.is_sign_negative() {
+                &mut self.negative
+            } else {
+                &mut self.positive
+            };
+            store.add_all(&[index], self.lowest_index, self.highest_index);
+            self.count += 1;
         }
     }
 
@@ -618,5 +649,13 @@ mod tests {
         }
         assert_eq!(bulk, single);
         assert_eq!(bulk.count(), data.len() as u64);
+        // The standardising entry counts the mapped values exactly as a slice of them.
+        let (center, inverse_scale) = (0.25, 1.0 / 3.0);
+        let mapped: Vec<f64> = data.iter().map(|x| (x - center) * inverse_scale).collect();
+        let mut standardised = QuantileSketch::new(0.001);
+        standardised.insert_standardised(&data, center, inverse_scale);
+        let mut of_mapped = QuantileSketch::new(0.001);
+        of_mapped.insert_slice(&mapped);
+        assert_eq!(standardised, of_mapped);
     }
 }
