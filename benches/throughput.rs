@@ -12,7 +12,8 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Through
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rvtol_benches::scenario_path;
-use rvtol_deviation::Ziggurat;
+use rvtol_deviation::{SamplerScratch, Ziggurat, ZigguratScratch};
+use rvtol_engine::run::BLOCK_ROWS;
 use rvtol_engine::scenario::BoundModel;
 use rvtol_engine::stats::{Moments, QuantileSketch};
 use rvtol_engine::{run, RunSettings, Scenario};
@@ -36,6 +37,11 @@ fn normals(c: &mut Criterion) {
             }
         })
     });
+    let mut scratch = ZigguratScratch::default();
+    group.bench_function("ziggurat_32bit_fill", |b| {
+        let z = Ziggurat::get();
+        b.iter(|| z.fill(&mut rng, &mut out, &mut scratch))
+    });
     group.bench_function("rand_distr_standard_normal", |b| {
         b.iter(|| {
             for x in out.iter_mut() {
@@ -57,8 +63,16 @@ fn stages(c: &mut Criterion) {
     let mut rows = vec![0.0; ROWS * n_columns];
     let mut counts = space.new_constraint_counts();
     let mut rng = ChaCha8Rng::seed_from_u64(1);
+    // As the run draws them: blocks of BLOCK_ROWS rows with reused scratch.
+    let mut scratch = SamplerScratch::default();
     group.bench_function("sampler", |b| {
-        b.iter(|| space.sample_rows(&mut rng, &mut rows, &mut counts).unwrap())
+        b.iter(|| {
+            for block in rows.chunks_mut(BLOCK_ROWS * n_columns) {
+                space
+                    .sample_rows_with(&mut rng, block, &mut counts, &mut scratch)
+                    .unwrap();
+            }
+        })
     });
 
     let n_out = bound.model.outputs().len();
