@@ -204,6 +204,22 @@ mod tests {
         }
     }
 
+    /// √n·D of the one-sample Kolmogorov–Smirnov test of `xs` against N(0, 1).
+    fn kolmogorov_root_n_d(xs: &mut [f64]) -> f64 {
+        let normal = Normal::new(0.0, 1.0).unwrap();
+        let n = xs.len() as f64;
+        xs.sort_by(f64::total_cmp);
+        let d = xs
+            .iter()
+            .enumerate()
+            .map(|(i, &x)| {
+                let cdf = normal.cdf(x);
+                (cdf - i as f64 / n).max((i + 1) as f64 / n - cdf)
+            })
+            .fold(0.0, f64::max);
+        n.sqrt() * d
+    }
+
     #[test]
     fn kolmogorov_smirnov_against_standard_normal() {
         // One-sample KS test, n = 1e6: the 0.1 % critical value of √n·D is 1.949
@@ -212,21 +228,8 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(42);
         let n = 1_000_000;
         let mut xs: Vec<f64> = (0..n).map(|_| z.sample(&mut rng)).collect();
-        xs.sort_by(f64::total_cmp);
-        let normal = Normal::new(0.0, 1.0).unwrap();
-        let d = xs
-            .iter()
-            .enumerate()
-            .map(|(i, &x)| {
-                let cdf = normal.cdf(x);
-                (cdf - i as f64 / n as f64).max((i + 1) as f64 / n as f64 - cdf)
-            })
-            .fold(0.0, f64::max);
-        assert!(
-            (n as f64).sqrt() * d < 1.949,
-            "√n·D = {}",
-            (n as f64).sqrt() * d
-        );
+        let root_n_d = kolmogorov_root_n_d(&mut xs);
+        assert!(root_n_d < 1.949, "√n·D = {root_n_d}");
     }
 
     #[test]
@@ -281,20 +284,8 @@ mod tests {
             (tail - expected).abs() < 5.0 * (expected * (1.0 - p)).sqrt(),
             "{tail} vs {expected}"
         );
-        xs.sort_by(f64::total_cmp);
-        let d = xs
-            .iter()
-            .enumerate()
-            .map(|(i, &x)| {
-                let cdf = normal.cdf(x);
-                (cdf - i as f64 / n as f64).max((i + 1) as f64 / n as f64 - cdf)
-            })
-            .fold(0.0, f64::max);
-        assert!(
-            (n as f64).sqrt() * d < 1.949,
-            "√n·D = {}",
-            (n as f64).sqrt() * d
-        );
+        let root_n_d = kolmogorov_root_n_d(&mut xs);
+        assert!(root_n_d < 1.949, "√n·D = {root_n_d}");
     }
 
     #[test]
