@@ -12,8 +12,9 @@
 //!   percentiles).
 //! - Chunks run in waves of [`WAVE_CHUNKS`] so memory stays bounded for any sample count.
 //!
-//! Per chunk: draw the input rows, gather each model's inputs (constants pre-filled once),
-//! evaluate the model on the whole chunk, and fold each output column into the statistics.
+//! Per chunk, block of [`BLOCK_ROWS`] rows after block: draw the input rows, gather each
+//! model's inputs (constants pre-filled once) and evaluate the model into the chunk's
+//! output columns; then fold each output column into the statistics.
 //! Non-finite outputs are counted per output and kept out of the statistics.
 
 use rand::SeedableRng;
