@@ -16,9 +16,11 @@
 //! Inequalities that share no block are independent and get their own rejection loop
 //! (for a diagonal 001 covariance, (Δu, Δβ) and (Δv, Δα) separately), so the expected cost
 //! is the sum, not the product, of the inverse acceptance rates. A group of independent
-//! components is drawn for the whole chunk at once by branch-free compaction (each
-//! candidate is written to the next unfilled row, which advances on acceptance). The
-//! acceptance rate of the whole constraint is the product of the groups' rates.
+//! components is drawn for all the rows of a call at once by branch-free compaction (each
+//! candidate is written to the next unfilled row, which advances on acceptance); a group
+//! of one inequality over two of them (each half of Eq. 11 for a diagonal covariance) is
+//! first rotated so that only the constrained direction is redrawn ([`RotatedPair`]).
+//! The acceptance rate of the whole constraint is the product of the groups' rates.
 
 use nalgebra::{DMatrix, DVector};
 use rand::{Rng, SeedableRng};
@@ -384,8 +386,8 @@ struct ConstrainedGroup {
     blocks: Vec<GaussianBlock>,
     inequalities: Vec<LinearInequality>,
     /// The inequalities over candidate slots, when the group holds only singles (the
-    /// diagonal covariance of 001 Eq. 12): drawn for a whole chunk at once without
-    /// data-dependent branches.
+    /// diagonal covariance of 001 Eq. 12): drawn for all the rows of a call at once
+    /// without data-dependent branches.
     slot_inequalities: Option<Vec<LinearInequality>>,
     /// The rotated form, when the group is one inequality over two singles (each half of
     /// 001 Eq. 11 for a diagonal covariance).
@@ -788,7 +790,7 @@ impl InputSpace {
     ///    [`Ziggurat::fill`]: each single's draws for all rows in turn, then each block's
     ///    draws, `rank` per row, row after row;
     /// 2. the non-normal scalars, row after row;
-    /// 3. each constraint group in turn: batches of candidates (see [`RotatedPair`] and
+    /// 3. each constraint group in turn: batches of candidates (the rotated z_s of a pair and
     ///    the compaction of singles), or row by row for groups with dense blocks.
     pub fn sample_rows_with<R: Rng + ?Sized>(
         &self,

@@ -46,6 +46,28 @@ impl Default for Moments {
     }
 }
 
+/// `value` if it is below `current`, else `current`: compare-and-select, one instruction
+/// per lane where f64::min needs a NaN fix-up (a NaN `value` compares false and is
+/// skipped, as with f64::min).
+#[inline(always)]
+fn smaller(current: f64, value: f64) -> f64 {
+    if value < current {
+        value
+    } else {
+        current
+    }
+}
+
+/// `value` if it is above `current`, else `current` (see [`smaller`]).
+#[inline(always)]
+fn larger(current: f64, value: f64) -> f64 {
+    if value > current {
+        value
+    } else {
+        current
+    }
+}
+
 impl Moments {
     /// The empty summary: n 0, mean and sums 0, min +inf, max -inf.
     pub fn new() -> Moments {
@@ -79,36 +101,18 @@ impl Moments {
         let mut maxs = [f64::NEG_INFINITY; LANES];
         let chunks = values.chunks_exact(LANES);
         let remainder = chunks.remainder();
-        // Compare-and-select rather than f64::min/max: one instruction per lane (a NaN
-        // value compares false and is skipped, as with f64::min).
         for chunk in chunks {
             for lane in 0..LANES {
                 let value = chunk[lane];
                 sums[lane] += value;
-                mins[lane] = if value < mins[lane] {
-                    value
-                } else {
-                    mins[lane]
-                };
-                maxs[lane] = if value > maxs[lane] {
-                    value
-                } else {
-                    maxs[lane]
-                };
+                mins[lane] = smaller(mins[lane], value);
+                maxs[lane] = larger(maxs[lane], value);
             }
         }
         for (lane, &value) in remainder.iter().enumerate() {
             sums[lane] += value;
-            mins[lane] = if value < mins[lane] {
-                value
-            } else {
-                mins[lane]
-            };
-            maxs[lane] = if value > maxs[lane] {
-                value
-            } else {
-                maxs[lane]
-            };
+            mins[lane] = smaller(mins[lane], value);
+            maxs[lane] = larger(maxs[lane], value);
         }
         let sum = (sums[0] + sums[1]) + (sums[2] + sums[3]);
         let min = mins.iter().fold(f64::INFINITY, |a, &b| a.min(b));
