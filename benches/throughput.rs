@@ -14,7 +14,6 @@ use rand_chacha::ChaCha8Rng;
 use rvtol_benches::scenario_path;
 use rvtol_deviation::{SamplerScratch, Ziggurat, ZigguratScratch};
 use rvtol_engine::run::BLOCK_ROWS;
-use rvtol_engine::scenario::BoundModel;
 use rvtol_engine::stats::{Moments, QuantileSketch};
 use rvtol_engine::{run, RunSettings, Scenario};
 
@@ -60,29 +59,31 @@ fn stages(c: &mut Criterion) {
     let mut group = c.benchmark_group("rv20e_stage");
     group.throughput(Throughput::Elements(ROWS as u64));
 
-    let mut rows = vec![0.0; ROWS * n_columns];
+    let mut blocks = vec![0.0; ROWS * n_columns];
     let mut counts = space.new_constraint_counts();
     let mut rng = ChaCha8Rng::seed_from_u64(1);
-    // As the run draws them: blocks of BLOCK_ROWS rows with reused scratch.
+    // As the run draws them: column-major blocks of BLOCK_ROWS rows with reused scratch.
     let mut scratch = SamplerScratch::default();
     group.bench_function("sampler", |b| {
         b.iter(|| {
-            for block in rows.chunks_mut(BLOCK_ROWS * n_columns) {
+            for block in blocks.chunks_mut(BLOCK_ROWS * n_columns) {
                 space
-                    .sample_rows_with(&mut rng, block, &mut counts, &mut scratch)
+                    .sample_columns_with(&mut rng, block, &mut counts, &mut scratch)
                     .unwrap();
             }
         })
     });
 
     let n_out = bound.model.outputs().len();
-    let inputs = model_inputs(bound, &rows, n_columns);
+    let inputs = model_rows(&scenario, ROWS);
+    let input_slices: Vec<&[f64]> = inputs.iter().map(Vec::as_slice).collect();
     let mut outputs = vec![0.0; ROWS * n_out];
     group.bench_function("model", |b| {
-        b.iter(|| bound.model.evaluate_batch(&inputs, &mut outputs))
+        b.iter(|| bound.model.evaluate_columns(&input_slices, &mut outputs))
     });
 
-    let column: Vec<f64> = outputs.iter().step_by(n_out).copied().collect();
+    // The first output's column.
+    let column: Vec<f64> = outputs[..ROWS].to_vec();
     let mut sketch = QuantileSketch::new(rvtol_engine::run::SKETCH_RELATIVE_ACCURACY);
     group.bench_function("moments_one_output", |b| {
         b.iter(|| Moments::from_slice(&column))
@@ -110,8 +111,9 @@ fn whole_run(c: &mut Criterion) {
     group.finish();
 }
 
-/// Model input rows drawn from a scenario's input space (its first model).
-fn model_rows(scenario: &Scenario, rows: usize) -> Vec<f64> {
+/// Model input columns (one per input of the scenario's first model) of `rows` rows drawn
+/// from the scenario's input space.
+fn model_rows(scenario: &Scenario, rows: usize) -> Vec<Vec<f64>> {
     let space = &scenario.input_space;
     let bound = &scenario.models[0];
     let n_columns = space.n_columns();
@@ -121,14 +123,12 @@ fn model_rows(scenario: &Scenario, rows: usize) -> Vec<f64> {
     space
         .sample_rows(&mut rng, &mut sampled, &mut counts)
         .expect("shipped scenario samples");
-    model_inputs(bound, &sampled, n_columns)
-}
-
-/// The model's input rows for sampled rows of `n_columns` variables.
-fn model_inputs(bound: &BoundModel, sampled: &[f64], n_columns: usize) -> Vec<f64> {
-    sampled
+    let model_rows: Vec<Vec<f64>> = sampled
         .chunks_exact(n_columns)
-        .flat_map(|row| bound.inputs_of_row(row))
+        .map(|row| bound.inputs_of_row(row))
+        .collect();
+    (0..bound.bindings.len())
+        .map(|i| model_rows.iter().map(|row| row[i]).collect())
         .collect()
 }
 
@@ -145,11 +145,12 @@ fn models(c: &mut Criterion) {
     ] {
         let scenario = Scenario::load(&scenario_path(file)).expect("shipped scenario loads");
         let inputs = model_rows(&scenario, rows);
+        let input_slices: Vec<&[f64]> = inputs.iter().map(Vec::as_slice).collect();
         let bound = &scenario.models[0];
         let mut outputs = vec![0.0; rows * bound.model.outputs().len()];
         group.throughput(Throughput::Elements(rows as u64));
         group.bench_function(bound.model.name(), |b| {
-            b.iter(|| bound.model.evaluate_batch(&inputs, &mut outputs))
+            b.iter(|| bound.model.evaluate_columns(&input_slices, &mut outputs))
         });
     }
     group.finish();

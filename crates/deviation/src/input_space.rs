@@ -363,16 +363,30 @@ impl GaussianBlock {
         self.apply(z, row);
     }
 
-    /// Writes μ + L·z into the block's columns of `row` (`z` holds `rank` draws).
+    /// Component `i` of μ + L·z (`z` holds `rank` draws).
+    #[inline]
+    fn component(&self, i: usize, z: &[f64]) -> f64 {
+        let factor_row = &self.factor[i * self.rank..(i + 1) * self.rank];
+        let mut value = self.means[i];
+        for (l, zk) in factor_row.iter().zip(z.iter()) {
+            value += l * zk;
+        }
+        value
+    }
+
+    /// Writes μ + L·z into the block's columns of `row`.
     #[inline]
     fn apply(&self, z: &[f64], row: &mut [f64]) {
-        for (i, (&column, &mean)) in self.columns.iter().zip(&self.means).enumerate() {
-            let factor_row = &self.factor[i * self.rank..(i + 1) * self.rank];
-            let mut value = mean;
-            for (l, zk) in factor_row.iter().zip(z.iter()) {
-                value += l * zk;
-            }
-            row[column] = value;
+        for (i, &column) in self.columns.iter().enumerate() {
+            row[column] = self.component(i, z);
+        }
+    }
+
+    /// Writes μ + L·z into the block's columns of row `r` of a column-major block.
+    #[inline]
+    fn apply_to_columns(&self, z: &[f64], columns: &mut [f64], n_rows: usize, r: usize) {
+        for (i, &column) in self.columns.iter().enumerate() {
+            columns[column * n_rows + r] = self.component(i, z);
         }
     }
 }
@@ -448,20 +462,20 @@ impl RotatedPair {
         })
     }
 
-    /// Fills the pair's columns of every row; returns the candidate draws of z_s, or `Err`
-    /// after [`MAX_REJECTIONS_PER_ROW`] consecutive rejections. Stream: batches of z_s
-    /// candidates ([`batch_size`] for the rows still unfilled; those left once every row
-    /// is filled are discarded) until every row is filled; then z_t.
+    /// Fills the pair's columns of every row of a column-major block of `n_rows` rows;
+    /// returns the candidate draws of z_s, or `Err` after [`MAX_REJECTIONS_PER_ROW`]
+    /// consecutive rejections. Stream: batches of z_s candidates ([`batch_size`] for the
+    /// rows still unfilled; those left once every row is filled are discarded) until every
+    /// row is filled; then z_t.
     fn fill_rows<R: Rng + ?Sized>(
         &self,
         acceptance: f64,
         normal: &Ziggurat,
         rng: &mut R,
-        rows: &mut [f64],
-        n_columns: usize,
+        columns: &mut [f64],
+        n_rows: usize,
         scratch: &mut SamplerScratch,
     ) -> Result<u64, ()> {
-        let n_rows = rows.len() / n_columns;
         let SamplerScratch {
             candidates,
             accepted,
@@ -512,16 +526,21 @@ impl RotatedPair {
         normal.fill(rng, free_z, ziggurat);
         let [c1, c2] = self.rotation;
         let [cx, cy] = self.columns;
-        for ((row, &z_s), &z_t) in rows
-            .chunks_exact_mut(n_columns)
-            .zip(accepted_z.iter())
-            .zip(free_z.iter())
-        {
-            row[cx] = self.means[0] + self.sds[0] * (c1 * z_s - c2 * z_t);
-            row[cy] = self.means[1] + self.sds[1] * (c2 * z_s + c1 * z_t);
+        let (z_s, z_t) = (&accepted_z[..n_rows], &free_z[..n_rows]);
+        for ((x, &z_s), &z_t) in column_mut(columns, cx, n_rows).iter_mut().zip(z_s).zip(z_t) {
+            *x = self.means[0] + self.sds[0] * (c1 * z_s - c2 * z_t);
+        }
+        for ((y, &z_s), &z_t) in column_mut(columns, cy, n_rows).iter_mut().zip(z_s).zip(z_t) {
+            *y = self.means[1] + self.sds[1] * (c2 * z_s + c1 * z_t);
         }
         Ok(attempts)
     }
+}
+
+/// Column `column` of a column-major block of `n_rows` rows.
+#[inline]
+fn column_mut(columns: &mut [f64], column: usize, n_rows: usize) -> &mut [f64] {
+    &mut columns[column * n_rows..(column + 1) * n_rows]
 }
 
 /// The first `n` values of `buffer`, grown (never shrunk) as needed: no memset per call.
@@ -532,14 +551,19 @@ fn prefix(buffer: &mut Vec<f64>, n: usize) -> &mut [f64] {
     &mut buffer[..n]
 }
 
-/// Reusable buffers of [`InputSpace::sample_rows_with`], so a hot loop that samples block
-/// after block does not allocate.
+/// Reusable buffers of [`InputSpace::sample_columns_with`] and
+/// [`InputSpace::sample_rows_with`], so a hot loop that samples block after block does not
+/// allocate.
 #[derive(Debug, Clone, Default)]
 pub struct SamplerScratch {
     normals: Vec<f64>,
     candidates: Vec<f64>,
     accepted: Vec<f64>,
     block_z: Vec<f64>,
+    /// One row of a group drawn by per-row rejection.
+    row: Vec<f64>,
+    /// The column-major block of [`InputSpace::sample_rows_with`] before it is transposed.
+    columns: Vec<f64>,
     ziggurat: ZigguratScratch,
 }
 
@@ -558,11 +582,10 @@ impl ConstrainedGroup {
         slot_inequalities: &[LinearInequality],
         normal: &Ziggurat,
         rng: &mut R,
-        rows: &mut [f64],
-        n_columns: usize,
+        columns: &mut [f64],
+        n_rows: usize,
         scratch: &mut SamplerScratch,
     ) -> Result<u64, ()> {
-        let n_rows = rows.len() / n_columns;
         let k = self.singles.len();
         let mut candidate = [0.0f64; MAX_SLOT_SINGLES];
         let (mut filled, mut attempts, mut consecutive, mut too_many) = (0, 0u64, 0u64, false);
@@ -581,9 +604,8 @@ impl ConstrainedGroup {
                 let accepted = slot_inequalities
                     .iter()
                     .fold(true, |all, q| all & q.holds(&candidate));
-                let row = &mut rows[filled * n_columns..(filled + 1) * n_columns];
                 for (value, &(column, _, _)) in candidate.iter().zip(&self.singles) {
-                    row[column] = *value;
+                    columns[column * n_rows + filled] = *value;
                 }
                 attempts += 1;
                 filled += usize::from(accepted);
@@ -772,7 +794,7 @@ impl InputSpace {
     }
 
     /// Fills `rows` (row-major, a multiple of `n_columns()` long) with independent draws.
-    /// Fails only when a constraint rejects [`MAX_REJECTIONS_PER_ROW`] draws in a row.
+    /// Fails only when a constraint rejects 100 000 draws in a row.
     pub fn sample_rows<R: Rng + ?Sized>(
         &self,
         rng: &mut R,
@@ -783,15 +805,8 @@ impl InputSpace {
     }
 
     /// [`InputSpace::sample_rows`] with caller-owned buffers (no allocation once they have
-    /// grown to the block size).
-    ///
-    /// Stream layout (part of the reproducibility contract, through the run's chunks):
-    /// 1. the standard normals of every unconstrained single and block as one
-    ///    [`Ziggurat::fill`]: each single's draws for all rows in turn, then each block's
-    ///    draws, `rank` per row, row after row;
-    /// 2. the non-normal scalars, row after row;
-    /// 3. each constraint group in turn: batches of candidates (the rotated z_s of a pair and
-    ///    the compaction of singles), or row by row for groups with dense blocks.
+    /// grown to the block size): [`InputSpace::sample_columns_with`], then transposed to
+    /// rows. The same stream gives the same values in either layout.
     pub fn sample_rows_with<R: Rng + ?Sized>(
         &self,
         rng: &mut R,
@@ -802,17 +817,52 @@ impl InputSpace {
         if self.n_columns == 0 {
             return Ok(());
         }
-        let normal = Ziggurat::get();
         let n_rows = rows.len() / self.n_columns;
+        let mut columns = std::mem::take(&mut scratch.columns);
+        let block = prefix(&mut columns, rows.len());
+        let drawn = self.sample_columns_with(rng, block, counts, scratch);
+        if drawn.is_ok() {
+            for (c, column) in block.chunks_exact(n_rows.max(1)).enumerate() {
+                for (row, &value) in rows.chunks_exact_mut(self.n_columns).zip(column) {
+                    row[c] = value;
+                }
+            }
+        }
+        scratch.columns = columns;
+        drawn
+    }
+
+    /// Fills a column-major block (`columns[c·n + r]` is column c of row r, n =
+    /// `columns.len() / n_columns()` rows) with independent draws: the layout of the run's
+    /// hot loop, where each column is contiguous for the models. Fails only when a
+    /// constraint rejects 100 000 draws in a row.
+    ///
+    /// Stream layout (part of the reproducibility contract, through the run's chunks):
+    /// 1. the standard normals of every unconstrained single and block as one
+    ///    [`Ziggurat::fill`]: each single's draws for all rows in turn, then each block's
+    ///    draws, `rank` per row, row after row;
+    /// 2. the non-normal scalars, row after row;
+    /// 3. each constraint group in turn: batches of candidates (the rotated z_s of a pair and
+    ///    the compaction of singles), or row by row for groups with dense blocks.
+    pub fn sample_columns_with<R: Rng + ?Sized>(
+        &self,
+        rng: &mut R,
+        columns: &mut [f64],
+        counts: &mut ConstraintCounts,
+        scratch: &mut SamplerScratch,
+    ) -> Result<(), DeviationError> {
+        if self.n_columns == 0 {
+            return Ok(());
+        }
+        let normal = Ziggurat::get();
+        let n_rows = columns.len() / self.n_columns;
         let block_draws: usize = self.blocks.iter().map(|b| b.rank).sum();
         let n_free = self.singles.len() + block_draws;
         let z = prefix(&mut scratch.normals, n_rows * n_free);
         normal.fill(rng, z, &mut scratch.ziggurat);
         let (single_z, block_z) = z.split_at(n_rows * self.singles.len());
         for &(column, mean) in &self.fixed {
-            for row in rows.chunks_exact_mut(self.n_columns) {
-                row[column] = mean;
-            }
+            column_mut(columns, column, n_rows).fill(mean);
         }
         // Singles column by column: their draws are laid out one column after another.
         for (&(column, mean, sd), z) in self
@@ -820,26 +870,23 @@ impl InputSpace {
             .iter()
             .zip(single_z.chunks_exact(n_rows.max(1)))
         {
-            for (row, &z) in rows.chunks_exact_mut(self.n_columns).zip(z) {
-                row[column] = mean + sd * z;
+            for (x, &z) in column_mut(columns, column, n_rows).iter_mut().zip(z) {
+                *x = mean + sd * z;
             }
         }
         // Blocks row by row: each row's `rank` draws of a block are consecutive.
         let mut block_z = block_z;
         for block in &self.blocks {
             let (this, rest) = block_z.split_at(n_rows * block.rank);
-            for (row, z) in rows
-                .chunks_exact_mut(self.n_columns)
-                .zip(this.chunks_exact(block.rank))
-            {
-                block.apply(z, row);
+            for (r, z) in this.chunks_exact(block.rank).enumerate() {
+                block.apply_to_columns(z, columns, n_rows, r);
             }
             block_z = rest;
         }
         if !self.independent.is_empty() {
-            for row in rows.chunks_exact_mut(self.n_columns) {
+            for r in 0..n_rows {
                 for (column, distribution) in &self.independent {
-                    row[*column] = distribution.sample(rng);
+                    columns[column * n_rows + r] = distribution.sample(rng);
                 }
             }
         }
@@ -852,26 +899,20 @@ impl InputSpace {
                     group.pilot_acceptance,
                     normal,
                     rng,
-                    rows,
-                    self.n_columns,
+                    columns,
+                    n_rows,
                     scratch,
                 )
                 .map_err(|()| self.rejection_error())?
             } else if let Some(slot_inequalities) = &group.slot_inequalities {
                 group
-                    .fill_rows_of_singles(
-                        slot_inequalities,
-                        normal,
-                        rng,
-                        rows,
-                        self.n_columns,
-                        scratch,
-                    )
+                    .fill_rows_of_singles(slot_inequalities, normal, rng, columns, n_rows, scratch)
                     .map_err(|()| self.rejection_error())?
             } else {
                 scratch.block_z.resize(self.max_rank.max(1), 0.0);
+                let row = prefix(&mut scratch.row, self.n_columns);
                 let mut attempts = 0;
-                for row in rows.chunks_exact_mut(self.n_columns) {
+                for r in 0..n_rows {
                     attempts += self.draw_group_by_rejection(
                         group,
                         normal,
@@ -879,6 +920,14 @@ impl InputSpace {
                         &mut scratch.block_z,
                         row,
                     )?;
+                    let group_columns = group
+                        .singles
+                        .iter()
+                        .map(|single| &single.0)
+                        .chain(group.blocks.iter().flat_map(|block| &block.columns));
+                    for &column in group_columns {
+                        columns[column * n_rows + r] = row[column];
+                    }
                 }
                 attempts
             };
@@ -967,6 +1016,83 @@ mod tests {
             assert_eq!(row[2], 0.0);
             assert_eq!(row[5], 0.0);
             assert!(row[0].is_finite() && row[0] != 0.0);
+        }
+    }
+
+    #[test]
+    fn column_blocks_fill_every_path() {
+        // Every way a column is drawn, in one space: fixed components (Δw, Δγ), an Eq. 11
+        // part drawn as rotated pairs (parts[0]), an Eq. 11 part whose Δu is correlated
+        // with a scalar, so that half of its constraint is a dense block redrawn row by
+        // row (parts[1]), a correlated block without constraint, a single and a uniform.
+        let band = |path| PartSpec::from_tolerance_band(path, 0.006, 120.0, true).unwrap();
+        let mut builder = InputSpaceBuilder::new();
+        let p0 = builder.add_part("parts[0]", &band("parts[0]"));
+        let p1 = builder.add_part("parts[1]", &band("parts[1]"));
+        let normal = |sd| ScalarDistribution::Normal { mean: 1.0, sd };
+        let s0 = builder.add_scalar("variables[0]", normal(0.002));
+        let s1 = builder.add_scalar("variables[1]", normal(1.0));
+        let s2 = builder.add_scalar("variables[2]", normal(2.0));
+        let s3 = builder.add_scalar("variables[3]", normal(0.5));
+        let uniform = builder.add_scalar(
+            "variables[4]",
+            ScalarDistribution::Uniform {
+                lower: -1.0,
+                upper: 1.0,
+            },
+        );
+        builder.correlate("correlations[0]", p1, s0, 0.7).unwrap();
+        builder.correlate("correlations[1]", s1, s2, -0.5).unwrap();
+        let space = builder.build("correlations").unwrap();
+        let n_columns = space.n_columns();
+        let groups = &space.constrained_groups;
+        assert_eq!(groups.len(), 4);
+        assert_eq!(groups.iter().filter(|g| g.pair.is_some()).count(), 3);
+        assert_eq!(groups.iter().filter(|g| !g.blocks.is_empty()).count(), 1);
+
+        let n_rows = 37;
+        let mut columns = vec![f64::NAN; n_rows * n_columns];
+        let mut counts = space.new_constraint_counts();
+        let mut scratch = SamplerScratch::default();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        for _ in 0..3 {
+            columns.fill(f64::NAN);
+            space
+                .sample_columns_with(&mut rng, &mut columns, &mut counts, &mut scratch)
+                .unwrap();
+            let value = |r: usize, c: usize| columns[c * n_rows + r];
+            for r in 0..n_rows {
+                for part in [p0, p1] {
+                    let deviation: Vec<f64> = (0..6).map(|k| value(r, part + k)).collect();
+                    assert_eq!((deviation[2], deviation[5]), (0.0, 0.0));
+                    assert!(band("parts[0]").constraint.unwrap().holds(&deviation));
+                }
+                for c in [s0, s1, s2, s3] {
+                    assert!(value(r, c).is_finite() && value(r, c) != 1.0);
+                }
+                assert!(value(r, uniform).abs() <= 1.0);
+            }
+        }
+        // Each group filled each row once; the block group's attempts come from its own
+        // rejection loop.
+        for &(attempts, accepted) in &counts.groups {
+            assert_eq!(accepted, 3 * n_rows as u64);
+            assert!(attempts >= accepted);
+        }
+        // The row-major form is the same draws, transposed.
+        let mut rows = vec![f64::NAN; n_rows * n_columns];
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        space
+            .sample_rows_with(&mut rng, &mut rows, &mut counts, &mut scratch)
+            .unwrap();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        space
+            .sample_columns_with(&mut rng, &mut columns, &mut counts, &mut scratch)
+            .unwrap();
+        for (r, row) in rows.chunks_exact(n_columns).enumerate() {
+            for (c, &x) in row.iter().enumerate() {
+                assert_eq!(x.to_bits(), columns[c * n_rows + r].to_bits());
+            }
         }
     }
 

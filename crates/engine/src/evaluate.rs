@@ -1,18 +1,29 @@
-//! Evaluating a scenario's models on a block of sampled input rows: gather each model's
-//! inputs from the row columns (constants pre-filled once), call the model once per block
-//! (`evaluate_batch`, so no dynamic dispatch per sample), and lay each output out as a
-//! contiguous column for the statistics. Shared by the Monte Carlo run and the
-//! sensitivity analysis; owns its scratch buffers, so the hot loop does not allocate.
+//! Evaluating a scenario's models on a block of sampled inputs held column by column:
+//! each model input is a slice, either a sampled column or a constant column filled once,
+//! the model is called once per block ([`ErrorModel::evaluate_columns`], so no dynamic
+//! dispatch per sample), and each output lands as a contiguous column for the statistics.
+//! Shared by the Monte Carlo run (column-major blocks straight from the sampler) and the
+//! sensitivity analyses (row-major rows, transposed here); owns its scratch buffers, so
+//! the hot loop does not allocate.
+//!
+//! [`ErrorModel::evaluate_columns`]: rvtol_models::ErrorModel::evaluate_columns
 
 use crate::run::CHUNK_SIZE;
-use crate::scenario::Scenario;
+use crate::scenario::{Binding, Scenario};
+
+/// Model inputs whose slices are gathered on the stack (larger models use one heap
+/// buffer per block).
+const STACK_INPUTS: usize = 64;
 
 /// Scratch buffers and bindings to evaluate up to [`CHUNK_SIZE`] rows at a time.
 pub struct ChunkEvaluator<'a> {
     scenario: &'a Scenario,
-    gathers: Vec<Vec<(usize, usize)>>,
-    model_inputs: Vec<Vec<f64>>,
-    model_outputs: Vec<Vec<f64>>,
+    /// Per model, one [`CHUNK_SIZE`]-long column per constant input, in input order.
+    constant_columns: Vec<Vec<f64>>,
+    /// Column-major copy of row-major input for [`ChunkEvaluator::evaluate`].
+    transposed: Vec<f64>,
+    /// Column-major outputs of one model for one block.
+    model_outputs: Vec<f64>,
     /// One column per scenario output; the first `m` values are those of the last block.
     pub output_columns: Vec<Vec<f64>>,
 }
@@ -20,59 +31,82 @@ pub struct ChunkEvaluator<'a> {
 impl<'a> ChunkEvaluator<'a> {
     /// Buffers for `scenario`.
     pub fn new(scenario: &'a Scenario) -> Self {
+        let constant_columns = scenario
+            .models
+            .iter()
+            .map(|bound| {
+                bound
+                    .bindings
+                    .iter()
+                    .filter_map(|binding| match binding {
+                        Binding::Constant(value) => Some([*value; 1].repeat(CHUNK_SIZE)),
+                        Binding::Column(_) => None,
+                    })
+                    .flatten()
+                    .collect()
+            })
+            .collect();
+        let max_outputs = scenario
+            .models
+            .iter()
+            .map(|bound| bound.model.outputs().len())
+            .max()
+            .unwrap_or(0);
         ChunkEvaluator {
             scenario,
-            gathers: scenario
-                .models
-                .iter()
-                .map(|m| m.column_bindings())
-                .collect(),
-            model_inputs: scenario
-                .models
-                .iter()
-                .map(|m| m.constant_template().repeat(CHUNK_SIZE))
-                .collect(),
-            model_outputs: scenario
-                .models
-                .iter()
-                .map(|m| vec![0.0; CHUNK_SIZE * m.model.outputs().len()])
-                .collect(),
+            constant_columns,
+            transposed: vec![0.0; CHUNK_SIZE * scenario.input_space.n_columns()],
+            model_outputs: vec![0.0; CHUNK_SIZE * max_outputs],
             output_columns: vec![vec![0.0; CHUNK_SIZE]; scenario.outputs.len()],
         }
     }
 
-    /// Evaluates every model on the first `m` rows (row-major, `n_columns` per row) and
-    /// fills `output_columns[o][..m]`. `m` ≤ [`CHUNK_SIZE`].
+    /// Evaluates every model on the first `m` rows of row-major `rows` (`n_columns` per
+    /// row) and fills `output_columns[o][..m]`. `m` ≤ [`CHUNK_SIZE`].
     pub fn evaluate(&mut self, rows: &[f64], m: usize) {
-        self.evaluate_at(rows, m, 0);
-    }
-
-    /// Like [`ChunkEvaluator::evaluate`], but fills `output_columns[o][first..first + m]`:
-    /// a chunk evaluated block by block (`first + m` ≤ [`CHUNK_SIZE`]).
-    pub fn evaluate_at(&mut self, rows: &[f64], m: usize, first: usize) {
-        let n_columns = self.scenario.input_space.n_columns().max(1);
-        for (model_index, bound) in self.scenario.models.iter().enumerate() {
-            let n_in = bound.model.inputs().len();
-            let n_out = bound.model.outputs().len();
-            let inputs = &mut self.model_inputs[model_index][..m * n_in];
-            if n_in > 0 {
-                // One bound input at a time: a tight strided copy per input.
-                for &(input, column) in &self.gathers[model_index] {
-                    for (dst, row) in inputs
-                        .chunks_exact_mut(n_in)
-                        .zip(rows.chunks_exact(n_columns))
-                    {
-                        dst[input] = row[column];
-                    }
+        let n_columns = self.scenario.input_space.n_columns();
+        let mut transposed = std::mem::take(&mut self.transposed);
+        if n_columns > 0 {
+            for (c, column) in transposed[..m * n_columns]
+                .chunks_exact_mut(m.max(1))
+                .enumerate()
+            {
+                for (x, row) in column.iter_mut().zip(rows.chunks_exact(n_columns)) {
+                    *x = row[c];
                 }
             }
-            let outputs = &mut self.model_outputs[model_index][..m * n_out];
-            bound.model.evaluate_batch(inputs, outputs);
-            for j in 0..n_out {
-                let column = &mut self.output_columns[bound.first_output + j];
-                for (r, value) in column[first..first + m].iter_mut().enumerate() {
-                    *value = outputs[r * n_out + j];
-                }
+        }
+        self.evaluate_columns_at(&transposed[..m * n_columns], m, 0);
+        self.transposed = transposed;
+    }
+
+    /// Evaluates every model on a column-major block of `m` rows (`columns[c·m + r]` is
+    /// input-space column c of row r) and fills `output_columns[o][first..first + m]`: a
+    /// chunk evaluated block by block (`first + m` ≤ [`CHUNK_SIZE`]).
+    pub fn evaluate_columns_at(&mut self, columns: &[f64], m: usize, first: usize) {
+        for (bound, constants) in self.scenario.models.iter().zip(&self.constant_columns) {
+            let n_in = bound.bindings.len();
+            let n_out = bound.model.outputs().len();
+            let mut stack: [&[f64]; STACK_INPUTS] = [&[]; STACK_INPUTS];
+            let mut heap: Vec<&[f64]> = Vec::new();
+            let inputs: &mut [&[f64]] = if n_in <= STACK_INPUTS {
+                &mut stack[..n_in]
+            } else {
+                heap.resize(n_in, &[]);
+                &mut heap
+            };
+            let mut constant = constants.chunks_exact(CHUNK_SIZE);
+            for (input, binding) in inputs.iter_mut().zip(&bound.bindings) {
+                *input = match binding {
+                    Binding::Column(c) => &columns[c * m..(c + 1) * m],
+                    Binding::Constant(_) => &constant.next().expect("one column per constant")[..m],
+                };
+            }
+            let outputs = &mut self.model_outputs[..m * n_out];
+            bound.model.evaluate_columns(inputs, outputs);
+            for (j, values) in outputs.chunks_exact(m.max(1)).enumerate() {
+                self.output_columns[bound.first_output + j][first..first + m]
+                    .copy_from_slice(values);
             }
         }
     }

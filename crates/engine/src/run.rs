@@ -12,9 +12,9 @@
 //!   percentiles).
 //! - Chunks run in waves of [`WAVE_CHUNKS`] so memory stays bounded for any sample count.
 //!
-//! Per chunk, block of [`BLOCK_ROWS`] rows after block: draw the input rows, gather each
-//! model's inputs (constants pre-filled once) and evaluate the model into the chunk's
-//! output columns; then fold each output column into the statistics.
+//! Per chunk, block of [`BLOCK_ROWS`] rows after block: draw the inputs as a column-major
+//! block, hand each model its input columns (constants pre-filled once) and evaluate it
+//! into the chunk's output columns; then fold each output column into the statistics.
 //! Non-finite outputs are counted per output and kept out of the statistics.
 
 use rand::SeedableRng;
@@ -118,7 +118,8 @@ pub struct RunResult {
 
 /// Per-thread scratch buffers and partial results.
 struct Partial<'a> {
-    rows: Vec<f64>,
+    /// One column-major block of sampled inputs.
+    columns: Vec<f64>,
     sampler: SamplerScratch,
     evaluator: ChunkEvaluator<'a>,
     finite: Vec<f64>,
@@ -146,7 +147,7 @@ impl<'a> Plan<'a> {
     fn partial(&self) -> Partial<'a> {
         let n_out = self.scenario.outputs.len();
         Partial {
-            rows: vec![0.0; BLOCK_ROWS * self.scenario.input_space.n_columns()],
+            columns: vec![0.0; BLOCK_ROWS * self.scenario.input_space.n_columns()],
             sampler: SamplerScratch::default(),
             evaluator: ChunkEvaluator::new(self.scenario),
             finite: Vec::with_capacity(CHUNK_SIZE),
@@ -191,17 +192,17 @@ impl<'a> Plan<'a> {
         rng.set_stream(chunk);
         for first in (0..m).step_by(BLOCK_ROWS) {
             let block = (m - first).min(BLOCK_ROWS);
-            let rows = &mut partial.rows[..block * n_columns];
-            if let Err(err) = space.sample_rows_with(
+            let columns = &mut partial.columns[..block * n_columns];
+            if let Err(err) = space.sample_columns_with(
                 &mut rng,
-                rows,
+                columns,
                 &mut partial.constraint_counts,
                 &mut partial.sampler,
             ) {
                 partial.error = Some((chunk, err.into()));
                 return None;
             }
-            partial.evaluator.evaluate_at(rows, block, first);
+            partial.evaluator.evaluate_columns_at(columns, block, first);
         }
         Some(m)
     }

@@ -213,29 +213,6 @@ pub struct BoundModel {
 }
 
 impl BoundModel {
-    /// (model input index, input-space column) for the inputs bound to columns.
-    pub fn column_bindings(&self) -> Vec<(usize, usize)> {
-        self.bindings
-            .iter()
-            .enumerate()
-            .filter_map(|(i, b)| match b {
-                Binding::Column(c) => Some((i, *c)),
-                Binding::Constant(_) => None,
-            })
-            .collect()
-    }
-
-    /// A model input row with every constant filled in (columns left at 0).
-    pub fn constant_template(&self) -> Vec<f64> {
-        self.bindings
-            .iter()
-            .map(|b| match b {
-                Binding::Constant(v) => *v,
-                Binding::Column(_) => 0.0,
-            })
-            .collect()
-    }
-
     /// The model's input row for one row of the input space: constants and columns.
     pub fn inputs_of_row(&self, row: &[f64]) -> Vec<f64> {
         self.bindings

@@ -401,7 +401,93 @@ impl ErrorModel for GeometricHysteresis {
 
     #[inline]
     fn evaluate(&self, x: &[f64], out: &mut [f64]) {
-        let x: &[f64; 18] = x[..18].try_into().expect("18 inputs");
+        let x: &[f64; N_INPUTS] = x[..N_INPUTS].try_into().expect("18 inputs");
+        let [hysteresis, involute, cycloid, crank, interference] = self.row(x, exact_tilt);
+        out[..N_OUTPUTS].copy_from_slice(&[hysteresis, involute, cycloid, crank, interference]);
+    }
+
+    /// The row form over every row of the block: a branch-free loop over contiguous
+    /// columns that the compiler vectorises. It takes the series for cos β on every row;
+    /// the rare rows tilted beyond the series' range are then redone by [`Self::evaluate`],
+    /// so every row has exactly the bits of the row form.
+    fn evaluate_columns(&self, inputs: &[&[f64]], outputs: &mut [f64]) {
+        let n = outputs.len() / N_OUTPUTS;
+        let columns: [&[f64]; N_INPUTS] = std::array::from_fn(|i| &inputs[i][..n]);
+        let (hysteresis, rest) = outputs.split_at_mut(n);
+        let (involute, rest) = rest.split_at_mut(n);
+        let (cycloid, rest) = rest.split_at_mut(n);
+        let (crank, interference) = rest.split_at_mut(n);
+        let interference = &mut interference[..n];
+        let mut any_exact = false;
+        for r in 0..n {
+            let x: [f64; N_INPUTS] = std::array::from_fn(|i| columns[i][r]);
+            let [h, i, c, k, f] = self.row(&x, series_tilt);
+            hysteresis[r] = h;
+            involute[r] = i;
+            cycloid[r] = c;
+            crank[r] = k;
+            interference[r] = f;
+            any_exact |= needs_cosine(&x);
+        }
+        if any_exact {
+            let mut out = [0.0; N_OUTPUTS];
+            for r in 0..n {
+                let x: [f64; N_INPUTS] = std::array::from_fn(|i| columns[i][r]);
+                if needs_cosine(&x) {
+                    self.evaluate(&x, &mut out);
+                    for (j, &value) in out.iter().enumerate() {
+                        outputs[j * n + r] = value;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Inputs and outputs of the model.
+const N_INPUTS: usize = 18;
+const N_OUTPUTS: usize = 5;
+/// β² below which cos β and 1/cos β are taken from their series (β = 1e-3 rad).
+const TILT_SERIES_LIMIT: f64 = 1e-6;
+
+/// β² = Δα² + Δβ² of the input shaft.
+#[inline(always)]
+fn tilt_squared(x: &[f64; N_INPUTS]) -> f64 {
+    x[16] * x[16] + x[17] * x[17]
+}
+
+/// Whether a row's tilt is beyond the series (or NaN), so cos β needs the cosine.
+#[inline(always)]
+fn needs_cosine(x: &[f64; N_INPUTS]) -> bool {
+    tilt_squared(x).partial_cmp(&TILT_SERIES_LIMIT) != Some(std::cmp::Ordering::Less)
+}
+
+/// cos β and 1/cos β by their series (truncation errors β⁶/720 and 61β⁶/720, below 1e-19
+/// for β² < [`TILT_SERIES_LIMIT`]).
+#[inline(always)]
+fn series_tilt(beta_squared: f64) -> (f64, f64) {
+    (
+        1.0 - 0.5 * beta_squared + beta_squared * beta_squared / 24.0,
+        1.0 + 0.5 * beta_squared + 5.0 * beta_squared * beta_squared / 24.0,
+    )
+}
+
+/// cos β and 1/cos β: the series below [`TILT_SERIES_LIMIT`], else the cosine itself.
+#[inline(always)]
+fn exact_tilt(beta_squared: f64) -> (f64, f64) {
+    if beta_squared < TILT_SERIES_LIMIT {
+        series_tilt(beta_squared)
+    } else {
+        let cos_beta = beta_squared.sqrt().cos();
+        (cos_beta, 1.0 / cos_beta)
+    }
+}
+
+impl GeometricHysteresis {
+    /// One row: [hysteresis, involute, cycloid, crank, interference], with cos β and
+    /// 1/cos β from `tilt` (of β²).
+    #[inline(always)]
+    fn row(&self, x: &[f64; N_INPUTS], tilt: impl Fn(f64) -> (f64, f64)) -> [f64; N_OUTPUTS] {
         let (e_ws, e_wi) = (x[0], x[1]);
         let (mod_equidistant, mod_shift, eccentricity_err) = (x[2], x[3], x[12]);
         let crank_clearance = x[13];
@@ -411,18 +497,7 @@ impl ErrorModel for GeometricHysteresis {
         let shaft = [shaft_du, shaft_dv, 0.0, shaft_dalpha, shaft_dbeta, 0.0];
         let at_sun = point_displacement(&shaft, [0.0, 0.0, self.sun_gear_axial_position]);
         let a1 = (at_sun[0] * at_sun[0] + at_sun[1] * at_sun[1]).sqrt();
-        let beta_squared = shaft_dalpha * shaft_dalpha + shaft_dbeta * shaft_dbeta;
-        // cos β and 1/cos β by their series below β = 1e-3 rad (truncation errors β⁶/720 and
-        // 61β⁶/720, below 1e-19).
-        let (cos_beta, sec_beta) = if beta_squared < 1e-6 {
-            (
-                1.0 - 0.5 * beta_squared + beta_squared * beta_squared / 24.0,
-                1.0 + 0.5 * beta_squared + 5.0 * beta_squared * beta_squared / 24.0,
-            )
-        } else {
-            let cos_beta = beta_squared.sqrt().cos();
-            (cos_beta, 1.0 / cos_beta)
-        };
+        let (cos_beta, sec_beta) = tilt(tilt_squared(x));
         let tilted_distance = self.center_distance + a1;
 
         // Involute stage, Eq. 5 / 12 with cos α' = a0·cos α·cos β/(a0 + a1).
@@ -439,11 +514,13 @@ impl ErrorModel for GeometricHysteresis {
         // Crank bearing clearance, Eq. 20.
         let crank = crank_clearance * cos_beta * ARCMIN_PER_RAD / tilted_distance;
 
-        out[0] = involute.max(0.0) + cycloid.max(0.0) + crank.max(0.0);
-        out[1] = involute;
-        out[2] = cycloid;
-        out[3] = crank;
-        out[4] = f64::from(u8::from(involute.min(cycloid).min(crank) < 0.0));
+        [
+            involute.max(0.0) + cycloid.max(0.0) + crank.max(0.0),
+            involute,
+            cycloid,
+            crank,
+            f64::from(u8::from(involute.min(cycloid).min(crank) < 0.0)),
+        ]
     }
 }
 
@@ -588,6 +665,48 @@ mod tests {
             GeometricHysteresis::from_params(&params).unwrap_err().key,
             "gear_mass_kg"
         );
+    }
+
+    #[test]
+    fn column_form_gives_the_row_form_bits() {
+        // Rows spread over the inputs' ranges, with some tilted beyond the cos β series
+        // (β ≥ 1e-3 rad, redone by the row form), one exactly at its limit and one NaN.
+        let model = model();
+        let n = 67;
+        let mut rows: Vec<[f64; 18]> = (0..n)
+            .map(|r| {
+                let mut x = table9_nominal();
+                for (i, value) in x.iter_mut().enumerate().skip(4) {
+                    *value += 1e-3 * (((r * 31 + i * 17) % 23) as f64 - 11.0);
+                }
+                x[16] = 1e-5 * ((r % 7) as f64 - 3.0);
+                x[17] = 2e-5 * ((r % 5) as f64 - 2.0);
+                x
+            })
+            .collect();
+        rows[3][16] = 2e-3;
+        rows[40][17] = -0.05;
+        rows[41][16] = 1e-3;
+        rows[50][13] = f64::NAN;
+        let columns: Vec<Vec<f64>> = (0..18)
+            .map(|i| rows.iter().map(|x| x[i]).collect())
+            .collect();
+        let inputs: Vec<&[f64]> = columns.iter().map(Vec::as_slice).collect();
+        let mut outputs = vec![0.0; 5 * n];
+        model.evaluate_columns(&inputs, &mut outputs);
+        for (r, x) in rows.iter().enumerate() {
+            let expected = eval(x);
+            for (j, value) in expected.iter().enumerate() {
+                assert_eq!(
+                    outputs[j * n + r].to_bits(),
+                    value.to_bits(),
+                    "row {r} output {j}"
+                );
+            }
+        }
+        // The tilted rows really leave the series: their crank term differs from it.
+        let beta = 0.05f64;
+        assert_ne!(series_tilt(beta * beta).0, beta.cos());
     }
 
     proptest! {

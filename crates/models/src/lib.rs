@@ -34,6 +34,10 @@ pub const ARCMIN_PER_RAD: f64 = 180.0 * 60.0 / std::f64::consts::PI;
 /// Arcseconds per radian, 180·3600/π.
 pub const ARCSEC_PER_RAD: f64 = 180.0 * 3600.0 / std::f64::consts::PI;
 
+/// Inputs plus outputs of one row that [`ErrorModel::evaluate_columns`]'s default gathers
+/// on the stack (larger models use one heap buffer per block).
+const ROW_BUFFER: usize = 128;
+
 /// A named model input with its unit.
 #[derive(Debug, Clone, PartialEq)]
 pub struct InputSpec {
@@ -92,25 +96,35 @@ pub trait ErrorModel: Send + Sync {
     /// Evaluates one sample. `inputs.len() == self.inputs().len()`,
     /// `outputs.len() == self.outputs().len()`. No allocation, no panic on finite input.
     fn evaluate(&self, inputs: &[f64], outputs: &mut [f64]);
-    /// Evaluates a chunk of samples, row-major in both buffers. Implementations override
-    /// it only when a batch form is faster; the default loops over [`Self::evaluate`],
-    /// so the per-sample call is static, not dynamic, dispatch.
-    fn evaluate_batch(&self, inputs: &[f64], outputs: &mut [f64]) {
-        let (n_in, n_out) = (self.inputs().len(), self.outputs().len());
+    /// Evaluates a block of samples held column by column: `inputs[i]` holds input i of
+    /// each of the block's n rows (every slice n long), and output j of row r goes to
+    /// `outputs[j·n + r]` (`outputs.len() == n·self.outputs().len()`). The engine calls it
+    /// once per block, so the per-sample call is static, not dynamic, dispatch. The default
+    /// gathers each row and calls [`Self::evaluate`]; models whose arithmetic vectorises
+    /// override it with a column-wise loop that gives the same bits.
+    fn evaluate_columns(&self, inputs: &[&[f64]], outputs: &mut [f64]) {
+        let (n_in, n_out) = (inputs.len(), self.outputs().len());
         if n_out == 0 {
             return;
         }
-        if n_in == 0 {
-            for out in outputs.chunks_exact_mut(n_out) {
-                self.evaluate(&[], out);
+        let n = outputs.len() / n_out;
+        let mut stack = [0.0; ROW_BUFFER];
+        let mut heap = Vec::new();
+        let buffer = if n_in + n_out <= ROW_BUFFER {
+            &mut stack[..n_in + n_out]
+        } else {
+            heap.resize(n_in + n_out, 0.0);
+            &mut heap[..]
+        };
+        let (row, out) = buffer.split_at_mut(n_in);
+        for r in 0..n {
+            for (x, column) in row.iter_mut().zip(inputs) {
+                *x = column[r];
             }
-            return;
-        }
-        for (row, out) in inputs
-            .chunks_exact(n_in)
-            .zip(outputs.chunks_exact_mut(n_out))
-        {
             self.evaluate(row, out);
+            for (j, &y) in out.iter().enumerate() {
+                outputs[j * n + r] = y;
+            }
         }
     }
 
