@@ -21,6 +21,10 @@
 //! of one inequality over two of them (each half of Eq. 11 for a diagonal covariance) is
 //! first rotated so that only the constrained direction is redrawn ([`RotatedPair`]).
 //! The acceptance rate of the whole constraint is the product of the groups' rates.
+//!
+//! A call fills a block of rows: column-major ([`InputSpace::sample_columns_with`], the
+//! run's hot loop, where each column is contiguous for the models) or row-major
+//! ([`InputSpace::sample_rows_with`], the same draws transposed, for the analyses).
 
 use nalgebra::{DMatrix, DVector};
 use rand::{Rng, SeedableRng};
