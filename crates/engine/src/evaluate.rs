@@ -4,7 +4,8 @@
 //! dispatch per sample), and each output lands as a contiguous column for the statistics.
 //! Shared by the Monte Carlo run (column-major blocks straight from the sampler) and the
 //! sensitivity analyses (row-major rows, transposed here); owns its scratch buffers, so
-//! the hot loop does not allocate.
+//! the hot loop does not allocate (for models of up to [`STACK_INPUTS`] inputs; beyond,
+//! one small buffer of slices per block).
 //!
 //! [`ErrorModel::evaluate_columns`]: rvtol_models::ErrorModel::evaluate_columns
 
@@ -13,7 +14,7 @@ use crate::scenario::{Binding, Scenario};
 
 /// Model inputs whose slices are gathered on the stack (larger models use one heap
 /// buffer per block).
-const STACK_INPUTS: usize = 64;
+pub const STACK_INPUTS: usize = 256;
 
 /// Scratch buffers and bindings to evaluate up to [`CHUNK_SIZE`] rows at a time.
 pub struct ChunkEvaluator<'a> {

@@ -670,7 +670,9 @@ mod tests {
     #[test]
     fn column_form_gives_the_row_form_bits() {
         // Rows spread over the inputs' ranges, with some tilted beyond the cos β series
-        // (β ≥ 1e-3 rad, redone by the row form), one exactly at its limit and one NaN.
+        // (β ≥ 1e-3 rad, redone by the row form: β = 0.02 and 0.05 rad, where the series
+        // differs from the cosine, and β = 1e-3 rad, just past the limit), one with a NaN
+        // tilt (redone) and one with a NaN clearance (NaN outputs either way).
         let model = model();
         let n = 67;
         let mut rows: Vec<[f64; 18]> = (0..n)
@@ -684,10 +686,12 @@ mod tests {
                 x
             })
             .collect();
-        rows[3][16] = 2e-3;
+        rows[3][16] = 0.02;
         rows[40][17] = -0.05;
         rows[41][16] = 1e-3;
+        rows[41][17] = 0.0;
         rows[50][13] = f64::NAN;
+        rows[60][17] = f64::NAN;
         let columns: Vec<Vec<f64>> = (0..18)
             .map(|i| rows.iter().map(|x| x[i]).collect())
             .collect();
@@ -704,9 +708,10 @@ mod tests {
                 );
             }
         }
-        // The tilted rows really leave the series: their crank term differs from it.
-        let beta = 0.05f64;
-        assert_ne!(series_tilt(beta * beta).0, beta.cos());
+        // The tilted rows really leave the series: its cos β differs from the cosine there.
+        for beta in [0.02f64, 0.05] {
+            assert_ne!(series_tilt(beta * beta).0, beta.cos());
+        }
     }
 
     proptest! {

@@ -36,7 +36,7 @@ pub const ARCSEC_PER_RAD: f64 = 180.0 * 3600.0 / std::f64::consts::PI;
 
 /// Inputs plus outputs of one row that [`ErrorModel::evaluate_columns`]'s default gathers
 /// on the stack (larger models use one heap buffer per block).
-const ROW_BUFFER: usize = 128;
+pub const ROW_BUFFER: usize = 512;
 
 /// A named model input with its unit.
 #[derive(Debug, Clone, PartialEq)]
@@ -211,4 +211,83 @@ pub fn all() -> &'static [ModelEntry] {
 /// The registry entry of a model by name.
 pub fn find(name: &str) -> Option<&'static ModelEntry> {
     all().iter().find(|entry| entry.name == name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A model with `n` inputs and three outputs: Σx, Σ(i + 1)·x_i and the first input
+    /// (7 without inputs), to see where the default column form puts each value.
+    struct Probe {
+        inputs: Vec<InputSpec>,
+        outputs: Vec<OutputSpec>,
+    }
+
+    impl Probe {
+        fn new(n: usize) -> Probe {
+            let spec = |name: String| InputSpec {
+                name,
+                unit: "any".into(),
+                description: "probe",
+            };
+            Probe {
+                inputs: (0..n).map(|i| spec(format!("x{i}"))).collect(),
+                outputs: ["sum", "weighted", "first"]
+                    .iter()
+                    .map(|name| OutputSpec {
+                        name: (*name).into(),
+                        unit: "any".into(),
+                        description: "probe",
+                        kind: OutputKind::Continuous,
+                    })
+                    .collect(),
+            }
+        }
+    }
+
+    impl ErrorModel for Probe {
+        fn name(&self) -> &'static str {
+            "probe"
+        }
+        fn inputs(&self) -> &[InputSpec] {
+            &self.inputs
+        }
+        fn outputs(&self) -> &[OutputSpec] {
+            &self.outputs
+        }
+        fn evaluate(&self, x: &[f64], out: &mut [f64]) {
+            out[0] = x.iter().sum();
+            out[1] = x.iter().enumerate().map(|(i, v)| (i + 1) as f64 * v).sum();
+            out[2] = x.first().copied().unwrap_or(7.0);
+        }
+    }
+
+    #[test]
+    fn default_column_form_lays_out_rows_and_outputs() {
+        // Output j of row r at j·n + r, equal to the row form: with no inputs, a few, and
+        // more than the stack buffer holds (the heap path).
+        let n = 5;
+        for n_in in [0, 3, ROW_BUFFER] {
+            let model = Probe::new(n_in);
+            let columns: Vec<Vec<f64>> = (0..n_in)
+                .map(|i| (0..n).map(|r| (10 * r + i) as f64 * 0.5).collect())
+                .collect();
+            let inputs: Vec<&[f64]> = columns.iter().map(Vec::as_slice).collect();
+            let mut outputs = vec![f64::NAN; 3 * n];
+            model.evaluate_columns(&inputs, &mut outputs);
+            for r in 0..n {
+                let row: Vec<f64> = columns.iter().map(|column| column[r]).collect();
+                let mut expected = [0.0; 3];
+                model.evaluate(&row, &mut expected);
+                for (j, value) in expected.iter().enumerate() {
+                    assert_eq!(
+                        outputs[j * n + r].to_bits(),
+                        value.to_bits(),
+                        "{n_in} inputs"
+                    );
+                }
+            }
+        }
+    }
 }

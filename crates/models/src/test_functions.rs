@@ -236,23 +236,6 @@ mod tests {
     }
 
     #[test]
-    fn default_column_form_evaluates_each_row() {
-        // The trait's default `evaluate_columns` (Ishigami does not override it): output
-        // of row r at r, equal to the row form.
-        let model = Ishigami::from_params(&ModelParams::new()).unwrap();
-        let columns: [Vec<f64>; 3] =
-            std::array::from_fn(|i| (0..9).map(|r| 0.3 * r as f64 - 1.1 * i as f64).collect());
-        let inputs: Vec<&[f64]> = columns.iter().map(Vec::as_slice).collect();
-        let mut outputs = vec![f64::NAN; 9];
-        model.evaluate_columns(&inputs, &mut outputs);
-        for (r, value) in outputs.iter().enumerate() {
-            let mut out = [0.0];
-            model.evaluate(&[columns[0][r], columns[1][r], columns[2][r]], &mut out);
-            assert_eq!(value.to_bits(), out[0].to_bits());
-        }
-    }
-
-    #[test]
     fn ishigami_value() {
         // y(π/2, π/2, 1) = 1 + 7 + 0.1 = 8.1.
         let model = Ishigami::from_params(&ModelParams::new()).unwrap();
