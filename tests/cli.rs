@@ -109,17 +109,10 @@ fn run_report_has_the_documented_keys() {
 #[test]
 fn nominal_json_gives_the_published_hysteresis() {
     // 000 §5.2: 0.5467 arcmin, within 1 % (issue acceptance).
-    let output = run_rvtol(&["nominal", &scenario("rv20e-hysteresis.json"), "--json", "-"]);
-    assert_eq!(output.status.code(), Some(0));
-    let report: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
-    let value = report["outputs"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|o| o["name"] == "hysteresis_arcmin")
-        .unwrap()["value"]
-        .as_f64()
-        .unwrap();
+    let value = nominal_value(
+        &nominal_report("rv20e-hysteresis.json"),
+        "hysteresis_arcmin",
+    );
     assert!((value - 0.5467).abs() < 0.01 * 0.5467, "{value}");
 }
 

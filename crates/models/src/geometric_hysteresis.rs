@@ -402,8 +402,7 @@ impl ErrorModel for GeometricHysteresis {
     #[inline]
     fn evaluate(&self, x: &[f64], out: &mut [f64]) {
         let x: &[f64; N_INPUTS] = x[..N_INPUTS].try_into().expect("18 inputs");
-        let [hysteresis, involute, cycloid, crank, interference] = self.row(x, exact_tilt);
-        out[..N_OUTPUTS].copy_from_slice(&[hysteresis, involute, cycloid, crank, interference]);
+        out[..N_OUTPUTS].copy_from_slice(&self.row(x, exact_tilt));
     }
 
     /// The row form over every row of the block: a branch-free loop over contiguous
@@ -427,13 +426,13 @@ impl ErrorModel for GeometricHysteresis {
             cycloid[r] = c;
             crank[r] = k;
             interference[r] = f;
-            any_exact |= needs_cosine(&x);
+            any_exact |= needs_cosine(tilt_squared(&x));
         }
         if any_exact {
             let mut out = [0.0; N_OUTPUTS];
             for r in 0..n {
                 let x: [f64; N_INPUTS] = std::array::from_fn(|i| columns[i][r]);
-                if needs_cosine(&x) {
+                if needs_cosine(tilt_squared(&x)) {
                     self.evaluate(&x, &mut out);
                     for (j, &value) in out.iter().enumerate() {
                         outputs[j * n + r] = value;
@@ -456,10 +455,10 @@ fn tilt_squared(x: &[f64; N_INPUTS]) -> f64 {
     x[16] * x[16] + x[17] * x[17]
 }
 
-/// Whether a row's tilt is beyond the series (or NaN), so cos β needs the cosine.
+/// Whether β² is beyond the series' range (or NaN), so cos β needs the cosine.
 #[inline(always)]
-fn needs_cosine(x: &[f64; N_INPUTS]) -> bool {
-    tilt_squared(x).partial_cmp(&TILT_SERIES_LIMIT) != Some(std::cmp::Ordering::Less)
+fn needs_cosine(beta_squared: f64) -> bool {
+    beta_squared >= TILT_SERIES_LIMIT || beta_squared.is_nan()
 }
 
 /// cos β and 1/cos β by their series (truncation errors β⁶/720 and 61β⁶/720, below 1e-19
@@ -475,11 +474,11 @@ fn series_tilt(beta_squared: f64) -> (f64, f64) {
 /// cos β and 1/cos β: the series below [`TILT_SERIES_LIMIT`], else the cosine itself.
 #[inline(always)]
 fn exact_tilt(beta_squared: f64) -> (f64, f64) {
-    if beta_squared < TILT_SERIES_LIMIT {
-        series_tilt(beta_squared)
-    } else {
+    if needs_cosine(beta_squared) {
         let cos_beta = beta_squared.sqrt().cos();
         (cos_beta, 1.0 / cos_beta)
+    } else {
+        series_tilt(beta_squared)
     }
 }
 

@@ -234,7 +234,8 @@ fn rv40e_params() -> ModelParams {
 /// The pin slots of every phase of the curve, as columns (structure of arrays) in blocks of
 /// `width` entries per phase: entry e of phase p is pin slot s = e, at φ = 2π(s + p·g/N)/z_p
 /// from the eccentric; pin i is in slot (i − 1 + k_j) mod z_p at point j. Slots whose lever
-/// is not positive are padding (`blocked` = +∞, every factor 0). Each clearance factor is
+/// is not positive, and slots past the last pin (3 pins in 4 slots), are padding
+/// (`blocked` = +∞, every factor 0). Each clearance factor is
 /// stored divided by the lever l, so that a row's clearance ratio g/l is a sum of products.
 #[derive(Debug, Clone, Default)]
 struct PinTable {
@@ -482,7 +483,8 @@ impl TransmissionError {
             for s in 0..width {
                 let phi = 2.0 * PI * (s as f64 + fraction) / pins as f64;
                 let (sin, cos) = phi.sin_cos();
-                if sin <= 1e-12 {
+                // Padding: no positive lever, or past the last pin (3 pins, 4 slots).
+                if s >= pins || sin <= 1e-12 {
                     table.blocked.push(f64::INFINITY);
                     for column in [
                         &mut table.inverse_lever,
@@ -656,20 +658,27 @@ impl TransmissionError {
         let (pin_radial, pin_tangential) = pin_inputs.split_at(n_pins);
         let tooth_errors = &tooth_errors[..n_teeth];
         let table = &self.table;
-        let double = |target: &mut Vec<f64>, values: &[f64], len: usize| {
+        let width = table.width;
+        // Each error list repeated from its start (zeros when the model has none), long
+        // enough for the window read at any shift: pin + width values for the pins (the
+        // width exceeds the pin count for 3 pins), twice the teeth for the tooth spaces.
+        let repeat = |target: &mut Vec<f64>, values: &[f64], len: usize| {
             target.clear();
-            for _ in 0..2 {
-                if values.is_empty() {
-                    target.extend(std::iter::repeat_n(0.0, len));
-                } else {
-                    target.extend_from_slice(values);
-                }
+            if values.is_empty() {
+                target.resize(len, 0.0);
+            } else {
+                target.extend(values.iter().cycle().take(len));
             }
         };
-        double(&mut search.pin_radial, pin_radial, self.pins);
-        double(&mut search.pin_tangential, pin_tangential, self.pins);
-        double(&mut search.tooth, tooth_errors, self.cycloid_teeth);
-        let width = table.width;
+        if self.per_pin {
+            repeat(&mut search.pin_radial, pin_radial, self.pins + width);
+            repeat(
+                &mut search.pin_tangential,
+                pin_tangential,
+                self.pins + width,
+            );
+        }
+        repeat(&mut search.tooth, tooth_errors, 2 * self.cycloid_teeth);
         let Search {
             pin_radial,
             pin_tangential,
@@ -716,17 +725,7 @@ impl TransmissionError {
                     + blocked[e];
             }
             // Without pin errors the first contact is the smallest head at every point.
-            let mut lanes = [f64::INFINITY; 4];
-            for quad in head.as_chunks::<4>().0 {
-                for lane in 0..4 {
-                    lanes[lane] = if quad[lane] < lanes[lane] {
-                        quad[lane]
-                    } else {
-                        lanes[lane]
-                    };
-                }
-            }
-            let best = smallest_lane(lanes);
+            let best = smallest(head);
             for point in points {
                 let j = point.index as usize;
                 // 1. Involute stage.
@@ -872,6 +871,23 @@ fn smallest_ratio(
                 + pin_radial[c][lane] * radial[c][lane]
                 + pin_tangential[c][lane] * tangential[c][lane];
             lanes[lane] = if v < lanes[lane] { v } else { lanes[lane] };
+        }
+    }
+    smallest_lane(lanes)
+}
+
+/// The smallest value of a column whose length is a multiple of 4, in four lanes (the
+/// pin-free form of [`smallest_ratio`]).
+#[inline(always)]
+fn smallest(column: &[f64]) -> f64 {
+    let mut lanes = [f64::INFINITY; 4];
+    for quad in column.as_chunks::<4>().0 {
+        for lane in 0..4 {
+            lanes[lane] = if quad[lane] < lanes[lane] {
+                quad[lane]
+            } else {
+                lanes[lane]
+            };
         }
     }
     smallest_lane(lanes)
@@ -1158,15 +1174,25 @@ mod tests {
 
     #[test]
     fn table_driven_first_contact_equals_direct_geometry() {
-        // The cycloid–pin stage recomputed from scratch at every point: pin angles from Θ,
-        // the 003 factors, the tooth space from the pin's polar angle about the disc
-        // centre, and the minimum of g/l over the pins with a positive lever.
+        // RV-40E's 40 pins, and the smallest reducer accepted (3 pins), whose slot table
+        // (rounded up to 4 slots) is wider than its pin count.
+        first_contact_equals_direct_geometry(40);
+        first_contact_equals_direct_geometry(3);
+    }
+
+    /// The cycloid–pin stage recomputed from scratch at every point: pin angles from Θ,
+    /// the 003 factors, the tooth space from the pin's polar angle about the disc centre,
+    /// and the minimum of g/l over the pins with a positive lever.
+    fn first_contact_equals_direct_geometry(zp: usize) {
+        let zc = zp - 1;
         let model = with(
             rv40e_params()
+                .with_number("pin_count", zp as f64)
+                .with_number("cycloid_teeth", zc as f64)
                 .with_number("pin_position_errors", 1.0)
                 .with_number("tooth_profile_errors", 1.0),
         );
-        let (zp, zc, rp, e) = (40usize, 39usize, 64.0, 1.25);
+        let (rp, e) = (64.0, 1.25);
         let k1 = e * zp as f64 / rp;
         let mut state = 0x2545_f491_4f6c_dd1d_u64;
         let mut next = || {
@@ -1223,7 +1249,7 @@ mod tests {
             }
             assert!(
                 (traced + lag).abs() < 1e-9 * lag.abs().max(1e-6),
-                "point {j}: {} vs {}",
+                "{zp} pins, point {j}: {} vs {}",
                 traced,
                 -lag
             );

@@ -325,7 +325,8 @@ impl QuantileSketch {
             self.zero_count += 1;
             self.count += 1;
         } else if magnitude > CLAMP_MAGNITUDE {
-            let index = (CLAMP_MAGNITUDE.to_bits() >> self.shift) as i64;
+            // The top bucket, that of CLAMP_MAGNITUDE.
+            let index = self.highest_index;
             let store = if x.is_sign_negative() {
                 &mut self.negative
             } else {
