@@ -431,6 +431,7 @@ impl CrankElasticError {
                     unit: unit.into(),
                     description,
                     kind: OutputKind::Continuous,
+                    condition: None,
                 })
                 .collect(),
         })

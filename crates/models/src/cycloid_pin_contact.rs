@@ -298,6 +298,7 @@ impl CycloidPinContact {
             unit: unit.into(),
             description,
             kind: OutputKind::Continuous,
+            condition: None,
         };
         let mut model = CycloidPinContact {
             pin_radius,

@@ -375,6 +375,7 @@ impl GeometricHysteresis {
                     unit: unit.into(),
                     description,
                     kind,
+                    condition: None,
                 })
                 .collect(),
         })

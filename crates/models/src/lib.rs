@@ -70,6 +70,33 @@ pub struct OutputSpec {
     pub description: &'static str,
     /// Continuous or indicator.
     pub kind: OutputKind,
+    /// An indicator output of the same model that governs this output sample by sample,
+    /// when there is one (see [`OutputCondition`]).
+    pub condition: Option<OutputCondition>,
+}
+
+/// A continuous output whose samples an indicator output of the same model qualifies: an
+/// interfering profile has no transmission error, a preloaded stage does not conform
+/// whatever its lost motion. The engine counts the flagged samples per output and reports
+/// them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct OutputCondition {
+    /// Name of the indicator output (of the same model).
+    pub indicator: &'static str,
+    /// What a sample with the indicator set means for this output.
+    pub effect: ConditionEffect,
+}
+
+/// What an indicator set on a sample means for the output it qualifies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ConditionEffect {
+    /// The sample has no value of this output (the model writes NaN): it is kept out of
+    /// the output's statistics and counted as excluded; against spec limits it does not
+    /// conform.
+    Excluded,
+    /// The value stands and enters the statistics, but the sample does not conform to the
+    /// output's spec limits (unless the scenario's spec says flagged samples conform).
+    NonConforming,
 }
 
 /// A fixed parameter a model reads from the scenario.
@@ -240,6 +267,7 @@ mod tests {
                         unit: "any".into(),
                         description: "probe",
                         kind: OutputKind::Continuous,
+                        condition: None,
                     })
                     .collect(),
             }

@@ -91,6 +91,7 @@ impl LinearStack {
                 unit,
                 description: "c + Σ a_i·x_i",
                 kind: OutputKind::Continuous,
+                condition: None,
             }],
         })
     }

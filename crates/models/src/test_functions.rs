@@ -80,6 +80,7 @@ impl Ishigami {
                 unit: "1".into(),
                 description: "Ishigami function",
                 kind: OutputKind::Continuous,
+                condition: None,
             }],
         })
     }
@@ -176,6 +177,7 @@ impl SobolG {
                 unit: "1".into(),
                 description: "Sobol' G-function",
                 kind: OutputKind::Continuous,
+                condition: None,
             }],
         })
     }

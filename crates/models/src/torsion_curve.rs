@@ -301,6 +301,7 @@ impl TorsionCurve {
                     unit: unit.into(),
                     description,
                     kind: OutputKind::Continuous,
+                    condition: None,
                 })
                 .collect(),
         })

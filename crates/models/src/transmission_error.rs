@@ -458,6 +458,7 @@ impl TransmissionError {
             unit: "arcsec".into(),
             description,
             kind: OutputKind::Continuous,
+            condition: None,
         };
         let outputs = vec![
             output("te_peak_to_peak_arcsec".into(), "peak-to-peak transmission error over one output revolution"),
