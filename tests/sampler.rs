@@ -134,7 +134,7 @@ fn mahalanobis_distances_follow_chi_squared_of_the_rank() {
     let mut distances: Vec<f64> = rows
         .chunks_exact(space.n_columns())
         .map(|row| {
-            let x = DVector::from_iterator(k, columns.iter().map(|&c| row[c])) - mean;
+            let x = DVector::from_iterator(k, columns.iter().map(|&c| row[c])) - &mean;
             kept.iter()
                 .map(|&r| {
                     let projection = eigen.eigenvectors.column(r).dot(&x);

@@ -171,7 +171,7 @@ fn shapley_effects_of_a_linear_gaussian_model_match_the_closed_form() {
     use rvtol_engine::shapley::{shapley_effects, ShapleySettings};
     let scenario = Scenario::load(&scenario_path("shapley-linear-gaussian.json")).unwrap();
     let (_, _, cov) = scenario.input_space.gaussian_specification();
-    let exact = linear_gaussian_shapley(&[1.0, 1.0, 0.5], cov);
+    let exact = linear_gaussian_shapley(&[1.0, 1.0, 0.5], &cov);
     assert!((exact.iter().sum::<f64>() - 1.0).abs() < 1e-12);
     let settings = ShapleySettings {
         permutations: 600,

@@ -10,6 +10,8 @@
 
 use nalgebra::{DMatrix, SymmetricEigen};
 
+use crate::error::DeviationError;
+
 /// The factor L of A = L·Lᵀ, stored row-major (n rows, `rank` columns), rows in the
 /// original variable order.
 #[derive(Debug, Clone, PartialEq)]
@@ -40,45 +42,108 @@ impl CholeskyFactor {
 
 /// Factorises a symmetric positive semi-definite matrix with diagonal pivoting.
 ///
-/// The caller checks symmetry and definiteness first ([`crate::check_covariance`]); tiny
-/// negative pivots from rounding end the factorisation like zero pivots do.
+/// The caller checks symmetry and definiteness first ([`crate::check_covariance`]) or uses
+/// [`factorise_covariance`], which checks the remainder; tiny negative pivots from rounding
+/// end the factorisation like zero pivots do.
 pub fn pivoted_cholesky(matrix: &DMatrix<f64>) -> CholeskyFactor {
+    factorise(matrix).0
+}
+
+/// Factorises a symmetric matrix as [`pivoted_cholesky`] does and checks that it is
+/// positive semi-definite from what the factorisation leaves over: when the largest
+/// remaining pivot falls below the tolerance, the Schur complement S of the factored
+/// columns must vanish (a PSD matrix with a zero diagonal is zero). An entry of S beyond
+/// `max(1e-12, 8·n·ε)·max(diag A)` (rounding grows with n) means an indefinite matrix.
+/// This costs nothing beyond the factorisation, where an eigen decomposition would cost
+/// several times more; the smallest eigenvalue is computed for the message only, and only
+/// for matrices up to [`EIGENVALUE_MESSAGE_LIMIT`] rows.
+pub fn factorise_covariance(
+    path: &str,
+    matrix: &DMatrix<f64>,
+) -> Result<CholeskyFactor, DeviationError> {
     let n = matrix.nrows();
-    let mut work = matrix.clone();
-    let mut perm: Vec<usize> = (0..n).collect();
+    let (factor, residual) = factorise(matrix);
+    let scale = (0..n).map(|i| matrix[(i, i)]).fold(0.0_f64, f64::max);
+    let allowed = (1e-12_f64).max(8.0 * n as f64 * f64::EPSILON) * scale;
+    if residual > allowed {
+        return Err(DeviationError::Indefinite {
+            path: path.to_string(),
+            smallest_eigenvalue: (n <= EIGENVALUE_MESSAGE_LIMIT)
+                .then(|| smallest_eigenvalue(matrix)),
+        });
+    }
+    Ok(factor)
+}
+
+/// Largest matrix whose smallest eigenvalue an indefiniteness message reports.
+pub const EIGENVALUE_MESSAGE_LIMIT: usize = 512;
+
+/// The outer-product algorithm with full diagonal pivoting on a working copy whose rows and
+/// columns are swapped into pivot order (as LAPACK's `dpstrf` does), so that the trailing
+/// update runs over contiguous memory. Every entry undergoes the same operations in the same
+/// order as in the textbook form (pivot = the first largest remaining diagonal; entry
+/// (i, j) −= l_i·l_j), so the factor is the same to the bit. Returns the factor and the
+/// largest magnitude left in the unfactored Schur complement (or the most negative
+/// diagonal's magnitude).
+fn factorise(matrix: &DMatrix<f64>) -> (CholeskyFactor, f64) {
+    let n = matrix.nrows();
+    // Row-major working copy in pivot order; `order[p]` is the variable at position p.
+    let mut work: Vec<f64> = (0..n * n).map(|k| matrix[(k / n, k % n)]).collect();
+    let mut order: Vec<usize> = (0..n).collect();
     let mut columns: Vec<Vec<f64>> = Vec::new();
     let max_diag = (0..n).map(|i| matrix[(i, i)]).fold(0.0_f64, f64::max);
     let tolerance = (n as f64) * f64::EPSILON * max_diag;
+    let mut factored = 0;
+    let mut l = vec![0.0; n];
     for k in 0..n {
-        let (pivot_pos, pivot_value) = (k..n).map(|i| (i, work[(perm[i], perm[i])])).fold(
-            (k, f64::NEG_INFINITY),
-            |best, cand| {
-                if cand.1 > best.1 {
-                    cand
-                } else {
-                    best
-                }
-            },
-        );
+        let (pivot_pos, pivot_value) =
+            (k..n)
+                .map(|i| (i, work[i * n + i]))
+                .fold((k, f64::NEG_INFINITY), |best, cand| {
+                    if cand.1 > best.1 {
+                        cand
+                    } else {
+                        best
+                    }
+                });
         if pivot_value <= tolerance || max_diag == 0.0 {
             break;
         }
-        perm.swap(k, pivot_pos);
-        let pivot = perm[k];
+        if pivot_pos != k {
+            order.swap(k, pivot_pos);
+            for row in 0..n {
+                work.swap(row * n + k, row * n + pivot_pos);
+            }
+            let (upper, lower) = work.split_at_mut(pivot_pos * n);
+            upper[k * n..(k + 1) * n].swap_with_slice(&mut lower[..n]);
+        }
         let diagonal = pivot_value.sqrt();
         let mut column = vec![0.0; n];
-        column[pivot] = diagonal;
-        for &row in &perm[k + 1..] {
-            column[row] = work[(row, pivot)] / diagonal;
+        column[order[k]] = diagonal;
+        for i in k + 1..n {
+            l[i] = work[i * n + k] / diagonal;
+            column[order[i]] = l[i];
         }
-        for (a, &row_a) in perm.iter().enumerate().skip(k + 1) {
-            for &row_b in &perm[a..] {
-                let updated = work[(row_a, row_b)] - column[row_a] * column[row_b];
-                work[(row_a, row_b)] = updated;
-                work[(row_b, row_a)] = updated;
+        for i in k + 1..n {
+            let li = l[i];
+            let row = &mut work[i * n + k + 1..(i + 1) * n];
+            for (entry, &lj) in row.iter_mut().zip(&l[k + 1..n]) {
+                *entry -= li * lj;
             }
         }
         columns.push(column);
+        factored = k + 1;
+    }
+    let mut residual = 0.0_f64;
+    for i in factored..n {
+        for j in factored..n {
+            let value = work[i * n + j];
+            residual = residual.max(if i == j {
+                (-value).max(0.0)
+            } else {
+                value.abs()
+            });
+        }
     }
     let rank = columns.len();
     let mut entries = vec![0.0; n * rank];
@@ -87,7 +152,7 @@ pub fn pivoted_cholesky(matrix: &DMatrix<f64>) -> CholeskyFactor {
             entries[row * rank + col] = value;
         }
     }
-    CholeskyFactor { n, rank, entries }
+    (CholeskyFactor { n, rank, entries }, residual)
 }
 
 /// The smallest eigenvalue of a symmetric matrix (for the indefiniteness message).

@@ -11,16 +11,19 @@
 //! with Σ_GG⁺ the pseudo-inverse (eigenvalues below 1e−12 of the largest dropped), so
 //! singular covariances work; the conditional covariance is factorised with the pivoted
 //! Cholesky. Non-normal scalars are independent of everything and are drawn from their
-//! marginal. Parts with the Eq. 11 constraint are not normal any more; a space with
+//! marginal. Every normal comes from the project's ziggurat ([`Ziggurat`]), the one
+//! normal source of every sampling path. Parts with the Eq. 11 constraint are not normal any more; a space with
 //! constraints has no conditional sampler.
+
+use std::collections::BTreeSet;
 
 use nalgebra::{DMatrix, SymmetricEigen};
 use rand::Rng;
-use rand_distr::StandardNormal;
 
 use crate::cholesky::pivoted_cholesky;
 use crate::error::DeviationError;
 use crate::input_space::InputSpace;
+use crate::normal::Ziggurat;
 use crate::scalar::ScalarDistribution;
 
 /// Draws the free columns of a row given its other columns.
@@ -51,12 +54,26 @@ impl InputSpace {
                 "conditional draws (Shapley effects) need parts without the Eq. 11 constraint",
             ));
         }
-        let (columns, mean, covariance) = self.gaussian_specification();
-        let (free, given): (Vec<usize>, Vec<usize>) =
-            (0..columns.len()).partition(|&g| free_columns.contains(&columns[g]));
+        // Only the given columns correlated with a free one enter the regression: the
+        // others are independent of the free columns and leave their law unchanged.
+        let mean = self.mean_row();
+        let free: Vec<usize> = self
+            .gaussian_columns()
+            .iter()
+            .copied()
+            .filter(|c| free_columns.contains(c))
+            .collect();
+        let related: BTreeSet<usize> = free
+            .iter()
+            .flat_map(|&c| self.correlated_columns(c))
+            .collect();
+        let given: Vec<usize> = related
+            .into_iter()
+            .filter(|c| !free_columns.contains(c))
+            .collect();
         let sub = |rows: &[usize], cols: &[usize]| {
             DMatrix::from_fn(rows.len(), cols.len(), |i, j| {
-                covariance[(rows[i], cols[j])]
+                self.covariance(rows[i], cols[j])
             })
         };
         let s_ff = sub(&free, &free);
@@ -81,8 +98,8 @@ impl InputSpace {
         }
         let factor = pivoted_cholesky(&conditional);
         Ok(ConditionalSampler {
-            free: free.iter().map(|&g| (columns[g], mean[g])).collect(),
-            given: given.iter().map(|&g| (columns[g], mean[g])).collect(),
+            free: free.iter().map(|&c| (c, mean[c])).collect(),
+            given: given.iter().map(|&c| (c, mean[c])).collect(),
             regression: (0..free.len())
                 .flat_map(|i| (0..given.len()).map(move |j| (i, j)))
                 .map(|(i, j)| regression[(i, j)])
@@ -105,7 +122,8 @@ impl ConditionalSampler {
     pub fn sample<R: Rng + ?Sized>(&self, rng: &mut R, row: &mut [f64], z: &mut Vec<f64>) {
         let n_given = self.given.len();
         z.clear();
-        z.extend((0..self.rank).map(|_| rng.sample::<f64, _>(StandardNormal)));
+        let normal = Ziggurat::get();
+        z.extend((0..self.rank).map(|_| normal.sample(rng)));
         for (i, &(column, mean)) in self.free.iter().enumerate() {
             let mut value = mean;
             for (j, &(given_column, given_mean)) in self.given.iter().enumerate() {

@@ -39,12 +39,15 @@ pub enum DeviationError {
         lower: f64,
     },
     /// A covariance (or correlation) matrix has a negative eigenvalue.
-    #[error("{path}: covariance is not positive semi-definite (smallest eigenvalue {smallest_eigenvalue:e})")]
+    #[error("{path}: covariance is not positive semi-definite{}", match smallest_eigenvalue {
+        Some(value) => format!(" (smallest eigenvalue {value:e})"),
+        None => String::new(),
+    })]
     Indefinite {
         /// JSON path of the matrix.
         path: String,
-        /// Its smallest eigenvalue.
-        smallest_eigenvalue: f64,
+        /// Its smallest eigenvalue, when the matrix is small enough to compute it.
+        smallest_eigenvalue: Option<f64>,
     },
     /// Any other invalid value, with the reason.
     #[error("{path}: {reason}")]

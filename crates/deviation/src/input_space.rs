@@ -26,14 +26,16 @@
 //! run's hot loop, where each column is contiguous for the models) or row-major
 //! ([`InputSpace::sample_rows_with`], the same draws transposed, for the analyses).
 
+use std::collections::{BTreeMap, BTreeSet};
+
 use nalgebra::{DMatrix, DVector};
 use rand::{Rng, SeedableRng};
 
-use crate::cholesky::pivoted_cholesky;
+use crate::cholesky::{factorise_covariance, pivoted_cholesky};
 use crate::constraint::{LinearInequality, TiltConstraint};
 use crate::error::DeviationError;
 use crate::normal::{Ziggurat, ZigguratScratch};
-use crate::part::{check_covariance, PartSpec};
+use crate::part::PartSpec;
 use crate::scalar::ScalarDistribution;
 
 /// Most consecutive rejections of one row before the run is abandoned. At the lowest
@@ -99,12 +101,27 @@ struct ConstraintSpec {
 pub struct InputSpaceBuilder {
     n_columns: usize,
     gaussian: Vec<GaussianColumn>,
-    /// Covariance entries between gaussian columns, by gaussian index (upper and lower).
-    covariance: Vec<((usize, usize), f64)>,
+    /// Variance of each gaussian column, by gaussian index.
+    variance: Vec<f64>,
+    /// Covariances between two gaussian columns, keyed by (smaller, larger) gaussian index;
+    /// only the non-zero ones.
+    cross: BTreeMap<(usize, usize), f64>,
+    /// The JSON path of the scenario correlation that set each pair, to refuse a second one.
+    correlated_by: BTreeMap<(usize, usize), String>,
     independent: Vec<(usize, ScalarDistribution)>,
     constraints: Vec<ConstraintSpec>,
     /// For each column, its gaussian index, if normal.
     gaussian_index: Vec<Option<usize>>,
+}
+
+/// Most columns one correlated group may hold: its dense covariance and factor take
+/// 2·n²·8 bytes (268 MB at 4096) and the factorisation n³/3 multiply-adds (seconds at
+/// 4096). Beyond it a scenario is refused before anything is allocated.
+pub const MAX_CORRELATED_COLUMNS: usize = 4096;
+
+/// The pair (smaller, larger).
+fn ordered(a: usize, b: usize) -> (usize, usize) {
+    (a.min(b), a.max(b))
 }
 
 impl InputSpaceBuilder {
@@ -113,7 +130,7 @@ impl InputSpaceBuilder {
         Self::default()
     }
 
-    fn push_gaussian(&mut self, mean: f64, label: String) -> usize {
+    fn push_gaussian(&mut self, mean: f64, variance: f64, label: String) -> usize {
         let column = self.n_columns;
         self.n_columns += 1;
         self.gaussian_index.push(Some(self.gaussian.len()));
@@ -122,6 +139,7 @@ impl InputSpaceBuilder {
             mean,
             label,
         });
+        self.variance.push(variance);
         column
     }
 
@@ -129,18 +147,18 @@ impl InputSpaceBuilder {
     /// first column. `path` is the part's JSON path, used in messages.
     pub fn add_part(&mut self, path: &str, spec: &PartSpec) -> usize {
         let first = self.n_columns;
-        let indices: Vec<usize> = (0..6)
-            .map(|i| {
-                let label = format!("{path}[{}]", crate::SixDof::NAMES[i]);
-                self.push_gaussian(spec.mean[i], label);
-                self.gaussian.len() - 1
-            })
-            .collect();
+        let first_gaussian = self.gaussian.len();
         for i in 0..6 {
-            for j in 0..6 {
+            let label = format!("{path}[{}]", crate::SixDof::NAMES[i]);
+            self.push_gaussian(spec.mean[i], spec.covariance[i][i], label);
+        }
+        for i in 0..6 {
+            for j in i + 1..6 {
                 if spec.covariance[i][j] != 0.0 {
-                    self.covariance
-                        .push(((indices[i], indices[j]), spec.covariance[i][j]));
+                    self.cross.insert(
+                        (first_gaussian + i, first_gaussian + j),
+                        spec.covariance[i][j],
+                    );
                 }
             }
         }
@@ -157,14 +175,7 @@ impl InputSpaceBuilder {
     /// Adds a scalar parameter and returns its column.
     pub fn add_scalar(&mut self, path: &str, distribution: ScalarDistribution) -> usize {
         match distribution.as_normal() {
-            Some((mean, sd)) => {
-                let column = self.push_gaussian(mean, path.to_string());
-                let g = self.gaussian.len() - 1;
-                if sd != 0.0 {
-                    self.covariance.push(((g, g), sd * sd));
-                }
-                column
-            }
+            Some((mean, sd)) => self.push_gaussian(mean, sd * sd, path.to_string()),
             None => {
                 let column = self.n_columns;
                 self.n_columns += 1;
@@ -175,17 +186,8 @@ impl InputSpaceBuilder {
         }
     }
 
-    /// Standard deviation of a normal column (from its variance), if normal.
-    fn gaussian_sd(&self, g: usize) -> f64 {
-        self.covariance
-            .iter()
-            .filter(|((a, b), _)| *a == g && *b == g)
-            .map(|(_, v)| *v)
-            .sum::<f64>()
-            .sqrt()
-    }
-
-    /// Correlates two normal columns with coefficient `rho`; `path` names the entry.
+    /// Correlates two normal columns with coefficient `rho`; `path` names the entry. A pair
+    /// may be correlated once: a second entry for it (with any ρ) is an error naming both.
     pub fn correlate(
         &mut self,
         path: &str,
@@ -197,7 +199,7 @@ impl InputSpaceBuilder {
         if rho.abs() > 1.0 {
             return Err(DeviationError::invalid(
                 format!("{path}.rho"),
-                format!("correlation must lie in [-1, 1], got {rho}"),
+                format!("correlation must lie in [-1, 1], got {}", crate::Shown(rho)),
             ));
         }
         if column_a == column_b {
@@ -213,13 +215,19 @@ impl InputSpaceBuilder {
                 "only normal variables (normal, tolerance_band, part components) can be correlated",
             ));
         };
-        let covariance = rho * self.gaussian_sd(a) * self.gaussian_sd(b);
-        // Replace an earlier entry between the same pair (a part's own covariance).
-        self.covariance
-            .retain(|((i, j), _)| !((*i == a && *j == b) || (*i == b && *j == a)));
+        let key = ordered(a, b);
+        if let Some(earlier) = self.correlated_by.get(&key) {
+            return Err(DeviationError::invalid(
+                path,
+                format!("correlates the same pair as {earlier}: give each pair once"),
+            ));
+        }
+        self.correlated_by.insert(key, path.to_string());
+        let covariance = rho * self.variance[a].sqrt() * self.variance[b].sqrt();
+        // Replaces an earlier entry between the same pair (a part's own covariance).
+        self.cross.remove(&key);
         if covariance != 0.0 {
-            self.covariance.push(((a, b), covariance));
-            self.covariance.push(((b, a), covariance));
+            self.cross.insert(key, covariance);
         }
         Ok(())
     }
@@ -231,13 +239,11 @@ impl InputSpaceBuilder {
 
     /// Factorises the joint covariance block by block and checks the constraints'
     /// acceptance rate. `correlations_path` names the cross-correlations in messages: a
-    /// joint covariance that is indefinite only because of them is reported there.
+    /// joint covariance that is indefinite only because of them is reported there. Memory
+    /// and time grow with the largest correlated group only (a scenario of many independent
+    /// variables costs one entry each); a group beyond [`MAX_CORRELATED_COLUMNS`] is refused.
     pub fn build(self, correlations_path: &str) -> Result<InputSpace, DeviationError> {
         let n_g = self.gaussian.len();
-        let mut full = DMatrix::<f64>::zeros(n_g, n_g);
-        for &((a, b), v) in &self.covariance {
-            full[(a, b)] = v;
-        }
         // Connected components of the non-zero pattern (union-find).
         let mut parent: Vec<usize> = (0..n_g).collect();
         fn find(parent: &mut [usize], mut x: usize) -> usize {
@@ -247,31 +253,83 @@ impl InputSpaceBuilder {
             }
             x
         }
-        for &((a, b), v) in &self.covariance {
-            if v != 0.0 && a != b {
-                let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
-                if ra != rb {
-                    parent[ra.max(rb)] = ra.min(rb);
-                }
+        for &(a, b) in self.cross.keys() {
+            let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+            if ra != rb {
+                parent[ra.max(rb)] = ra.min(rb);
             }
         }
         let mut components: Vec<Vec<usize>> = Vec::new();
         let mut component_of_root = vec![usize::MAX; n_g];
-        for g in 0..n_g {
+        let mut component_of = vec![0; n_g];
+        for (g, component) in component_of.iter_mut().enumerate() {
             let root = find(&mut parent, g);
             if component_of_root[root] == usize::MAX {
                 component_of_root[root] = components.len();
                 components.push(Vec::new());
             }
+            *component = component_of_root[root];
             components[component_of_root[root]].push(g);
+        }
+        if let Some(largest) = components.iter().max_by_key(|c| c.len()) {
+            if largest.len() > MAX_CORRELATED_COLUMNS {
+                let n = largest.len() as f64;
+                return Err(DeviationError::invalid(
+                    correlations_path,
+                    format!(
+                        "{} normal columns are correlated into one group (starting at {}); at most {MAX_CORRELATED_COLUMNS} can be: its covariance factor would need {} and about {:.1e} multiply-adds. Correlate fewer columns, or split them into independent groups",
+                        largest.len(),
+                        self.gaussian[largest[0]].label,
+                        crate::human_bytes(2.0 * n * n * 8.0),
+                        n * n * n / 3.0
+                    ),
+                ));
+            }
+        }
+        let mut position = vec![0; n_g];
+        for members in &components {
+            for (p, &g) in members.iter().enumerate() {
+                position[g] = p;
+            }
+        }
+        let mut matrices: Vec<Option<DMatrix<f64>>> = components
+            .iter()
+            .map(|members| {
+                (members.len() > 1).then(|| {
+                    DMatrix::from_fn(members.len(), members.len(), |i, j| {
+                        if i == j {
+                            self.variance[members[i]]
+                        } else {
+                            0.0
+                        }
+                    })
+                })
+            })
+            .collect();
+        for (&(a, b), &v) in &self.cross {
+            if let Some(matrix) = &mut matrices[component_of[a]] {
+                let (i, j) = (position[a], position[b]);
+                matrix[(i, j)] = v;
+                matrix[(j, i)] = v;
+            }
         }
         let inequalities: Vec<LinearInequality> = self
             .constraints
             .iter()
             .flat_map(|c| c.constraint.inequalities(c.first_column))
             .collect();
-        let constrained_columns: Vec<usize> = inequalities.iter().flat_map(|q| q.columns).collect();
+        let constrained_columns: BTreeSet<usize> =
+            inequalities.iter().flat_map(|q| q.columns).collect();
         let mut constrained_blocks: Vec<GaussianBlock> = Vec::new();
+        let mut covariance_position = vec![None; self.n_columns];
+        let mut covariance_blocks = Vec::new();
+        let mut variances = vec![0.0; self.n_columns];
+        for (g, column) in self.gaussian.iter().enumerate() {
+            variances[column.column] = self.variance[g];
+        }
+        for (column, distribution) in &self.independent {
+            variances[*column] = distribution.variance();
+        }
         let mut space = InputSpace {
             n_columns: self.n_columns,
             fixed: Vec::new(),
@@ -281,35 +339,43 @@ impl InputSpaceBuilder {
             independent: self.independent,
             constraint_paths: self.constraints.iter().map(|c| c.path.clone()).collect(),
             gaussian_columns: self.gaussian.iter().map(|g| g.column).collect(),
-            gaussian_mean: DVector::from_iterator(n_g, self.gaussian.iter().map(|g| g.mean)),
-            gaussian_covariance: full.clone(),
+            gaussian_mean: self.gaussian.iter().map(|g| g.mean).collect(),
+            variances,
+            covariance_position: Vec::new(),
+            covariance_blocks: Vec::new(),
+            covariance_group_columns: Vec::new(),
             max_rank: 0,
         };
-        for members in components {
-            let size = members.len();
-            let sub = DMatrix::from_fn(size, size, |i, j| full[(members[i], members[j])]);
-            if size > 1 {
-                check_covariance(correlations_path, &sub).map_err(|err| match err {
-                    DeviationError::Indefinite {
-                        smallest_eigenvalue,
-                        ..
-                    } => DeviationError::Indefinite {
-                        path: format!(
-                            "{correlations_path} (joint covariance of {})",
-                            members
-                                .iter()
-                                .map(|&g| self.gaussian[g].label.as_str())
-                                .collect::<Vec<_>>()
-                                .join(", ")
-                        ),
-                        smallest_eigenvalue,
-                    },
-                    other => other,
-                })?;
-            }
+        for (members, matrix) in components.into_iter().zip(matrices) {
             let columns: Vec<usize> = members.iter().map(|&g| self.gaussian[g].column).collect();
             let means: Vec<f64> = members.iter().map(|&g| self.gaussian[g].mean).collect();
-            let factor = pivoted_cholesky(&sub);
+            let factor = match &matrix {
+                Some(sub) => {
+                    factorise_covariance(correlations_path, sub).map_err(|err| match err {
+                        DeviationError::Indefinite {
+                            smallest_eigenvalue,
+                            ..
+                        } => DeviationError::Indefinite {
+                            path: format!(
+                                "{correlations_path} (joint covariance of {})",
+                                joint_labels(
+                                    members.iter().map(|&g| self.gaussian[g].label.as_str())
+                                )
+                            ),
+                            smallest_eigenvalue,
+                        },
+                        other => other,
+                    })?
+                }
+                None => pivoted_cholesky(&DMatrix::from_element(1, 1, self.variance[members[0]])),
+            };
+            if let Some(sub) = matrix {
+                for (p, &column) in columns.iter().enumerate() {
+                    covariance_position[column] = Some((covariance_blocks.len(), p));
+                }
+                covariance_blocks.push(sub);
+                space.covariance_group_columns.push(columns.clone());
+            }
             let constrained = columns.iter().any(|c| constrained_columns.contains(c));
             if factor.rank == 0 {
                 space
@@ -318,7 +384,7 @@ impl InputSpaceBuilder {
                 continue;
             }
             space.max_rank = space.max_rank.max(factor.rank);
-            if size == 1 && !constrained {
+            if columns.len() == 1 && !constrained {
                 space
                     .singles
                     .push((columns[0], means[0], factor.entries[0]));
@@ -336,9 +402,23 @@ impl InputSpaceBuilder {
                 space.blocks.push(block);
             }
         }
+        space.covariance_position = covariance_position;
+        space.covariance_blocks = covariance_blocks;
         space.constrained_groups = group_inequalities(inequalities, constrained_blocks);
         space.measure_acceptance()?;
         Ok(space)
+    }
+}
+
+/// The labels of a correlated group for a message: all of them up to 8, else the first
+/// 8 and how many more.
+fn joint_labels<'a>(labels: impl ExactSizeIterator<Item = &'a str>) -> String {
+    let n = labels.len();
+    let shown: Vec<&str> = labels.take(8).collect();
+    if n > shown.len() {
+        format!("{} and {} more", shown.join(", "), n - shown.len())
+    } else {
+        shown.join(", ")
     }
 }
 
@@ -740,9 +820,18 @@ pub struct InputSpace {
     constrained_groups: Vec<ConstrainedGroup>,
     independent: Vec<(usize, ScalarDistribution)>,
     constraint_paths: Vec<String>,
+    /// The normal columns and their means, in the order they were added.
     gaussian_columns: Vec<usize>,
-    gaussian_mean: DVector<f64>,
-    gaussian_covariance: DMatrix<f64>,
+    gaussian_mean: Vec<f64>,
+    /// Variance of every column (normal or not).
+    variances: Vec<f64>,
+    /// For each column in a correlated group: (group, position in its matrix).
+    covariance_position: Vec<Option<(usize, usize)>>,
+    /// The covariance matrix of each correlated group (columns of independent normals and
+    /// non-normal scalars have none: their covariance with anything else is 0).
+    covariance_blocks: Vec<DMatrix<f64>>,
+    /// The columns of each correlated group, in the order of its matrix.
+    covariance_group_columns: Vec<Vec<usize>>,
     max_rank: usize,
 }
 
@@ -769,14 +858,66 @@ impl InputSpace {
         &self.constraint_paths
     }
 
-    /// The normal columns, their mean vector and joint covariance (as specified, before the
-    /// constraints), for tests and diagnostics.
-    pub fn gaussian_specification(&self) -> (&[usize], &DVector<f64>, &DMatrix<f64>) {
+    /// The normal columns (part components, normal and tolerance-band scalars), in the order
+    /// they were added.
+    pub fn gaussian_columns(&self) -> &[usize] {
+        &self.gaussian_columns
+    }
+
+    /// The covariance of two columns as specified, before the constraints: the variance on
+    /// the diagonal (of any distribution), the scenario's covariance between two normal
+    /// columns of one correlated group, 0 otherwise.
+    pub fn covariance(&self, column_a: usize, column_b: usize) -> f64 {
+        if column_a == column_b {
+            return self.variances[column_a];
+        }
+        match (
+            self.covariance_position[column_a],
+            self.covariance_position[column_b],
+        ) {
+            (Some((group_a, i)), Some((group_b, j))) if group_a == group_b => {
+                self.covariance_blocks[group_a][(i, j)]
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// The normal columns, their mean vector and their dense joint covariance (as specified,
+    /// before the constraints), built on demand: for tests and diagnostics of small spaces
+    /// (it takes (number of normal columns)² values).
+    pub fn gaussian_specification(&self) -> (Vec<usize>, DVector<f64>, DMatrix<f64>) {
         (
-            &self.gaussian_columns,
-            &self.gaussian_mean,
-            &self.gaussian_covariance,
+            self.gaussian_columns.clone(),
+            DVector::from_column_slice(&self.gaussian_mean),
+            self.covariance_matrix(&self.gaussian_columns),
         )
+    }
+
+    /// Whether a column varies (has a positive variance).
+    pub fn is_random(&self, column: usize) -> bool {
+        self.variances[column] > 0.0
+    }
+
+    /// The covariance matrix of the given columns ([`InputSpace::covariance`] entry by entry).
+    pub fn covariance_matrix(&self, columns: &[usize]) -> DMatrix<f64> {
+        DMatrix::from_fn(columns.len(), columns.len(), |i, j| {
+            self.covariance(columns[i], columns[j])
+        })
+    }
+
+    /// The columns correlated with `column` (its correlated group, itself included); just
+    /// itself when it is correlated with nothing.
+    pub fn correlated_columns(&self, column: usize) -> Vec<usize> {
+        match self.covariance_position[column] {
+            Some((group, _)) => self.covariance_group_columns[group].clone(),
+            None => vec![column],
+        }
+    }
+
+    /// The groups of two or more normal columns that the scenario correlates (connected
+    /// through non-zero covariances), each as its columns.
+    pub fn correlated_groups(&self) -> &[Vec<usize>] {
+        &self.covariance_group_columns
     }
 
     /// The non-normal scalar columns with their distributions.
@@ -788,7 +929,7 @@ impl InputSpace {
     /// (the constraint is not applied: the Eq. 10 mean lies on its boundary).
     pub fn mean_row(&self) -> Vec<f64> {
         let mut row = vec![0.0; self.n_columns];
-        for (&column, &mean) in self.gaussian_columns.iter().zip(self.gaussian_mean.iter()) {
+        for (&column, &mean) in self.gaussian_columns.iter().zip(&self.gaussian_mean) {
             row[column] = mean;
         }
         for (column, distribution) in &self.independent {
@@ -1124,6 +1265,74 @@ mod tests {
         assert_eq!(columns_counts.groups, tallies);
     }
 
+    /// A builder with `n` independent standard normals, each correlated with the next by
+    /// `rho` (a chain).
+    fn chain(n: usize, rho: f64) -> InputSpaceBuilder {
+        let mut builder = InputSpaceBuilder::new();
+        let columns: Vec<usize> = (0..n)
+            .map(|i| {
+                builder.add_scalar(
+                    &format!("variables[{i}]"),
+                    ScalarDistribution::Normal { mean: 0.0, sd: 1.0 },
+                )
+            })
+            .collect();
+        for (i, pair) in columns.windows(2).enumerate() {
+            builder
+                .correlate(&format!("correlations[{i}]"), pair[0], pair[1], rho)
+                .unwrap();
+        }
+        builder
+    }
+
+    #[test]
+    fn a_pair_correlated_twice_is_an_error_naming_both() {
+        let mut builder = chain(3, 0.2);
+        let err = builder.correlate("correlations[2]", 1, 0, 0.3).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "correlations[2]: correlates the same pair as correlations[0]: give each pair once"
+        );
+    }
+
+    #[test]
+    fn a_correlated_group_beyond_the_limit_is_refused_before_allocating() {
+        let err = chain(MAX_CORRELATED_COLUMNS + 1, 0.2)
+            .build("correlations")
+            .unwrap_err();
+        let message = err.to_string();
+        assert!(
+            message.starts_with(&format!(
+                "correlations: {} normal columns are correlated into one group (starting at variables[0]); at most {MAX_CORRELATED_COLUMNS} can be",
+                MAX_CORRELATED_COLUMNS + 1
+            )),
+            "{message}"
+        );
+    }
+
+    #[test]
+    fn a_large_indefinite_group_is_found_by_the_factorisation() {
+        // A chain with ρ = 0.6 between neighbours: the tridiagonal Toeplitz matrix has
+        // eigenvalues 1 + 2ρ·cos(kπ/(n + 1)), the smallest 1 − 1.2·cos(π/(n + 1)) < 0 for
+        // n ≥ 3. Beyond the eigenvalue limit the message says so without the eigenvalue.
+        let n = crate::EIGENVALUE_MESSAGE_LIMIT + 1;
+        let err = chain(n, 0.6).build("correlations").unwrap_err();
+        match err {
+            DeviationError::Indefinite {
+                path,
+                smallest_eigenvalue,
+            } => {
+                assert!(path.starts_with("correlations (joint covariance of variables[0]"));
+                assert!(path.ends_with(&format!("and {} more)", n - 8)), "{path}");
+                assert_eq!(smallest_eigenvalue, None);
+            }
+            other => panic!("expected Indefinite, got {other}"),
+        }
+        // A chain with ρ = 0.4 is positive definite (smallest eigenvalue 1 − 0.8·cos(π/(n + 1))
+        // > 0.2): it builds.
+        chain(n, 0.4).build("correlations").unwrap();
+    }
+
     #[test]
     fn correlating_a_uniform_is_an_error() {
         let mut builder = InputSpaceBuilder::new();
@@ -1172,7 +1381,7 @@ mod tests {
                 smallest_eigenvalue,
             } => {
                 assert!(path.starts_with("correlations (joint covariance of variables[0]"));
-                assert!((smallest_eigenvalue - (1.0 - 1.8)).abs() < 1e-12);
+                assert!((smallest_eigenvalue.unwrap() - (1.0 - 1.8)).abs() < 1e-12);
             }
             other => panic!("expected Indefinite, got {other}"),
         }

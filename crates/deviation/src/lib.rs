@@ -28,8 +28,12 @@ mod input_space;
 mod normal;
 mod part;
 mod scalar;
+mod shown;
 
-pub use cholesky::{pivoted_cholesky, smallest_eigenvalue, CholeskyFactor};
+pub use cholesky::{
+    factorise_covariance, pivoted_cholesky, smallest_eigenvalue, CholeskyFactor,
+    EIGENVALUE_MESSAGE_LIMIT,
+};
 pub use conditional::ConditionalSampler;
 pub use constraint::TiltConstraint;
 pub use displacement::point_displacement;
@@ -38,3 +42,4 @@ pub use input_space::{ConstraintCounts, InputSpace, InputSpaceBuilder, SamplerSc
 pub use normal::{Ziggurat, ZigguratScratch};
 pub use part::{check_covariance, PartSpec, SixDof};
 pub use scalar::ScalarDistribution;
+pub use shown::{human_bytes, Shown};

@@ -15,7 +15,7 @@
 
 use std::sync::OnceLock;
 
-use rand::Rng;
+use rand::{Rng, RngExt};
 
 const LAYERS: usize = 256;
 /// Right edge of the base strip (start of the tail) for 256 layers (Marsaglia & Tsang 2000).
@@ -187,7 +187,7 @@ fn open_unit<R: Rng + ?Sized>(rng: &mut R) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rand::{RngCore, SeedableRng};
+    use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
     use statrs::distribution::{ContinuousCDF, Normal};
 

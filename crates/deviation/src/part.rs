@@ -204,7 +204,7 @@ pub fn check_covariance(path: &str, matrix: &DMatrix<f64>) -> Result<(), Deviati
     if smallest < -1e-12 * scale.max(f64::MIN_POSITIVE) {
         return Err(DeviationError::Indefinite {
             path: path.to_string(),
-            smallest_eigenvalue: smallest,
+            smallest_eigenvalue: Some(smallest),
         });
     }
     Ok(())
@@ -258,7 +258,7 @@ mod tests {
                 smallest_eigenvalue,
             } => {
                 assert_eq!(path, "parts[0].covariance");
-                assert!((smallest_eigenvalue + 1.0).abs() < 1e-12);
+                assert!((smallest_eigenvalue.unwrap() + 1.0).abs() < 1e-12);
             }
             other => panic!("expected Indefinite, got {other}"),
         }

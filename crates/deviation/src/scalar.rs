@@ -13,7 +13,7 @@
 //! Normal and tolerance-band parameters join the scenario's multivariate normal (they can
 //! be correlated with part components); the others are drawn independently.
 
-use rand::Rng;
+use rand::{Rng, RngExt};
 use statrs::function::erf::{erfc, erfc_inv};
 
 use crate::error::DeviationError;

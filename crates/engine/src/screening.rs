@@ -59,21 +59,7 @@ pub fn screening(
 ) -> Result<Vec<OutputScreening>, ScenarioError> {
     let space = &scenario.input_space;
     let n_columns = space.n_columns();
-    let (gaussian_columns, _, gaussian_covariance) = space.gaussian_specification();
-    let independent = space.independent_columns();
-    let covariance = |a: usize, b: usize| -> f64 {
-        match (
-            gaussian_columns.iter().position(|&c| c == a),
-            gaussian_columns.iter().position(|&c| c == b),
-        ) {
-            (Some(i), Some(j)) => gaussian_covariance[(i, j)],
-            _ if a == b => independent
-                .iter()
-                .find(|(c, _)| *c == a)
-                .map_or(0.0, |(_, d)| d.variance()),
-            _ => 0.0,
-        }
-    };
+    let covariance = |a: usize, b: usize| space.covariance(a, b);
     // Random columns, with their source.
     let columns: Vec<(usize, usize)> = players
         .iter()

@@ -23,7 +23,7 @@
 //! streams 2k and 2k + 1; chunks are collected in order and every sum runs sequentially,
 //! so the result does not depend on the thread count.
 
-use rand::{Rng, SeedableRng};
+use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
@@ -86,9 +86,14 @@ pub struct OutputSensitivity {
 /// source) made independent: groups that the scenario correlates are merged (names joined
 /// with `+`); groups with no random column are left out.
 pub fn independent_groups(scenario: &Scenario) -> Vec<InputGroup> {
-    let (gaussian_columns, _, covariance) = scenario.input_space.gaussian_specification();
+    let space = &scenario.input_space;
     let units = &scenario.sensitivity_groups;
-    let source_of_column = |column: usize| units.iter().position(|s| s.columns.contains(&column));
+    let mut unit_of_column = vec![None; space.n_columns()];
+    for (u, unit) in units.iter().enumerate() {
+        for &c in &unit.columns {
+            unit_of_column[c] = Some(u);
+        }
+    }
     let mut parent: Vec<usize> = (0..units.len()).collect();
     fn root(parent: &mut [usize], mut x: usize) -> usize {
         while parent[x] != x {
@@ -97,23 +102,22 @@ pub fn independent_groups(scenario: &Scenario) -> Vec<InputGroup> {
         }
         x
     }
-    for (i, &ci) in gaussian_columns.iter().enumerate() {
-        for (j, &cj) in gaussian_columns.iter().enumerate().skip(i + 1) {
-            if covariance[(i, j)] == 0.0 {
-                continue;
-            }
-            if let (Some(a), Some(b)) = (source_of_column(ci), source_of_column(cj)) {
-                let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
-                if ra != rb {
-                    parent[ra.max(rb)] = ra.min(rb);
+    for group in space.correlated_groups() {
+        for (i, &ci) in group.iter().enumerate() {
+            for &cj in &group[i + 1..] {
+                if space.covariance(ci, cj) == 0.0 {
+                    continue;
+                }
+                if let (Some(a), Some(b)) = (unit_of_column[ci], unit_of_column[cj]) {
+                    let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
+                    if ra != rb {
+                        parent[ra.max(rb)] = ra.min(rb);
+                    }
                 }
             }
         }
     }
-    let random_column = |column: usize| match gaussian_columns.iter().position(|&c| c == column) {
-        Some(g) => covariance[(g, g)] > 0.0,
-        None => true,
-    };
+    let random_column = |column: usize| space.is_random(column);
     let mut groups: Vec<InputGroup> = Vec::new();
     let mut group_of_root = vec![usize::MAX; units.len()];
     for (s, source) in units.iter().enumerate() {

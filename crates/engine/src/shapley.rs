@@ -75,11 +75,7 @@ fn nth_permutation(d: usize, mut p: usize) -> Vec<usize> {
 
 /// The random sources of a scenario (players of the Shapley game).
 pub fn players(scenario: &Scenario) -> Vec<InputGroup> {
-    let (gaussian_columns, _, covariance) = scenario.input_space.gaussian_specification();
-    let random = |column: usize| match gaussian_columns.iter().position(|&c| c == column) {
-        Some(g) => covariance[(g, g)] > 0.0,
-        None => true,
-    };
+    let random = |column: usize| scenario.input_space.is_random(column);
     scenario
         .sources
         .iter()

@@ -1,0 +1,66 @@
+//! Numbers and sizes as a person writes them, for messages: `1e308` rather than the 309
+//! digits of `{}` on an `f64`, `3.2 GB` rather than a byte count.
+
+use std::fmt;
+
+/// An `f64` shown as a person writes it: the shortest form that reads back to the same
+/// value, in exponent form (`1e308`, `2.5e-7`) when it is large or small.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Shown(pub f64);
+
+impl fmt::Display for Shown {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let x = self.0;
+        if x.is_nan() {
+            f.write_str("NaN")
+        } else if x.is_infinite() {
+            f.write_str(if x > 0.0 { "inf" } else { "-inf" })
+        } else if x != 0.0 && !(1e-4..1e6).contains(&x.abs()) {
+            write!(f, "{x:e}")
+        } else {
+            write!(f, "{x}")
+        }
+    }
+}
+
+/// A byte count with a decimal unit: `512 B`, `3.2 GB`.
+pub fn human_bytes(bytes: f64) -> String {
+    const UNITS: [&str; 7] = ["B", "kB", "MB", "GB", "TB", "PB", "EB"];
+    let mut value = bytes.max(0.0);
+    let mut unit = 0;
+    while value >= 1000.0 && unit + 1 < UNITS.len() {
+        value /= 1000.0;
+        unit += 1;
+    }
+    if unit == 0 {
+        format!("{value:.0} B")
+    } else {
+        format!("{value:.1} {}", UNITS[unit])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_read_as_written() {
+        assert_eq!(Shown(1e308).to_string(), "1e308");
+        assert_eq!(Shown(-1e308).to_string(), "-1e308");
+        assert_eq!(Shown(2.5e-7).to_string(), "2.5e-7");
+        assert_eq!(Shown(0.0125).to_string(), "0.0125");
+        assert_eq!(Shown(76.5).to_string(), "76.5");
+        assert_eq!(Shown(0.0).to_string(), "0");
+        assert_eq!(Shown(123456.0).to_string(), "123456");
+        assert_eq!(Shown(1234567.0).to_string(), "1.234567e6");
+        assert_eq!(Shown(f64::NAN).to_string(), "NaN");
+        assert_eq!(Shown(f64::NEG_INFINITY).to_string(), "-inf");
+    }
+
+    #[test]
+    fn sizes_read_as_written() {
+        assert_eq!(human_bytes(512.0), "512 B");
+        assert_eq!(human_bytes(3.2e9), "3.2 GB");
+        assert_eq!(human_bytes(8e10), "80.0 GB");
+    }
+}
