@@ -8,7 +8,7 @@ mod common;
 
 use common::{run_rvtol, workspace_dir};
 use rvtol_engine::gate::{baseline, check, Baseline, FAMILY_FALSE_ALARM};
-use rvtol_engine::Scenario;
+use rvtol_engine::{RunSettings, Scenario};
 
 const SAMPLES: u64 = 100_000;
 
@@ -28,6 +28,15 @@ fn widened_text() -> String {
     widened
 }
 
+/// A gate run of SAMPLES samples with `seed`, exact percentiles.
+fn settings(seed: u64) -> RunSettings {
+    RunSettings {
+        samples: SAMPLES,
+        seed,
+        exact_percentile_limit: rvtol_engine::DEFAULT_EXACT_PERCENTILE_LIMIT,
+    }
+}
+
 fn scenario(text: &str) -> Scenario {
     Scenario::from_json(text, "rv20e-hysteresis").unwrap()
 }
@@ -36,8 +45,8 @@ fn scenario(text: &str) -> Scenario {
 fn unchanged_scenario_with_the_same_seed_reproduces_every_figure() {
     let text = rv20e_text();
     let s = scenario(&text);
-    let recorded = baseline(&s, &text, SAMPLES, 11, &|_| {}).unwrap();
-    let report = check(&s, &text, &recorded, SAMPLES, 11, &|_| {}).unwrap();
+    let recorded = baseline(&s, &text, settings(11), 0.0, &|_| {}).unwrap();
+    let report = check(&s, &text, &recorded, 11, 0.0, &|_| {}).unwrap();
     assert!(report.passed);
     assert!(report.scenario_changes.is_empty());
     for c in &report.comparisons {
@@ -53,10 +62,10 @@ fn false_alarm_rate_over_50_seeds_is_at_most_nominal() {
     // too narrow.
     let text = rv20e_text();
     let s = scenario(&text);
-    let recorded = baseline(&s, &text, SAMPLES, 1, &|_| {}).unwrap();
+    let recorded = baseline(&s, &text, settings(1), 0.0, &|_| {}).unwrap();
     let failures = (2..52)
         .filter(|&seed| {
-            !check(&s, &text, &recorded, SAMPLES, seed, &|_| {})
+            !check(&s, &text, &recorded, seed, 0.0, &|_| {})
                 .unwrap()
                 .passed
         })
@@ -70,18 +79,10 @@ fn false_alarm_rate_over_50_seeds_is_at_most_nominal() {
 #[test]
 fn widening_the_largest_contributor_by_20_percent_fails_and_names_the_change() {
     let text = rv20e_text();
-    let recorded = baseline(&scenario(&text), &text, SAMPLES, 1, &|_| {}).unwrap();
+    let recorded = baseline(&scenario(&text), &text, settings(1), 0.0, &|_| {}).unwrap();
     let widened = widened_text();
     for seed in [1, 2, 3] {
-        let report = check(
-            &scenario(&widened),
-            &widened,
-            &recorded,
-            SAMPLES,
-            seed,
-            &|_| {},
-        )
-        .unwrap();
+        let report = check(&scenario(&widened), &widened, &recorded, seed, 0.0, &|_| {}).unwrap();
         assert!(!report.passed, "seed {seed}");
         assert_eq!(
             report.scenario_changes,

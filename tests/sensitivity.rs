@@ -7,7 +7,9 @@
 //! (six intervals). The tests therefore check the coverage over many seeds against its
 //! binomial distribution (precision policy, tests/lib.rs), and every interval's width.
 
-use rvtol_engine::sensitivity::{independent_groups, sobol_indices, SensitivitySettings};
+use rvtol_engine::sensitivity::{
+    independent_groups, sobol_indices, SensitivitySettings, DEFAULT_ROW_BOOTSTRAP_LIMIT,
+};
 use rvtol_engine::sensitivity_report::SensitivityReport;
 use rvtol_engine::Scenario;
 use rvtol_models::{Ishigami, ModelParams, ParamValue, SobolG};
@@ -21,6 +23,7 @@ fn settings(seed: u64) -> SensitivitySettings {
         seed,
         bootstrap: 300,
         confidence: 0.95,
+        row_bootstrap_limit: DEFAULT_ROW_BOOTSTRAP_LIMIT,
     }
 }
 
@@ -113,6 +116,7 @@ fn report_is_byte_identical_for_1_and_2_threads() {
         seed: 4,
         bootstrap: 50,
         confidence: 0.95,
+        row_bootstrap_limit: DEFAULT_ROW_BOOTSTRAP_LIMIT,
     };
     let json = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new()

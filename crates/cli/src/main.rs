@@ -1,30 +1,23 @@
 //! `rvtol`: the command-line interface. Parses arguments (clap), calls the engine, prints
-//! the report on stdout and writes report files atomically. Progress goes to stderr, only
+//! the report on stdout and writes report files ([`output`]). Progress goes to stderr, only
 //! when it is a terminal and `--quiet` is not given.
 //!
-//! Exit codes: 0 success; 1 a check or gate failed; 2 bad input or usage.
+//! Exit codes: 0 success; 1 a check or gate failed; 2 bad input, usage or an environment
+//! that cannot serve the request (memory, an unwritable path). Every error is one line.
 
+mod commands;
+mod limits;
+mod output;
 mod plot;
 
-use std::io::{IsTerminal, Write};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{Context, Result};
-use clap::{Parser, Subcommand};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use rvtol_engine::allocation::report::AllocationReport;
-use rvtol_engine::allocation::spec::{CostKind, Target};
-use rvtol_engine::allocation::{allocate, default_samples, proposal_document, AllocationSettings};
-use rvtol_engine::gate;
-use rvtol_engine::screening::screening;
-use rvtol_engine::sensitivity::{sobol_indices, SensitivitySettings};
-use rvtol_engine::sensitivity_report::SensitivityReport;
-use rvtol_engine::shapley::{players as shapley_players, shapley_effects, ShapleySettings};
-use rvtol_engine::{
-    nominal, nominal_curves, run, NominalReport, RunReport, RunSettings, Scenario, ScenarioError,
-    DEFAULT_EXACT_PERCENTILE_LIMIT,
-};
+use clap::{Args, Parser, Subcommand};
+use rvtol_engine::sensitivity::DEFAULT_ROW_BOOTSTRAP_LIMIT;
+use rvtol_engine::DEFAULT_EXACT_PERCENTILE_LIMIT;
+
+use crate::limits::{parse_count, parse_share, parse_size};
 
 /// Monte Carlo tolerance and deviation statistics for RV reducers.
 #[derive(Debug, Parser)]
@@ -34,31 +27,48 @@ struct Cli {
     command: Command,
 }
 
+/// Options every Monte Carlo command takes.
+#[derive(Debug, Clone, Args)]
+struct Execution {
+    /// Worker threads (default: all cores; at most 4 per core). Results do not depend on it.
+    #[arg(long, value_parser = parse_count, allow_hyphen_values = true)]
+    threads: Option<u64>,
+    /// Largest share (0 to 1) of samples whose model value may be non-finite (the model
+    /// could not evaluate them) before the command fails; they are always counted and
+    /// reported, and counted out of spec.
+    #[arg(long, value_name = "SHARE", default_value_t = 0.0, value_parser = parse_share, allow_hyphen_values = true)]
+    max_non_finite: f64,
+    /// Memory the command may use (bytes, or with k, M, G, T: `4G`); default: the memory
+    /// available on this machine. A request that needs more is refused before it starts.
+    #[arg(long, value_name = "SIZE", value_parser = parse_size)]
+    max_memory: Option<f64>,
+    /// No progress display.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
 #[derive(Debug, Subcommand)]
 enum Command {
     /// Run the Monte Carlo simulation of a scenario and report its output distributions.
     Run {
         /// Scenario file (JSON).
         scenario: PathBuf,
-        /// Number of samples (default: the scenario's `samples`, else 1,000,000).
-        #[arg(long)]
+        /// Number of samples, e.g. 1000000 or 1e6 (default: the scenario's `samples`, else
+        /// 1,000,000).
+        #[arg(long, value_parser = parse_count, allow_hyphen_values = true)]
         samples: Option<u64>,
         /// Seed of the random streams (default: the scenario's `seed`, else 1).
-        #[arg(long)]
+        #[arg(long, allow_hyphen_values = true)]
         seed: Option<u64>,
-        /// Worker threads (default: all cores). Results do not depend on it.
-        #[arg(long)]
-        threads: Option<usize>,
         /// Write the JSON report to PATH ("-" for stdout instead of the table).
         #[arg(long, value_name = "PATH")]
         json: Option<PathBuf>,
         /// Exact percentiles while samples × outputs stays at or below this many values;
         /// a bounded-memory sketch beyond it.
-        #[arg(long, value_name = "VALUES", default_value_t = DEFAULT_EXACT_PERCENTILE_LIMIT)]
+        #[arg(long, value_name = "VALUES", default_value_t = DEFAULT_EXACT_PERCENTILE_LIMIT, value_parser = parse_count, allow_hyphen_values = true)]
         exact_percentile_limit: u64,
-        /// No progress bar.
-        #[arg(long, short)]
-        quiet: bool,
+        #[command(flatten)]
+        execution: Execution,
     },
     /// Evaluate every model with every deviation at its mean.
     Nominal {
@@ -73,33 +83,33 @@ enum Command {
         /// Scenario file (JSON).
         scenario: PathBuf,
         /// Base samples N; the models are evaluated N·(2·groups + 2) times.
-        #[arg(long, default_value_t = 65_536)]
+        #[arg(long, default_value_t = 65_536, value_parser = parse_count, allow_hyphen_values = true)]
         samples: u64,
         /// Seed of the random streams (default: the scenario's `seed`, else 1).
-        #[arg(long)]
+        #[arg(long, allow_hyphen_values = true)]
         seed: Option<u64>,
-        /// Worker threads (default: all cores). Results do not depend on it.
-        #[arg(long)]
-        threads: Option<usize>,
         /// Bootstrap resamples for the 95 % intervals.
-        #[arg(long, default_value_t = 500)]
-        bootstrap: usize,
+        #[arg(long, default_value_t = 500, value_parser = parse_count, allow_hyphen_values = true)]
+        bootstrap: u64,
+        /// Most model values kept for the row bootstrap; beyond, the intervals come from a
+        /// bootstrap of blocks of rows (bounded memory).
+        #[arg(long, value_name = "VALUES", default_value_t = DEFAULT_ROW_BOOTSTRAP_LIMIT, value_parser = parse_count, allow_hyphen_values = true)]
+        row_bootstrap_limit: u64,
         /// Also estimate Shapley effects per source (exact for correlated inputs; needs
         /// parts without the Eq. 11 constraint).
         #[arg(long)]
         shapley: bool,
         /// Shapley: permutation budget (all orders when d! fits, repeated).
-        #[arg(long, default_value_t = 600)]
-        permutations: usize,
+        #[arg(long, default_value_t = 600, value_parser = parse_count, allow_hyphen_values = true)]
+        permutations: u64,
         /// Shapley: outer draws per conditional-variance estimate.
-        #[arg(long, default_value_t = 256)]
-        outer: usize,
+        #[arg(long, default_value_t = 256, value_parser = parse_count, allow_hyphen_values = true)]
+        outer: u64,
         /// Write the JSON report to PATH ("-" for stdout instead of the table).
         #[arg(long, value_name = "PATH")]
         json: Option<PathBuf>,
-        /// No progress bar.
-        #[arg(long, short)]
-        quiet: bool,
+        #[command(flatten)]
+        execution: Execution,
     },
     /// Record the distribution figures of every output, with the band a re-run may move
     /// within, for `rvtol check`.
@@ -110,17 +120,17 @@ enum Command {
         #[arg(short, long, value_name = "FILE")]
         output: PathBuf,
         /// Number of samples (default: the scenario's `samples`, else 1,000,000).
-        #[arg(long)]
+        #[arg(long, value_parser = parse_count, allow_hyphen_values = true)]
         samples: Option<u64>,
         /// Seed (default: the scenario's `seed`, else 1).
-        #[arg(long)]
+        #[arg(long, allow_hyphen_values = true)]
         seed: Option<u64>,
-        /// Worker threads (default: all cores). Results do not depend on it.
-        #[arg(long)]
-        threads: Option<usize>,
-        /// No progress bar.
-        #[arg(long, short)]
-        quiet: bool,
+        /// Exact percentiles while samples × outputs stays at or below this many values;
+        /// a bounded-memory sketch beyond it (recorded in the baseline for the check).
+        #[arg(long, value_name = "VALUES", default_value_t = DEFAULT_EXACT_PERCENTILE_LIMIT, value_parser = parse_count, allow_hyphen_values = true)]
+        exact_percentile_limit: u64,
+        #[command(flatten)]
+        execution: Execution,
     },
     /// Re-run a scenario and compare it with a baseline: exit 1 when a figure moved.
     Check {
@@ -130,7 +140,7 @@ enum Command {
         #[arg(long, value_name = "FILE")]
         baseline: PathBuf,
         /// Seed of the check run (default: the baseline's).
-        #[arg(long)]
+        #[arg(long, allow_hyphen_values = true)]
         seed: Option<u64>,
         /// Write a JUnit XML report to PATH.
         #[arg(long, value_name = "PATH")]
@@ -138,14 +148,10 @@ enum Command {
         /// Write the JSON report to PATH ("-" for stdout instead of the summary).
         #[arg(long, value_name = "PATH")]
         json: Option<PathBuf>,
-        /// Worker threads (default: all cores). Results do not depend on it.
-        #[arg(long)]
-        threads: Option<usize>,
-        /// No progress bar.
-        #[arg(long, short)]
-        quiet: bool,
+        #[command(flatten)]
+        execution: Execution,
     },
-    /// Check a scenario file without running it.
+    /// Check a scenario file without running it; one line per problem.
     Validate {
         /// Scenario file (JSON).
         scenario: PathBuf,
@@ -161,33 +167,29 @@ enum Command {
         output: String,
         /// The target: `p99.865 <= 1.0`, `cpk >= 1.33`, `ppm_out <= 100`, `sd <= 0.01`,
         /// `mean <= x`, `cp >= 1.67`.
-        #[arg(long, value_name = "EXPR")]
+        #[arg(long, value_name = "EXPR", allow_hyphen_values = true)]
         target: String,
         /// Cost model to use where a source gives several: reciprocal, exponential, table.
         #[arg(long, value_name = "MODEL")]
         cost: Option<String>,
         /// Samples per Monte Carlo run (default: enough for about 100 samples in the
         /// targeted tail; at least 200,000).
-        #[arg(long)]
+        #[arg(long, value_parser = parse_count, allow_hyphen_values = true)]
         samples: Option<u64>,
         /// Seed of the optimisation runs (default: the scenario's `seed`, else 1).
-        #[arg(long)]
+        #[arg(long, allow_hyphen_values = true)]
         seed: Option<u64>,
         /// Seed of the verification run (default: seed + 1).
-        #[arg(long)]
+        #[arg(long, allow_hyphen_values = true)]
         verify_seed: Option<u64>,
-        /// Worker threads (default: all cores). Results do not depend on it.
-        #[arg(long)]
-        threads: Option<usize>,
         /// Write the JSON report to PATH ("-" for stdout instead of the table).
         #[arg(long, value_name = "PATH")]
         json: Option<PathBuf>,
         /// Write the scenario with the proposed tolerances to PATH.
         #[arg(long, value_name = "PATH")]
         write_scenario: Option<PathBuf>,
-        /// No progress display.
-        #[arg(long, short)]
-        quiet: bool,
+        #[command(flatten)]
+        execution: Execution,
     },
     /// Write the curves of the scenario's models with every deviation at its mean (the
     /// transmission-error trace and its order spectrum, the torsion curve): a CSV and an
@@ -203,9 +205,9 @@ enum Command {
     Models,
 }
 
-/// An error in the user's input, reported as one line.
+/// An error in the user's input or environment, reported as one line (exit code 2).
 #[derive(Debug)]
-struct BadInput(String);
+pub struct BadInput(pub String);
 
 impl std::fmt::Display for BadInput {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -215,474 +217,204 @@ impl std::fmt::Display for BadInput {
 
 impl std::error::Error for BadInput {}
 
-/// A check or gate that failed (exit code 1); its report is already printed.
+/// A check, gate or allocation that failed (exit code 1); its report is already printed.
 #[derive(Debug)]
-struct GateFailed;
+pub struct Failed(pub String);
 
-impl std::fmt::Display for GateFailed {
+impl std::fmt::Display for Failed {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str("figures moved beyond their baseline bands")
+        f.write_str(&self.0)
     }
 }
 
-impl std::error::Error for GateFailed {}
+impl std::error::Error for Failed {}
 
-fn bad_scenario(path: &Path, err: ScenarioError) -> anyhow::Error {
-    BadInput(format!("{}: {err}", path.display())).into()
-}
-
-fn load(path: &Path) -> Result<Scenario> {
-    Scenario::load(path).map_err(|err| bad_scenario(path, err))
-}
-
-/// Writes `contents` to `path` through a temporary file in the same directory and a
-/// rename, so an interrupted run never leaves a half-written report.
-fn write_atomically(path: &Path, contents: &str) -> Result<()> {
-    let directory = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let file_name = path
-        .file_name()
-        .with_context(|| format!("{} is not a file path", path.display()))?;
-    let temporary = directory.join(format!(
-        ".{}.tmp-{}",
-        file_name.to_string_lossy(),
-        std::process::id()
-    ));
-    let result = (|| -> std::io::Result<()> {
-        let mut file = std::fs::File::create(&temporary)?;
-        file.write_all(contents.as_bytes())?;
-        file.sync_all()?;
-        std::fs::rename(&temporary, path)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&temporary);
-    }
-    result.with_context(|| format!("cannot write {}", path.display()))
-}
-
-fn emit(
-    json_path: Option<&Path>,
-    json: impl FnOnce() -> String,
-    text: impl FnOnce() -> String,
-) -> Result<()> {
-    let mut stdout = std::io::stdout().lock();
-    match json_path {
-        Some(p) if p == Path::new("-") => stdout.write_all(json().as_bytes())?,
-        Some(p) => {
-            write_atomically(p, &json())?;
-            stdout.write_all(text().as_bytes())?;
-        }
-        None => stdout.write_all(text().as_bytes())?,
-    }
-    Ok(())
-}
-
-fn progress_bar(samples: u64, quiet: bool) -> ProgressBar {
-    if quiet || !std::io::stderr().is_terminal() {
-        return ProgressBar::hidden();
-    }
-    let bar = ProgressBar::with_draw_target(Some(samples), ProgressDrawTarget::stderr());
-    bar.set_style(
-        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} {percent:>3}% {human_pos}/{human_len} samples, eta {eta}")
-            .expect("valid template"),
-    );
-    bar
-}
-
-/// A rayon pool of `threads` workers (all cores when absent).
-fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
-    if threads == Some(0) {
-        return Err(BadInput("--threads: must be at least 1".into()).into());
-    }
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads.unwrap_or(0))
-        .build()
-        .context("cannot start the worker threads")
-}
-
-#[allow(clippy::too_many_arguments)]
-fn command_run(
-    scenario_path: &Path,
-    samples: Option<u64>,
-    seed: Option<u64>,
-    threads: Option<usize>,
-    json: Option<&Path>,
-    exact_percentile_limit: u64,
-    quiet: bool,
-) -> Result<()> {
-    let scenario = load(scenario_path)?;
-    let samples = samples.unwrap_or(scenario.samples);
-    if samples == 0 {
-        return Err(BadInput("--samples: must be at least 1".into()).into());
-    }
-    let settings = RunSettings {
-        samples,
-        seed: seed.unwrap_or(scenario.seed),
-        exact_percentile_limit,
-    };
-    let pool = thread_pool(threads)?;
-    let bar = progress_bar(samples, quiet);
-    let started = std::time::Instant::now();
-    let result = pool
-        .install(|| run(&scenario, settings, &|n| bar.inc(n)))
-        .map_err(|err| bad_scenario(scenario_path, err))?;
-    bar.finish_and_clear();
-    let elapsed = started.elapsed();
-    let report = RunReport::new(&scenario, result);
-    emit(json, || report.to_json(), || report.to_text())?;
-    if !quiet && std::io::stderr().is_terminal() {
-        eprintln!(
-            "{} samples in {:.2} s ({:.1} ns per sample)",
-            samples,
-            elapsed.as_secs_f64(),
-            elapsed.as_secs_f64() * 1e9 / samples as f64
-        );
-    }
-    Ok(())
-}
-
-fn command_curve(scenario_path: &Path, out_dir: &Path) -> Result<()> {
-    let scenario = load(scenario_path)?;
-    let drawn = nominal_curves(&scenario);
-    if drawn.is_empty() {
-        return Err(BadInput(format!(
-            "{}: none of its models draws a curve (transmission_error and torsion_curve do)",
-            scenario_path.display()
-        ))
-        .into());
-    }
-    std::fs::create_dir_all(out_dir)
-        .with_context(|| format!("cannot create {}", out_dir.display()))?;
-    let mut stdout = std::io::stdout().lock();
-    for (model, curves) in drawn {
-        for curve in curves {
-            let stem = out_dir.join(&curve.name);
-            let (csv, svg) = (stem.with_extension("csv"), stem.with_extension("svg"));
-            write_atomically(&csv, &plot::to_csv(&curve))?;
-            write_atomically(&svg, &plot::to_svg(&curve))?;
-            writeln!(
-                stdout,
-                "{model}: {} -> {}, {}",
-                curve.title,
-                csv.display(),
-                svg.display()
-            )?;
-        }
-    }
-    Ok(())
-}
-
-fn command_models() -> Result<()> {
-    let mut out = String::new();
-    for entry in rvtol_models::all() {
-        out.push_str(&format!("{}\n  {}\n", entry.name, entry.summary));
-        out.push_str("  parameters:\n");
-        for p in entry.params {
-            let default = p
-                .default
-                .map(|d| format!(" (default {d})"))
-                .unwrap_or_default();
-            out.push_str(&format!(
-                "    {:<36} {:<6} {}{default}\n",
-                p.name, p.unit, p.description
-            ));
-        }
-        let model = (entry.build)(&(entry.example_params)())
-            .map_err(|err| anyhow::anyhow!("example of {} does not build: {err}", entry.name))?;
-        out.push_str("  inputs:\n");
-        for i in model.inputs() {
-            out.push_str(&format!(
-                "    {:<36} {:<6} {}\n",
-                i.name, i.unit, i.description
-            ));
-        }
-        out.push_str("  outputs:\n");
-        for o in model.outputs() {
-            out.push_str(&format!(
-                "    {:<36} {:<8} {}\n",
-                o.name, o.unit, o.description
-            ));
-        }
-        out.push('\n');
-    }
-    std::io::stdout().lock().write_all(out.as_bytes())?;
-    Ok(())
-}
-
-fn dispatch(cli: Cli) -> Result<()> {
+fn dispatch(cli: Cli) -> anyhow::Result<()> {
+    use commands::*;
     match cli.command {
         Command::Run {
             scenario,
             samples,
             seed,
-            threads,
             json,
             exact_percentile_limit,
-            quiet,
-        } => command_run(
+            execution,
+        } => run(
             &scenario,
             samples,
             seed,
-            threads,
             json.as_deref(),
             exact_percentile_limit,
-            quiet,
+            &execution,
         ),
-        Command::Nominal {
-            scenario: path,
-            json,
-        } => {
-            let scenario = load(&path)?;
-            let report = NominalReport::new(&scenario, &nominal(&scenario));
-            emit(json.as_deref(), || report.to_json(), || report.to_text())
-        }
-        Command::Curve { scenario, out_dir } => command_curve(&scenario, &out_dir),
-        Command::Validate { scenario: path } => {
-            let scenario = load(&path)?;
-            println!(
-                "{}: valid ({} input columns, {} models, {} outputs)",
-                path.display(),
-                scenario.input_space.n_columns(),
-                scenario.models.len(),
-                scenario.outputs.len()
-            );
-            Ok(())
-        }
+        Command::Nominal { scenario, json } => nominal(&scenario, json.as_deref()),
+        Command::Curve { scenario, out_dir } => curve(&scenario, &out_dir),
+        Command::Validate { scenario } => validate(&scenario),
         Command::Sensitivity {
-            scenario: path,
+            scenario,
             samples,
             seed,
-            threads,
             bootstrap,
+            row_bootstrap_limit,
             shapley,
             permutations,
             outer,
             json,
-            quiet,
-        } => {
-            let scenario = load(&path)?;
-            if samples < 2 {
-                return Err(BadInput(
-                    "--samples: sensitivity needs at least 2 base samples".into(),
-                )
-                .into());
-            }
-            if bootstrap < 2 {
-                return Err(BadInput("--bootstrap: needs at least 2 resamples".into()).into());
-            }
-            let settings = SensitivitySettings {
-                base_samples: samples,
-                seed: seed.unwrap_or(scenario.seed),
+            execution,
+        } => sensitivity(
+            &scenario,
+            SensitivityArgs {
+                samples,
+                seed,
                 bootstrap,
-                confidence: 0.95,
-            };
-            let pool = thread_pool(threads)?;
-            let bar = progress_bar(samples, quiet);
-            let outputs = pool
-                .install(|| sobol_indices(&scenario, settings, &|n| bar.inc(n)))
-                .map_err(|err| bad_scenario(&path, err))?;
-            bar.finish_and_clear();
-            let screening = pool
-                .install(|| {
-                    screening(
-                        &scenario,
-                        &shapley_players(&scenario),
-                        samples.min(65_536),
-                        settings.seed,
-                    )
-                })
-                .map_err(|err| bad_scenario(&path, err))?;
-            let mut report =
-                SensitivityReport::new(&scenario, settings, outputs).with_screening(screening);
-            if shapley {
-                let effects = pool
-                    .install(|| {
-                        shapley_effects(
-                            &scenario,
-                            ShapleySettings {
-                                permutations,
-                                outer,
-                                inner: 3,
-                                seed: settings.seed,
-                            },
-                        )
-                    })
-                    .map_err(|err| bad_scenario(&path, err))?;
-                report = report.with_shapley(effects);
-            }
-            emit(json.as_deref(), || report.to_json(), || report.to_text())
-        }
+                row_bootstrap_limit,
+                shapley,
+                permutations,
+                outer,
+            },
+            json.as_deref(),
+            &execution,
+        ),
         Command::Baseline {
-            scenario: path,
+            scenario,
             output,
             samples,
             seed,
-            threads,
-            quiet,
-        } => {
-            let (scenario, text) = Scenario::read(&path).map_err(|err| bad_scenario(&path, err))?;
-            let samples = samples.unwrap_or(scenario.samples);
-            if samples < 2 {
-                return Err(
-                    BadInput("--samples: a baseline needs at least 2 samples".into()).into(),
-                );
-            }
-            let seed = seed.unwrap_or(scenario.seed);
-            let pool = thread_pool(threads)?;
-            let bar = progress_bar(samples, quiet);
-            let baseline = pool
-                .install(|| gate::baseline(&scenario, &text, samples, seed, &|n| bar.inc(n)))
-                .map_err(|err| bad_scenario(&path, err))?;
-            bar.finish_and_clear();
-            write_atomically(&output, &baseline.to_json())?;
-            println!(
-                "{}: {} figures of {} ({} samples, seed {}) written to {}",
-                path.display(),
-                baseline.figures.len(),
-                baseline.scenario,
-                samples,
-                seed,
-                output.display()
-            );
-            Ok(())
-        }
+            exact_percentile_limit,
+            execution,
+        } => baseline(
+            &scenario,
+            &output,
+            samples,
+            seed,
+            exact_percentile_limit,
+            &execution,
+        ),
         Command::Check {
-            scenario: path,
+            scenario,
             baseline,
             seed,
             junit,
             json,
-            threads,
-            quiet,
-        } => {
-            let (scenario, text) = Scenario::read(&path).map_err(|err| bad_scenario(&path, err))?;
-            let baseline_text = std::fs::read_to_string(&baseline)
-                .map_err(|err| BadInput(format!("{}: cannot read: {err}", baseline.display())))?;
-            let recorded = gate::Baseline::from_json(&baseline_text)
-                .map_err(|err| bad_scenario(&baseline, err))?;
-            let seed = seed.unwrap_or(recorded.seed);
-            let pool = thread_pool(threads)?;
-            let bar = progress_bar(recorded.samples, quiet);
-            let report = pool
-                .install(|| {
-                    gate::check(&scenario, &text, &recorded, recorded.samples, seed, &|n| {
-                        bar.inc(n)
-                    })
-                })
-                .map_err(|err| bad_scenario(&path, err))?;
-            bar.finish_and_clear();
-            if let Some(junit) = &junit {
-                write_atomically(junit, &report.to_junit())?;
-            }
-            emit(json.as_deref(), || report.to_json(), || report.to_text())?;
-            if report.passed {
-                Ok(())
-            } else {
-                Err(GateFailed.into())
-            }
-        }
+            execution,
+        } => check(
+            &scenario,
+            &baseline,
+            seed,
+            junit.as_deref(),
+            json.as_deref(),
+            &execution,
+        ),
         Command::Allocate {
-            scenario: path,
+            scenario,
             output,
             target,
             cost,
             samples,
             seed,
             verify_seed,
-            threads,
             json,
             write_scenario,
-            quiet,
-        } => {
-            let (scenario, text) = Scenario::read(&path).map_err(|err| bad_scenario(&path, err))?;
-            let target =
-                Target::parse(&target).map_err(|err| BadInput(format!("--target: {err}")))?;
-            let cost = cost
-                .map(|name| {
-                    CostKind::parse(&name).ok_or_else(|| {
-                        BadInput(format!(
-                            "--cost: unknown cost model {name:?}; use reciprocal, exponential or table"
-                        ))
-                    })
-                })
-                .transpose()?;
-            let seed = seed.unwrap_or(scenario.seed);
-            let settings = AllocationSettings {
-                samples: samples.unwrap_or_else(|| default_samples(&target)),
-                seed,
-                verification_seed: verify_seed.unwrap_or(seed.wrapping_add(1)),
+            execution,
+        } => allocate(
+            &scenario,
+            AllocateArgs {
+                output,
+                target,
                 cost,
-            };
-            let pool = thread_pool(threads)?;
-            let spinner = if quiet || !std::io::stderr().is_terminal() {
-                ProgressBar::hidden()
-            } else {
-                let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
-                bar.set_style(
-                    ProgressStyle::with_template(
-                        "{spinner} [{elapsed_precise}] allocating: {pos} Monte Carlo runs",
-                    )
-                    .expect("valid template"),
-                );
-                bar
-            };
-            let allocation = pool
-                .install(|| {
-                    allocate(&scenario, &text, &output, target, settings, &|n| {
-                        spinner.set_position(n as u64)
-                    })
-                })
-                .map_err(|err| bad_scenario(&path, err))?;
-            spinner.finish_and_clear();
-            if let Some(proposal) = &write_scenario {
-                let document = proposal_document(&text, &allocation)
-                    .map_err(|err| bad_scenario(&path, err))?;
-                write_atomically(proposal, &document)?;
-            }
-            let report = AllocationReport::new(&allocation);
-            emit(json.as_deref(), || report.to_json(), || report.to_text())?;
-            if allocation.status() == "met" {
-                Ok(())
-            } else {
-                Err(AllocationFailed(allocation.status()).into())
-            }
-        }
-        Command::Models => command_models(),
+                samples,
+                seed,
+                verify_seed,
+            },
+            json.as_deref(),
+            write_scenario.as_deref(),
+            &execution,
+        ),
+        Command::Models => models(),
     }
 }
 
-/// `rvtol allocate` found no verified allocation (exit code 1); its report is printed.
-#[derive(Debug)]
-struct AllocationFailed(&'static str);
-
-impl std::fmt::Display for AllocationFailed {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "allocation {}", self.0)
-    }
+/// A clap error as one line: its message and where to read more.
+fn usage_line(err: &clap::Error) -> String {
+    let rendered = err.render().to_string();
+    // The message is what comes before the usage block; some span several lines (a list
+    // of missing arguments), which are joined.
+    let message = rendered
+        .lines()
+        .take_while(|line| {
+            !line.starts_with("Usage:")
+                && !line.starts_with("  tip:")
+                && !line.starts_with("For more information")
+        })
+        .map(str::trim)
+        .filter(|line| !line.is_empty())
+        .collect::<Vec<_>>()
+        .join(" ");
+    let message = message.strip_prefix("error: ").unwrap_or(&message);
+    let subcommand = std::env::args()
+        .nth(1)
+        .filter(|a| Cli::command_names().contains(&a.as_str()));
+    let help = match subcommand {
+        Some(name) => format!("rvtol {name} --help"),
+        None => "rvtol --help".to_string(),
+    };
+    format!("error: {message} (see '{help}')")
 }
 
-impl std::error::Error for AllocationFailed {}
+impl Cli {
+    fn command_names() -> Vec<&'static str> {
+        vec![
+            "run",
+            "nominal",
+            "sensitivity",
+            "baseline",
+            "check",
+            "validate",
+            "allocate",
+            "curve",
+            "models",
+        ]
+    }
+}
 
 fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(err) => {
-            let _ = err.print();
-            return ExitCode::from(if err.use_stderr() { 2 } else { 0 });
+            use clap::error::ErrorKind;
+            return match err.kind() {
+                ErrorKind::DisplayHelp
+                | ErrorKind::DisplayVersion
+                | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
+                    let text = err.render().to_string();
+                    if err.use_stderr() {
+                        output::note(text.trim_end());
+                        ExitCode::from(2)
+                    } else {
+                        match output::print(&text) {
+                            Ok(()) => ExitCode::SUCCESS,
+                            Err(err) => {
+                                output::note(&format!("error: {err:#}"));
+                                ExitCode::from(2)
+                            }
+                        }
+                    }
+                }
+                _ => {
+                    output::note(&usage_line(&err));
+                    ExitCode::from(2)
+                }
+            };
         }
     };
     match dispatch(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
-            eprintln!("error: {err:#}");
-            if err.downcast_ref::<GateFailed>().is_some()
-                || err.downcast_ref::<AllocationFailed>().is_some()
-            {
+            let line = format!("{err:#}").replace('\n', " ");
+            output::note(&format!("error: {line}"));
+            if err.downcast_ref::<Failed>().is_some() {
                 ExitCode::from(1)
             } else {
-                // Bad input or usage: a scenario, a baseline, a path.
                 ExitCode::from(2)
             }
         }

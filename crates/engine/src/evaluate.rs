@@ -21,7 +21,8 @@ pub struct ChunkEvaluator<'a> {
     scenario: &'a Scenario,
     /// Per model, one [`CHUNK_SIZE`]-long column per constant input, in input order.
     constant_columns: Vec<Vec<f64>>,
-    /// Column-major copy of row-major input for [`ChunkEvaluator::evaluate`].
+    /// Column-major copy of row-major input for [`ChunkEvaluator::evaluate`] (grown on
+    /// first use: the run's hot loop never needs it).
     transposed: Vec<f64>,
     /// Column-major outputs of one model for one block.
     model_outputs: Vec<f64>,
@@ -56,7 +57,7 @@ impl<'a> ChunkEvaluator<'a> {
         ChunkEvaluator {
             scenario,
             constant_columns,
-            transposed: vec![0.0; CHUNK_SIZE * scenario.input_space.n_columns()],
+            transposed: Vec::new(),
             model_outputs: vec![0.0; CHUNK_SIZE * max_outputs],
             output_columns: vec![vec![0.0; CHUNK_SIZE]; scenario.outputs.len()],
         }
@@ -67,6 +68,9 @@ impl<'a> ChunkEvaluator<'a> {
     pub fn evaluate(&mut self, rows: &[f64], m: usize) {
         let n_columns = self.scenario.input_space.n_columns();
         let mut transposed = std::mem::take(&mut self.transposed);
+        if transposed.len() < m * n_columns {
+            transposed.resize(m * n_columns, 0.0);
+        }
         if n_columns > 0 {
             for (c, column) in transposed[..m * n_columns]
                 .chunks_exact_mut(m.max(1))

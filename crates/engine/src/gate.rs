@@ -17,12 +17,21 @@
 //! (Bonferroni), so an unchanged scenario fails with probability at most 1 %. The same seed
 //! and sample count reproduce every figure exactly. A figure may instead carry an
 //! absolute or relative tolerance in the baseline file, which then replaces its band.
+//!
+//! Memory is bounded as in `rvtol run`: beyond the exact-percentile limit the percentiles
+//! come from the run's quantile sketch and each percentile band is widened by the sketch's
+//! error bound (α·|x − centre|) at both ends.
 
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ContinuousCDF, Normal};
 
-use crate::run::{run, Distribution, RunSettings};
+use crate::run::{
+    check_non_finite, run, Distribution, RunSettings, DEFAULT_EXACT_PERCENTILE_LIMIT,
+};
 use crate::scenario::{Scenario, ScenarioError};
+use crate::stats::{
+    order_statistic_interval, percentile_type7_of_sorted, proportion_standard_error, QuantileSketch,
+};
 use rvtol_models::OutputKind;
 
 /// Family-wise false-alarm level of a check.
@@ -86,12 +95,20 @@ pub struct Baseline {
     pub seed: u64,
     /// Samples of the baseline run.
     pub samples: u64,
+    /// Exact percentiles while samples × outputs stays within this many values, a sketch
+    /// beyond it: a check re-runs with the same setting.
+    #[serde(default = "default_exact_percentile_limit")]
+    pub exact_percentile_limit: u64,
     /// Family-wise false-alarm level the bands are built for.
     pub family_false_alarm: f64,
     /// z of every band (Bonferroni over the figures).
     pub z: f64,
     /// The figures.
     pub figures: Vec<Figure>,
+}
+
+fn default_exact_percentile_limit() -> u64 {
+    DEFAULT_EXACT_PERCENTILE_LIMIT
 }
 
 impl Baseline {
@@ -120,7 +137,25 @@ impl Baseline {
                 format!("must be a positive number, got {}", baseline.z),
             ));
         }
+        if baseline.figures.is_empty() {
+            return Err(ScenarioError::new(
+                "figures",
+                "is empty: a check against no figures would pass whatever the scenario does; write the baseline again with rvtol baseline",
+            ));
+        }
         for (i, figure) in baseline.figures.iter().enumerate() {
+            for (key, value) in [
+                ("value", figure.value),
+                ("lower", figure.lower),
+                ("upper", figure.upper),
+            ] {
+                if !value.is_finite() {
+                    return Err(ScenarioError::new(
+                        format!("figures[{i}].{key}"),
+                        "must be a finite number",
+                    ));
+                }
+            }
             for (key, tolerance) in [
                 ("absolute_tolerance", figure.absolute_tolerance),
                 ("relative_tolerance", figure.relative_tolerance),
@@ -142,6 +177,52 @@ impl Baseline {
             }
         }
         Ok(baseline)
+    }
+
+    /// Checks that this baseline belongs to `scenario`: the same scenario name, and every
+    /// figure names an output of it and a figure that output has. A mismatch is bad input
+    /// (the wrong file), not a moved figure.
+    pub fn matches(&self, scenario: &Scenario) -> Result<(), ScenarioError> {
+        if self.scenario != scenario.name {
+            return Err(ScenarioError::new(
+                "scenario",
+                format!(
+                    "the baseline records scenario {:?}, not {:?}: check a scenario against its own baseline (rvtol baseline writes one)",
+                    self.scenario, scenario.name
+                ),
+            ));
+        }
+        for (i, figure) in self.figures.iter().enumerate() {
+            let Some(output) = scenario.outputs.iter().find(|o| o.name == figure.output) else {
+                return Err(ScenarioError::new(
+                    format!("figures[{i}].output"),
+                    format!(
+                        "the scenario has no output {:?}; write the baseline again with rvtol baseline",
+                        figure.output
+                    ),
+                ));
+            };
+            let known: Vec<&str> = match output.kind {
+                OutputKind::Indicator => vec!["fraction"],
+                OutputKind::Continuous => ["mean", "sd"]
+                    .into_iter()
+                    .chain(GATED_PERCENTS.iter().map(|(name, _)| *name))
+                    .chain(output.spec.map(|_| "ppm_out"))
+                    .collect(),
+            };
+            if !known.contains(&figure.figure.as_str()) {
+                return Err(ScenarioError::new(
+                    format!("figures[{i}].figure"),
+                    format!(
+                        "{:?} is not a figure of {} (figures: {})",
+                        figure.figure,
+                        figure.output,
+                        known.join(", ")
+                    ),
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// The baseline file's text.
@@ -170,21 +251,21 @@ pub fn band_z(figures: usize) -> f64 {
     normal.inverse_cdf(1.0 - FAMILY_FALSE_ALARM / (2.0 * figures.max(1) as f64))
 }
 
-/// Runs the scenario (exact percentiles) and returns every gated figure with its band for
-/// a re-run at band quantile `z`.
+/// Runs the scenario and returns every gated figure with its band for a re-run at band
+/// quantile `z`. Percentiles are exact order statistics while samples × outputs stays
+/// within `exact_percentile_limit` values, and come from the run's quantile sketch beyond
+/// it (bounded memory at any sample count); a sketch percentile's band is widened by the
+/// sketch's error bound at each end.
 pub fn measure(
     scenario: &Scenario,
-    samples: u64,
-    seed: u64,
+    settings: RunSettings,
     z: f64,
+    max_non_finite: f64,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Vec<Figure>, ScenarioError> {
-    let settings = RunSettings {
-        samples,
-        seed,
-        exact_percentile_limit: u64::MAX,
-    };
     let result = run(scenario, settings, progress)?;
+    check_non_finite(scenario, &result, max_non_finite)?;
+    let samples = result.samples;
     let two_sample = std::f64::consts::SQRT_2 * z;
     let mut figures = Vec::new();
     let mut push = |output: &str, figure: &str, value: f64, below: f64, above: f64| {
@@ -207,10 +288,8 @@ pub fn measure(
             ));
         }
         let nf = n as f64;
-        let proportion_se =
-            |events: u64| crate::stats::proportion_standard_error(events as f64 / nf, n);
         if info.kind == OutputKind::Indicator {
-            let half = two_sample * proportion_se(acc.nonzero);
+            let half = two_sample * proportion_standard_error(acc.nonzero as f64 / nf, n);
             push(&info.name, "fraction", acc.nonzero as f64 / nf, half, half);
             continue;
         }
@@ -219,27 +298,106 @@ pub fn measure(
         push(&info.name, "mean", mean, half, half);
         let half = two_sample * acc.moments.sd_standard_error();
         push(&info.name, "sd", sd, half, half);
-        let Distribution::Values(mut values) = acc.distribution else {
-            unreachable!("the gate runs with exact percentiles");
-        };
-        values.sort_unstable_by(f64::total_cmp);
+        let out = acc.out_of_spec(info.flagged_conform);
+        let (min, max) = (acc.moments.min, acc.moments.max);
+        let mut percentiles = Percentiles::new(acc.distribution, n, min, max);
         for (name, percent) in GATED_PERCENTS {
-            let value =
-                crate::stats::percentile_type7_of_sorted(&values, percent).unwrap_or(f64::NAN);
-            // Distribution-free one-sample interval [X_(l), X_(u)] at z.
-            let (low, high) =
-                crate::stats::order_statistic_interval(&values, percent, z).expect("n ≥ 2 values");
+            let (value, low, high) = percentiles.with_interval(percent, z);
             let below = std::f64::consts::SQRT_2 * (value - low).max(0.0);
             let above = std::f64::consts::SQRT_2 * (high - value).max(0.0);
             push(&info.name, name, value, below, above);
         }
         if info.spec.is_some() {
-            let out = acc.below_lower + acc.above_upper;
-            let half = two_sample * proportion_se(out) * 1e6;
-            push(&info.name, "ppm_out", out as f64 / nf * 1e6, half, half);
+            // Out of spec among every sample drawn (non-finite, excluded and flagged ones
+            // included).
+            let fraction = out as f64 / samples as f64;
+            let half = two_sample * proportion_standard_error(fraction, samples) * 1e6;
+            push(&info.name, "ppm_out", fraction * 1e6, half, half);
         }
     }
     Ok(figures)
+}
+
+/// The percentiles of one output, exact (sorted values) or from its sketch.
+enum Percentiles {
+    Exact(Vec<f64>),
+    Sketch {
+        sketch: QuantileSketch,
+        center: f64,
+        scale: f64,
+        n: u64,
+        min: f64,
+        max: f64,
+    },
+}
+
+impl Percentiles {
+    fn new(distribution: Distribution, n: u64, min: f64, max: f64) -> Percentiles {
+        match distribution {
+            Distribution::Values(mut values) => {
+                values.sort_unstable_by(f64::total_cmp);
+                Percentiles::Exact(values)
+            }
+            Distribution::Sketch {
+                sketch,
+                center,
+                scale,
+            } => Percentiles::Sketch {
+                sketch,
+                center,
+                scale,
+                n,
+                min,
+                max,
+            },
+            Distribution::Indicator | Distribution::Dropped => {
+                unreachable!("the gate keeps the distribution of every continuous output")
+            }
+        }
+    }
+
+    /// The percentile and the distribution-free one-sample interval [X_(l), X_(u)] at z
+    /// ([`crate::stats::order_statistic_interval`]); from a sketch, each end moved out by
+    /// its error bound α·|x − centre|.
+    fn with_interval(&mut self, percent: f64, z: f64) -> (f64, f64, f64) {
+        match self {
+            Percentiles::Exact(sorted) => {
+                let value = percentile_type7_of_sorted(sorted, percent).unwrap_or(f64::NAN);
+                let (low, high) =
+                    order_statistic_interval(sorted, percent, z).unwrap_or((value, value));
+                (value, low, high)
+            }
+            Percentiles::Sketch {
+                sketch,
+                center,
+                scale,
+                n,
+                min,
+                max,
+            } => {
+                let alpha = sketch.relative_accuracy();
+                let last = (*n - 1) as f64;
+                // The order statistic of 0-based rank r: the sketch's quantile at a q
+                // whose ⌊q·(n − 1)⌋ is r, moved out by its error bound.
+                let at_rank = |rank: f64, outward: f64| {
+                    let q = if last > 0.0 {
+                        ((rank + 0.5) / last).min(1.0)
+                    } else {
+                        0.0
+                    };
+                    let z = sketch.quantile(q).unwrap_or(0.0);
+                    let value = *center + *scale * z + outward * alpha * (*scale * z).abs();
+                    value.clamp(*min, *max)
+                };
+                let (nf, p) = (*n as f64, (percent / 100.0).clamp(0.0, 1.0));
+                let value = at_rank((p * last).floor(), 0.0);
+                let reach = z * (nf * p * (1.0 - p)).sqrt();
+                let low = at_rank((nf * p - reach).floor().clamp(0.0, last), -1.0);
+                let high = at_rank((nf * p + reach).ceil().clamp(0.0, last), 1.0);
+                (value, low.min(value), high.max(value))
+            }
+        }
+    }
 }
 
 /// Writes a baseline: the figures of a run of `scenario` (whose file text is
@@ -247,12 +405,17 @@ pub fn measure(
 pub fn baseline(
     scenario: &Scenario,
     scenario_text: &str,
-    samples: u64,
-    seed: u64,
+    settings: RunSettings,
+    max_non_finite: f64,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Baseline, ScenarioError> {
     let z = band_z(gated_figure_count(scenario));
-    let figures = measure(scenario, samples, seed, z, progress)?;
+    let figures = measure(scenario, settings, z, max_non_finite, progress)?;
+    let RunSettings {
+        samples,
+        seed,
+        exact_percentile_limit,
+    } = settings;
     Ok(Baseline {
         rvtol_version: env!("CARGO_PKG_VERSION").to_string(),
         scenario: scenario.name.clone(),
@@ -260,6 +423,7 @@ pub fn baseline(
             .map_err(|err| ScenarioError::new("JSON syntax", err.to_string()))?,
         seed,
         samples,
+        exact_percentile_limit,
         family_false_alarm: FAMILY_FALSE_ALARM,
         z,
         figures,
@@ -357,13 +521,20 @@ pub fn check(
     scenario: &Scenario,
     scenario_text: &str,
     baseline: &Baseline,
-    samples: u64,
     seed: u64,
+    max_non_finite: f64,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<CheckReport, ScenarioError> {
+    baseline.matches(scenario)?;
     let current: serde_json::Value = serde_json::from_str(scenario_text)
         .map_err(|err| ScenarioError::new("JSON syntax", err.to_string()))?;
-    let figures = measure(scenario, samples, seed, baseline.z, progress)?;
+    let samples = baseline.samples;
+    let settings = RunSettings {
+        samples,
+        seed,
+        exact_percentile_limit: baseline.exact_percentile_limit,
+    };
+    let figures = measure(scenario, settings, baseline.z, max_non_finite, progress)?;
     let comparisons: Vec<Comparison> = baseline
         .figures
         .iter()

@@ -9,6 +9,7 @@
 pub mod allocation;
 pub mod evaluate;
 pub mod gate;
+pub mod memory;
 pub mod report;
 pub mod run;
 pub mod scenario;

@@ -13,14 +13,15 @@
 use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
 
-use crate::run::{Distribution, PercentileMethod, RunResult, CHUNK_SIZE};
-use crate::scenario::Scenario;
+use crate::run::{Distribution, OutputAccumulator, PercentileMethod, RunResult, CHUNK_SIZE};
+use crate::scenario::{OutputInfo, Scenario};
 use crate::stats::quantile_sketch::bucket_representative;
 use crate::stats::{
     capability_from_moments, capability_percentile_method, out_of_spec_interval, percentiles_type7,
-    Histogram, QuantileSketch, SpecLimits,
+    Histogram, Moments, QuantileSketch, SpecLimits,
 };
-use rvtol_models::OutputKind;
+use rvtol_deviation::Shown;
+use rvtol_models::{ConditionEffect, OutputKind};
 
 /// Percentiles every report gives: the ±1, 2, 3 σ points of a normal law and the median.
 pub const PERCENTS: [(&str, f64); 7] = [
@@ -100,18 +101,42 @@ pub struct HistogramReport {
 pub struct CapabilityReport {
     /// The limits.
     pub spec: SpecReport,
-    /// Cp = (U − L)/(6σ); null when one-sided.
+    /// Cp = (U − L)/(6σ); null when one-sided or not given (`capability_note`).
     pub cp: Option<f64>,
-    /// Cpk = min(U − μ, μ − L)/(3σ) over the limits set.
-    pub cpk: f64,
-    /// Percentile-method Cp = (U − L)/(P99.865 − P0.135) (ISO 22514-2); null when one-sided.
+    /// Cpk = min(U − μ, μ − L)/(3σ) over the limits set; null when not given.
+    pub cpk: Option<f64>,
+    /// Percentile-method Cp = (U − L)/(P99.865 − P0.135) (ISO 22514-2); null when
+    /// one-sided or not given.
     pub cp_percentile: Option<f64>,
-    /// Percentile-method Cpk.
-    pub cpk_percentile: f64,
-    /// Samples out of spec per million.
+    /// Percentile-method Cpk; null when not given.
+    pub cpk_percentile: Option<f64>,
+    /// Why the indices are not given, when they are not: samples that do not conform
+    /// although the values do not show it (not finite, excluded, flagged), or values
+    /// without spread.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub capability_note: Option<String>,
+    /// Samples out of spec per million samples drawn: outside the limits, not finite,
+    /// excluded or flagged non-conforming.
     pub ppm_out: f64,
     /// Clopper–Pearson 95 % interval on `ppm_out`.
     pub ppm_out_ci95: [f64; 2],
+}
+
+/// The samples an output's qualifying indicator excluded or flagged.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ConditionReport {
+    /// The indicator output.
+    pub indicator: String,
+    /// `excluded` (no value: kept out of the statistics) or `non-conforming` (the value is
+    /// in the statistics, the sample does not conform).
+    pub effect: &'static str,
+    /// Samples with the indicator set.
+    pub samples: u64,
+    /// Their share of the samples drawn.
+    pub fraction: f64,
+    /// Whether a flagged sample within the limits conforms (`spec_limits` setting).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub flagged_conform: bool,
 }
 
 /// Spec limits in the report.
@@ -132,10 +157,19 @@ pub struct OutputReport {
     pub unit: String,
     /// `continuous` or `indicator`.
     pub kind: &'static str,
-    /// Finite samples.
+    /// Finite samples (those in the statistics below).
     pub n: u64,
-    /// Non-finite samples (degenerate geometry), kept out of the statistics.
+    /// Samples whose value was not finite although nothing excluded them: lost data, kept
+    /// out of the statistics and counted out of spec.
     pub non_finite: u64,
+    /// `non_finite` as a share of the samples drawn.
+    pub non_finite_fraction: f64,
+    /// The first sample (index in the run) whose value was not finite.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub first_non_finite_sample: Option<u64>,
+    /// The samples the output's qualifying indicator excluded or flagged.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub condition: Option<ConditionReport>,
     /// Mean.
     pub mean: f64,
     /// Sample standard deviation (n − 1).
@@ -191,34 +225,89 @@ pub struct RunReport {
     pub outputs: Vec<OutputReport>,
 }
 
+/// The capability figures of one output from its statistics. `samples` is every sample
+/// drawn, `out` those that do not conform, `hidden` those among them that the values do
+/// not show (with the reason), which leaves the indices undefined.
 fn capability(
     limits: SpecLimits,
-    mean: f64,
-    sd: f64,
+    m: &Moments,
     percentiles: &OrderedNumbers,
-    n: u64,
-    n_out: u64,
+    samples: u64,
+    out: u64,
+    hidden: Option<String>,
 ) -> CapabilityReport {
-    let moment = capability_from_moments(mean, sd, limits);
+    let (ppm, lower, upper) = out_of_spec_interval(out, samples, CONFIDENCE).to_ppm();
+    let mut report = CapabilityReport {
+        spec: SpecReport {
+            lower: limits.lower,
+            upper: limits.upper,
+        },
+        cp: None,
+        cpk: None,
+        cp_percentile: None,
+        cpk_percentile: None,
+        capability_note: None,
+        ppm_out: ppm,
+        ppm_out_ci95: [lower, upper],
+    };
+    if let Some(reason) = hidden {
+        report.capability_note = Some(format!(
+            "indices not given: {reason}; the indices of the remaining values would overstate the capability, ppm_out counts these samples"
+        ));
+        return report;
+    }
+    if m.n < 2 || m.sd().partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        report.capability_note =
+            Some("indices not given: the values do not spread (sd 0)".to_string());
+        return report;
+    }
+    let moment = capability_from_moments(m.mean, m.sd(), limits);
     let pct = capability_percentile_method(
         percentiles.get("0.135").unwrap_or(f64::NAN),
         percentiles.get("50").unwrap_or(f64::NAN),
         percentiles.get("99.865").unwrap_or(f64::NAN),
         limits,
     );
-    let (ppm, lower, upper) = out_of_spec_interval(n_out, n, CONFIDENCE).to_ppm();
-    CapabilityReport {
-        spec: SpecReport {
-            lower: limits.lower,
-            upper: limits.upper,
-        },
-        cp: moment.cp,
-        cpk: moment.cpk,
-        cp_percentile: pct.cp,
-        cpk_percentile: pct.cpk,
-        ppm_out: ppm,
-        ppm_out_ci95: [lower, upper],
+    report.cp = moment.cp;
+    report.cpk = moment.cpk;
+    report.cp_percentile = pct.cp;
+    report.cpk_percentile = pct.cpk;
+    if report.cpk_percentile.is_none() {
+        report.capability_note = Some(
+            "percentile-method indices not given: the percentiles do not spread on the side of a limit".to_string(),
+        );
     }
+    report
+}
+
+/// The samples of an output that do not conform although its values do not show it, as
+/// words for the capability note (none: the values tell the whole story).
+fn hidden_nonconforming(
+    acc: &OutputAccumulator,
+    info: &OutputInfo,
+    samples: u64,
+) -> Option<String> {
+    let share = |count: u64| {
+        format!(
+            "{} samples ({} %)",
+            group_thousands(count),
+            format_sig(100.0 * count as f64 / samples as f64)
+        )
+    };
+    let mut parts = Vec::new();
+    if acc.non_finite > 0 {
+        parts.push(format!("{} are not finite", share(acc.non_finite)));
+    }
+    if acc.excluded > 0 {
+        parts.push(format!("{} are excluded", share(acc.excluded)));
+    }
+    if acc.flagged_within_spec > 0 && !info.flagged_conform {
+        parts.push(format!(
+            "{} are flagged non-conforming within the limits",
+            share(acc.flagged_within_spec)
+        ));
+    }
+    (!parts.is_empty()).then(|| parts.join(", "))
 }
 
 impl RunReport {
@@ -287,6 +376,9 @@ impl RunReport {
                             histogram_of_standardised_sketch(sketch, *center, *scale, min, max);
                         (values, bounds, histogram)
                     }
+                    Distribution::Dropped => {
+                        unreachable!("a run for a report keeps every output's distribution")
+                    }
                     Distribution::Indicator => {
                         let zeros = m.n - acc.nonzero;
                         (
@@ -320,26 +412,43 @@ impl RunReport {
                 let indicator = info.kind == OutputKind::Indicator;
                 let events = indicator.then_some(acc.nonzero);
                 let interval = out_of_spec_interval(acc.nonzero, m.n, CONFIDENCE);
+                let samples = result.samples;
+                let defined = |x: f64| if m.n > 0 { x } else { f64::NAN };
                 OutputReport {
                     name: info.name.clone(),
                     unit: info.unit.clone(),
                     kind: if indicator { "indicator" } else { "continuous" },
                     n: m.n,
                     non_finite: acc.non_finite,
-                    mean: m.mean,
-                    sd: m.sd(),
-                    skewness: m.skewness(),
-                    excess_kurtosis: m.excess_kurtosis(),
+                    non_finite_fraction: acc.non_finite as f64 / samples as f64,
+                    first_non_finite_sample: acc.first_non_finite,
+                    condition: info.condition.map(|(k, effect)| {
+                        let (effect, count) = match effect {
+                            ConditionEffect::Excluded => ("excluded", acc.excluded),
+                            ConditionEffect::NonConforming => ("non-conforming", acc.flagged),
+                        };
+                        ConditionReport {
+                            indicator: scenario.outputs[k].name.clone(),
+                            effect,
+                            samples: count,
+                            fraction: count as f64 / samples as f64,
+                            flagged_conform: info.flagged_conform,
+                        }
+                    }),
+                    mean: defined(m.mean),
+                    sd: defined(m.sd()),
+                    skewness: defined(m.skewness()),
+                    excess_kurtosis: defined(m.excess_kurtosis()),
                     min,
                     max,
                     capability: info.spec.map(|limits| {
                         capability(
                             limits,
-                            m.mean,
-                            m.sd(),
+                            m,
                             &percentiles,
-                            m.n,
-                            acc.below_lower + acc.above_upper,
+                            samples,
+                            acc.out_of_spec(info.flagged_conform),
+                            hidden_nonconforming(acc, info, samples),
                         )
                     }),
                     percentiles,
@@ -442,41 +551,67 @@ impl RunReport {
             lines.push("capability against spec limits".to_string());
             for o in with_spec {
                 let c = o.capability.as_ref().expect("filtered");
-                let spec = match (c.spec.lower, c.spec.upper) {
+                let spec = match (c.spec.lower.map(Shown), c.spec.upper.map(Shown)) {
                     (Some(l), Some(u)) => format!("{l} ≤ x ≤ {u}"),
                     (Some(l), None) => format!("x ≥ {l}"),
                     (None, Some(u)) => format!("x ≤ {u}"),
                     (None, None) => String::new(),
                 };
-                let cp = c.cp.map(format_sig).unwrap_or_else(|| "n/a".into());
-                let cp_pct = c
-                    .cp_percentile
-                    .map(format_sig)
-                    .unwrap_or_else(|| "n/a".into());
+                let index = |x: Option<f64>| x.map(format_sig).unwrap_or_else(|| "n/a".into());
                 lines.push(format!(
-                    "  {} ({spec} {}): Cp {cp}  Cpk {}  | percentile method Cp {cp_pct}  Cpk {}  | out of spec {} ppm (95 % CI {} .. {})",
+                    "  {} ({spec} {}): Cp {}  Cpk {}  | percentile method Cp {}  Cpk {}  | out of spec {} ppm (95 % CI {} .. {})",
                     o.name,
                     o.unit,
-                    format_sig(c.cpk),
-                    format_sig(c.cpk_percentile),
+                    index(c.cp),
+                    index(c.cpk),
+                    index(c.cp_percentile),
+                    index(c.cpk_percentile),
                     format_sig(c.ppm_out),
                     format_sig(c.ppm_out_ci95[0]),
                     format_sig(c.ppm_out_ci95[1]),
                 ));
+                if let Some(note) = &c.capability_note {
+                    lines.push(format!("    {note}"));
+                }
             }
         }
-        let degenerate: Vec<&OutputReport> =
-            self.outputs.iter().filter(|o| o.non_finite > 0).collect();
-        for o in degenerate {
-            lines.push(format!(
-                "warning: {} samples of {} were not finite (degenerate geometry) and are left out of its statistics",
-                group_thousands(o.non_finite),
-                o.name
-            ));
+        for o in &self.outputs {
+            if o.non_finite > 0 {
+                lines.push(format!(
+                    "lost data: {} of {} samples ({} %) of {} are not finite (first at sample {}): kept out of its statistics, counted out of spec",
+                    group_thousands(o.non_finite),
+                    group_thousands(self.samples),
+                    format_sig(100.0 * o.non_finite_fraction),
+                    o.name,
+                    o.first_non_finite_sample.unwrap_or(0),
+                ));
+            }
+            if let Some(c) = o.condition.as_ref().filter(|c| c.samples > 0) {
+                let what = match (c.effect, c.flagged_conform) {
+                    ("excluded", _) => {
+                        "excluded (no value): kept out of its statistics, counted out of spec"
+                    }
+                    (_, false) => "flagged non-conforming: in its statistics, counted out of spec",
+                    (_, true) => {
+                        "flagged: in its statistics, conforming within the limits (flagged_conform)"
+                    }
+                };
+                lines.push(format!(
+                    "{}: {} samples ({} %) with {} set are {what}",
+                    o.name,
+                    group_thousands(c.samples),
+                    format_sig(100.0 * c.fraction),
+                    c.indicator,
+                ));
+            }
         }
         for o in self.outputs.iter().filter(|o| o.kind == "continuous") {
             lines.push(String::new());
             lines.push(format!("{} ({})", o.name, o.unit));
+            if o.n == 0 {
+                lines.push("  (no finite values)".to_string());
+                continue;
+            }
             let histogram = Histogram {
                 lower_edge: o.histogram.lower_edge,
                 bin_width: o.histogram.bin_width,
@@ -552,13 +687,16 @@ pub struct NominalOutput {
     pub name: String,
     /// Unit.
     pub unit: String,
-    /// Value.
-    pub value: f64,
+    /// Value; null when the output's indicator excludes the nominal sample.
+    pub value: Option<f64>,
+    /// The indicator that excludes the nominal sample, when one does.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub excluded_by: Option<String>,
 }
 
 impl NominalReport {
-    /// Builds the report from the nominal values.
-    pub fn new(scenario: &Scenario, values: &[f64]) -> NominalReport {
+    /// Builds the report from the nominal values ([`crate::run::nominal`]).
+    pub fn new(scenario: &Scenario, values: &[Option<f64>]) -> NominalReport {
         NominalReport {
             rvtol_version: env!("CARGO_PKG_VERSION"),
             scenario: scenario.name.clone(),
@@ -570,6 +708,10 @@ impl NominalReport {
                     name: o.name.clone(),
                     unit: o.unit.clone(),
                     value,
+                    excluded_by: match (value, o.condition) {
+                        (None, Some((k, _))) => Some(scenario.outputs[k].name.clone()),
+                        _ => None,
+                    },
                 })
                 .collect(),
         }
@@ -590,12 +732,12 @@ impl NominalReport {
             self.scenario
         );
         for o in &self.outputs {
-            text.push_str(&format!(
-                "{:<width$}  {:>12}  {}\n",
-                o.name,
-                format!("{:.6}", o.value),
-                o.unit
-            ));
+            let value = match (o.value, &o.excluded_by) {
+                (Some(v), _) => format!("{v:.6}"),
+                (None, Some(indicator)) => format!("excluded ({indicator})"),
+                (None, None) => "-".to_string(),
+            };
+            text.push_str(&format!("{:<width$}  {:>12}  {}\n", o.name, value, o.unit));
         }
         text
     }

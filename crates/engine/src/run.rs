@@ -15,13 +15,15 @@
 //! Per chunk, block of [`BLOCK_ROWS`] rows after block: draw the inputs as a column-major
 //! block, hand each model its input columns (constants pre-filled once) and evaluate it
 //! into the chunk's output columns; then fold each output column into the statistics.
-//! Non-finite outputs are counted per output and kept out of the statistics.
+//! Non-finite outputs are counted per output (with the first such sample) and kept out of
+//! the statistics; an output's qualifying indicator excludes samples or flags them
+//! non-conforming ([`OutputAccumulator`]).
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use rvtol_deviation::{ConstraintCounts, SamplerScratch};
-use rvtol_models::{Curve, OutputKind};
+use rvtol_models::{ConditionEffect, Curve, OutputKind};
 
 use crate::evaluate::ChunkEvaluator;
 use crate::scenario::{Scenario, ScenarioError};
@@ -82,23 +84,92 @@ pub enum Distribution {
     },
     /// Nothing kept: an indicator output, whose distribution is its event count.
     Indicator,
+    /// Nothing kept: the caller asked for this output's moments and counts only
+    /// ([`run_for_output`]).
+    Dropped,
 }
 
 /// The accumulated statistics of one output.
+///
+/// Every sample lands in exactly one of: a finite value (in the moments and the
+/// distribution), `non_finite` (the model could not evaluate it) or `excluded` (its
+/// [`ConditionEffect::Excluded`] indicator was set: the output has no value there). A
+/// sample conforms to the spec limits when its value is finite, within the limits and not
+/// flagged non-conforming; [`OutputAccumulator::out_of_spec`] counts the others.
 #[derive(Debug, Clone)]
 pub struct OutputAccumulator {
     /// Moments, min and max of the finite values.
     pub moments: Moments,
-    /// Samples whose value was NaN or infinite (kept out of every statistic).
+    /// Samples whose value was NaN or infinite although no condition excluded them: lost
+    /// data, kept out of the statistics, counted out of spec, reported and (beyond the
+    /// allowed share) failing the run.
     pub non_finite: u64,
-    /// Samples below the lower spec limit.
+    /// The first sample (index in the run) whose value was not finite, if any.
+    pub first_non_finite: Option<u64>,
+    /// Samples excluded by the output's indicator (an interfering profile): kept out of the
+    /// statistics, counted out of spec.
+    pub excluded: u64,
+    /// Samples flagged non-conforming by the output's indicator (a preloaded stage); their
+    /// values are in the statistics.
+    pub flagged: u64,
+    /// Flagged samples whose value lies within the spec limits: out of spec unless the
+    /// scenario lets flagged samples conform.
+    pub flagged_within_spec: u64,
+    /// Finite samples below the lower spec limit.
     pub below_lower: u64,
-    /// Samples above the upper spec limit.
+    /// Finite samples above the upper spec limit.
     pub above_upper: u64,
     /// Samples whose value was non-zero (the events of an indicator output).
     pub nonzero: u64,
     /// Values or sketch, for percentiles and the histogram.
     pub distribution: Distribution,
+}
+
+impl OutputAccumulator {
+    fn new(distribution: Distribution) -> OutputAccumulator {
+        OutputAccumulator {
+            moments: Moments::new(),
+            non_finite: 0,
+            first_non_finite: None,
+            excluded: 0,
+            flagged: 0,
+            flagged_within_spec: 0,
+            below_lower: 0,
+            above_upper: 0,
+            nonzero: 0,
+            distribution,
+        }
+    }
+
+    /// Samples that do not conform to the spec limits: outside them, not finite, excluded,
+    /// or flagged non-conforming within them (unless `flagged_conform`).
+    pub fn out_of_spec(&self, flagged_conform: bool) -> u64 {
+        self.below_lower
+            + self.above_upper
+            + self.non_finite
+            + self.excluded
+            + if flagged_conform {
+                0
+            } else {
+                self.flagged_within_spec
+            }
+    }
+
+    /// Adds another partial's counts and distribution (moments are merged separately, in
+    /// chunk order).
+    fn add_counts(&mut self, other: &OutputAccumulator) {
+        self.non_finite += other.non_finite;
+        self.first_non_finite = match (self.first_non_finite, other.first_non_finite) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        };
+        self.excluded += other.excluded;
+        self.flagged += other.flagged;
+        self.flagged_within_spec += other.flagged_within_spec;
+        self.below_lower += other.below_lower;
+        self.above_upper += other.above_upper;
+        self.nonzero += other.nonzero;
+    }
 }
 
 /// The result of a run, before it is turned into a report.
@@ -124,11 +195,8 @@ struct Partial<'a> {
     evaluator: ChunkEvaluator<'a>,
     finite: Vec<f64>,
     chunk_moments: Vec<(u64, Vec<Moments>)>,
-    non_finite: Vec<u64>,
-    below_lower: Vec<u64>,
-    above_upper: Vec<u64>,
-    nonzero: Vec<u64>,
-    distributions: Vec<Distribution>,
+    /// Counts and distributions per output (their moments stay per chunk until the merge).
+    outputs: Vec<OutputAccumulator>,
     constraint_counts: ConstraintCounts,
     error: Option<(u64, ScenarioError)>,
 }
@@ -139,8 +207,12 @@ struct Plan<'a> {
     exact: bool,
     limits: Vec<Option<SpecLimits>>,
     indicator: Vec<bool>,
+    /// Per output: its qualifying indicator output and what a set flag means.
+    conditions: Vec<Option<(usize, ConditionEffect)>>,
     /// (center, scale) of each output's sketch, from the pilot chunk.
     sketch_frames: Vec<(f64, f64)>,
+    /// The only output whose values are kept, when the caller needs one.
+    only_output: Option<usize>,
 }
 
 impl<'a> Plan<'a> {
@@ -152,28 +224,28 @@ impl<'a> Plan<'a> {
             evaluator: ChunkEvaluator::new(self.scenario),
             finite: Vec::with_capacity(CHUNK_SIZE),
             chunk_moments: Vec::new(),
-            non_finite: vec![0; n_out],
-            below_lower: vec![0; n_out],
-            above_upper: vec![0; n_out],
-            nonzero: vec![0; n_out],
-            distributions: (0..n_out)
-                .map(|o| {
-                    if self.indicator[o] {
-                        Distribution::Indicator
-                    } else if self.exact {
-                        Distribution::Values(Vec::new())
-                    } else {
-                        let (center, scale) = self.sketch_frames[o];
-                        Distribution::Sketch {
-                            sketch: QuantileSketch::new(SKETCH_RELATIVE_ACCURACY),
-                            center,
-                            scale,
-                        }
-                    }
-                })
+            outputs: (0..n_out)
+                .map(|o| OutputAccumulator::new(self.new_distribution(o)))
                 .collect(),
             constraint_counts: self.scenario.input_space.new_constraint_counts(),
             error: None,
+        }
+    }
+
+    fn new_distribution(&self, output: usize) -> Distribution {
+        if self.indicator[output] {
+            Distribution::Indicator
+        } else if self.only_output.is_some_and(|o| o != output) {
+            Distribution::Dropped
+        } else if self.exact {
+            Distribution::Values(Vec::new())
+        } else {
+            let (center, scale) = self.sketch_frames[output];
+            Distribution::Sketch {
+                sketch: QuantileSketch::new(SKETCH_RELATIVE_ACCURACY),
+                center,
+                scale,
+            }
         }
     }
 
@@ -248,47 +320,95 @@ impl<'a> Plan<'a> {
         let Some(m) = self.evaluate_chunk(partial, chunk) else {
             return;
         };
-        let mut moments = Vec::with_capacity(partial.evaluator.output_columns.len());
-        for (o, column) in partial.evaluator.output_columns.iter().enumerate() {
-            let mut values = &column[..m];
+        let first_sample = chunk * CHUNK_SIZE as u64;
+        let columns = &partial.evaluator.output_columns;
+        let mut moments = Vec::with_capacity(columns.len());
+        for (o, column) in columns.iter().enumerate() {
+            let values = &column[..m];
+            let acc = &mut partial.outputs[o];
             if self.indicator[o] {
                 // Events only: the moments follow from the counts at the end.
                 let finite = values.iter().filter(|v| v.is_finite()).count();
-                partial.non_finite[o] += (m - finite) as u64;
-                partial.nonzero[o] += values
+                note_non_finite(acc, values, m - finite, first_sample);
+                acc.nonzero += values
                     .iter()
                     .filter(|&&v| v.is_finite() && v != 0.0)
                     .count() as u64;
                 moments.push(Moments::new());
                 continue;
             }
-            if values.iter().any(|v| !v.is_finite()) {
-                partial.finite.clear();
-                partial
-                    .finite
-                    .extend(values.iter().copied().filter(|v| v.is_finite()));
-                partial.non_finite[o] += (m - partial.finite.len()) as u64;
-                values = &partial.finite;
-            }
-            moments.push(Moments::from_slice(values));
+            let flags = self.conditions[o].map(|(k, effect)| (&columns[k][..m], effect));
+            let kept: &[f64] = match flags {
+                Some((flags, ConditionEffect::Excluded)) => {
+                    // Flagged samples have no value; any other non-finite one is lost data.
+                    partial.finite.clear();
+                    let mut excluded = 0;
+                    for (&v, &flag) in values.iter().zip(flags) {
+                        if is_set(flag) {
+                            excluded += 1;
+                        } else if v.is_finite() {
+                            partial.finite.push(v);
+                        }
+                    }
+                    acc.excluded += excluded;
+                    let lost = m - excluded as usize - partial.finite.len();
+                    if lost > 0 {
+                        let unflagged_non_finite =
+                            values
+                                .iter()
+                                .zip(flags)
+                                .map(|(&v, &flag)| if is_set(flag) { 0.0 } else { v });
+                        note_first_non_finite(acc, unflagged_non_finite, lost, first_sample);
+                    }
+                    &partial.finite
+                }
+                _ => {
+                    let finite = values.iter().filter(|v| v.is_finite()).count();
+                    if finite < m {
+                        note_non_finite(acc, values, m - finite, first_sample);
+                        partial.finite.clear();
+                        partial
+                            .finite
+                            .extend(values.iter().copied().filter(|v| v.is_finite()));
+                        &partial.finite
+                    } else {
+                        values
+                    }
+                }
+            };
+            moments.push(Moments::from_slice(kept));
             if let Some(limits) = self.limits[o] {
-                if let Some(lower) = limits.lower {
-                    partial.below_lower[o] += values.iter().filter(|&&v| v < lower).count() as u64;
+                let below = |v: f64| limits.lower.is_some_and(|lower| v < lower);
+                let above = |v: f64| limits.upper.is_some_and(|upper| v > upper);
+                if limits.lower.is_some() {
+                    acc.below_lower += kept.iter().filter(|&&v| below(v)).count() as u64;
                 }
-                if let Some(upper) = limits.upper {
-                    partial.above_upper[o] += values.iter().filter(|&&v| v > upper).count() as u64;
+                if limits.upper.is_some() {
+                    acc.above_upper += kept.iter().filter(|&&v| above(v)).count() as u64;
+                }
+                if let Some((flags, ConditionEffect::NonConforming)) = flags {
+                    acc.flagged_within_spec += values
+                        .iter()
+                        .zip(flags)
+                        .filter(|&(&v, &flag)| {
+                            is_set(flag) && v.is_finite() && !below(v) && !above(v)
+                        })
+                        .count() as u64;
                 }
             }
-            match &mut partial.distributions[o] {
-                Distribution::Values(kept) => kept.extend_from_slice(values),
+            if let Some((flags, ConditionEffect::NonConforming)) = flags {
+                acc.flagged += flags.iter().filter(|&&flag| is_set(flag)).count() as u64;
+            }
+            match &mut acc.distribution {
+                Distribution::Values(all) => all.extend_from_slice(kept),
                 Distribution::Sketch {
                     sketch,
                     center,
                     scale,
                 } => {
-                    sketch.insert_standardised(values, *center, 1.0 / *scale);
+                    sketch.insert_standardised(kept, *center, 1.0 / *scale);
                 }
-                Distribution::Indicator => {}
+                Distribution::Indicator | Distribution::Dropped => {}
             }
         }
         partial.chunk_moments.push((chunk, moments));
@@ -302,11 +422,37 @@ pub fn run(
     settings: RunSettings,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<RunResult, ScenarioError> {
+    run_keeping(scenario, settings, None, progress)
+}
+
+/// [`run`] for a caller that needs the distribution of one output only (the allocation):
+/// the other outputs keep their moments and counts but no values or sketch
+/// ([`Distribution::Dropped`]), so memory grows with one output's values.
+pub fn run_for_output(
+    scenario: &Scenario,
+    settings: RunSettings,
+    output: usize,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<RunResult, ScenarioError> {
+    run_keeping(scenario, settings, Some(output), progress)
+}
+
+fn run_keeping(
+    scenario: &Scenario,
+    settings: RunSettings,
+    only_output: Option<usize>,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<RunResult, ScenarioError> {
     if settings.samples == 0 {
         return Err(ScenarioError::new("samples", "must be at least 1"));
     }
-    let n_out = scenario.outputs.len() as u64;
-    let exact = settings.samples.saturating_mul(n_out.max(1)) <= settings.exact_percentile_limit;
+    let kept_outputs = if only_output.is_some() {
+        1
+    } else {
+        scenario.outputs.len() as u64
+    };
+    let exact =
+        settings.samples.saturating_mul(kept_outputs.max(1)) <= settings.exact_percentile_limit;
     let mut plan = Plan {
         scenario,
         settings,
@@ -317,7 +463,9 @@ pub fn run(
             .iter()
             .map(|o| o.kind == OutputKind::Indicator)
             .collect(),
+        conditions: scenario.outputs.iter().map(|o| o.condition).collect(),
         sketch_frames: vec![(0.0, 1.0); scenario.outputs.len()],
+        only_output,
     };
     if !exact {
         plan.sketch_frames = plan.pilot_sketch_frames()?;
@@ -334,18 +482,8 @@ pub fn run(
             }
         },
         constraint_counts: scenario.input_space.new_constraint_counts(),
-        outputs: plan
-            .partial()
-            .distributions
-            .into_iter()
-            .map(|distribution| OutputAccumulator {
-                moments: Moments::new(),
-                non_finite: 0,
-                below_lower: 0,
-                above_upper: 0,
-                nonzero: 0,
-                distribution,
-            })
+        outputs: (0..scenario.outputs.len())
+            .map(|o| OutputAccumulator::new(plan.new_distribution(o)))
             .collect(),
     };
     if exact {
@@ -402,17 +540,14 @@ fn merge_wave(result: &mut RunResult, partials: Vec<Partial>) -> Result<(), Scen
     for partial in partials {
         result.constraint_counts.add(&partial.constraint_counts);
         chunk_moments.extend(partial.chunk_moments);
-        for (o, distribution) in partial.distributions.into_iter().enumerate() {
-            let output = &mut result.outputs[o];
-            output.non_finite += partial.non_finite[o];
-            output.below_lower += partial.below_lower[o];
-            output.above_upper += partial.above_upper[o];
-            output.nonzero += partial.nonzero[o];
-            match (&mut output.distribution, distribution) {
+        for (output, part) in result.outputs.iter_mut().zip(partial.outputs) {
+            output.add_counts(&part);
+            match (&mut output.distribution, part.distribution) {
                 (Distribution::Values(all), Distribution::Values(part)) => {
                     all.extend_from_slice(&part)
                 }
-                (Distribution::Indicator, Distribution::Indicator) => {}
+                (Distribution::Indicator, Distribution::Indicator)
+                | (Distribution::Dropped, Distribution::Dropped) => {}
                 (
                     Distribution::Sketch { sketch: all, .. },
                     Distribution::Sketch { sketch: part, .. },
@@ -430,6 +565,37 @@ fn merge_wave(result: &mut RunResult, partials: Vec<Partial>) -> Result<(), Scen
         }
     }
     Ok(())
+}
+
+/// Whether an indicator value flags its sample: finite and non-zero.
+#[inline]
+fn is_set(flag: f64) -> bool {
+    flag.is_finite() && flag != 0.0
+}
+
+/// Counts `count` non-finite values among `values` and records the first one's sample.
+fn note_non_finite(acc: &mut OutputAccumulator, values: &[f64], count: usize, first: u64) {
+    if count > 0 {
+        note_first_non_finite(acc, values.iter().copied(), count, first);
+    }
+}
+
+/// Adds `count` lost samples; the first non-finite value of `values` (sample `first` + its
+/// position) becomes the output's first non-finite sample if it is earlier.
+fn note_first_non_finite(
+    acc: &mut OutputAccumulator,
+    mut values: impl Iterator<Item = f64>,
+    count: usize,
+    first: u64,
+) {
+    acc.non_finite += count as u64;
+    let position = values
+        .position(|v| !v.is_finite())
+        .map(|p| first + p as u64);
+    acc.first_non_finite = match (acc.first_non_finite, position) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
+    };
 }
 
 /// Moments of a 0/1 sample with `events` ones among `n` values, in closed form.
@@ -452,8 +618,52 @@ fn indicator_moments(events: u64, n: u64) -> Moments {
     }
 }
 
-/// Evaluates every model at the mean row of the input space (the nominal design).
-pub fn nominal(scenario: &Scenario) -> Vec<f64> {
+/// The JSON path and name of the model that produces output `output`: `models[i] (name)`.
+pub fn model_of_output(scenario: &Scenario, output: usize) -> String {
+    scenario
+        .models
+        .iter()
+        .enumerate()
+        .find(|(_, bound)| {
+            (bound.first_output..bound.first_output + bound.model.outputs().len()).contains(&output)
+        })
+        .map(|(i, bound)| format!("models[{i}] ({})", bound.model.name()))
+        .unwrap_or_else(|| "models".to_string())
+}
+
+/// Checks that no output lost more than `max_share` of its samples to non-finite values
+/// (the model could not evaluate them): the first output that did is an error naming its
+/// model's JSON path, the count, the share and the first such sample.
+pub fn check_non_finite(
+    scenario: &Scenario,
+    result: &RunResult,
+    max_share: f64,
+) -> Result<(), ScenarioError> {
+    for (o, acc) in result.outputs.iter().enumerate() {
+        let share = acc.non_finite as f64 / result.samples as f64;
+        if acc.non_finite > 0 && share > max_share {
+            return Err(ScenarioError::new(
+                model_of_output(scenario, o),
+                format!(
+                    "{} is not finite for {} of {} samples ({} %, first at sample {}), more than the allowed {} %: the model cannot evaluate the inputs the scenario draws there; narrow the distributions to the model's domain, or accept a share with --max-non-finite",
+                    scenario.outputs[o].name,
+                    crate::report::group_thousands(acc.non_finite),
+                    crate::report::group_thousands(result.samples),
+                    crate::report::format_sig(100.0 * share),
+                    acc.first_non_finite.unwrap_or(0),
+                    rvtol_deviation::Shown(100.0 * max_share),
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The value of each output with every deviation at its mean (the nominal design):
+/// `None` where the output's qualifying indicator excludes the nominal sample (an
+/// interfering nominal profile). Any other non-finite value is an error naming the model
+/// and the output: a nominal design the model cannot evaluate.
+pub fn nominal(scenario: &Scenario) -> Result<Vec<Option<f64>>, ScenarioError> {
     let row = scenario.input_space.mean_row();
     let mut values = vec![0.0; scenario.outputs.len()];
     for bound in &scenario.models {
@@ -464,22 +674,63 @@ pub fn nominal(scenario: &Scenario) -> Vec<f64> {
             &mut values[bound.first_output..bound.first_output + n_out],
         );
     }
-    values
+    let excluded = |o: usize| match scenario.outputs[o].condition {
+        Some((k, ConditionEffect::Excluded)) => is_set(values[k]),
+        _ => false,
+    };
+    (0..values.len())
+        .map(|o| {
+            if excluded(o) {
+                Ok(None)
+            } else if values[o].is_finite() {
+                Ok(Some(values[o]))
+            } else {
+                Err(ScenarioError::new(
+                    model_of_output(scenario, o),
+                    format!(
+                        "{} is {} at the nominal point (every deviation at its mean): the model cannot evaluate the scenario's nominal design",
+                        scenario.outputs[o].name,
+                        rvtol_deviation::Shown(values[o])
+                    ),
+                ))
+            }
+        })
+        .collect()
 }
 
 /// The curves of every model that draws any (`rvtol curve`), with every deviation at its
-/// mean: (model name, its curves) in scenario order.
-pub fn nominal_curves(scenario: &Scenario) -> Vec<(&'static str, Vec<Curve>)> {
+/// mean: (model name, its curves) in scenario order. A curve with a non-finite point is an
+/// error naming the model and the curve.
+pub fn nominal_curves(
+    scenario: &Scenario,
+) -> Result<Vec<(&'static str, Vec<Curve>)>, ScenarioError> {
     let row = scenario.input_space.mean_row();
-    scenario
-        .models
-        .iter()
-        .map(|bound| {
-            (
-                bound.model.name(),
-                bound.model.curves(&bound.inputs_of_row(&row)),
-            )
-        })
-        .filter(|(_, curves)| !curves.is_empty())
-        .collect()
+    let mut drawn = Vec::new();
+    for (i, bound) in scenario.models.iter().enumerate() {
+        let curves = bound.model.curves(&bound.inputs_of_row(&row));
+        for curve in &curves {
+            for series in &curve.series {
+                if let Some(&(x, y)) = series
+                    .points
+                    .iter()
+                    .find(|(x, y)| !(x.is_finite() && y.is_finite()))
+                {
+                    return Err(ScenarioError::new(
+                        format!("models[{i}] ({})", bound.model.name()),
+                        format!(
+                            "curve {} ({}) has a point that is not finite ({}, {}) at the nominal point: the model cannot evaluate the scenario's nominal design",
+                            curve.name,
+                            series.label,
+                            rvtol_deviation::Shown(x),
+                            rvtol_deviation::Shown(y)
+                        ),
+                    ));
+                }
+            }
+        }
+        if !curves.is_empty() {
+            drawn.push((bound.model.name(), curves));
+        }
+    }
+    Ok(drawn)
 }

@@ -17,7 +17,10 @@
 //! and f(B). N·(2G + 2) model evaluations. Sobol' indices need independent inputs, so the groups are
 //! the error sources (a part's six correlated components form one group) merged wherever
 //! the scenario correlates two of them. Intervals: percentile bootstrap over the N rows
-//! (Archer, Saltelli & Sobol' 1997), resample b drawn from its own stream.
+//! (Archer, Saltelli & Sobol' 1997), resample b drawn from its own stream, while the
+//! N·(2G + 2) values per output fit the row-bootstrap limit; beyond it, a bootstrap over
+//! blocks of consecutive rows whose sums alone are kept (bounded memory at any N; see
+//! [`BootstrapMethod`]).
 //!
 //! Reproducibility: chunk k of A and B draws from `ChaCha8Rng::seed_from_u64(seed)` with
 //! streams 2k and 2k + 1; chunks are collected in order and every sum runs sequentially,
@@ -34,6 +37,13 @@ use crate::scenario::{InputGroup, Scenario, ScenarioError};
 /// First bootstrap stream (far above the 2k, 2k + 1 streams of the sample matrices).
 const BOOTSTRAP_STREAM_BASE: u64 = 1 << 62;
 
+/// Default most model values (N·(2G + 2) per continuous output) kept for the row
+/// bootstrap (800 MB); beyond it the intervals come from the block bootstrap.
+pub const DEFAULT_ROW_BOOTSTRAP_LIMIT: u64 = 100_000_000;
+/// Most blocks of the block bootstrap: the block length is the smallest power of two of at
+/// least 64 rows that keeps their number at or below this (and at most a chunk).
+const MAX_BOOTSTRAP_BLOCKS: u64 = 65_536;
+
 /// What to compute.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SensitivitySettings {
@@ -45,6 +55,45 @@ pub struct SensitivitySettings {
     pub bootstrap: usize,
     /// Confidence of the intervals (0.95).
     pub confidence: f64,
+    /// Most model values kept for the row bootstrap; beyond, the block bootstrap
+    /// ([`BootstrapMethod`]).
+    pub row_bootstrap_limit: u64,
+}
+
+/// How the intervals are resampled.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BootstrapMethod {
+    /// Every model value is kept and the bootstrap resamples rows (the estimator's own
+    /// sampling unit); values centred on the mean of f(A), f(B).
+    Rows,
+    /// Only the estimator's sums over blocks of consecutive rows are kept (memory grows
+    /// with the number of blocks, not of rows) and the bootstrap resamples blocks: the rows
+    /// are independent, so block sums are independent and identically distributed (the
+    /// last block may be shorter) and their resampled totals give the percentile interval
+    /// of the ratio estimators. Values centred on the mean of f(A), f(B) over chunk 0.
+    Blocks {
+        /// Rows per block.
+        rows: u64,
+    },
+}
+
+impl SensitivitySettings {
+    /// The bootstrap a run of `scenario` with these settings uses.
+    pub fn bootstrap_method(&self, scenario: &Scenario) -> BootstrapMethod {
+        let variants = 2 * independent_groups(scenario).len() as u64 + 2;
+        let values = self
+            .base_samples
+            .saturating_mul(variants)
+            .saturating_mul(scenario.continuous_outputs().len() as u64);
+        if values <= self.row_bootstrap_limit {
+            BootstrapMethod::Rows
+        } else {
+            let wanted = self.base_samples.div_ceil(MAX_BOOTSTRAP_BLOCKS);
+            BootstrapMethod::Blocks {
+                rows: wanted.next_power_of_two().clamp(64, CHUNK_SIZE as u64),
+            }
+        }
+    }
 }
 
 /// An estimate with its confidence interval.
@@ -227,6 +276,232 @@ fn indices(
     )
 }
 
+/// The estimator's sums over a set of rows, for one output: enough to give the indices
+/// ([`BlockSums::indices`]) and to be added block by block.
+#[derive(Debug, Clone, PartialEq)]
+struct BlockSums {
+    rows: u64,
+    sum: f64,
+    sum_squares: f64,
+    /// Σ f(B)·(f(A_B) − f(A)) + f(A)·(f(B_A) − f(B)) per group.
+    first: Vec<f64>,
+    /// Σ (f(A) − f(A_B))² + (f(B) − f(B_A))² per group.
+    total: Vec<f64>,
+}
+
+impl BlockSums {
+    fn new(n_groups: usize) -> BlockSums {
+        BlockSums {
+            rows: 0,
+            sum: 0.0,
+            sum_squares: 0.0,
+            first: vec![0.0; n_groups],
+            total: vec![0.0; n_groups],
+        }
+    }
+
+    fn add(&mut self, other: &BlockSums) {
+        self.rows += other.rows;
+        self.sum += other.sum;
+        self.sum_squares += other.sum_squares;
+        for (a, b) in self.first.iter_mut().zip(&other.first) {
+            *a += b;
+        }
+        for (a, b) in self.total.iter_mut().zip(&other.total) {
+            *a += b;
+        }
+    }
+
+    /// Adds row `r` of `f[variant][row]` (values centred on `centre`) when all its values
+    /// are finite; returns whether it did.
+    fn add_row(&mut self, f: &[Vec<f64>], r: usize, centre: f64) -> bool {
+        if !f.iter().all(|v| v[r].is_finite()) {
+            return false;
+        }
+        let n_groups = self.first.len();
+        let (fa, fb) = (f[0][r] - centre, f[1][r] - centre);
+        self.rows += 1;
+        self.sum += fa + fb;
+        self.sum_squares += fa * fa + fb * fb;
+        for g in 0..n_groups {
+            let fab = f[2 + g][r] - centre;
+            let fba = f[2 + n_groups + g][r] - centre;
+            self.first[g] += fb * (fab - fa) + fa * (fba - fb);
+            self.total[g] += (fa - fab) * (fa - fab) + (fb - fba) * (fb - fba);
+        }
+        true
+    }
+
+    /// (variance, first-order indices, total indices), as [`indices`] computes them.
+    fn indices(&self) -> (f64, Vec<f64>, Vec<f64>) {
+        let nf = self.rows as f64;
+        let mean = self.sum / (2.0 * nf);
+        let variance =
+            (self.sum_squares / (2.0 * nf) - mean * mean) * (2.0 * nf) / (2.0 * nf - 1.0);
+        (
+            variance,
+            self.first
+                .iter()
+                .map(|s| s / (2.0 * nf) / variance)
+                .collect(),
+            self.total
+                .iter()
+                .map(|s| s / (4.0 * nf) / variance)
+                .collect(),
+        )
+    }
+}
+
+/// The block bootstrap ([`BootstrapMethod::Blocks`]): per chunk, per output, the sums of
+/// each block of `block_rows` rows; then the indices from the totals and the intervals from
+/// resampled blocks.
+fn sobol_indices_by_blocks(
+    scenario: &Scenario,
+    groups: &[InputGroup],
+    continuous: &[usize],
+    settings: SensitivitySettings,
+    block_rows: u64,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<Vec<OutputSensitivity>, ScenarioError> {
+    let n_groups = groups.len();
+    // Centres from chunk 0, which every run draws identically.
+    let pilot = evaluate_chunk(scenario, groups, continuous, settings, 0)?;
+    let centres: Vec<f64> = pilot
+        .iter()
+        .map(|f| {
+            let finite: Vec<f64> = f[0]
+                .iter()
+                .chain(&f[1])
+                .copied()
+                .filter(|v| v.is_finite())
+                .collect();
+            if finite.is_empty() {
+                0.0
+            } else {
+                crate::stats::Moments::from_slice(&finite).mean
+            }
+        })
+        .collect();
+    drop(pilot);
+    let n_chunks = settings.base_samples.div_ceil(CHUNK_SIZE as u64);
+    // blocks[chunk][output] = the sums of the chunk's blocks, and its non-finite rows.
+    type ChunkBlocks = Vec<(Vec<BlockSums>, u64)>;
+    let chunks: Vec<ChunkBlocks> = (0..n_chunks)
+        .into_par_iter()
+        .map(|chunk| {
+            let values = evaluate_chunk(scenario, groups, continuous, settings, chunk)?;
+            progress(CHUNK_SIZE as u64);
+            Ok(values
+                .iter()
+                .zip(&centres)
+                .map(|(f, &centre)| {
+                    let m = f[0].len();
+                    let mut dropped = 0;
+                    let blocks = (0..m)
+                        .step_by(block_rows as usize)
+                        .map(|first| {
+                            let mut sums = BlockSums::new(n_groups);
+                            for r in first..(first + block_rows as usize).min(m) {
+                                dropped += u64::from(!sums.add_row(f, r, centre));
+                            }
+                            sums
+                        })
+                        .collect();
+                    (blocks, dropped)
+                })
+                .collect())
+        })
+        .collect::<Result<_, ScenarioError>>()?;
+    let mut results = Vec::with_capacity(continuous.len());
+    for (slot, &o) in continuous.iter().enumerate() {
+        let blocks: Vec<&BlockSums> = chunks
+            .iter()
+            .flat_map(|chunk| chunk[slot].0.iter())
+            .filter(|b| b.rows > 0)
+            .collect();
+        let non_finite_rows: u64 = chunks.iter().map(|chunk| chunk[slot].1).sum();
+        let mut all = BlockSums::new(n_groups);
+        for block in &blocks {
+            all.add(block);
+        }
+        if all.rows < 2 || blocks.len() < 2 {
+            return Err(ScenarioError::new(
+                format!("(output {})", scenario.outputs[o].name),
+                "fewer than 2 finite rows: the sensitivity is undefined",
+            ));
+        }
+        let (variance, first, total) = all.indices();
+        let resamples: Vec<(Vec<f64>, Vec<f64>)> = (0..settings.bootstrap)
+            .into_par_iter()
+            .map(|b| {
+                let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
+                rng.set_stream(BOOTSTRAP_STREAM_BASE + b as u64);
+                let mut sums = BlockSums::new(n_groups);
+                for _ in 0..blocks.len() {
+                    sums.add(blocks[rng.random_range(0..blocks.len())]);
+                }
+                let (_, first, total) = sums.indices();
+                (first, total)
+            })
+            .collect();
+        results.push(output_sensitivity(
+            scenario,
+            o,
+            groups,
+            settings,
+            variance,
+            non_finite_rows,
+            (first, total),
+            resamples,
+        ));
+    }
+    Ok(results)
+}
+
+/// The indices of output `o` with their percentile intervals, groups sorted by decreasing
+/// total index.
+#[allow(clippy::too_many_arguments)]
+fn output_sensitivity(
+    scenario: &Scenario,
+    o: usize,
+    groups: &[InputGroup],
+    settings: SensitivitySettings,
+    variance: f64,
+    non_finite_rows: u64,
+    (first, total): (Vec<f64>, Vec<f64>),
+    resamples: Vec<(Vec<f64>, Vec<f64>)>,
+) -> OutputSensitivity {
+    let mut group_indices: Vec<GroupIndices> = groups
+        .iter()
+        .enumerate()
+        .map(|(g, group)| GroupIndices {
+            group: group.name.clone(),
+            first_order: Estimate {
+                value: first[g],
+                interval: percentile_interval(
+                    resamples.iter().map(|r| r.0[g]).collect(),
+                    settings.confidence,
+                ),
+            },
+            total: Estimate {
+                value: total[g],
+                interval: percentile_interval(
+                    resamples.iter().map(|r| r.1[g]).collect(),
+                    settings.confidence,
+                ),
+            },
+        })
+        .collect();
+    group_indices.sort_by(|a, b| b.total.value.total_cmp(&a.total.value));
+    OutputSensitivity {
+        name: scenario.outputs[o].name.clone(),
+        unit: scenario.outputs[o].unit.clone(),
+        variance,
+        non_finite_rows,
+        indices: group_indices,
+    }
+}
+
 fn percentile_interval(mut values: Vec<f64>, confidence: f64) -> [f64; 2] {
     let tail = 50.0 * (1.0 - confidence);
     let ends = crate::stats::percentiles_type7(&mut values, &[tail, 100.0 - tail]);
@@ -259,6 +534,9 @@ pub fn sobol_indices(
         ));
     }
     let continuous = scenario.continuous_outputs();
+    if let BootstrapMethod::Blocks { rows } = settings.bootstrap_method(scenario) {
+        return sobol_indices_by_blocks(scenario, &groups, &continuous, settings, rows, progress);
+    }
     let n_chunks = settings.base_samples.div_ceil(CHUNK_SIZE as u64);
     let chunks: Vec<ChunkValues> = (0..n_chunks as usize)
         .into_par_iter()
@@ -318,35 +596,16 @@ pub fn sobol_indices(
                 indices(&f, &mut picks, groups.len())
             })
             .collect();
-        let mut group_indices: Vec<GroupIndices> = groups
-            .iter()
-            .enumerate()
-            .map(|(g, group)| GroupIndices {
-                group: group.name.clone(),
-                first_order: Estimate {
-                    value: first[g],
-                    interval: percentile_interval(
-                        resamples.iter().map(|r| r.0[g]).collect(),
-                        settings.confidence,
-                    ),
-                },
-                total: Estimate {
-                    value: total[g],
-                    interval: percentile_interval(
-                        resamples.iter().map(|r| r.1[g]).collect(),
-                        settings.confidence,
-                    ),
-                },
-            })
-            .collect();
-        group_indices.sort_by(|a, b| b.total.value.total_cmp(&a.total.value));
-        results.push(OutputSensitivity {
-            name: scenario.outputs[o].name.clone(),
-            unit: scenario.outputs[o].unit.clone(),
+        results.push(output_sensitivity(
+            scenario,
+            o,
+            &groups,
+            settings,
             variance,
             non_finite_rows,
-            indices: group_indices,
-        });
+            (first, total),
+            resamples,
+        ));
     }
     Ok(results)
 }

@@ -8,7 +8,7 @@ use serde::Serialize;
 
 use crate::report::format_sig;
 use crate::scenario::Scenario;
-use crate::sensitivity::{OutputSensitivity, SensitivitySettings};
+use crate::sensitivity::{BootstrapMethod, OutputSensitivity, SensitivitySettings};
 
 /// One input group's indices.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -100,6 +100,12 @@ pub struct SensitivityReport {
     pub confidence: f64,
     /// Estimators, in words.
     pub method: &'static str,
+    /// How the intervals were resampled: `rows`, or `blocks` of `bootstrap_block_rows`
+    /// consecutive rows (bounded memory beyond the row-bootstrap limit).
+    pub bootstrap_unit: &'static str,
+    /// Rows per resampled block, for `blocks`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bootstrap_block_rows: Option<u64>,
     /// One entry per continuous output.
     pub outputs: Vec<OutputSensitivityReport>,
 }
@@ -112,6 +118,10 @@ impl SensitivityReport {
         outputs: Vec<OutputSensitivity>,
     ) -> Self {
         let groups = outputs.first().map_or(0, |o| o.indices.len()) as u64;
+        let (bootstrap_unit, bootstrap_block_rows) = match settings.bootstrap_method(scenario) {
+            BootstrapMethod::Rows => ("rows", None),
+            BootstrapMethod::Blocks { rows } => ("blocks", Some(rows)),
+        };
         SensitivityReport {
             rvtol_version: env!("CARGO_PKG_VERSION"),
             scenario: scenario.name.clone(),
@@ -121,6 +131,8 @@ impl SensitivityReport {
             bootstrap: settings.bootstrap,
             confidence: settings.confidence,
             method: "Sobol' indices of independent input groups: first order by Saltelli et al. (2010), total by Jansen (1999), each averaged over the A_B and B_A designs; percentile bootstrap intervals over the base samples",
+            bootstrap_unit,
+            bootstrap_block_rows,
             outputs: outputs
                 .into_iter()
                 .map(|o| OutputSensitivityReport {
@@ -212,13 +224,17 @@ impl SensitivityReport {
     /// One ranking table per output.
     pub fn to_text(&self) -> String {
         let mut lines = vec![format!(
-            "rvtol {} | scenario {} | sensitivity: {} base samples ({} model evaluations) | seed {} | {} bootstrap resamples, {:.0} % intervals",
+            "rvtol {} | scenario {} | sensitivity: {} base samples ({} model evaluations) | seed {} | {} bootstrap resamples{}, {:.0} % intervals",
             self.rvtol_version,
             self.scenario,
             self.base_samples,
             self.evaluations,
             self.seed,
             self.bootstrap,
+            match self.bootstrap_block_rows {
+                Some(rows) => format!(" of blocks of {rows} rows"),
+                None => String::new(),
+            },
             100.0 * self.confidence
         )];
         let interval = |ci: [f64; 2]| format!("[{}, {}]", format_sig(ci[0]), format_sig(ci[1]));

@@ -28,7 +28,7 @@ pub mod spec;
 use rvtol_models::OutputKind;
 use serde_json::Value;
 
-use crate::run::{run, Distribution, RunSettings};
+use crate::run::{run_for_output, Distribution, RunSettings};
 use crate::scenario::{Scenario, ScenarioError};
 use crate::stats::{
     capability_from_moments, order_statistic_interval, out_of_spec_interval,
@@ -173,6 +173,8 @@ struct Problem<'a> {
     output_name: &'a str,
     target: Target,
     limits: Option<SpecLimits>,
+    /// Whether flagged samples within the limits conform (the output's spec setting).
+    flagged_conform: bool,
     samples: u64,
     /// Factor bounds per source: [min/t, max/t].
     bounds: Vec<(f64, f64)>,
@@ -284,6 +286,7 @@ pub fn allocate(
         output_name: output,
         target,
         limits,
+        flagged_conform: info.flagged_conform,
         samples: settings.samples,
         bounds: scenario
             .allocation
@@ -477,18 +480,21 @@ impl Problem<'_> {
         verification: bool,
     ) -> Result<Point, ScenarioError> {
         let scenario = self.scenario(factors)?;
-        let mut result = run(
+        let mut result = run_for_output(
             &scenario,
             RunSettings {
                 samples: self.samples,
                 seed,
                 exact_percentile_limit: u64::MAX,
             },
+            self.output,
             &|_| {},
         )?;
         self.evaluations.set(self.evaluations.get() + 1);
         (self.progress)(self.evaluations.get());
         let accumulator = result.outputs.swap_remove(self.output);
+        let out = accumulator.out_of_spec(self.flagged_conform);
+        let hidden_out = out - accumulator.below_lower - accumulator.above_upper;
         let Distribution::Values(mut values) = accumulator.distribution else {
             unreachable!("allocation runs keep every value");
         };
@@ -498,7 +504,11 @@ impl Problem<'_> {
             &values,
             &accumulator.moments,
             self.limits,
-            verification.then_some(accumulator.below_lower + accumulator.above_upper),
+            OutOfSpec {
+                samples: self.samples,
+                hidden: hidden_out,
+                counted: verification.then_some(out),
+            },
         );
         let evaluation = evaluation.ok_or_else(|| {
             ScenarioError::new(
@@ -778,12 +788,25 @@ pub fn proposal_document(
 /// The target figure of a sorted sample, its standard error and 95 % interval.
 /// `counted_out`: the number of samples out of spec, for a verification run's ppm (the
 /// optimisation uses the continuous interpolated version instead).
+/// What a run says about the samples out of spec, for [`evaluate_figure`].
+#[derive(Debug, Clone, Copy)]
+struct OutOfSpec {
+    /// Samples drawn.
+    samples: u64,
+    /// Samples that do not conform although their values do not show it (not finite,
+    /// excluded, flagged within the limits).
+    hidden: u64,
+    /// The counted samples out of spec, for the verification; the optimisation uses the
+    /// interpolated count instead.
+    counted: Option<u64>,
+}
+
 fn evaluate_figure(
     figure: TargetFigure,
     sorted: &[f64],
     moments: &Moments,
     limits: Option<SpecLimits>,
-    counted_out: Option<u64>,
+    out_of_spec: OutOfSpec,
 ) -> Option<Evaluation> {
     let (mean, sd) = (moments.mean, moments.sd());
     let (excess_kurtosis, skewness) = (moments.excess_kurtosis(), moments.skewness());
@@ -813,7 +836,7 @@ fn evaluate_figure(
         }
         TargetFigure::Cpk => {
             let limits = limits?;
-            let cpk = capability_from_moments(mean, sd, limits).cpk;
+            let cpk = capability_from_moments(mean, sd, limits).cpk?;
             // Delta method on Cpk = ±(limit − mean)/(3σ), with Var(mean) = σ²/n,
             // Var(s) = σ²(κ + 2)/(4n) and Cov(mean, s) = γ1·σ²/(2n):
             // Var = 1/(9n) + Cpk²(κ + 2)/(4n) ± Cpk·γ1/(3n), + on the upper side. For a
@@ -831,20 +854,23 @@ fn evaluate_figure(
         }
         TargetFigure::PpmOut => {
             let limits = limits?;
-            let fraction = match counted_out {
-                Some(out) => out as f64 / nf,
+            // Among every sample drawn: the finite values out of the limits, plus the
+            // samples that do not conform although their values do not show it.
+            let samples = out_of_spec.samples;
+            let fraction = match out_of_spec.counted {
+                Some(out) => out as f64 / samples as f64,
                 None => {
                     let below = limits.lower.map_or(0.0, |l| interpolated_cdf(sorted, l));
                     let above = limits
                         .upper
                         .map_or(0.0, |u| 1.0 - interpolated_cdf(sorted, u));
-                    below + above
+                    ((below + above) * nf + out_of_spec.hidden as f64) / samples as f64
                 }
             };
-            let se = 1e6 * proportion_standard_error(fraction, n as u64);
-            let interval = match counted_out {
+            let se = 1e6 * proportion_standard_error(fraction, samples);
+            let interval = match out_of_spec.counted {
                 Some(out) => {
-                    let e = out_of_spec_interval(out, n as u64, 0.95);
+                    let e = out_of_spec_interval(out, samples, 0.95);
                     (e.lower * 1e6, e.upper * 1e6)
                 }
                 None => (

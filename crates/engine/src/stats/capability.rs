@@ -19,10 +19,9 @@
 //!   10^9, and its `beta_reg` stops after 140 terms, which is inaccurate
 //!   when both shapes are large; sample counts here reach 10^9.)
 //!
-//! A zero-width spread (σ = 0 or coinciding percentiles) never gives NaN: an
-//! index is +inf when the centre is strictly inside the limit, −inf when it
-//! is strictly outside and 0 when it is exactly on the limit (the value of
-//! the index for any positive spread).
+//! An index needs a positive, finite spread: with σ = 0 (or coinciding percentiles) the
+//! ratio has no meaningful value, so the index is `None` (reported as n/a with the
+//! reason), never ±inf or NaN. A Cp needs both limits, a Cpk at least one.
 
 use statrs::function::gamma::ln_gamma;
 
@@ -35,15 +34,14 @@ pub struct SpecLimits {
     pub upper: Option<f64>,
 }
 
-/// Capability indices.
+/// Capability indices; `None` where an index is undefined (module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MomentCapability {
-    /// Cp, only when both limits are set.
+    /// Cp, only when both limits are set and the spread is positive.
     pub cp: Option<f64>,
-    /// Cpk: the minimum of Cpu and Cpl over the limits that are set
-    /// (Cpu or Cpl alone for a one-sided specification; +inf when no limit
-    /// is set, since nothing can be out of specification).
-    pub cpk: f64,
+    /// Cpk: the minimum of Cpu and Cpl over the limits that are set (Cpu or Cpl alone for
+    /// a one-sided specification), when at least one is set and the spread is positive.
+    pub cpk: Option<f64>,
 }
 
 /// Estimated fraction with an exact confidence interval.
@@ -64,18 +62,11 @@ impl ProportionEstimate {
     }
 }
 
-/// `numerator / denominator`, with a zero (or negative, or NaN) denominator
-/// mapped to +inf / −inf / 0 by the sign of the numerator (module docs).
-fn index_ratio(numerator: f64, denominator: f64) -> f64 {
-    if denominator > 0.0 {
-        numerator / denominator
-    } else if numerator > 0.0 {
-        f64::INFINITY
-    } else if numerator < 0.0 {
-        f64::NEG_INFINITY
-    } else {
-        0.0
-    }
+/// `numerator / denominator` when the denominator (a spread) is positive and the ratio
+/// finite; `None` otherwise (module docs).
+fn index_ratio(numerator: f64, denominator: f64) -> Option<f64> {
+    let ratio = numerator / denominator;
+    (denominator > 0.0 && ratio.is_finite()).then_some(ratio)
 }
 
 /// Shared Cp / Cpk assembly: `upper_side(U)` and `lower_side(L)` give Cpu and
@@ -83,19 +74,22 @@ fn index_ratio(numerator: f64, denominator: f64) -> f64 {
 fn assemble(
     limits: SpecLimits,
     spread: f64,
-    upper_side: impl Fn(f64) -> f64,
-    lower_side: impl Fn(f64) -> f64,
+    upper_side: impl Fn(f64) -> Option<f64>,
+    lower_side: impl Fn(f64) -> Option<f64>,
 ) -> MomentCapability {
     let cp = match (limits.lower, limits.upper) {
-        (Some(lower), Some(upper)) => Some(index_ratio(upper - lower, spread)),
+        (Some(lower), Some(upper)) => index_ratio(upper - lower, spread),
         _ => None,
     };
     let cpu = limits.upper.map(upper_side);
     let cpl = limits.lower.map(lower_side);
-    let cpk = [cpu, cpl]
-        .into_iter()
-        .flatten()
-        .fold(f64::INFINITY, f64::min);
+    // Any side set but undefined makes the whole Cpk undefined.
+    let cpk = match (cpu, cpl) {
+        (None, None) => None,
+        (Some(u), None) => u,
+        (None, Some(l)) => l,
+        (Some(u), Some(l)) => u.zip(l).map(|(u, l)| u.min(l)),
+    };
     MomentCapability { cp, cpk }
 }
 
@@ -103,9 +97,7 @@ fn assemble(
 /// Cp = (U − L) / (6σ) (both limits only), Cpk = min((U − μ) / (3σ),
 /// (μ − L) / (3σ)) over the limits that are set.
 ///
-/// σ = 0 (or negative or NaN, treated as 0): the indices are +inf when the
-/// mean is strictly inside, −inf when strictly outside, 0 on a limit. Finite
-/// inputs never give NaN.
+/// σ = 0 (or negative or NaN): no index (`None`).
 pub fn capability_from_moments(mean: f64, sd: f64, limits: SpecLimits) -> MomentCapability {
     assemble(
         limits,
@@ -119,7 +111,7 @@ pub fn capability_from_moments(mean: f64, sd: f64, limits: SpecLimits) -> Moment
 /// 0.135 %, 50 % and 99.865 % percentiles:
 /// Cp = (U − L) / (P99.865 − P0.135) (both limits only),
 /// Cpk = min((U − P50) / (P99.865 − P50), (P50 − L) / (P50 − P0.135)) over
-/// the limits that are set. Zero-width denominators are handled as in
+/// the limits that are set. A zero-width denominator gives no index, as in
 /// [`capability_from_moments`].
 pub fn capability_percentile_method(
     p00135: f64,
@@ -297,14 +289,14 @@ mod tests {
         // Centred, σ = 1, limits ±3: Cp = 6/6 = 1, Cpk = 3/3 = 1.
         let centred = capability_from_moments(0.0, 1.0, BOTH);
         assert_eq!(centred.cp, Some(1.0));
-        assert_eq!(centred.cpk, 1.0);
+        assert_eq!(centred.cpk, Some(1.0));
         // Mean 1, σ = 0.5: Cp = 6/3 = 2, Cpu = 2/1.5 = 1.333..., Cpl = 4/1.5.
         let shifted = capability_from_moments(1.0, 0.5, BOTH);
         assert_eq!(shifted.cp, Some(2.0));
-        assert!(close(shifted.cpk, 4.0 / 3.0, 1e-15));
+        assert!(close(shifted.cpk.unwrap(), 4.0 / 3.0, 1e-15));
         // Mean outside: Cpk negative, (3 − 4)/3 = −1/3.
         let outside = capability_from_moments(4.0, 1.0, BOTH);
-        assert!(close(outside.cpk, -1.0 / 3.0, 1e-15));
+        assert!(close(outside.cpk.unwrap(), -1.0 / 3.0, 1e-15));
     }
 
     #[test]
@@ -315,38 +307,40 @@ mod tests {
         };
         let result = capability_from_moments(4.0, 2.0, upper_only);
         assert_eq!(result.cp, None);
-        assert_eq!(result.cpk, 1.0); // (10 − 4)/(3·2)
+        assert_eq!(result.cpk, Some(1.0)); // (10 − 4)/(3·2)
         let lower_only = SpecLimits {
             lower: Some(1.0),
             upper: None,
         };
         let result = capability_from_moments(4.0, 2.0, lower_only);
         assert_eq!(result.cp, None);
-        assert_eq!(result.cpk, 0.5); // (4 − 1)/(3·2)
+        assert_eq!(result.cpk, Some(0.5)); // (4 − 1)/(3·2)
         let none = SpecLimits {
             lower: None,
             upper: None,
         };
         let result = capability_from_moments(4.0, 2.0, none);
         assert_eq!(result.cp, None);
-        assert_eq!(result.cpk, f64::INFINITY);
+        assert_eq!(result.cpk, None);
     }
 
     #[test]
-    fn zero_sigma_never_nan() {
-        let inside = capability_from_moments(1.0, 0.0, BOTH);
-        assert_eq!(inside.cp, Some(f64::INFINITY));
-        assert_eq!(inside.cpk, f64::INFINITY);
-        let outside = capability_from_moments(5.0, 0.0, BOTH);
-        assert_eq!(outside.cp, Some(f64::INFINITY));
-        assert_eq!(outside.cpk, f64::NEG_INFINITY);
-        let on_limit = capability_from_moments(3.0, 0.0, BOTH);
-        assert_eq!(on_limit.cpk, 0.0);
-        let nan_sd = capability_from_moments(1.0, f64::NAN, BOTH);
-        assert_eq!(nan_sd.cpk, f64::INFINITY);
-        let percentile = capability_percentile_method(2.0, 2.0, 2.0, BOTH);
-        assert_eq!(percentile.cp, Some(f64::INFINITY));
-        assert_eq!(percentile.cpk, f64::INFINITY);
+    fn zero_spread_gives_no_index_never_inf_or_nan() {
+        let none = MomentCapability {
+            cp: None,
+            cpk: None,
+        };
+        for mean in [1.0, 5.0, 3.0] {
+            assert_eq!(capability_from_moments(mean, 0.0, BOTH), none);
+        }
+        assert_eq!(capability_from_moments(1.0, f64::NAN, BOTH), none);
+        assert_eq!(capability_percentile_method(2.0, 2.0, 2.0, BOTH), none);
+        // A spread so small that the ratio overflows is no index either.
+        assert_eq!(capability_from_moments(1.0, 1e-320, BOTH), none);
+        // One side of zero width (P50 = P99.865) leaves Cpk undefined, Cp defined.
+        let one_side = capability_percentile_method(-1.0, 2.0, 2.0, BOTH);
+        assert_eq!(one_side.cp, Some(2.0));
+        assert_eq!(one_side.cpk, None);
     }
 
     #[test]
@@ -355,12 +349,12 @@ mod tests {
         // the percentile method reproduces the moment method: Cp = Cpk = 1.
         let normal = capability_percentile_method(-3.0, 0.0, 3.0, BOTH);
         assert_eq!(normal.cp, Some(1.0));
-        assert_eq!(normal.cpk, 1.0);
+        assert_eq!(normal.cpk, Some(1.0));
         // Skewed: P0.135 = −1, P50 = 0, P99.865 = 4, limits ±3:
         // Cp = 6/5, Cpu = 3/4, Cpl = 3/1 → Cpk = 0.75.
         let skewed = capability_percentile_method(-1.0, 0.0, 4.0, BOTH);
         assert_eq!(skewed.cp, Some(1.2));
-        assert_eq!(skewed.cpk, 0.75);
+        assert_eq!(skewed.cpk, Some(0.75));
     }
 
     #[test]

@@ -1,0 +1,520 @@
+//! One function per command: read the scenario, check what the request needs against the
+//! machine ([`crate::limits`]), call the engine, print or write the report
+//! ([`crate::output`]). The engine computes; nothing here does statistics.
+
+use std::io::IsTerminal;
+use std::path::Path;
+
+use anyhow::Result;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rvtol_engine::allocation::report::AllocationReport;
+use rvtol_engine::allocation::spec::{CostKind, Target};
+use rvtol_engine::allocation::{
+    allocate as run_allocation, default_samples, proposal_document, AllocationSettings,
+};
+use rvtol_engine::memory::{self, MemoryNeed};
+use rvtol_engine::run::check_non_finite;
+use rvtol_engine::screening::screening;
+use rvtol_engine::sensitivity::{sobol_indices, SensitivitySettings};
+use rvtol_engine::sensitivity_report::SensitivityReport;
+use rvtol_engine::shapley::{players as shapley_players, shapley_effects, ShapleySettings};
+use rvtol_engine::{
+    gate, nominal_curves, run as run_scenario, NominalReport, RunReport, RunSettings, Scenario,
+    ScenarioError,
+};
+
+use crate::limits::{memory_budget, thread_pool, threads};
+use crate::output::{note, print, write_report};
+use crate::{plot, BadInput, Execution, Failed};
+
+fn bad_scenario(path: &Path, err: ScenarioError) -> anyhow::Error {
+    BadInput(format!("{}: {err}", path.display())).into()
+}
+
+/// The scenario file's text, or one line saying why it cannot be read.
+fn read_text(path: &Path) -> Result<String> {
+    std::fs::read_to_string(path)
+        .map_err(|err| BadInput(format!("{}: cannot read: {err}", path.display())).into())
+}
+
+/// The name a scenario without `name` gets: its file stem.
+fn fallback_name(path: &Path) -> String {
+    path.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scenario".to_string())
+}
+
+fn read(path: &Path) -> Result<(Scenario, String)> {
+    let text = read_text(path)?;
+    let scenario =
+        Scenario::from_json(&text, &fallback_name(path)).map_err(|err| bad_scenario(path, err))?;
+    Ok((scenario, text))
+}
+
+fn load(path: &Path) -> Result<Scenario> {
+    read(path).map(|(scenario, _)| scenario)
+}
+
+/// Prints the text, or writes the JSON to `json_path` and prints the text, or prints the
+/// JSON when the path is `-`.
+fn emit(
+    json_path: Option<&Path>,
+    json: impl FnOnce() -> String,
+    text: impl FnOnce() -> String,
+) -> Result<()> {
+    match json_path {
+        Some(p) if p == Path::new("-") => print(&json()),
+        Some(p) => {
+            write_report(p, &json())?;
+            print(&text())
+        }
+        None => print(&text()),
+    }
+}
+
+fn progress_bar(samples: u64, quiet: bool) -> ProgressBar {
+    if quiet || !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::with_draw_target(Some(samples), ProgressDrawTarget::stderr());
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} {percent:>3}% {human_pos}/{human_len} samples, eta {eta}")
+            .expect("valid template"),
+    );
+    bar
+}
+
+/// Refuses a request whose memory need exceeds the budget, with one line.
+fn check_memory(need: MemoryNeed, execution: &Execution, command: &str) -> Result<()> {
+    let (budget, source) = memory_budget(execution.max_memory);
+    need.check(budget, &source)
+        .map_err(|message| BadInput(format!("{command}: {message}")).into())
+}
+
+/// The report first, then the failure of a run that lost more samples than allowed.
+fn non_finite_failure(
+    path: &Path,
+    scenario: &Scenario,
+    result: &rvtol_engine::RunResult,
+    execution: &Execution,
+) -> Result<()> {
+    check_non_finite(scenario, result, execution.max_non_finite)
+        .map_err(|err| bad_scenario(path, err))
+}
+
+pub fn run(
+    scenario_path: &Path,
+    samples: Option<u64>,
+    seed: Option<u64>,
+    json: Option<&Path>,
+    exact_percentile_limit: u64,
+    execution: &Execution,
+) -> Result<()> {
+    let scenario = load(scenario_path)?;
+    let settings = RunSettings {
+        samples: samples.unwrap_or(scenario.samples),
+        seed: seed.unwrap_or(scenario.seed),
+        exact_percentile_limit,
+    };
+    let threads = threads(execution.threads)?;
+    check_memory(memory::run(&scenario, &settings, threads), execution, "run")?;
+    let pool = thread_pool(threads)?;
+    let bar = progress_bar(settings.samples, execution.quiet);
+    let started = std::time::Instant::now();
+    let result = pool
+        .install(|| run_scenario(&scenario, settings, &|n| bar.inc(n)))
+        .map_err(|err| bad_scenario(scenario_path, err))?;
+    bar.finish_and_clear();
+    let elapsed = started.elapsed();
+    let failure = non_finite_failure(scenario_path, &scenario, &result, execution);
+    let report = RunReport::new(&scenario, result);
+    emit(json, || report.to_json(), || report.to_text())?;
+    if !execution.quiet && std::io::stderr().is_terminal() {
+        note(&format!(
+            "{} samples in {:.2} s ({:.1} ns per sample)",
+            settings.samples,
+            elapsed.as_secs_f64(),
+            elapsed.as_secs_f64() * 1e9 / settings.samples as f64
+        ));
+    }
+    failure
+}
+
+pub fn nominal(scenario_path: &Path, json: Option<&Path>) -> Result<()> {
+    let scenario = load(scenario_path)?;
+    let values =
+        rvtol_engine::nominal(&scenario).map_err(|err| bad_scenario(scenario_path, err))?;
+    let report = NominalReport::new(&scenario, &values);
+    emit(json, || report.to_json(), || report.to_text())
+}
+
+pub fn curve(scenario_path: &Path, out_dir: &Path) -> Result<()> {
+    let scenario = load(scenario_path)?;
+    let drawn = nominal_curves(&scenario).map_err(|err| bad_scenario(scenario_path, err))?;
+    if drawn.is_empty() {
+        return Err(BadInput(format!(
+            "{}: none of its models draws a curve (transmission_error and torsion_curve do)",
+            scenario_path.display()
+        ))
+        .into());
+    }
+    std::fs::create_dir_all(out_dir)
+        .map_err(|err| BadInput(format!("cannot create {}: {err}", out_dir.display())))?;
+    let mut lines = String::new();
+    for (model, curves) in drawn {
+        for curve in curves {
+            let stem = out_dir.join(&curve.name);
+            let (csv, svg) = (stem.with_extension("csv"), stem.with_extension("svg"));
+            write_report(&csv, &plot::to_csv(&curve))?;
+            write_report(&svg, &plot::to_svg(&curve))?;
+            lines.push_str(&format!(
+                "{model}: {} -> {}, {}\n",
+                curve.title,
+                csv.display(),
+                svg.display()
+            ));
+        }
+    }
+    print(&lines)
+}
+
+pub fn validate(scenario_path: &Path) -> Result<()> {
+    let text = read_text(scenario_path)?;
+    match Scenario::from_json_all_problems(&text, &fallback_name(scenario_path)) {
+        Ok(scenario) => print(&format!(
+            "{}: valid ({} input columns, {} models, {} outputs)\n",
+            scenario_path.display(),
+            scenario.input_space.n_columns(),
+            scenario.models.len(),
+            scenario.outputs.len()
+        )),
+        Err(problems) => {
+            let count = problems.len();
+            let mut lines: Vec<String> = problems
+                .iter()
+                .map(|err| format!("{}: {err}", scenario_path.display()))
+                .collect();
+            let last = lines.pop().unwrap_or_default();
+            for line in lines {
+                note(&format!("error: {line}"));
+            }
+            Err(BadInput(if count > 1 {
+                format!("{last} ({count} problems)")
+            } else {
+                last
+            })
+            .into())
+        }
+    }
+}
+
+/// The options of `rvtol sensitivity` beyond the common ones.
+pub struct SensitivityArgs {
+    pub samples: u64,
+    pub seed: Option<u64>,
+    pub bootstrap: u64,
+    pub row_bootstrap_limit: u64,
+    pub shapley: bool,
+    pub permutations: u64,
+    pub outer: u64,
+}
+
+/// Most Shapley permutations and outer draws: their product sets the model evaluations.
+const MAX_SHAPLEY_DRAWS: u64 = 1_000_000_000;
+
+pub fn sensitivity(
+    path: &Path,
+    args: SensitivityArgs,
+    json: Option<&Path>,
+    execution: &Execution,
+) -> Result<()> {
+    let scenario = load(path)?;
+    if args.samples < 2 {
+        return Err(BadInput("--samples: sensitivity needs at least 2 base samples".into()).into());
+    }
+    if args.bootstrap < 2 || args.bootstrap > 1_000_000 {
+        return Err(BadInput("--bootstrap: must be between 2 and 1000000 resamples".into()).into());
+    }
+    if args.shapley && args.permutations.saturating_mul(args.outer) > MAX_SHAPLEY_DRAWS {
+        return Err(BadInput(format!(
+            "--permutations × --outer: at most {MAX_SHAPLEY_DRAWS} conditional draws, got {} × {}",
+            args.permutations, args.outer
+        ))
+        .into());
+    }
+    let settings = SensitivitySettings {
+        base_samples: args.samples,
+        seed: args.seed.unwrap_or(scenario.seed),
+        bootstrap: args.bootstrap as usize,
+        confidence: 0.95,
+        row_bootstrap_limit: args.row_bootstrap_limit,
+    };
+    let threads = threads(execution.threads)?;
+    check_memory(
+        memory::sensitivity(&scenario, &settings, threads),
+        execution,
+        "sensitivity",
+    )?;
+    let pool = thread_pool(threads)?;
+    let bar = progress_bar(args.samples, execution.quiet);
+    let outputs = pool
+        .install(|| sobol_indices(&scenario, settings, &|n| bar.inc(n)))
+        .map_err(|err| bad_scenario(path, err))?;
+    bar.finish_and_clear();
+    let screening = pool
+        .install(|| {
+            screening(
+                &scenario,
+                &shapley_players(&scenario),
+                args.samples.min(65_536),
+                settings.seed,
+            )
+        })
+        .map_err(|err| bad_scenario(path, err))?;
+    let mut report = SensitivityReport::new(&scenario, settings, outputs).with_screening(screening);
+    if args.shapley {
+        let effects = pool
+            .install(|| {
+                shapley_effects(
+                    &scenario,
+                    ShapleySettings {
+                        permutations: args.permutations as usize,
+                        outer: args.outer as usize,
+                        inner: 3,
+                        seed: settings.seed,
+                    },
+                )
+            })
+            .map_err(|err| bad_scenario(path, err))?;
+        report = report.with_shapley(effects);
+    }
+    emit(json, || report.to_json(), || report.to_text())?;
+    let lost: Vec<String> = report
+        .outputs
+        .iter()
+        .filter(|o| o.non_finite_rows as f64 > execution.max_non_finite * args.samples as f64)
+        .map(|o| format!("{} ({} rows)", o.name, o.non_finite_rows))
+        .collect();
+    if lost.is_empty() {
+        Ok(())
+    } else {
+        Err(BadInput(format!(
+            "{}: rows with non-finite model values were left out of the indices of {}, more than the allowed share {} of the base samples; narrow the distributions to the models' domain, or accept a share with --max-non-finite",
+            path.display(),
+            lost.join(", "),
+            execution.max_non_finite
+        ))
+        .into())
+    }
+}
+
+pub fn baseline(
+    path: &Path,
+    output: &Path,
+    samples: Option<u64>,
+    seed: Option<u64>,
+    exact_percentile_limit: u64,
+    execution: &Execution,
+) -> Result<()> {
+    let (scenario, text) = read(path)?;
+    let settings = RunSettings {
+        samples: samples.unwrap_or(scenario.samples),
+        seed: seed.unwrap_or(scenario.seed),
+        exact_percentile_limit,
+    };
+    if settings.samples < 2 {
+        return Err(BadInput("--samples: a baseline needs at least 2 samples".into()).into());
+    }
+    let threads = threads(execution.threads)?;
+    check_memory(
+        memory::run(&scenario, &settings, threads),
+        execution,
+        "baseline",
+    )?;
+    let pool = thread_pool(threads)?;
+    let bar = progress_bar(settings.samples, execution.quiet);
+    let baseline = pool
+        .install(|| {
+            gate::baseline(&scenario, &text, settings, execution.max_non_finite, &|n| {
+                bar.inc(n)
+            })
+        })
+        .map_err(|err| bad_scenario(path, err))?;
+    bar.finish_and_clear();
+    write_report(output, &baseline.to_json())?;
+    print(&format!(
+        "{}: {} figures of {} ({} samples, seed {}) written to {}\n",
+        path.display(),
+        baseline.figures.len(),
+        baseline.scenario,
+        settings.samples,
+        settings.seed,
+        output.display()
+    ))
+}
+
+pub fn check(
+    path: &Path,
+    baseline_path: &Path,
+    seed: Option<u64>,
+    junit: Option<&Path>,
+    json: Option<&Path>,
+    execution: &Execution,
+) -> Result<()> {
+    let (scenario, text) = read(path)?;
+    let baseline_text = std::fs::read_to_string(baseline_path)
+        .map_err(|err| BadInput(format!("{}: cannot read: {err}", baseline_path.display())))?;
+    let recorded = gate::Baseline::from_json(&baseline_text)
+        .map_err(|err| bad_scenario(baseline_path, err))?;
+    recorded
+        .matches(&scenario)
+        .map_err(|err| bad_scenario(baseline_path, err))?;
+    let seed = seed.unwrap_or(recorded.seed);
+    let settings = RunSettings {
+        samples: recorded.samples,
+        seed,
+        exact_percentile_limit: recorded.exact_percentile_limit,
+    };
+    let threads = threads(execution.threads)?;
+    check_memory(
+        memory::run(&scenario, &settings, threads),
+        execution,
+        "check",
+    )?;
+    let pool = thread_pool(threads)?;
+    let bar = progress_bar(recorded.samples, execution.quiet);
+    let report = pool
+        .install(|| {
+            gate::check(
+                &scenario,
+                &text,
+                &recorded,
+                seed,
+                execution.max_non_finite,
+                &|n| bar.inc(n),
+            )
+        })
+        .map_err(|err| bad_scenario(path, err))?;
+    bar.finish_and_clear();
+    if let Some(junit) = junit {
+        write_report(junit, &report.to_junit())?;
+    }
+    emit(json, || report.to_json(), || report.to_text())?;
+    if report.passed {
+        Ok(())
+    } else {
+        Err(Failed("figures moved beyond their baseline bands".into()).into())
+    }
+}
+
+/// The options of `rvtol allocate` beyond the common ones.
+pub struct AllocateArgs {
+    pub output: String,
+    pub target: String,
+    pub cost: Option<String>,
+    pub samples: Option<u64>,
+    pub seed: Option<u64>,
+    pub verify_seed: Option<u64>,
+}
+
+pub fn allocate(
+    path: &Path,
+    args: AllocateArgs,
+    json: Option<&Path>,
+    write_scenario: Option<&Path>,
+    execution: &Execution,
+) -> Result<()> {
+    let (scenario, text) = read(path)?;
+    let target = Target::parse(&args.target).map_err(|err| BadInput(format!("--target: {err}")))?;
+    let cost = args
+        .cost
+        .map(|name| {
+            CostKind::parse(&name).ok_or_else(|| {
+                BadInput(format!(
+                    "--cost: unknown cost model {name:?}; use reciprocal, exponential or table"
+                ))
+            })
+        })
+        .transpose()?;
+    let seed = args.seed.unwrap_or(scenario.seed);
+    let settings = AllocationSettings {
+        samples: args.samples.unwrap_or_else(|| default_samples(&target)),
+        seed,
+        verification_seed: args.verify_seed.unwrap_or(seed.wrapping_add(1)),
+        cost,
+    };
+    let threads = threads(execution.threads)?;
+    check_memory(
+        memory::allocation(&scenario, settings.samples, threads),
+        execution,
+        "allocate",
+    )?;
+    let pool = thread_pool(threads)?;
+    let spinner = if execution.quiet || !std::io::stderr().is_terminal() {
+        ProgressBar::hidden()
+    } else {
+        let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
+        bar.set_style(
+            ProgressStyle::with_template(
+                "{spinner} [{elapsed_precise}] allocating: {pos} Monte Carlo runs",
+            )
+            .expect("valid template"),
+        );
+        bar
+    };
+    let allocation = pool
+        .install(|| {
+            run_allocation(&scenario, &text, &args.output, target, settings, &|n| {
+                spinner.set_position(n as u64)
+            })
+        })
+        .map_err(|err| bad_scenario(path, err))?;
+    spinner.finish_and_clear();
+    if let Some(proposal) = write_scenario {
+        let document =
+            proposal_document(&text, &allocation).map_err(|err| bad_scenario(path, err))?;
+        write_report(proposal, &document)?;
+    }
+    let report = AllocationReport::new(&allocation);
+    emit(json, || report.to_json(), || report.to_text())?;
+    match allocation.status() {
+        "met" => Ok(()),
+        status => Err(Failed(format!("allocation {status}")).into()),
+    }
+}
+
+pub fn models() -> Result<()> {
+    let mut out = String::new();
+    for entry in rvtol_models::all() {
+        out.push_str(&format!("{}\n  {}\n", entry.name, entry.summary));
+        out.push_str("  parameters:\n");
+        for p in entry.params {
+            let default = p
+                .default
+                .map(|d| format!(" (default {})", rvtol_deviation::Shown(d)))
+                .unwrap_or_default();
+            out.push_str(&format!(
+                "    {:<36} {:<6} {}{default}\n",
+                p.name, p.unit, p.description
+            ));
+        }
+        let model = (entry.build)(&(entry.example_params)())
+            .map_err(|err| anyhow::anyhow!("example of {} does not build: {err}", entry.name))?;
+        out.push_str("  inputs:\n");
+        for i in model.inputs() {
+            out.push_str(&format!(
+                "    {:<36} {:<6} {}\n",
+                i.name, i.unit, i.description
+            ));
+        }
+        out.push_str("  outputs:\n");
+        for o in model.outputs() {
+            out.push_str(&format!(
+                "    {:<36} {:<8} {}\n",
+                o.name, o.unit, o.description
+            ));
+        }
+        out.push('\n');
+    }
+    print(&out)
+}

@@ -1,0 +1,179 @@
+//! The bounds of what a command may ask of this machine, and the parsers of the numbers
+//! on the command line: counts (`1e6` allowed), shares, memory sizes, the thread count and
+//! the memory budget.
+
+use anyhow::Result;
+
+use crate::BadInput;
+
+/// Most worker threads per core: more only adds scheduling and per-thread buffers (the
+/// run time grew about quadratically with the thread count beyond it).
+pub const THREADS_PER_CORE: u64 = 4;
+
+/// A whole number of at least 1, written as digits (`1000000`, `1_000_000`) or in exponent
+/// form when that is a whole number (`1e6`, `2.5e6`).
+pub fn parse_count(text: &str) -> Result<u64, String> {
+    let cleaned = text.trim().replace('_', "");
+    let value = match cleaned.parse::<u64>() {
+        Ok(value) => value,
+        Err(_) => {
+            let x: f64 = cleaned
+                .parse()
+                .map_err(|_| "must be a whole number of at least 1".to_string())?;
+            if !(x.is_finite() && x.fract() == 0.0 && x >= 1.0 && x <= u64::MAX as f64) {
+                return Err(if x.is_finite() && x > u64::MAX as f64 {
+                    format!("must be at most {}", u64::MAX)
+                } else {
+                    "must be a whole number of at least 1".to_string()
+                });
+            }
+            x as u64
+        }
+    };
+    if value == 0 {
+        return Err("must be at least 1".to_string());
+    }
+    Ok(value)
+}
+
+/// A share between 0 and 1 (`0.001`).
+pub fn parse_share(text: &str) -> Result<f64, String> {
+    let x: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| "must be a number between 0 and 1".to_string())?;
+    if (0.0..=1.0).contains(&x) {
+        Ok(x)
+    } else {
+        Err("must be a number between 0 and 1".to_string())
+    }
+}
+
+/// A memory size in bytes: a number with an optional unit k, M, G or T (powers of 1024,
+/// with or without a trailing B or iB: `512M`, `4GiB`, `2.5G`).
+pub fn parse_size(text: &str) -> Result<f64, String> {
+    let trimmed = text.trim();
+    let upper = trimmed.to_ascii_uppercase();
+    let unit_start = upper
+        .find(|c: char| c.is_ascii_alphabetic())
+        .unwrap_or(upper.len());
+    let (number, unit) = upper.split_at(unit_start);
+    let factor = match unit.trim_end_matches("IB").trim_end_matches('B') {
+        "" => 1.0,
+        "K" => 1024.0,
+        "M" => 1024.0_f64.powi(2),
+        "G" => 1024.0_f64.powi(3),
+        "T" => 1024.0_f64.powi(4),
+        _ => return Err("must be a size such as 512M, 4G or 1073741824".to_string()),
+    };
+    let value: f64 = number
+        .trim()
+        .parse()
+        .map_err(|_| "must be a size such as 512M, 4G or 1073741824".to_string())?;
+    if value.is_finite() && value > 0.0 {
+        Ok(value * factor)
+    } else {
+        Err("must be a positive size such as 512M or 4G".to_string())
+    }
+}
+
+/// Cores of this machine (1 when it cannot tell).
+pub fn cores() -> u64 {
+    std::thread::available_parallelism().map_or(1, |n| n.get() as u64)
+}
+
+/// The worker-thread count to use: the one asked for (at most [`THREADS_PER_CORE`] per
+/// core) or every core.
+pub fn threads(asked: Option<u64>) -> Result<usize> {
+    let cores = cores();
+    let most = THREADS_PER_CORE * cores;
+    match asked {
+        None => Ok(cores as usize),
+        Some(n) if n <= most => Ok(n as usize),
+        Some(n) => Err(BadInput(format!(
+            "--threads: {n} is more than {most} ({THREADS_PER_CORE} per core on this machine's {cores} cores); more threads than cores only slow the run down"
+        ))
+        .into()),
+    }
+}
+
+/// A rayon pool of `threads` workers.
+pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|err| BadInput(format!("cannot start {threads} worker threads: {err}")).into())
+}
+
+/// The memory budget in bytes and where it comes from: `--max-memory`, or the memory the
+/// kernel says is available (`MemAvailable` of /proc/meminfo), else 4 GiB.
+pub fn memory_budget(asked: Option<f64>) -> (f64, String) {
+    if let Some(bytes) = asked {
+        return (bytes, "--max-memory".to_string());
+    }
+    let available = std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|text| {
+            text.lines()
+                .find_map(|line| line.strip_prefix("MemAvailable:"))
+                .and_then(|rest| {
+                    rest.trim()
+                        .trim_end_matches("kB")
+                        .trim()
+                        .parse::<f64>()
+                        .ok()
+                })
+                .map(|kib| kib * 1024.0)
+        });
+    match available {
+        Some(bytes) => (
+            bytes,
+            "available on this machine; raise with --max-memory".to_string(),
+        ),
+        None => (
+            4.0 * 1024.0_f64.powi(3),
+            "a default of 4 GiB where the machine does not say; set --max-memory".to_string(),
+        ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counts_read_as_written() {
+        assert_eq!(parse_count("1000000"), Ok(1_000_000));
+        assert_eq!(parse_count("1_000_000"), Ok(1_000_000));
+        assert_eq!(parse_count("1e6"), Ok(1_000_000));
+        assert_eq!(parse_count("2.5e6"), Ok(2_500_000));
+        assert_eq!(parse_count("1e9"), Ok(1_000_000_000));
+        for bad in ["0", "-1", "1.5", "x", "nan", "inf", "-1e6", ""] {
+            assert!(parse_count(bad).is_err(), "{bad}");
+        }
+        assert_eq!(
+            parse_count("1e30"),
+            Err(format!("must be at most {}", u64::MAX))
+        );
+    }
+
+    #[test]
+    fn shares_and_sizes() {
+        assert_eq!(parse_share("0.01"), Ok(0.01));
+        assert!(parse_share("1.5").is_err());
+        assert!(parse_share("-0.1").is_err());
+        assert_eq!(parse_size("512M"), Ok(512.0 * 1024.0 * 1024.0));
+        assert_eq!(parse_size("4GiB"), Ok(4.0 * 1024.0_f64.powi(3)));
+        assert_eq!(parse_size("1000"), Ok(1000.0));
+        assert!(parse_size("4X").is_err());
+        assert!(parse_size("-1G").is_err());
+    }
+
+    #[test]
+    fn threads_are_bounded_by_the_cores() {
+        let most = THREADS_PER_CORE * cores();
+        assert_eq!(threads(Some(most)).unwrap(), most as usize);
+        let err = threads(Some(most + 1)).unwrap_err().to_string();
+        assert!(err.starts_with(&format!("--threads: {} is more than {most}", most + 1)));
+    }
+}

@@ -1,0 +1,234 @@
+//! Where results go: report files and standard output.
+//!
+//! A report file is written as a user expects of the path they named:
+//! - a regular file (new or existing) is replaced atomically: the text goes to a temporary
+//!   file in the same directory, is synced, and is renamed over the path, so an interrupted
+//!   run never leaves a half-written report; an existing file keeps its permission bits;
+//! - a symbolic link is followed: its final target is written (replaced atomically when
+//!   it is a regular file), the link itself stays;
+//! - a character or block device or a FIFO (`/dev/null`, `/dev/stdout`, a named pipe) is
+//!   written through, never replaced: renaming a file over a device would turn it into a
+//!   regular file and break every program that uses it;
+//! - a directory or a socket is an error naming the path.
+//!
+//! Temporary files are named `.NAME.rvtol-tmp-PID`; one left by a killed run is removed by
+//! the next write to the same path once its process is gone (checked through /proc where
+//! there is one).
+//!
+//! Standard output: a closed pipe (`rvtol … | head`) ends the output quietly, as Unix tools
+//! do; any other write error (a full disk) is an error of one line.
+
+use std::ffi::OsString;
+use std::fs::{self, File, OpenOptions};
+use std::io::{self, Write};
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+
+/// Most symbolic links followed from a report path (as the kernel's own limit).
+const MAX_LINKS: usize = 40;
+
+/// Writes `contents` to `path` as the module documentation describes.
+pub fn write_report(path: &Path, contents: &str) -> Result<()> {
+    let target = resolve_links(path)?;
+    match fs::metadata(&target) {
+        Ok(metadata) => {
+            let kind = metadata.file_type();
+            if kind.is_file() {
+                replace_atomically(&target, contents, Some(metadata.permissions()))
+            } else if kind.is_dir() {
+                bail!("cannot write {}: it is a directory", path.display())
+            } else if is_socket(&kind) {
+                bail!("cannot write {}: it is a socket", path.display())
+            } else {
+                write_through(&target, contents)
+                    .with_context(|| format!("cannot write {}", path.display()))
+            }
+        }
+        Err(err) if err.kind() == io::ErrorKind::NotFound => {
+            replace_atomically(&target, contents, None)
+        }
+        Err(err) => Err(err).with_context(|| format!("cannot write {}", path.display())),
+    }
+}
+
+#[cfg(unix)]
+fn is_socket(kind: &fs::FileType) -> bool {
+    use std::os::unix::fs::FileTypeExt;
+    kind.is_socket()
+}
+
+#[cfg(not(unix))]
+fn is_socket(_kind: &fs::FileType) -> bool {
+    false
+}
+
+/// The path a report named `path` lands on: `path` itself, or the final target of the
+/// symbolic links it names (a dangling link's target is created).
+fn resolve_links(path: &Path) -> Result<PathBuf> {
+    let mut current = path.to_path_buf();
+    for _ in 0..MAX_LINKS {
+        match fs::symlink_metadata(&current) {
+            Ok(metadata) if metadata.file_type().is_symlink() => {
+                let link = fs::read_link(&current)
+                    .with_context(|| format!("cannot read the link {}", current.display()))?;
+                current = match current.parent() {
+                    Some(parent) if link.is_relative() => parent.join(link),
+                    _ => link,
+                };
+            }
+            _ => return Ok(current),
+        }
+    }
+    bail!(
+        "cannot write {}: more than {MAX_LINKS} symbolic links",
+        path.display()
+    )
+}
+
+/// Writes into an existing device or FIFO without creating, replacing or syncing it.
+fn write_through(path: &Path, contents: &str) -> io::Result<()> {
+    let mut file = OpenOptions::new().write(true).open(path)?;
+    file.write_all(contents.as_bytes())?;
+    file.flush()
+}
+
+/// The directory and file name of `path`.
+fn split(path: &Path) -> Result<(PathBuf, OsString)> {
+    let directory = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let name = path
+        .file_name()
+        .with_context(|| format!("{} is not a file path", path.display()))?
+        .to_os_string();
+    Ok((directory, name))
+}
+
+/// The prefix of the temporary files of reports named `name`.
+fn temporary_prefix(name: &OsString) -> String {
+    format!(".{}.rvtol-tmp-", name.to_string_lossy())
+}
+
+/// Replaces (or creates) the regular file `path` through a temporary file and a rename;
+/// the new file gets `permissions` when given (those of the file it replaces).
+fn replace_atomically(
+    path: &Path,
+    contents: &str,
+    permissions: Option<fs::Permissions>,
+) -> Result<()> {
+    let (directory, name) = split(path)?;
+    remove_stale_temporaries(&directory, &name);
+    let temporary = directory.join(format!("{}{}", temporary_prefix(&name), std::process::id()));
+    let result = (|| -> io::Result<()> {
+        let mut file = OpenOptions::new()
+            .write(true)
+            .create(true)
+            .truncate(true)
+            .open(&temporary)?;
+        if let Some(permissions) = permissions {
+            file.set_permissions(permissions)?;
+        }
+        file.write_all(contents.as_bytes())?;
+        file.sync_all()?;
+        fs::rename(&temporary, path)?;
+        // Make the rename itself durable; a directory that cannot be synced is no error.
+        if let Ok(dir) = File::open(&directory) {
+            let _ = dir.sync_all();
+        }
+        Ok(())
+    })();
+    if result.is_err() {
+        let _ = fs::remove_file(&temporary);
+    }
+    result.with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// Removes temporary files of earlier writes to `name` in `directory` whose process is
+/// gone (a run killed between creating and renaming). Only where /proc tells which
+/// processes live; elsewhere they stay (and a later write of the same process id reuses
+/// the name).
+fn remove_stale_temporaries(directory: &Path, name: &OsString) {
+    if !Path::new("/proc/self").exists() {
+        return;
+    }
+    let prefix = temporary_prefix(name);
+    let Ok(entries) = fs::read_dir(directory) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let file_name = entry.file_name();
+        let Some(pid) = file_name
+            .to_str()
+            .and_then(|n| n.strip_prefix(&prefix))
+            .and_then(|pid| pid.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        let alive = Path::new(&format!("/proc/{pid}")).exists();
+        if !alive && entry.file_type().is_ok_and(|t| t.is_file()) {
+            let _ = fs::remove_file(entry.path());
+        }
+    }
+}
+
+/// Writes `text` to standard output: a closed pipe ends the output quietly (the reader has
+/// what it wanted), any other failure is an error.
+pub fn print(text: &str) -> Result<()> {
+    let mut stdout = io::stdout().lock();
+    match stdout
+        .write_all(text.as_bytes())
+        .and_then(|()| stdout.flush())
+    {
+        Err(err) if err.kind() == io::ErrorKind::BrokenPipe => Ok(()),
+        other => other.context("cannot write to standard output"),
+    }
+}
+
+/// Writes a line to standard error, ignoring failure (there is nowhere left to report it).
+pub fn note(line: &str) {
+    let _ = writeln!(io::stderr().lock(), "{line}");
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("rvtol-output-{name}-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    #[test]
+    fn a_stale_temporary_of_a_dead_process_is_removed() {
+        let dir = scratch("stale");
+        let target = dir.join("report.json");
+        // No process has id 0 in /proc; a temporary "left" by it is stale.
+        let stale = dir.join(".report.json.rvtol-tmp-0");
+        fs::write(&stale, "half").unwrap();
+        let other = dir.join(".other.json.rvtol-tmp-0");
+        fs::write(&other, "not ours").unwrap();
+        write_report(&target, "{}\n").unwrap();
+        assert_eq!(fs::read_to_string(&target).unwrap(), "{}\n");
+        assert_eq!(stale.exists(), !Path::new("/proc/self").exists());
+        assert!(
+            other.exists(),
+            "a temporary of another report is left alone"
+        );
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_directory_is_an_error() {
+        let dir = scratch("dir");
+        let err = write_report(&dir, "x").unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            format!("cannot write {}: it is a directory", dir.display())
+        );
+        fs::remove_dir_all(&dir).unwrap();
+    }
+}

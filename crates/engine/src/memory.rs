@@ -1,0 +1,160 @@
+//! What a request needs in memory, worked out before anything is allocated, so that a
+//! request that cannot fit is refused with one line naming the figure and the way out,
+//! instead of aborting halfway through on a failed allocation.
+//!
+//! The estimates count the large, sample-dependent buffers: values kept for exact
+//! percentiles or the row bootstrap, and the per-thread blocks (sampled columns, model
+//! outputs, sample matrices of the analyses). Constant overheads (sketches, model tables,
+//! the program itself) are covered by [`BASE_BYTES`].
+
+use crate::run::{RunSettings, BLOCK_ROWS, CHUNK_SIZE, WAVE_CHUNKS};
+use crate::scenario::Scenario;
+use crate::sensitivity::{independent_groups, BootstrapMethod, SensitivitySettings};
+use rvtol_deviation::human_bytes;
+
+/// Bytes of one kept value.
+const VALUE: f64 = 8.0;
+/// Allowance for everything that does not grow with the request (program, model tables,
+/// sketches).
+pub const BASE_BYTES: f64 = 64e6;
+
+/// The memory a request needs, with what it is for and how to need less.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MemoryNeed {
+    /// Bytes.
+    pub bytes: f64,
+    /// What takes most of it, in words.
+    pub what: String,
+    /// How a user needs less.
+    pub way_out: &'static str,
+}
+
+impl MemoryNeed {
+    /// `Err(one line)` when the need exceeds `budget` bytes (`budget_source` says where the
+    /// budget comes from).
+    pub fn check(&self, budget: f64, budget_source: &str) -> Result<(), String> {
+        if self.bytes <= budget {
+            return Ok(());
+        }
+        Err(format!(
+            "needs about {} of memory ({}), more than the {} available ({budget_source}): {}",
+            human_bytes(self.bytes),
+            self.what,
+            human_bytes(budget),
+            self.way_out
+        ))
+    }
+}
+
+/// The buffers each worker thread of a run keeps: a block of sampled columns and the
+/// sampler's scratch, the chunk's output columns, one model's outputs and its constant
+/// input columns.
+fn run_scratch_per_thread(scenario: &Scenario) -> f64 {
+    let constants: usize = scenario
+        .models
+        .iter()
+        .map(|bound| {
+            bound
+                .bindings
+                .iter()
+                .filter(|b| matches!(b, crate::scenario::Binding::Constant(_)))
+                .count()
+        })
+        .sum();
+    let columns = scenario.input_space.n_columns() as f64;
+    let outputs = scenario.outputs.len() as f64;
+    VALUE
+        * (3.0 * BLOCK_ROWS as f64 * columns
+            + CHUNK_SIZE as f64 * (2.0 * outputs + constants as f64))
+}
+
+/// A Monte Carlo run (`run`, `baseline`, `check`): the kept values when the percentiles are
+/// exact (all of them plus one wave in flight), and the per-thread buffers.
+pub fn run(scenario: &Scenario, settings: &RunSettings, threads: usize) -> MemoryNeed {
+    let continuous = scenario.continuous_outputs().len() as f64;
+    let samples = settings.samples as f64;
+    let exact = settings
+        .samples
+        .saturating_mul(scenario.outputs.len().max(1) as u64)
+        <= settings.exact_percentile_limit;
+    let kept = if exact {
+        let in_flight = samples.min((WAVE_CHUNKS as usize * CHUNK_SIZE) as f64);
+        VALUE * continuous * (samples + in_flight)
+    } else {
+        0.0
+    };
+    // Partials: about four splits per thread, each with its scratch.
+    let scratch = 4.0 * threads as f64 * run_scratch_per_thread(scenario);
+    MemoryNeed {
+        bytes: BASE_BYTES + kept + scratch,
+        what: if exact {
+            format!(
+                "{} kept values for exact percentiles of {continuous} outputs",
+                crate::report::group_thousands((samples * continuous) as u64)
+            )
+        } else {
+            format!(
+                "the worker buffers of {} input columns",
+                scenario.input_space.n_columns()
+            )
+        },
+        way_out: if exact {
+            "lower --exact-percentile-limit (the percentiles then come from the bounded-memory sketch) or ask for fewer --samples"
+        } else {
+            "use fewer threads (--threads) or fewer input columns"
+        },
+    }
+}
+
+/// `rvtol sensitivity`: the row bootstrap keeps N·(2G + 2) values per continuous output
+/// (twice, while one output's are concatenated); every worker holds a chunk's sample
+/// matrices A, B and a mixed one with their column-major copy, and the chunk's values.
+pub fn sensitivity(
+    scenario: &Scenario,
+    settings: &SensitivitySettings,
+    threads: usize,
+) -> MemoryNeed {
+    let variants = (2 * independent_groups(scenario).len() + 2) as f64;
+    let continuous = scenario.continuous_outputs().len() as f64;
+    let n = settings.base_samples as f64;
+    let rows = settings.bootstrap_method(scenario) == BootstrapMethod::Rows;
+    let kept = if rows {
+        VALUE * n * variants * (continuous + 1.0)
+    } else {
+        // Block sums: at most a block per 64 rows, 2G + 3 numbers each.
+        VALUE * (n / 64.0).min(1e6) * (variants + 1.0) * continuous
+    };
+    let columns = scenario.input_space.n_columns() as f64;
+    let per_thread = VALUE * CHUNK_SIZE as f64 * (4.0 * columns + variants * continuous);
+    MemoryNeed {
+        bytes: BASE_BYTES + kept + threads as f64 * per_thread,
+        what: if rows {
+            format!(
+                "{} model values for the row bootstrap",
+                crate::report::group_thousands((n * variants * continuous) as u64)
+            )
+        } else {
+            format!("the sample matrices of {columns} input columns per worker thread")
+        },
+        way_out: if rows {
+            "lower --row-bootstrap-limit (the intervals then come from the bounded-memory block bootstrap) or ask for fewer --samples"
+        } else {
+            "use fewer threads (--threads) or fewer input columns"
+        },
+    }
+}
+
+/// `rvtol allocate`: each Monte Carlo run keeps the targeted output's values (one run at a
+/// time) besides the run's per-thread buffers.
+pub fn allocation(scenario: &Scenario, samples: u64, threads: usize) -> MemoryNeed {
+    let scratch = 4.0 * threads as f64 * run_scratch_per_thread(scenario);
+    let kept = 2.0 * VALUE * samples as f64;
+    MemoryNeed {
+        bytes: BASE_BYTES + kept + scratch,
+        what: format!(
+            "{} kept values of the targeted output per Monte Carlo run",
+            crate::report::group_thousands(samples)
+        ),
+        way_out: "ask for fewer --samples",
+    }
+}

@@ -1,0 +1,662 @@
+//! Validation of a parsed scenario file into a [`Scenario`]: every value checked once, every
+//! problem collected with its JSON path ([`compile`]).
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use rvtol_deviation::{InputSpaceBuilder, PartSpec, ScalarDistribution, Shown, SixDof};
+use rvtol_models::{ConditionEffect, ModelParams, OutputKind, ParamValue};
+
+use super::file::{DistributionFile, PartFile, ScenarioFile, SpecFile, VariableFile};
+use super::{
+    Binding, BoundModel, ColumnInfo, InputGroup, OutputInfo, Scenario, ScenarioError,
+    DEFAULT_SAMPLES, DEFAULT_SEED,
+};
+use crate::allocation::spec::{compile_allocation, ToleranceKind, ToleranceSource};
+use crate::stats::SpecLimits;
+
+fn fixed_array<const N: usize>(path: &str, values: &[f64]) -> Result<[f64; N], ScenarioError> {
+    values.try_into().map_err(|_| {
+        ScenarioError::new(path, format!("expected {N} numbers, got {}", values.len()))
+    })
+}
+
+fn fixed_matrix(path: &str, rows: &[Vec<f64>]) -> Result<[[f64; 6]; 6], ScenarioError> {
+    if rows.len() != 6 {
+        return Err(ScenarioError::new(
+            path,
+            format!(
+                "expected 6 rows of 6 numbers (row-major), got {} rows",
+                rows.len()
+            ),
+        ));
+    }
+    let mut matrix = [[0.0; 6]; 6];
+    for (i, row) in rows.iter().enumerate() {
+        matrix[i] = fixed_array::<6>(&format!("{path}[{i}]"), row)?;
+    }
+    Ok(matrix)
+}
+
+fn check_name(path: &str, name: &str) -> Result<(), ScenarioError> {
+    let ok = !name.is_empty()
+        && name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+    if ok {
+        Ok(())
+    } else {
+        Err(ScenarioError::new(
+            path,
+            format!("name {name:?} must be non-empty and use only letters, digits, '_' and '-'"),
+        ))
+    }
+}
+
+fn part_spec(path: &str, part: &PartFile) -> Result<PartSpec, ScenarioError> {
+    let forms = [
+        part.covariance.is_some(),
+        part.sd.is_some() || part.correlation.is_some(),
+        part.tolerance_band.is_some(),
+    ];
+    if forms.iter().filter(|f| **f).count() != 1 {
+        return Err(ScenarioError::new(
+            path,
+            "give exactly one of: mean + covariance, mean + sd + correlation, tolerance_band",
+        ));
+    }
+    if let Some(band) = &part.tolerance_band {
+        if part.mean.is_some() {
+            return Err(ScenarioError::new(
+                format!("{path}.mean"),
+                "a tolerance_band part derives its mean (001 Eq. 10); remove mean",
+            ));
+        }
+        return Ok(PartSpec::from_tolerance_band(
+            &format!("{path}.tolerance_band"),
+            band.delta_tau_mm,
+            band.length_mm,
+            band.constraint_eq11,
+        )?);
+    }
+    let mean_path = format!("{path}.mean");
+    let mean = match &part.mean {
+        Some(m) => fixed_array::<6>(&mean_path, m)?,
+        None => [0.0; 6],
+    };
+    if let Some(covariance) = &part.covariance {
+        let covariance = fixed_matrix(&format!("{path}.covariance"), covariance)?;
+        return Ok(PartSpec::from_covariance(path, mean, covariance)?);
+    }
+    let sd = part.sd.as_deref().ok_or_else(|| {
+        ScenarioError::new(format!("{path}.sd"), "sd is required with correlation")
+    })?;
+    let sd = fixed_array::<6>(&format!("{path}.sd"), sd)?;
+    let correlation = match &part.correlation {
+        Some(c) => fixed_matrix(&format!("{path}.correlation"), c)?,
+        None => std::array::from_fn(|i| std::array::from_fn(|j| if i == j { 1.0 } else { 0.0 })),
+    };
+    Ok(PartSpec::from_correlation(path, mean, sd, correlation)?)
+}
+
+/// A part's tolerance as `rvtol allocate` reads it (see [`crate::allocation::spec`]).
+fn part_tolerance(path: &str, part: &PartFile) -> ToleranceSource {
+    let (kind, current, unit) = match &part.tolerance_band {
+        Some(band) => (ToleranceKind::PartToleranceBand, band.delta_tau_mm, "mm"),
+        None if part.covariance.is_some() => (ToleranceKind::PartCovariance, 1.0, ""),
+        None => (ToleranceKind::PartSd, 1.0, ""),
+    };
+    ToleranceSource {
+        name: part.name.clone(),
+        path: path.to_string(),
+        kind,
+        current,
+        unit: unit.to_string(),
+    }
+}
+
+/// A variable's tolerance as `rvtol allocate` reads it (see [`crate::allocation::spec`]).
+fn variable_tolerance(path: &str, variable: &VariableFile) -> ToleranceSource {
+    let (kind, current) = match variable.distribution {
+        DistributionFile::Normal { sd, .. } => (ToleranceKind::VariableNormal, 3.0 * sd),
+        DistributionFile::ToleranceBand { lower, upper, .. } => {
+            (ToleranceKind::VariableToleranceBand, 0.5 * (upper - lower))
+        }
+        DistributionFile::Uniform { lower, upper } => {
+            (ToleranceKind::VariableUniform, 0.5 * (upper - lower))
+        }
+        DistributionFile::Triangular { lower, upper, .. } => {
+            (ToleranceKind::VariableTriangular, 0.5 * (upper - lower))
+        }
+        DistributionFile::TruncatedNormal { sd, .. } => {
+            (ToleranceKind::VariableTruncatedNormal, 3.0 * sd)
+        }
+    };
+    ToleranceSource {
+        name: variable.name.clone(),
+        path: path.to_string(),
+        kind,
+        current,
+        unit: variable.unit.clone().unwrap_or_default(),
+    }
+}
+
+fn distribution(d: &DistributionFile) -> (ScalarDistribution, &'static str) {
+    match *d {
+        DistributionFile::Normal { mean, sd } => {
+            (ScalarDistribution::Normal { mean, sd }, "normal")
+        }
+        DistributionFile::ToleranceBand {
+            lower,
+            upper,
+            cp,
+            mean_shift,
+        } => (
+            ScalarDistribution::ToleranceBand {
+                lower,
+                upper,
+                cp,
+                mean_shift,
+            },
+            "tolerance_band",
+        ),
+        DistributionFile::Uniform { lower, upper } => {
+            (ScalarDistribution::Uniform { lower, upper }, "uniform")
+        }
+        DistributionFile::Triangular { lower, mode, upper } => (
+            ScalarDistribution::Triangular { lower, mode, upper },
+            "triangular",
+        ),
+        DistributionFile::TruncatedNormal {
+            mean,
+            sd,
+            lower,
+            upper,
+        } => (
+            ScalarDistribution::TruncatedNormal {
+                mean,
+                sd,
+                lower,
+                upper,
+            },
+            "truncated_normal",
+        ),
+    }
+}
+
+fn model_params(
+    path: &str,
+    map: &serde_json::Map<String, serde_json::Value>,
+) -> Result<ModelParams, ScenarioError> {
+    let mut params = ModelParams::new();
+    for (key, value) in map {
+        let value = match value {
+            serde_json::Value::Number(n) => ParamValue::Number(n.as_f64().unwrap_or(f64::NAN)),
+            serde_json::Value::String(s) => ParamValue::Text(s.clone()),
+            serde_json::Value::Object(entries) => {
+                let mut named = Vec::with_capacity(entries.len());
+                for (name, v) in entries {
+                    let number = v.as_f64().ok_or_else(|| {
+                        ScenarioError::new(
+                            format!("{path}.{key}.{name}"),
+                            format!("expected a number, got {v}"),
+                        )
+                    })?;
+                    named.push((name.clone(), number));
+                }
+                ParamValue::Named(named)
+            }
+            other => {
+                return Err(ScenarioError::new(
+                    format!("{path}.{key}"),
+                    format!("expected a number, a string or an object of numbers, got {other}"),
+                ))
+            }
+        };
+        params.insert(key.clone(), value);
+    }
+    Ok(params)
+}
+
+/// Validates the parsed file and builds the scenario, adding every problem to `problems`;
+/// `None` when something the scenario needs could not be built. Elements that failed to
+/// parse or to compile are left out, and what refers to them (a correlation with a broken
+/// variable, a binding to a broken part) is not reported again.
+pub(super) fn compile(
+    file: ScenarioFile,
+    fallback_name: &str,
+    problems: &mut Vec<ScenarioError>,
+) -> Option<Scenario> {
+    let models_failed_to_parse = problems.iter().any(|p| p.path.starts_with("models"));
+    let mut report = |result: Result<(), ScenarioError>| {
+        if let Err(err) = result {
+            problems.push(err);
+        }
+    };
+    if file.samples == Some(0) {
+        report(Err(ScenarioError::new("samples", "must be at least 1")));
+    }
+    let mut builder = InputSpaceBuilder::new();
+    let mut columns: Vec<ColumnInfo> = Vec::new();
+    let mut sources: Vec<InputGroup> = Vec::new();
+    let mut column_by_name: BTreeMap<String, usize> = BTreeMap::new();
+    // Names of parts and variables that could not be built: references to them are not
+    // reported again.
+    let mut broken: BTreeSet<String> = file.broken_names.clone();
+    let mut add_name = |path: &str,
+                        name: String,
+                        column: usize,
+                        unit: Option<String>,
+                        columns: &mut Vec<ColumnInfo>| {
+        if column_by_name.insert(name.clone(), column).is_some() {
+            return Err(ScenarioError::new(
+                path,
+                format!("name {name:?} is used twice"),
+            ));
+        }
+        columns.push(ColumnInfo { name, unit });
+        Ok(())
+    };
+
+    for (i, part) in &file.parts {
+        let path = format!("parts[{i}]");
+        let spec =
+            check_name(&format!("{path}.name"), &part.name).and_then(|()| part_spec(&path, part));
+        let spec = match spec {
+            Ok(spec) => spec,
+            Err(err) => {
+                report(Err(err));
+                broken.insert(part.name.clone());
+                for component in SixDof::NAMES {
+                    broken.insert(format!("{}.{component}", part.name));
+                }
+                continue;
+            }
+        };
+        let first = builder.add_part(&path, &spec);
+        sources.push(InputGroup {
+            name: part.name.clone(),
+            columns: (first..first + 6).collect(),
+        });
+        for (k, component) in SixDof::NAMES.iter().enumerate() {
+            report(add_name(
+                &format!("{path}.name"),
+                format!("{}.{component}", part.name),
+                first + k,
+                Some(SixDof::UNITS[k].to_string()),
+                &mut columns,
+            ));
+        }
+    }
+    for (i, variable) in &file.variables {
+        let path = format!("variables[{i}]");
+        let (dist, kind) = distribution(&variable.distribution);
+        let checked = check_name(&format!("{path}.name"), &variable.name).and_then(|()| {
+            dist.validate(&format!("{path}.distribution.{kind}"))
+                .map_err(ScenarioError::from)
+        });
+        if let Err(err) = checked {
+            report(Err(err));
+            broken.insert(variable.name.clone());
+            continue;
+        }
+        let column = builder.add_scalar(&path, dist);
+        sources.push(InputGroup {
+            name: variable.name.clone(),
+            columns: vec![column],
+        });
+        report(add_name(
+            &format!("{path}.name"),
+            variable.name.clone(),
+            column,
+            variable.unit.clone(),
+            &mut columns,
+        ));
+    }
+    for (i, correlation) in &file.correlations {
+        let path = format!("correlations[{i}]");
+        let mut ends = [0usize; 2];
+        let mut resolved = true;
+        for (k, name) in correlation.between.iter().enumerate() {
+            match column_by_name.get(name) {
+                Some(&column) => ends[k] = column,
+                None => {
+                    resolved = false;
+                    if !broken.contains(name) {
+                        report(Err(ScenarioError::new(
+                            format!("{path}.between[{k}]"),
+                            format!("no variable or part component named {name:?}"),
+                        )));
+                    }
+                }
+            }
+        }
+        if resolved {
+            report(
+                builder
+                    .correlate(&path, ends[0], ends[1], correlation.rho)
+                    .map_err(ScenarioError::from),
+            );
+        }
+    }
+    let input_space = match builder.build("correlations") {
+        Ok(space) => Some(space),
+        Err(err) => {
+            report(Err(err.into()));
+            None
+        }
+    };
+
+    if file.models.is_empty() && !models_failed_to_parse {
+        report(Err(ScenarioError::new(
+            "models",
+            "needs at least one model",
+        )));
+    }
+    let mut models = Vec::new();
+    let mut outputs: Vec<OutputInfo> = Vec::new();
+    for (i, model_file) in &file.models {
+        let path = format!("models[{i}]");
+        let Some(entry) = rvtol_models::find(&model_file.model) else {
+            let known: Vec<&str> = rvtol_models::all().iter().map(|e| e.name).collect();
+            report(Err(ScenarioError::new(
+                format!("{path}.model"),
+                format!(
+                    "unknown model {:?}; known models: {}",
+                    model_file.model,
+                    known.join(", ")
+                ),
+            )));
+            continue;
+        };
+        let params = match model_params(&format!("{path}.params"), &model_file.params) {
+            Ok(params) => params,
+            Err(err) => {
+                report(Err(err));
+                continue;
+            }
+        };
+        let model = match (entry.build)(&params) {
+            Ok(model) => model,
+            Err(err) => {
+                report(Err(ScenarioError::new(
+                    format!("{path}.params.{}", err.key),
+                    err.reason,
+                )));
+                continue;
+            }
+        };
+        let mut bindings = Vec::with_capacity(model.inputs().len());
+        let mut bound = true;
+        for input in model.inputs() {
+            let binding_path = format!("{path}.inputs.{}", input.name);
+            let binding = match model_file.inputs.get(&input.name) {
+                None => Err(ScenarioError::new(
+                    format!("{path}.inputs"),
+                    format!(
+                        "model input {:?} ({}) is not bound: give a number or a variable name",
+                        input.name, input.unit
+                    ),
+                )),
+                Some(serde_json::Value::Number(n)) => {
+                    let v = n.as_f64().unwrap_or(f64::NAN);
+                    if !v.is_finite() {
+                        Err(ScenarioError::new(&binding_path, "must be a finite number"))
+                    } else {
+                        model
+                            .check_constant(bindings.len(), v)
+                            .map(|()| Binding::Constant(v))
+                            .map_err(|reason| ScenarioError::new(&binding_path, reason))
+                    }
+                }
+                Some(serde_json::Value::String(name)) => match column_by_name.get(name) {
+                    Some(&column) => match &columns[column].unit {
+                        Some(unit) if input.unit != "any" && unit != &input.unit => {
+                            Err(ScenarioError::new(
+                                &binding_path,
+                                format!("{name:?} is in {unit} but the input wants {}", input.unit),
+                            ))
+                        }
+                        _ => Ok(Binding::Column(column)),
+                    },
+                    None if broken.contains(name) => {
+                        bound = false;
+                        Ok(Binding::Constant(0.0))
+                    }
+                    None => Err(ScenarioError::new(
+                        &binding_path,
+                        format!("no variable or part component named {name:?}"),
+                    )),
+                },
+                Some(other) => Err(ScenarioError::new(
+                    &binding_path,
+                    format!("expected a number or a variable name, got {other}"),
+                )),
+            };
+            match binding {
+                Ok(binding) => bindings.push(binding),
+                Err(err) => {
+                    report(Err(err));
+                    bound = false;
+                    bindings.push(Binding::Constant(0.0));
+                }
+            }
+        }
+        for extra in model_file
+            .inputs
+            .keys()
+            .filter(|k| !model.inputs().iter().any(|input| &input.name == *k))
+        {
+            let known: Vec<&str> = model.inputs().iter().map(|i| i.name.as_str()).collect();
+            report(Err(ScenarioError::new(
+                format!("{path}.inputs.{extra}"),
+                format!(
+                    "{} has no input {extra:?}; its inputs are: {}",
+                    entry.name,
+                    known.join(", ")
+                ),
+            )));
+            bound = false;
+        }
+        let first_output = outputs.len();
+        for output in model.outputs() {
+            if outputs.iter().any(|o| o.name == output.name) {
+                report(Err(ScenarioError::new(
+                    format!("{path}.model"),
+                    format!(
+                        "output {:?} is produced by an earlier model too",
+                        output.name
+                    ),
+                )));
+                bound = false;
+            }
+            outputs.push(OutputInfo {
+                name: output.name.clone(),
+                unit: output.unit.clone(),
+                kind: output.kind,
+                description: output.description.to_string(),
+                spec: None,
+                condition: None,
+                flagged_conform: false,
+            });
+        }
+        for (j, output) in model.outputs().iter().enumerate() {
+            if let Some(condition) = output.condition {
+                let indicator = model
+                    .outputs()
+                    .iter()
+                    .position(|o| o.name == condition.indicator && o.kind == OutputKind::Indicator)
+                    .unwrap_or_else(|| {
+                        panic!(
+                            "model {} qualifies {} by {}, which is not one of its indicator outputs",
+                            entry.name, output.name, condition.indicator
+                        )
+                    });
+                outputs[first_output + j].condition =
+                    Some((first_output + indicator, condition.effect));
+            }
+        }
+        if bound {
+            models.push(BoundModel {
+                model,
+                bindings,
+                first_output,
+            });
+        }
+    }
+
+    for (name, spec) in &file.spec_limits {
+        let path = format!("spec_limits.{name}");
+        let Some(output) = outputs.iter_mut().find(|o| &o.name == name) else {
+            if models.len() == file.models.len() {
+                report(Err(ScenarioError::new(
+                    &path,
+                    format!("no output named {name:?}"),
+                )));
+            }
+            continue;
+        };
+        report(spec_limits(&path, name, spec, output));
+    }
+
+    let sensitivity_groups = sensitivity_groups(&file, &sources, &broken, &mut report);
+
+    let allocation = match &file.allocation {
+        Some(section) => {
+            let tolerances: Vec<ToleranceSource> =
+                file.parts
+                    .iter()
+                    .map(|(i, part)| part_tolerance(&format!("parts[{i}]"), part))
+                    .chain(file.variables.iter().map(|(i, variable)| {
+                        variable_tolerance(&format!("variables[{i}]"), variable)
+                    }))
+                    .collect();
+            match compile_allocation(section, &tolerances) {
+                Ok(allocation) => allocation,
+                Err(err) => {
+                    report(Err(err));
+                    Vec::new()
+                }
+            }
+        }
+        None => Vec::new(),
+    };
+
+    Some(Scenario {
+        name: file.name.unwrap_or_else(|| fallback_name.to_string()),
+        description: file.description.unwrap_or_default(),
+        samples: file.samples.unwrap_or(DEFAULT_SAMPLES),
+        seed: file.seed.unwrap_or(DEFAULT_SEED),
+        input_space: input_space?,
+        columns,
+        sources,
+        sensitivity_groups,
+        models,
+        outputs,
+        allocation,
+    })
+}
+
+/// The spec limits of one output.
+fn spec_limits(
+    path: &str,
+    name: &str,
+    spec: &SpecFile,
+    output: &mut OutputInfo,
+) -> Result<(), ScenarioError> {
+    if output.kind != OutputKind::Continuous {
+        return Err(ScenarioError::new(
+            path,
+            "spec limits apply to continuous outputs only",
+        ));
+    }
+    if spec.lower.is_none() && spec.upper.is_none() {
+        return Err(ScenarioError::new(path, "give lower, upper or both"));
+    }
+    if let (Some(l), Some(u)) = (spec.lower, spec.upper) {
+        if l >= u {
+            return Err(ScenarioError::new(
+                format!("{path}.upper"),
+                format!("upper {} must exceed lower {}", Shown(u), Shown(l)),
+            ));
+        }
+    }
+    if spec.flagged_conform
+        && !matches!(output.condition, Some((_, ConditionEffect::NonConforming)))
+    {
+        return Err(ScenarioError::new(
+            format!("{path}.flagged_conform"),
+            format!("{name:?} has no indicator that flags non-conforming samples"),
+        ));
+    }
+    output.spec = Some(SpecLimits {
+        lower: spec.lower,
+        upper: spec.upper,
+    });
+    output.flagged_conform = spec.flagged_conform;
+    Ok(())
+}
+
+/// The units of the Sobol' analysis: the scenario's groups, then every source in none.
+fn sensitivity_groups(
+    file: &ScenarioFile,
+    sources: &[InputGroup],
+    broken: &BTreeSet<String>,
+    report: &mut impl FnMut(Result<(), ScenarioError>),
+) -> Vec<InputGroup> {
+    let mut groups: Vec<InputGroup> = Vec::new();
+    let mut grouped: Vec<&str> = Vec::new();
+    for (i, group) in &file.sensitivity_groups {
+        let path = format!("sensitivity_groups[{i}]");
+        if let Err(err) = check_name(&format!("{path}.name"), &group.name) {
+            report(Err(err));
+            continue;
+        }
+        if group.members.is_empty() {
+            report(Err(ScenarioError::new(
+                format!("{path}.members"),
+                "needs at least one member",
+            )));
+            continue;
+        }
+        if sources.iter().any(|s| s.name == group.name) && !group.members.contains(&group.name) {
+            report(Err(ScenarioError::new(
+                format!("{path}.name"),
+                format!("{:?} is already the name of a part or variable", group.name),
+            )));
+            continue;
+        }
+        let mut columns = Vec::new();
+        for (k, member) in group.members.iter().enumerate() {
+            let member_path = format!("{path}.members[{k}]");
+            let Some(source) = sources.iter().find(|s| &s.name == member) else {
+                if !broken.contains(member) {
+                    report(Err(ScenarioError::new(
+                        &member_path,
+                        format!("no part or variable named {member:?}"),
+                    )));
+                }
+                continue;
+            };
+            if grouped.contains(&member.as_str()) {
+                report(Err(ScenarioError::new(
+                    member_path,
+                    format!("{member:?} is already in a group"),
+                )));
+                continue;
+            }
+            grouped.push(member);
+            columns.extend(&source.columns);
+        }
+        groups.push(InputGroup {
+            name: group.name.clone(),
+            columns,
+        });
+    }
+    groups.extend(
+        sources
+            .iter()
+            .filter(|s| !grouped.contains(&s.name.as_str()))
+            .cloned(),
+    );
+    groups
+}

@@ -1,0 +1,216 @@
+//! Scenario files: the only serde types of rvtol, their loading and their validation into
+//! a [`Scenario`] the run can use.
+//!
+//! [`file`] parses the text section by section, rejecting unknown keys, wrong types and
+//! values out of range with the JSON path of the value (`parts[0].covariance[2]`);
+//! [`compile`] checks every value once (finite, non-negative, symmetric, positive
+//! semi-definite, every model input bound, known models and outputs, each model's geometry)
+//! and builds the [`Scenario`]. Every problem is a [`ScenarioError`] naming its JSON path;
+//! `rvtol validate` reports them all, the other commands the first. The keys and units are
+//! documented in scenarios/README.md.
+
+mod compile;
+mod file;
+
+use std::path::Path;
+
+use rvtol_deviation::InputSpace;
+use rvtol_models::{ConditionEffect, ErrorModel, OutputKind};
+
+use crate::allocation::spec::AllocatableSource;
+use crate::stats::SpecLimits;
+
+pub use file::{MAX_COVARIANCE, MAX_DEVIATION, MAX_PARAMETER};
+
+/// Samples of a run when neither the scenario nor the command line sets them.
+pub const DEFAULT_SAMPLES: u64 = 1_000_000;
+/// Seed of a run when neither the scenario nor the command line sets it.
+pub const DEFAULT_SEED: u64 = 1;
+
+/// A scenario that cannot be read or used, with the JSON path of the problem.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{path}: {message}")]
+pub struct ScenarioError {
+    /// JSON path of the offending value (`(file)` for the file as a whole).
+    pub path: String,
+    /// What is wrong, in one line.
+    pub message: String,
+}
+
+impl ScenarioError {
+    /// A new error at `path`.
+    pub fn new(path: impl Into<String>, message: impl Into<String>) -> Self {
+        ScenarioError {
+            path: path.into(),
+            message: message.into(),
+        }
+    }
+}
+
+impl From<rvtol_deviation::DeviationError> for ScenarioError {
+    fn from(err: rvtol_deviation::DeviationError) -> Self {
+        ScenarioError::new(err.path(), err.message())
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// The validated scenario.
+
+/// Where a model input comes from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Binding {
+    /// A fixed value.
+    Constant(f64),
+    /// A column of the input space.
+    Column(usize),
+}
+
+/// A model with its inputs bound to columns or constants.
+pub struct BoundModel {
+    /// The model.
+    pub model: Box<dyn ErrorModel>,
+    /// One binding per model input, in the model's order.
+    pub bindings: Vec<Binding>,
+    /// Index of its first output among the scenario's outputs.
+    pub first_output: usize,
+}
+
+impl BoundModel {
+    /// The model's input row for one row of the input space: constants and columns.
+    pub fn inputs_of_row(&self, row: &[f64]) -> Vec<f64> {
+        self.bindings
+            .iter()
+            .map(|b| match b {
+                Binding::Constant(v) => *v,
+                Binding::Column(column) => row[*column],
+            })
+            .collect()
+    }
+}
+
+/// One output of the scenario (of one of its models).
+#[derive(Debug, Clone, PartialEq)]
+pub struct OutputInfo {
+    /// Name.
+    pub name: String,
+    /// Unit.
+    pub unit: String,
+    /// Continuous or indicator.
+    pub kind: OutputKind,
+    /// What it is.
+    pub description: String,
+    /// Spec limits, when the scenario sets them.
+    pub spec: Option<SpecLimits>,
+    /// The indicator output (its index among the scenario's outputs) that qualifies this
+    /// output's samples, and how ([`rvtol_models::OutputCondition`]).
+    pub condition: Option<(usize, ConditionEffect)>,
+    /// Whether a sample flagged by a [`ConditionEffect::NonConforming`] condition conforms
+    /// when its value is within the limits (`spec_limits.<output>.flagged_conform`; by
+    /// default it does not).
+    pub flagged_conform: bool,
+}
+
+/// A named column of the input space (a variable or a part component).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ColumnInfo {
+    /// `variable` or `part.component`.
+    pub name: String,
+    /// Unit, when known.
+    pub unit: Option<String>,
+}
+
+/// A named set of input-space columns: one error source (a part, a variable) or a group of
+/// them.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct InputGroup {
+    /// Name: the part or variable name, or names joined with `+`.
+    pub name: String,
+    /// Its columns.
+    pub columns: Vec<usize>,
+}
+
+/// A validated scenario: the input space, the bound models and the outputs.
+pub struct Scenario {
+    /// Name (from the file, or its stem).
+    pub name: String,
+    /// Description from the file.
+    pub description: String,
+    /// Samples when the command line does not say.
+    pub samples: u64,
+    /// Seed when the command line does not say.
+    pub seed: u64,
+    /// The joint input space.
+    pub input_space: InputSpace,
+    /// Its columns' names.
+    pub columns: Vec<ColumnInfo>,
+    /// The error sources: each part (its six columns) and each variable (its column).
+    pub sources: Vec<InputGroup>,
+    /// The units of the Sobol' analysis: the scenario's `sensitivity_groups`, then every
+    /// source in none of them.
+    pub sensitivity_groups: Vec<InputGroup>,
+    /// The models in scenario order.
+    pub models: Vec<BoundModel>,
+    /// All outputs, models in order.
+    pub outputs: Vec<OutputInfo>,
+    /// The sources `rvtol allocate` may change (the `allocation` section; empty without
+    /// one), in scenario order.
+    pub allocation: Vec<AllocatableSource>,
+}
+
+impl Scenario {
+    /// Reads and validates a scenario file.
+    pub fn load(path: &Path) -> Result<Scenario, ScenarioError> {
+        Scenario::read(path).map(|(scenario, _)| scenario)
+    }
+
+    /// Reads and validates a scenario file, returning its text too.
+    pub fn read(path: &Path) -> Result<(Scenario, String), ScenarioError> {
+        let text = std::fs::read_to_string(path).map_err(|err| {
+            ScenarioError::new("(file)", format!("cannot read {}: {err}", path.display()))
+        })?;
+        let fallback_name = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "scenario".to_string());
+        let scenario = Scenario::from_json(&text, &fallback_name)?;
+        Ok((scenario, text))
+    }
+
+    /// Parses and validates scenario JSON text; the first problem is the error.
+    pub fn from_json(text: &str, fallback_name: &str) -> Result<Scenario, ScenarioError> {
+        Scenario::from_json_all_problems(text, fallback_name)
+            .map_err(|mut problems| problems.swap_remove(0))
+    }
+
+    /// Parses and validates scenario JSON text, reporting every problem found (each with
+    /// its JSON path; at least one on `Err`). A problem in one element (a part, a variable,
+    /// a model) does not hide those of the others; what depends on a broken element is not
+    /// checked again.
+    pub fn from_json_all_problems(
+        text: &str,
+        fallback_name: &str,
+    ) -> Result<Scenario, Vec<ScenarioError>> {
+        let (file, mut problems) = file::parse(text).map_err(|err| vec![err])?;
+        match compile::compile(file, fallback_name, &mut problems) {
+            Some(scenario) if problems.is_empty() => Ok(scenario),
+            _ => {
+                if problems.is_empty() {
+                    problems.push(ScenarioError::new("(root)", "the scenario is not valid"));
+                }
+                Err(problems)
+            }
+        }
+    }
+
+    /// Indices of the continuous outputs (those with distributions to analyse).
+    pub fn continuous_outputs(&self) -> Vec<usize> {
+        (0..self.outputs.len())
+            .filter(|&o| self.outputs[o].kind == OutputKind::Continuous)
+            .collect()
+    }
+
+    /// Index of an output by name.
+    pub fn output_index(&self, name: &str) -> Option<usize> {
+        self.outputs.iter().position(|o| o.name == name)
+    }
+}
