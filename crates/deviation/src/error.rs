@@ -1,13 +1,14 @@
 //! Errors of the deviation model. Each names the JSON path of the offending value, as
 //! handed in by the caller, so that a user can find it in the scenario file.
 
+use crate::shown::Shown;
 use thiserror::Error;
 
 /// A deviation specification that cannot be sampled.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum DeviationError {
     /// A value that must be finite is NaN or infinite.
-    #[error("{path}: must be a finite number, got {value}")]
+    #[error("{path}: must be a finite number, got {}", Shown(*value))]
     NotFinite {
         /// JSON path of the value.
         path: String,
@@ -15,7 +16,7 @@ pub enum DeviationError {
         value: f64,
     },
     /// A standard deviation, variance or width that must not be negative is.
-    #[error("{path}: must not be negative, got {value}")]
+    #[error("{path}: must not be negative, got {}", Shown(*value))]
     Negative {
         /// JSON path of the value.
         path: String,
@@ -24,7 +25,7 @@ pub enum DeviationError {
     },
     /// A matrix that must be symmetric is not.
     #[error(
-        "{path}: matrix is not symmetric: [{row}][{col}] = {upper} but [{col}][{row}] = {lower}"
+        "{path}: matrix is not symmetric: [{row}][{col}] = {} but [{col}][{row}] = {}", Shown(*upper), Shown(*lower)
     )]
     Asymmetric {
         /// JSON path of the matrix.

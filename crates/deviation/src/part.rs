@@ -17,6 +17,7 @@
 //! diagonal matrix diag(σ²): the document gives no correlation between the components.
 //! It is singular (two zero variances), which the pivoted Cholesky sampler accepts.
 
+use crate::shown::Shown;
 use nalgebra::DMatrix;
 
 use crate::cholesky::smallest_eigenvalue;
@@ -89,13 +90,16 @@ impl PartSpec {
                 if i == j && r != 1.0 {
                     return Err(DeviationError::invalid(
                         entry,
-                        format!("diagonal of a correlation matrix must be 1, got {r}"),
+                        format!(
+                            "diagonal of a correlation matrix must be 1, got {}",
+                            Shown(r)
+                        ),
                     ));
                 }
                 if r.abs() > 1.0 {
                     return Err(DeviationError::invalid(
                         entry,
-                        format!("correlation must lie in [-1, 1], got {r}"),
+                        format!("correlation must lie in [-1, 1], got {}", Shown(r)),
                     ));
                 }
             }
@@ -125,7 +129,7 @@ impl PartSpec {
         if length <= 0.0 {
             return Err(DeviationError::invalid(
                 format!("{path}.length_mm"),
-                format!("must be positive, got {length}"),
+                format!("must be positive, got {}", Shown(length)),
             ));
         }
         // Eq. 10: u = max/2 with the maxima of Eq. 9.

@@ -13,6 +13,7 @@
 //! Normal and tolerance-band parameters join the scenario's multivariate normal (they can
 //! be correlated with part components); the others are drawn independently.
 
+use crate::shown::Shown;
 use rand::{Rng, RngExt};
 use statrs::function::erf::{erfc, erfc_inv};
 
@@ -116,13 +117,17 @@ impl ScalarDistribution {
                 if upper < lower {
                     return Err(DeviationError::invalid(
                         field("upper"),
-                        format!("upper limit {upper} is below lower limit {lower}"),
+                        format!(
+                            "upper limit {} is below lower limit {}",
+                            Shown(upper),
+                            Shown(lower)
+                        ),
                     ));
                 }
                 if cp <= 0.0 {
                     return Err(DeviationError::invalid(
                         field("cp"),
-                        format!("process capability must be positive, got {cp}"),
+                        format!("process capability must be positive, got {}", Shown(cp)),
                     ));
                 }
             }
@@ -132,7 +137,11 @@ impl ScalarDistribution {
                 if upper < lower {
                     return Err(DeviationError::invalid(
                         field("upper"),
-                        format!("upper end {upper} is below lower end {lower}"),
+                        format!(
+                            "upper end {} is below lower end {}",
+                            Shown(upper),
+                            Shown(lower)
+                        ),
                     ));
                 }
             }
@@ -143,7 +152,12 @@ impl ScalarDistribution {
                 if !(lower <= mode && mode <= upper) {
                     return Err(DeviationError::invalid(
                         field("mode"),
-                        format!("need lower ≤ mode ≤ upper, got {lower}, {mode}, {upper}"),
+                        format!(
+                            "need lower ≤ mode ≤ upper, got {}, {}, {}",
+                            Shown(lower),
+                            Shown(mode),
+                            Shown(upper)
+                        ),
                     ));
                 }
             }
@@ -166,7 +180,11 @@ impl ScalarDistribution {
                 if upper <= lower {
                     return Err(DeviationError::invalid(
                         field("upper"),
-                        format!("upper bound {upper} must exceed lower bound {lower}"),
+                        format!(
+                            "upper bound {} must exceed lower bound {}",
+                            Shown(upper),
+                            Shown(lower)
+                        ),
                     ));
                 }
                 let (a, b) = ((lower - mean) / sd, (upper - mean) / sd);
@@ -174,7 +192,13 @@ impl ScalarDistribution {
                 if mass < 1e-300 || !mass.is_finite() {
                     return Err(DeviationError::invalid(
                         path,
-                        format!("the interval [{lower}, {upper}] holds no probability of N({mean}, {sd}²)"),
+                        format!(
+                            "the interval [{}, {}] holds no probability of N({}, {}²)",
+                            Shown(lower),
+                            Shown(upper),
+                            Shown(mean),
+                            Shown(sd)
+                        ),
                     ));
                 }
             }

@@ -22,6 +22,7 @@
 //! come from the run's quantile sketch and each percentile band is widened by the sketch's
 //! error bound (α·|x − centre|) at both ends.
 
+use rvtol_deviation::Shown;
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ContinuousCDF, Normal};
 
@@ -134,7 +135,7 @@ impl Baseline {
         if !(baseline.z.is_finite() && baseline.z > 0.0) {
             return Err(ScenarioError::new(
                 "z",
-                format!("must be a positive number, got {}", baseline.z),
+                format!("must be a positive number, got {}", Shown(baseline.z)),
             ));
         }
         if baseline.figures.is_empty() {
@@ -164,7 +165,7 @@ impl Baseline {
                     if !(t.is_finite() && t >= 0.0) {
                         return Err(ScenarioError::new(
                             format!("figures[{i}].{key}"),
-                            format!("must be a finite number ≥ 0, got {t}"),
+                            format!("must be a finite number ≥ 0, got {}", Shown(t)),
                         ));
                     }
                 }

@@ -69,6 +69,7 @@
 //! largest of F_t43, F_t4'3 over the turn and the largest |F_r43|. A row with a
 //! non-finite input, k_i ≤ 0, e ≤ 0 or a ≤ 0 gives NaN outputs (the engine counts them).
 
+use rvtol_deviation::Shown;
 use std::f64::consts::PI;
 
 use nalgebra::{SMatrix, SVector};
@@ -384,7 +385,7 @@ impl CrankElasticError {
         if !(pressure_angle > 0.0 && pressure_angle < 90.0) {
             return Err(ModelError::new(
                 "pressure_angle_deg",
-                format!("must lie in (0, 90), got {pressure_angle}"),
+                format!("must lie in (0, 90), got {}", Shown(pressure_angle)),
             ));
         }
         let sun_teeth = params.count("sun_teeth", None)? as f64;

@@ -5,6 +5,7 @@
 //! place both the contact and the transmission-error model take them from.
 
 use crate::{ModelError, ModelParams};
+use rvtol_deviation::Shown;
 
 /// A checked cycloid–pin stage.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -60,6 +61,50 @@ impl CycloidStage {
             ));
         }
         Ok(stage)
+    }
+
+    /// Checks that pins of radius `pin_radius` (the parameter `key`) fit the stage: adjacent
+    /// pins must not overlap, r_rp < r_p·sin(π/z_p), and the disc profile, the inner
+    /// equidistant of the theoretical cycloid at distance r_rp, must not be undercut:
+    /// r_rp below the smallest curvature radius of the theoretical profile where it is
+    /// convex (the inverse curvature κ = (K1·(z_p + 1)·cos φ − (1 + z_p·K1²))/(r_p·S³) of
+    /// document 003 negative; the equidistant loops where 1 + r_rp·κ ≤ 0).
+    pub fn check_pin_radius(&self, key: &str, pin_radius: f64) -> Result<(), ModelError> {
+        let zp = self.pins as f64;
+        let gap_limit = self.pin_circle_radius * (std::f64::consts::PI / zp).sin();
+        if pin_radius >= gap_limit {
+            return Err(ModelError::new(
+                key,
+                format!(
+                    "pins of radius {} overlap their neighbours on a {} mm pin circle with {} pins: the radius must be below r_p·sin(π/z_p) = {}",
+                    Shown(pin_radius),
+                    Shown(self.pin_circle_radius),
+                    self.pins,
+                    Shown(gap_limit)
+                ),
+            ));
+        }
+        let k1 = self.k1();
+        // κ depends on cos φ only: scan c = cos φ over [−1, 1].
+        let most_convex = (0..=10_000)
+            .map(|i| -1.0 + 2.0 * i as f64 / 10_000.0)
+            .map(|c| {
+                let s = (1.0 + k1 * k1 - 2.0 * k1 * c).sqrt();
+                (k1 * (zp + 1.0) * c - (1.0 + zp * k1 * k1)) / (self.pin_circle_radius * s.powi(3))
+            })
+            .fold(f64::INFINITY, f64::min);
+        if most_convex < 0.0 && 1.0 + pin_radius * most_convex <= 0.0 {
+            return Err(ModelError::new(
+                key,
+                format!(
+                    "pins of radius {} undercut the disc profile: the theoretical cycloid's smallest convex curvature radius is {} mm (K1 = {}), and the pin radius must stay below it",
+                    Shown(pin_radius),
+                    Shown(-1.0 / most_convex),
+                    Shown(k1)
+                ),
+            ));
+        }
+        Ok(())
     }
 
     /// K1 = e·z_p/r_p.

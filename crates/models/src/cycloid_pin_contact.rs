@@ -44,6 +44,7 @@
 //! force over a crank turn is T_c/(m·a_w) + |(F_x, F_y)|/m (003's "simplified" F_n(θ)
 //! drops the cross term and is not used).
 
+use rvtol_deviation::Shown;
 use std::f64::consts::PI;
 
 use crate::cycloid::{CycloidStage, PinFactors};
@@ -249,12 +250,13 @@ impl CycloidPinContact {
         let stage = CycloidStage::from_params(params, MAX_PINS)?;
         let pins = stage.pins;
         let pin_radius = params.positive("pin_radius_mm", None)?;
+        stage.check_pin_radius("pin_radius_mm", pin_radius)?;
         let face_width = params.positive("disc_face_width_mm", None)?;
         let load_share = params.positive("disc_load_share", Some(0.5))?;
         if load_share > 1.0 {
             return Err(ModelError::new(
                 "disc_load_share",
-                format!("must be at most 1, got {load_share}"),
+                format!("must be at most 1, got {}", Shown(load_share)),
             ));
         }
         let cranks = params.count("crank_count", None)? as f64;
@@ -264,7 +266,7 @@ impl CycloidPinContact {
         if !(0.0..0.5).contains(&poisson) {
             return Err(ModelError::new(
                 "poisson_ratio",
-                format!("must lie in [0, 0.5), got {poisson}"),
+                format!("must lie in [0, 0.5), got {}", Shown(poisson)),
             ));
         }
         let per_pin = params.flag("pin_position_errors", false)?;

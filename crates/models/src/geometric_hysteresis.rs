@@ -44,7 +44,7 @@
 //!   the free play of the stages in series with it, so each stage is clipped at zero and
 //!   the sample is flagged in the `interference` indicator.
 
-use rvtol_deviation::point_displacement;
+use rvtol_deviation::{point_displacement, Shown};
 
 use crate::{
     ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputKind, OutputSpec, ParamSpec,
@@ -315,14 +315,29 @@ impl GeometricHysteresis {
         if !(curtate_ratio > 0.0 && curtate_ratio < 1.0) {
             return Err(ModelError::new(
                 "curtate_ratio",
-                format!("K1 must lie in (0, 1), got {curtate_ratio}"),
+                format!("K1 must lie in (0, 1), got {}", Shown(curtate_ratio)),
+            ));
+        }
+        // K1 is e·z_p/r_p; a K1 given beside e and r_p must agree with them. Document 000
+        // Table 8 gives 0.72 where its e, z_p and r_p give 0.692 (4 % apart): 10 % allows
+        // the document and catches a geometry that cannot be (e beyond the pin circle).
+        let geometric_k1 = eccentricity * pin_count as f64 / pin_circle_radius;
+        if (curtate_ratio / geometric_k1 - 1.0).abs() > CURTATE_RATIO_AGREEMENT {
+            return Err(ModelError::new(
+                "eccentricity_mm",
+                format!(
+                    "e·z_p/r_p = {} disagrees with curtate_ratio K1 = {} by more than {} %: the eccentricity, pin count and pin-circle radius do not make one stage",
+                    Shown(geometric_k1),
+                    Shown(curtate_ratio),
+                    100.0 * CURTATE_RATIO_AGREEMENT
+                ),
             ));
         }
         let pressure_angle_deg = params.number("pressure_angle_deg", Some(20.0))?;
         if !(pressure_angle_deg > 0.0 && pressure_angle_deg < 90.0) {
             return Err(ModelError::new(
                 "pressure_angle_deg",
-                format!("must lie in (0, 90), got {pressure_angle_deg}"),
+                format!("must lie in (0, 90), got {}", Shown(pressure_angle_deg)),
             ));
         }
         let center_distance = params.positive("center_distance_mm", None)?;
@@ -449,6 +464,8 @@ const N_INPUTS: usize = 18;
 const N_OUTPUTS: usize = 5;
 /// β² below which cos β and 1/cos β are taken from their series (β = 1e-3 rad).
 const TILT_SERIES_LIMIT: f64 = 1e-6;
+/// Largest relative difference allowed between a given curtate ratio K1 and e·z_p/r_p.
+const CURTATE_RATIO_AGREEMENT: f64 = 0.1;
 
 /// β² = Δα² + Δβ² of the input shaft.
 #[inline(always)]

@@ -13,6 +13,7 @@ use crate::{
     ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputKind, OutputSpec, ParamSpec,
     ParamValue,
 };
+use rvtol_deviation::Shown;
 
 /// y = c + Σ a_i·x_i.
 #[derive(Debug, Clone)]
@@ -65,7 +66,7 @@ impl LinearStack {
             if !a.is_finite() {
                 return Err(ModelError::new(
                     format!("coefficients.{name}"),
-                    format!("must be a finite number, got {a}"),
+                    format!("must be a finite number, got {}", Shown(*a)),
                 ));
             }
             inputs.push(InputSpec {

@@ -2,6 +2,7 @@
 //! record which keys were read, so unknown keys are reported, and error messages that the
 //! engine prefixes with the JSON path of the `params` object.
 
+use rvtol_deviation::Shown;
 use std::cell::RefCell;
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -75,7 +76,7 @@ impl ModelParams {
             Some(ParamValue::Number(v)) if v.is_finite() => Ok(*v),
             Some(ParamValue::Number(v)) => Err(ModelError::new(
                 key,
-                format!("must be a finite number, got {v}"),
+                format!("must be a finite number, got {}", Shown(*v)),
             )),
             Some(ParamValue::Named(_)) => {
                 Err(ModelError::new(key, "must be a number, got an object"))
@@ -95,7 +96,7 @@ impl ModelParams {
         } else {
             Err(ModelError::new(
                 key,
-                format!("must be positive, got {value}"),
+                format!("must be positive, got {}", Shown(value)),
             ))
         }
     }

@@ -47,6 +47,7 @@
 //! peak-to-peak, its rms about the mean, its mean and the FFT semi-amplitudes of orders
 //! 1, z_c and z_p.
 
+use rvtol_deviation::Shown;
 use std::cell::RefCell;
 use std::f64::consts::PI;
 
@@ -382,7 +383,7 @@ impl TransmissionError {
         if alpha >= 45.0 {
             return Err(ModelError::new(
                 "pressure_angle_deg",
-                format!("must be below 45, got {alpha}"),
+                format!("must be below 45, got {}", Shown(alpha)),
             ));
         }
         let stage = CycloidStage::from_params(params, 256)?;

@@ -14,6 +14,7 @@
 //! Scaling a tolerance by s scales the source's spread by s about its centre and keeps
 //! its shape (Cp, relative mean shift, truncation in σ units, correlations).
 
+use rvtol_deviation::Shown;
 use std::collections::BTreeMap;
 
 use serde::Deserialize;
@@ -226,7 +227,10 @@ impl CostModel {
             if b < 0.0 {
                 return Err(ScenarioError::new(
                     format!("{path}.{name}"),
-                    format!("must be ≥ 0 (a looser tolerance cannot cost more), got {b}"),
+                    format!(
+                        "must be ≥ 0 (a looser tolerance cannot cost more), got {}",
+                        Shown(b)
+                    ),
                 ));
             }
             Ok(())
@@ -243,7 +247,7 @@ impl CostModel {
                 if *rate <= 0.0 {
                     return Err(ScenarioError::new(
                         format!("{path}.exponential.rate"),
-                        format!("must be > 0, got {rate}"),
+                        format!("must be > 0, got {}", Shown(*rate)),
                     ));
                 }
             }
@@ -262,7 +266,7 @@ impl CostModel {
                     if p[0] <= 0.0 {
                         return Err(ScenarioError::new(
                             here,
-                            format!("tolerance must be > 0, got {}", p[0]),
+                            format!("tolerance must be > 0, got {}", Shown(p[0])),
                         ));
                     }
                     if k > 0 {
@@ -446,13 +450,17 @@ pub(crate) fn compile_allocation(
         if !(min.is_finite() && min > 0.0) {
             return Err(ScenarioError::new(
                 format!("{path}.min"),
-                format!("must be a finite number > 0, got {min}"),
+                format!("must be a finite number > 0, got {}", Shown(min)),
             ));
         }
         if !(max.is_finite() && max >= min) {
             return Err(ScenarioError::new(
                 format!("{path}.max"),
-                format!("must be a finite number ≥ min ({min}), got {max}"),
+                format!(
+                    "must be a finite number ≥ min ({}), got {}",
+                    Shown(min),
+                    Shown(max)
+                ),
             ));
         }
         if let Some((lo, hi)) = range {

@@ -247,13 +247,18 @@ pub(super) fn compile(
                         column: usize,
                         unit: Option<String>,
                         columns: &mut Vec<ColumnInfo>| {
-        if column_by_name.insert(name.clone(), column).is_some() {
+        // The column exists whatever its name: its info stays aligned with the index.
+        columns.push(ColumnInfo {
+            name: name.clone(),
+            unit,
+        });
+        if column_by_name.contains_key(&name) {
             return Err(ScenarioError::new(
                 path,
                 format!("name {name:?} is used twice"),
             ));
         }
-        columns.push(ColumnInfo { name, unit });
+        column_by_name.insert(name, column);
         Ok(())
     };
 
