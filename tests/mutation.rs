@@ -323,8 +323,7 @@ fn non_finite_figure(report: &Value) -> Option<String> {
             match output.get(key) {
                 None => {}
                 Some(Value::Null) if noted => {}
-                Some(Value::Null)
-                    if one_sided && (key == "cp" || key == "cp_percentile") => {}
+                Some(Value::Null) if one_sided && (key == "cp" || key == "cp_percentile") => {}
                 Some(Value::Null) => return Some(format!("{name}.{key} is null without a note")),
                 Some(v) if !v.as_f64().is_some_and(f64::is_finite) => {
                     return Some(format!("{name}.{key} = {v}"))

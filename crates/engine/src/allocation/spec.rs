@@ -327,6 +327,13 @@ pub(crate) struct AllocationFile {
     sources: BTreeMap<String, AllocationSourceFile>,
 }
 
+impl AllocationFile {
+    /// Whether the section names any of `names` as a source.
+    pub(crate) fn names_any(&self, names: &std::collections::BTreeSet<String>) -> bool {
+        self.sources.keys().any(|name| names.contains(name))
+    }
+}
+
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct AllocationSourceFile {

@@ -526,6 +526,9 @@ pub(super) fn compile(
     let sensitivity_groups = sensitivity_groups(&file, &sources, &broken, &mut report);
 
     let allocation = match &file.allocation {
+        // A source that could not be built is reported already; its allocation is not
+        // checked again.
+        Some(section) if section.names_any(&broken) => Vec::new(),
         Some(section) => {
             let tolerances: Vec<ToleranceSource> =
                 file.parts

@@ -283,6 +283,10 @@ fn tidy_serde_message(message: &str) -> String {
         "invalid value: map, expected map with a single key",
         "give exactly one distribution, e.g. {\"normal\": {\"mean\": 0, \"sd\": 0.001}}",
     );
+    let message = message.replace(
+        "expected fewer elements in array",
+        "expected fewer elements",
+    );
     // serde writes floats in full ("floating point `1000000…`"): shorten them.
     let mut out = String::with_capacity(message.len());
     let mut rest = message.as_str();

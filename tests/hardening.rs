@@ -1,0 +1,764 @@
+//! One test per class of defect the hardening campaign found, end to end through the
+//! binary: non-finite model values counted and failing, report files on devices, FIFOs and
+//! symbolic links, a closed or full standard output, requests refused for memory, the
+//! thread bound, the accepted-but-wrong inputs, the exit codes of `check`, extreme values,
+//! and the wording of messages.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+use common::{run_rvtol, rvtol_binary, workspace_dir, TempScenario};
+use serde_json::Value;
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+/// The one stderr line of a failed command, after checking the exit code and that nothing
+/// panicked.
+fn one_line(output: &Output, code: i32) -> String {
+    let stderr = text(&output.stderr);
+    assert_eq!(
+        output.status.code(),
+        Some(code),
+        "exit code; stderr:\n{stderr}\nstdout:\n{}",
+        text(&output.stdout)
+    );
+    assert!(!stderr.contains("panicked"), "panic: {stderr}");
+    let line = stderr.strip_suffix('\n').unwrap_or(&stderr);
+    assert!(!line.contains('\n'), "more than one line: {stderr}");
+    assert!(line.starts_with("error: "), "{stderr}");
+    line.to_string()
+}
+
+fn shipped(file: &str) -> Value {
+    let path = workspace_dir().join("scenarios").join(file);
+    serde_json::from_str(&std::fs::read_to_string(path).expect("read")).expect("parse")
+}
+
+fn with(file: &str, change: impl FnOnce(&mut Value)) -> String {
+    let mut scenario = shipped(file);
+    change(&mut scenario);
+    serde_json::to_string_pretty(&scenario).expect("serialise")
+}
+
+/// A fresh directory in the temporary directory.
+fn scratch(label: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("rvtol-hardening-{label}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create scratch directory");
+    dir
+}
+
+fn path_arg(path: &Path) -> &str {
+    path.to_str().expect("utf-8 path")
+}
+
+// ---------------------------------------------------------------------------------------
+// Non-finite model values.
+
+/// The RV-20E torsion scenario with the crank bearing stiffness error bound to a constant
+/// of −1 (a zero stiffness): every sample's lost motion is NaN.
+fn torsion_with_zero_stiffness() -> String {
+    with("rv20e-torsion.json", |s| {
+        s["models"][0]["inputs"]["crank_bearing_stiffness_error"] = Value::from(-1.0);
+    })
+}
+
+#[test]
+fn non_finite_outputs_are_counted_and_fail_the_run_naming_the_model() {
+    let scenario = TempScenario::new("hardening-nan", &torsion_with_zero_stiffness());
+    let path = path_arg(scenario.path());
+    let out = run_rvtol(&["run", path, "--samples", "2000", "--json", "-", "--quiet"]);
+    let line = one_line(&out, 2);
+    assert!(
+        line.contains("models[0] (torsion_curve): lost_motion_arcmin is not finite for 2,000 of 2,000 samples (100.00 %, first at sample 0)"),
+        "{line}"
+    );
+    // The report is still written: it says how many, which share, and counts them out of
+    // spec (every sample: 1e6 ppm), with no index and the reason.
+    let report: Value = serde_json::from_slice(&out.stdout).expect("report");
+    let lost = &report["outputs"][0];
+    assert_eq!(lost["name"], "lost_motion_arcmin");
+    assert_eq!(lost["n"], 0);
+    assert_eq!(lost["non_finite"], 2000);
+    assert_eq!(lost["non_finite_fraction"], 1.0);
+    assert_eq!(lost["first_non_finite_sample"], 0);
+    assert!(lost["mean"].is_null(), "no mean of no values");
+    assert_eq!(lost["ppm_out"], 1e6);
+    assert!(lost["cpk"].is_null());
+    assert!(lost["capability_note"]
+        .as_str()
+        .is_some_and(|n| n.contains("2,000 samples (100.00 %) are not finite")));
+    // Nominal and curve refuse it, naming the model and the output.
+    let nominal = one_line(&run_rvtol(&["nominal", path]), 2);
+    assert!(
+        nominal
+            .contains("models[0] (torsion_curve): lost_motion_arcmin is NaN at the nominal point"),
+        "{nominal}"
+    );
+    let dir = scratch("nan-curve");
+    let curve = one_line(&run_rvtol(&["curve", path, "--out-dir", path_arg(&dir)]), 2);
+    assert!(
+        curve.contains("models[0] (torsion_curve): curve torsion_curve"),
+        "{curve}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_share_of_non_finite_samples_is_reported_and_may_be_allowed() {
+    // The stiffness error drawn from N(0, 0.5): k·(1 + x) ≤ 0, a NaN sample, with
+    // probability Φ(−2) = 0.02275.
+    let contents = with("rv20e-torsion.json", |s| {
+        let variables = s["variables"].as_array_mut().expect("variables");
+        let v = variables
+            .iter_mut()
+            .find(|v| v["name"] == "crank_bearing_stiffness_error")
+            .expect("the stiffness error variable");
+        v["distribution"] = serde_json::json!({ "normal": { "mean": 0.0, "sd": 0.5 } });
+    });
+    let scenario = TempScenario::new("hardening-nan-share", &contents);
+    let path = path_arg(scenario.path());
+    let samples = 20_000.0;
+    let refused = run_rvtol(&["run", path, "--samples", "20000", "--quiet"]);
+    assert!(one_line(&refused, 2).contains("more than the allowed 0 %"));
+    let allowed = run_rvtol(&[
+        "run",
+        path,
+        "--samples",
+        "20000",
+        "--max-non-finite",
+        "0.05",
+        "--json",
+        "-",
+        "--quiet",
+    ]);
+    assert_eq!(allowed.status.code(), Some(0), "{}", text(&allowed.stderr));
+    let report: Value = serde_json::from_slice(&allowed.stdout).expect("report");
+    let lost = &report["outputs"][0];
+    let share = lost["non_finite_fraction"].as_f64().expect("share");
+    // Binomial: p = Φ(−2) = 0.0227501, sd √(p(1 − p)/n); bound 5 sd.
+    let p = 0.022_750_131_948_179;
+    assert!(
+        (share - p).abs() <= 5.0 * (p * (1.0 - p) / samples).sqrt(),
+        "{share}"
+    );
+    // Every lost sample is out of spec: ppm at least the lost share.
+    assert!(lost["ppm_out"].as_f64().expect("ppm") >= share * 1e6);
+    assert!(lost["cpk"].is_null() && lost["capability_note"].is_string());
+}
+
+// ---------------------------------------------------------------------------------------
+// Report files: devices, FIFOs, symbolic links, permissions.
+
+/// A character device equal to /dev/null, made in `dir` (root can; otherwise a symbolic
+/// link to /dev/null stands in, which the writer must follow to the device).
+fn null_device(dir: &Path) -> PathBuf {
+    let node = dir.join("null-device");
+    let made = Command::new("mknod")
+        .arg(&node)
+        .args(["c", "1", "3"])
+        .status()
+        .is_ok_and(|s| s.success());
+    if !made {
+        std::os::unix::fs::symlink("/dev/null", &node).expect("symlink to /dev/null");
+    }
+    node
+}
+
+#[cfg(unix)]
+#[test]
+fn a_report_written_to_a_device_leaves_the_device() {
+    use std::os::unix::fs::FileTypeExt;
+    let dir = scratch("device");
+    let device = null_device(&dir);
+    let scenario = workspace_dir().join("scenarios/linear-stack-correlated.json");
+    for args in [
+        vec![
+            "run",
+            path_arg(&scenario),
+            "--samples",
+            "1000",
+            "--quiet",
+            "--json",
+        ],
+        vec![
+            "baseline",
+            path_arg(&scenario),
+            "--samples",
+            "1000",
+            "--quiet",
+            "-o",
+        ],
+    ] {
+        let mut args = args;
+        args.push(path_arg(&device));
+        let out = run_rvtol(&args);
+        assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+        let kind = std::fs::metadata(&device).expect("device").file_type();
+        assert!(kind.is_char_device(), "{args:?} replaced the device");
+    }
+    assert!(std::fs::metadata("/dev/null")
+        .expect("/dev/null")
+        .file_type()
+        .is_char_device());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[cfg(unix)]
+#[test]
+fn a_report_written_to_a_fifo_goes_through_it() {
+    let dir = scratch("fifo");
+    let fifo = dir.join("report.fifo");
+    assert!(Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .expect("mkfifo")
+        .success());
+    let reader_path = fifo.clone();
+    let reader =
+        std::thread::spawn(move || std::fs::read_to_string(reader_path).expect("read fifo"));
+    let scenario = workspace_dir().join("scenarios/linear-stack-correlated.json");
+    let out = run_rvtol(&[
+        "run",
+        path_arg(&scenario),
+        "--samples",
+        "1000",
+        "--quiet",
+        "--json",
+        path_arg(&fifo),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let received = reader.join().expect("reader");
+    let report: Value = serde_json::from_str(&received).expect("the report came through");
+    assert_eq!(report["samples"], 1000);
+    use std::os::unix::fs::FileTypeExt;
+    assert!(std::fs::metadata(&fifo)
+        .expect("fifo")
+        .file_type()
+        .is_fifo());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[cfg(unix)]
+#[test]
+fn a_symlink_keeps_pointing_at_its_target_which_keeps_its_permissions() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = scratch("symlink");
+    let target = dir.join("report.json");
+    std::fs::write(&target, "old").expect("write");
+    std::fs::set_permissions(&target, std::fs::Permissions::from_mode(0o600)).expect("chmod");
+    let link = dir.join("link.json");
+    std::os::unix::fs::symlink("report.json", &link).expect("symlink");
+    // A temporary left by a run that was killed (process 0 never lives).
+    let stale = dir.join(".report.json.rvtol-tmp-0");
+    std::fs::write(&stale, "half a report").expect("write");
+    let scenario = workspace_dir().join("scenarios/linear-stack-correlated.json");
+    let out = run_rvtol(&[
+        "run",
+        path_arg(&scenario),
+        "--samples",
+        "1000",
+        "--quiet",
+        "--json",
+        path_arg(&link),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert!(std::fs::symlink_metadata(&link)
+        .expect("link")
+        .file_type()
+        .is_symlink());
+    let report: Value =
+        serde_json::from_str(&std::fs::read_to_string(&target).expect("target")).expect("json");
+    assert_eq!(report["samples"], 1000);
+    let mode = std::fs::metadata(&target)
+        .expect("target")
+        .permissions()
+        .mode();
+    assert_eq!(mode & 0o777, 0o600, "permissions kept");
+    assert!(!stale.exists(), "the killed run's temporary is cleaned up");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+// ---------------------------------------------------------------------------------------
+// Standard output closed or full.
+
+#[test]
+fn a_closed_pipe_ends_the_output_quietly() {
+    let scenario = workspace_dir().join("scenarios/rv20e-hysteresis.json");
+    let dir = scratch("pipe");
+    let baseline = dir.join("b.json");
+    for args in [
+        vec!["validate", path_arg(&scenario)],
+        vec!["models"],
+        vec!["run", path_arg(&scenario), "--samples", "2000", "--quiet"],
+        vec![
+            "baseline",
+            path_arg(&scenario),
+            "--samples",
+            "2000",
+            "--quiet",
+            "-o",
+            path_arg(&baseline),
+        ],
+    ] {
+        let mut child = Command::new(rvtol_binary())
+            .args(&args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("start");
+        drop(child.stdout.take()); // the reader goes away at once, as `| head -0` does
+        let out = child.wait_with_output().expect("wait");
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "{args:?}: {}",
+            text(&out.stderr)
+        );
+        assert!(out.stderr.is_empty(), "{args:?}: {}", text(&out.stderr));
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[cfg(target_os = "linux")]
+#[test]
+fn a_full_output_is_one_line() {
+    let scenario = workspace_dir().join("scenarios/rv20e-hysteresis.json");
+    for args in [
+        vec!["validate", path_arg(&scenario)],
+        vec!["run", path_arg(&scenario), "--samples", "2000", "--quiet"],
+    ] {
+        let full = std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .expect("/dev/full");
+        let out = Command::new(rvtol_binary())
+            .args(&args)
+            .stdout(full)
+            .output()
+            .expect("run");
+        let line = one_line(&out, 2);
+        assert!(
+            line.starts_with("error: cannot write to standard output: No space left on device"),
+            "{line}"
+        );
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Memory and threads.
+
+#[test]
+fn requests_that_cannot_fit_are_refused_before_they_start() {
+    let scenario = workspace_dir().join("scenarios/rv20e-hysteresis.json");
+    let path = path_arg(&scenario);
+    let run = one_line(
+        &run_rvtol(&[
+            "run",
+            path,
+            "--samples",
+            "1e9",
+            "--exact-percentile-limit",
+            "1e10",
+            "--max-memory",
+            "1G",
+        ]),
+        2,
+    );
+    assert!(
+        run.starts_with("error: run: needs about 32.2 GB of memory (4,000,000,000 kept values for exact percentiles of 4 outputs), more than the 1.1 GB available (--max-memory): lower --exact-percentile-limit"),
+        "{run}"
+    );
+    let sensitivity = one_line(
+        &run_rvtol(&[
+            "sensitivity",
+            path,
+            "--samples",
+            "1e8",
+            "--row-bootstrap-limit",
+            "1e12",
+            "--max-memory",
+            "1G",
+        ]),
+        2,
+    );
+    assert!(
+        sensitivity.contains("model values for the row bootstrap"),
+        "{sensitivity}"
+    );
+    assert!(
+        sensitivity.contains("lower --row-bootstrap-limit"),
+        "{sensitivity}"
+    );
+    let allocate = one_line(
+        &run_rvtol(&[
+            "allocate",
+            path,
+            "--output",
+            "hysteresis_arcmin",
+            "--target",
+            "p99.865 <= 1.5",
+            "--samples",
+            "1e10",
+            "--max-memory",
+            "1G",
+        ]),
+        2,
+    );
+    assert!(
+        allocate.contains("kept values of the targeted output"),
+        "{allocate}"
+    );
+    // A baseline file that claims more than fits is refused by check, not aborted.
+    let dir = scratch("memory");
+    let baseline = dir.join("b.json");
+    let written = run_rvtol(&[
+        "baseline",
+        path,
+        "--samples",
+        "2000",
+        "--quiet",
+        "-o",
+        path_arg(&baseline),
+    ]);
+    assert_eq!(written.status.code(), Some(0), "{}", text(&written.stderr));
+    let mut recorded: Value =
+        serde_json::from_str(&std::fs::read_to_string(&baseline).expect("read")).expect("json");
+    recorded["samples"] = Value::from(1_000_000_000_000u64);
+    recorded["exact_percentile_limit"] = Value::from(u64::MAX);
+    std::fs::write(&baseline, recorded.to_string()).expect("write");
+    let check = one_line(
+        &run_rvtol(&[
+            "check",
+            path,
+            "--baseline",
+            path_arg(&baseline),
+            "--max-memory",
+            "1G",
+        ]),
+        2,
+    );
+    assert!(check.starts_with("error: check: needs about"), "{check}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_baseline_of_a_billion_samples_takes_bounded_memory() {
+    // Beyond the exact-percentile limit the gate's percentiles come from the sketch: the
+    // memory estimate stays below 100 MB for any sample count (the run is not made).
+    let scenario =
+        rvtol_engine::Scenario::load(&workspace_dir().join("scenarios/rv20e-hysteresis.json"))
+            .expect("load");
+    let settings = rvtol_engine::RunSettings {
+        samples: 1_000_000_000,
+        seed: 1,
+        exact_percentile_limit: rvtol_engine::DEFAULT_EXACT_PERCENTILE_LIMIT,
+    };
+    let need = rvtol_engine::memory::run(&scenario, &settings, 2);
+    assert!(need.bytes < 100e6, "{need:?}");
+}
+
+#[test]
+fn threads_beyond_four_per_core_are_refused() {
+    let scenario = workspace_dir().join("scenarios/linear-stack-correlated.json");
+    let line = one_line(
+        &run_rvtol(&["run", path_arg(&scenario), "--threads", "10000", "--quiet"]),
+        2,
+    );
+    assert!(
+        line.starts_with("error: --threads: 10000 is more than "),
+        "{line}"
+    );
+}
+
+#[test]
+fn huge_scenarios_validate_fast_or_are_refused() {
+    // 100,000 unused variables: the covariance is kept per correlated group, not dense.
+    let mut many = shipped("linear-stack-correlated.json");
+    let variables = many["variables"].as_array_mut().expect("variables");
+    for i in 0..100_000 {
+        variables.push(serde_json::json!({
+            "name": format!("unused{i}"),
+            "distribution": { "normal": { "mean": 0.0, "sd": 1.0 } }
+        }));
+    }
+    let scenario = TempScenario::new("hardening-many", &many.to_string());
+    let started = std::time::Instant::now();
+    let out = run_rvtol(&["validate", path_arg(scenario.path())]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert!(started.elapsed().as_secs() < 30, "{:?}", started.elapsed());
+    // A 20,000-column correlated chain is refused with the figure and the way out.
+    let mut chain = shipped("linear-stack-correlated.json");
+    let variables = chain["variables"].as_array_mut().expect("variables");
+    for i in 0..20_000 {
+        variables.push(serde_json::json!({
+            "name": format!("c{i}"),
+            "distribution": { "normal": { "mean": 0.0, "sd": 1.0 } }
+        }));
+    }
+    let correlations = chain["correlations"].as_array_mut().expect("correlations");
+    for i in 0..19_999 {
+        correlations.push(
+            serde_json::json!({ "between": [format!("c{i}"), format!("c{}", i + 1)], "rho": 0.4 }),
+        );
+    }
+    let scenario = TempScenario::new("hardening-chain", &chain.to_string());
+    let line = one_line(&run_rvtol(&["validate", path_arg(scenario.path())]), 2);
+    assert!(
+        line.contains("correlations: 20000 normal columns are correlated into one group"),
+        "{line}"
+    );
+    assert!(line.contains("6.4 GB"), "{line}");
+}
+
+// ---------------------------------------------------------------------------------------
+// Accepted but wrong, now refused.
+
+fn assert_refused(label: &str, contents: &str, needles: &[&str]) {
+    let scenario = TempScenario::new(label, contents);
+    let line = one_line(&run_rvtol(&["validate", path_arg(scenario.path())]), 2);
+    for needle in needles {
+        assert!(
+            line.contains(needle),
+            "{label}: missing {needle:?} in {line}"
+        );
+    }
+}
+
+#[test]
+fn a_pair_correlated_twice_is_refused() {
+    let contents = with("linear-stack-correlated.json", |s| {
+        let correlations = s["correlations"].as_array_mut().expect("correlations");
+        let mut again = correlations[0].clone();
+        again["rho"] = Value::from(-0.1);
+        correlations.push(again);
+    });
+    assert_refused(
+        "hardening-twice",
+        &contents,
+        &["correlations[2]: correlates the same pair as correlations[0]"],
+    );
+}
+
+#[test]
+fn impossible_geometry_is_refused() {
+    assert_refused(
+        "hardening-eccentricity",
+        &with("rv20e-hysteresis.json", |s| {
+            s["models"][0]["params"]["eccentricity_mm"] = Value::from(60.0);
+        }),
+        &["models[0].params.eccentricity_mm", "e·z_p/r_p = 46.15"],
+    );
+    assert_refused(
+        "hardening-pin-radius",
+        &with("rv80e-contact.json", |s| {
+            s["models"][0]["params"]["pin_radius_mm"] = Value::from(1000.0);
+        }),
+        &["models[0].params.pin_radius_mm", "overlap their neighbours"],
+    );
+    // Pins that fit between their neighbours but are larger than the profile's smallest
+    // convex curvature radius (7.52 mm for the RV-80E: r_p·(1 + K1)³/(K1·(z_p + 1) + 1 +
+    // z_p·K1²) at φ = π).
+    assert_refused(
+        "hardening-undercut",
+        &with("rv80e-contact.json", |s| {
+            s["models"][0]["params"]["pin_radius_mm"] = Value::from(5.5);
+            s["models"][0]["params"]["eccentricity_mm"] = Value::from(1.85);
+        }),
+        &[
+            "models[0].params.pin_radius_mm",
+            "undercut the disc profile",
+        ],
+    );
+}
+
+#[test]
+fn extreme_values_are_refused_with_the_range() {
+    assert_refused(
+        "hardening-1e308",
+        &with("rv20e-hysteresis.json", |s| {
+            s["variables"][0]["distribution"]["tolerance_band"]["upper"] = Value::from(1e308);
+        }),
+        &["variables[0].distribution.tolerance_band.upper: 1e308 is outside ±1e6"],
+    );
+}
+
+// ---------------------------------------------------------------------------------------
+// Exit codes of check.
+
+#[test]
+fn check_against_the_wrong_baseline_is_bad_input() {
+    let dir = scratch("check");
+    let baseline = dir.join("b.json");
+    let hysteresis = workspace_dir().join("scenarios/rv20e-hysteresis.json");
+    let written = run_rvtol(&[
+        "baseline",
+        path_arg(&hysteresis),
+        "--samples",
+        "2000",
+        "--quiet",
+        "-o",
+        path_arg(&baseline),
+    ]);
+    assert_eq!(written.status.code(), Some(0));
+    let other = workspace_dir().join("scenarios/linear-stack-correlated.json");
+    let line = one_line(
+        &run_rvtol(&[
+            "check",
+            path_arg(&other),
+            "--baseline",
+            path_arg(&baseline),
+            "--quiet",
+        ]),
+        2,
+    );
+    assert!(
+        line.contains("scenario: the baseline records scenario \"rv20e-hysteresis\", not \"linear-stack-correlated\""),
+        "{line}"
+    );
+    let recorded: Value =
+        serde_json::from_str(&std::fs::read_to_string(&baseline).expect("read")).expect("json");
+    for (label, change, needle) in [
+        (
+            "output",
+            ("output", "no_such_output"),
+            "figures[0].output: the scenario has no output",
+        ),
+        (
+            "figure",
+            ("figure", "p42"),
+            "figures[0].figure: \"p42\" is not a figure",
+        ),
+    ] {
+        let mut broken = recorded.clone();
+        broken["figures"][0][change.0] = Value::from(change.1);
+        let file = dir.join(format!("{label}.json"));
+        std::fs::write(&file, broken.to_string()).expect("write");
+        let line = one_line(
+            &run_rvtol(&[
+                "check",
+                path_arg(&hysteresis),
+                "--baseline",
+                path_arg(&file),
+                "--quiet",
+            ]),
+            2,
+        );
+        assert!(line.contains(needle), "{line}");
+    }
+    let mut empty = recorded.clone();
+    empty["figures"] = Value::Array(Vec::new());
+    let file = dir.join("empty.json");
+    std::fs::write(&file, empty.to_string()).expect("write");
+    let line = one_line(
+        &run_rvtol(&[
+            "check",
+            path_arg(&hysteresis),
+            "--baseline",
+            path_arg(&file),
+            "--quiet",
+        ]),
+        2,
+    );
+    assert!(line.contains("figures: is empty"), "{line}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+// ---------------------------------------------------------------------------------------
+// Messages.
+
+#[test]
+fn validate_reports_every_problem_one_line_each() {
+    let contents = with("rv20e-hysteresis.json", |s| {
+        s["variables"][0]["distribution"]["tolerance_band"]["cp"] = Value::from(-1.0);
+        s["variables"][1]["distribution"]["tolerance_band"]["extra"] = Value::from(1.0);
+        s["correlations"] = serde_json::json!([{ "between": ["a", "b", "c"], "rho": 0.5 }]);
+    });
+    let scenario = TempScenario::new("hardening-many-problems", &contents);
+    let out = run_rvtol(&["validate", path_arg(scenario.path())]);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = text(&out.stderr);
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(lines.len(), 3, "{stderr}");
+    assert!(lines.iter().all(|l| l.starts_with("error: ")), "{stderr}");
+    assert!(stderr.contains("variables[0].distribution.tolerance_band.cp: process capability must be positive, got -1"), "{stderr}");
+    assert!(
+        stderr.contains("variables[1].distribution.tolerance_band.extra: unknown field `extra`"),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("correlations[0].between: invalid length 3, expected fewer elements"),
+        "{stderr}"
+    );
+    assert!(lines[2].ends_with("(3 problems)"), "{stderr}");
+}
+
+#[test]
+fn schema_errors_carry_their_json_path() {
+    for (label, distribution, needle) in [
+        (
+            "two-distributions",
+            serde_json::json!({ "normal": { "mean": 0, "sd": 1 }, "uniform": { "lower": 0, "upper": 1 } }),
+            "variables[0].distribution: give exactly one distribution",
+        ),
+        (
+            "empty-distribution",
+            serde_json::json!({}),
+            "variables[0].distribution: give exactly one distribution",
+        ),
+        (
+            "extra-key",
+            serde_json::json!({ "normal": { "mean": 0, "sd": 1, "skew": 2 } }),
+            "variables[0].distribution.normal.skew: unknown field `skew`",
+        ),
+    ] {
+        let contents = with("rv20e-hysteresis.json", |s| {
+            s["variables"][0]["distribution"] = distribution;
+        });
+        assert_refused(&format!("hardening-{label}"), &contents, &[needle]);
+    }
+    // A duplicate key is not silently the last one.
+    let text =
+        std::fs::read_to_string(workspace_dir().join("scenarios/linear-stack-correlated.json"))
+            .expect("read")
+            .replacen("\"seed\":", "\"seed\": 3, \"seed\":", 1);
+    assert_refused(
+        "hardening-duplicate-key",
+        &text,
+        &["key \"seed\" appears twice"],
+    );
+}
+
+#[test]
+fn usage_errors_are_one_line_naming_the_option() {
+    let line = one_line(&run_rvtol(&["run", "x.json", "--samples", "-1"]), 2);
+    assert_eq!(
+        line,
+        "error: invalid value '-1' for '--samples <SAMPLES>': must be a whole number of at least 1 (see 'rvtol run --help')"
+    );
+    let line = one_line(&run_rvtol(&["run"]), 2);
+    assert!(line.contains("<SCENARIO>"), "{line}");
+    let line = one_line(&run_rvtol(&["frobnicate"]), 2);
+    assert!(
+        line.contains("unrecognized subcommand 'frobnicate'"),
+        "{line}"
+    );
+    // Counts may be written in exponent form.
+    let scenario = workspace_dir().join("scenarios/linear-stack-correlated.json");
+    let out = run_rvtol(&[
+        "run",
+        path_arg(&scenario),
+        "--samples",
+        "2e3",
+        "--quiet",
+        "--json",
+        "-",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let report: Value = serde_json::from_slice(&out.stdout).expect("json");
+    assert_eq!(report["samples"], 2000);
+}
