@@ -8,7 +8,8 @@
 //! binomial distribution (precision policy, tests/lib.rs), and every interval's width.
 
 use rvtol_engine::sensitivity::{
-    independent_groups, sobol_indices, SensitivitySettings, DEFAULT_ROW_BOOTSTRAP_LIMIT,
+    independent_groups, sobol_indices, BootstrapMethod, SensitivitySettings,
+    DEFAULT_ROW_BOOTSTRAP_LIMIT,
 };
 use rvtol_engine::sensitivity_report::SensitivityReport;
 use rvtol_engine::Scenario;
@@ -30,6 +31,16 @@ fn settings(seed: u64) -> SensitivitySettings {
 /// Runs `seeds` analyses of a one-output scenario; returns (intervals covering the closed
 /// form, intervals in all, widest interval).
 fn coverage(file: &str, seeds: u64, closed_form: impl Fn(&str) -> (f64, f64)) -> (u64, u64, f64) {
+    coverage_with(file, seeds, closed_form, settings)
+}
+
+/// [`coverage`] with the settings of each seed given.
+fn coverage_with(
+    file: &str,
+    seeds: u64,
+    closed_form: impl Fn(&str) -> (f64, f64),
+    settings: impl Fn(u64) -> SensitivitySettings,
+) -> (u64, u64, f64) {
     let scenario = Scenario::load(&scenario_path(file)).unwrap();
     let (mut covered, mut total, mut widest) = (0u64, 0u64, 0.0f64);
     for seed in 1..=seeds {
@@ -65,6 +76,39 @@ fn ishigami_intervals_cover_the_closed_form_and_are_narrow() {
         let i = ["x1", "x2", "x3"].iter().position(|n| *n == name).unwrap();
         (s[i], st[i])
     });
+    assert_coverage(covered, total);
+    assert!(widest < 0.02, "widest interval {widest}");
+}
+
+#[test]
+fn block_bootstrap_intervals_cover_the_closed_form_too() {
+    // With the row-bootstrap limit below N·(2G + 2) the intervals come from resampled blocks
+    // of rows (2^16 base samples: 64-row blocks, 1024 of them); their coverage must hold at
+    // the same nominal rate, and their width stay that of the row bootstrap (< 0.02).
+    let (s, st) = Ishigami::from_params(&ModelParams::new())
+        .unwrap()
+        .sobol_indices();
+    let scenario = Scenario::load(&scenario_path("ishigami.json")).unwrap();
+    let blocks = SensitivitySettings {
+        row_bootstrap_limit: 1,
+        ..settings(1)
+    };
+    assert_eq!(
+        blocks.bootstrap_method(&scenario),
+        BootstrapMethod::Blocks { rows: 64 }
+    );
+    let (covered, total, widest) = coverage_with(
+        "ishigami.json",
+        20,
+        |name| {
+            let i = ["x1", "x2", "x3"].iter().position(|n| *n == name).unwrap();
+            (s[i], st[i])
+        },
+        |seed| SensitivitySettings {
+            row_bootstrap_limit: 1,
+            ..settings(seed)
+        },
+    );
     assert_coverage(covered, total);
     assert!(widest < 0.02, "widest interval {widest}");
 }

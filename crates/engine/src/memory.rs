@@ -117,12 +117,14 @@ pub fn sensitivity(
     let variants = (2 * independent_groups(scenario).len() + 2) as f64;
     let continuous = scenario.continuous_outputs().len() as f64;
     let n = settings.base_samples as f64;
-    let rows = settings.bootstrap_method(scenario) == BootstrapMethod::Rows;
-    let kept = if rows {
-        VALUE * n * variants * (continuous + 1.0)
-    } else {
-        // Block sums: at most a block per 64 rows, 2G + 3 numbers each.
-        VALUE * (n / 64.0).min(1e6) * (variants + 1.0) * continuous
+    let method = settings.bootstrap_method(scenario);
+    let rows = method == BootstrapMethod::Rows;
+    let kept = match method {
+        BootstrapMethod::Rows => VALUE * n * variants * (continuous + 1.0),
+        // Block sums: 2G + 3 numbers per block and output.
+        BootstrapMethod::Blocks { rows } => {
+            VALUE * (n / rows as f64).ceil() * (variants + 1.0) * continuous
+        }
     };
     let columns = scenario.input_space.n_columns() as f64;
     let per_thread = VALUE * CHUNK_SIZE as f64 * (4.0 * columns + variants * continuous);
