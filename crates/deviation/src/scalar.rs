@@ -10,8 +10,23 @@
 //!   the inverse CDF, u ~ U(Φ(a), Φ(b)), x = μ + σ·Φ⁻¹(u) with a = (L − μ)/σ, b = (U − μ)/σ;
 //!   evaluated on the side of the mean where the tail probabilities keep their precision.
 //!
+//! - `FoldedNormal { mean, sd }`: |X| for X ~ N(μ, σ²), the magnitude of a signed
+//!   deviation (a clearance, a position error's size). Mean σ·√(2/π)·e^(−μ²/2σ²) +
+//!   μ·(1 − 2Φ(−μ/σ)), variance μ² + σ² − mean² (Leone, Nelson & Nottingham 1961). Drawn
+//!   as |μ + σ·Φ⁻¹(u)|.
+//! - `Rayleigh { sigma }`: the length of a 2-D eccentricity whose two components are
+//!   independent N(0, σ²) (a radial runout, the amplitude of a once-per-revolution pitch
+//!   error). Mean σ·√(π/2), variance (4 − π)/2·σ²; drawn as σ·√(−2·ln(1 − u)).
+//! - `Lognormal { mu, sigma }`: exp(μ + σ·Z). Mean e^(μ + σ²/2), variance
+//!   (e^(σ²) − 1)·e^(2μ + σ²); drawn as exp(μ + σ·Φ⁻¹(u)).
+//!
+//! The scenario gives the three non-negative laws from a tolerance the way it gives a
+//! normal from a band ([`RAYLEIGH_QUANTILE`], [`FOLDED_QUANTILE`]): the stated upper limit
+//! is the 99.865 % quantile at Cp = 1, as a band limit is for a normal.
+//!
 //! Normal and tolerance-band parameters join the scenario's multivariate normal (they can
-//! be correlated with part components); the others are drawn independently.
+//! be correlated with part components); the others are drawn independently, each from one
+//! uniform of the stream by its inverse CDF.
 
 use crate::shown::Shown;
 use rand::{Rng, RngExt};
@@ -67,6 +82,37 @@ pub enum ScalarDistribution {
         /// Upper truncation point (> lower).
         upper: f64,
     },
+    /// |X| with X ~ N(mean, sd²).
+    FoldedNormal {
+        /// Mean of the underlying normal.
+        mean: f64,
+        /// Standard deviation of the underlying normal (≥ 0).
+        sd: f64,
+    },
+    /// The length of a 2-D vector of two independent N(0, σ²) components.
+    Rayleigh {
+        /// σ of each component (≥ 0).
+        sigma: f64,
+    },
+    /// exp(μ + σ·Z), Z standard normal.
+    Lognormal {
+        /// μ, the log of the median.
+        mu: f64,
+        /// σ of the log (≥ 0).
+        sigma: f64,
+    },
+}
+
+/// The 99.865 % quantile of the standard Rayleigh law, √(−2·ln 0.00135) = 3.6353: a
+/// Rayleigh quantity with upper tolerance U at Cp has σ = U/(3.6353·Cp).
+pub const RAYLEIGH_QUANTILE: f64 = 3.635_285_597_179_897;
+/// The 99.865 % quantile of |Z| for a standard normal Z, Φ⁻¹(1 − 0.00135/2) = 3.2051.
+pub const FOLDED_QUANTILE: f64 = 3.205_133_180_184_792;
+
+/// A uniform draw in the open interval (0, 1): 53 random bits, centred in their cell.
+#[inline]
+fn open_unit<R: Rng + ?Sized>(rng: &mut R) -> f64 {
+    ((rng.next_u64() >> 11) as f64 + 0.5) * (1.0 / (1u64 << 53) as f64)
 }
 
 fn standard_normal_cdf(x: f64) -> f64 {
@@ -202,6 +248,24 @@ impl ScalarDistribution {
                     ));
                 }
             }
+            ScalarDistribution::FoldedNormal { mean, sd } => {
+                DeviationError::finite(&field("mean"), mean)?;
+                DeviationError::non_negative(&field("sd"), sd)?;
+            }
+            ScalarDistribution::Rayleigh { sigma } => {
+                DeviationError::non_negative(&field("sigma"), sigma)?;
+            }
+            ScalarDistribution::Lognormal { mu, sigma } => {
+                DeviationError::finite(&field("mu"), mu)?;
+                DeviationError::non_negative(&field("sigma"), sigma)?;
+                // e^(2μ + σ²)·e^(σ²) must stay finite for the moments.
+                if 2.0 * mu + 2.0 * sigma * sigma > 700.0 {
+                    return Err(DeviationError::invalid(
+                        field("sigma"),
+                        "the spread of the log is too large for finite moments",
+                    ));
+                }
+            }
         }
         Ok(())
     }
@@ -248,6 +312,17 @@ impl ScalarDistribution {
                 let shift = (pa - pb) / mass;
                 sd * sd * (1.0 + (a * pa - b * pb) / mass - shift * shift)
             }
+            ScalarDistribution::FoldedNormal { mean, sd } => {
+                let m = self.mean();
+                (mean * mean + sd * sd - m * m).max(0.0)
+            }
+            ScalarDistribution::Rayleigh { sigma } => {
+                (4.0 - std::f64::consts::PI) / 2.0 * sigma * sigma
+            }
+            ScalarDistribution::Lognormal { mu, sigma } => {
+                let s2 = sigma * sigma;
+                s2.exp_m1() * (2.0 * mu + s2).exp()
+            }
             other => other.as_normal().map(|(_, sd)| sd * sd).unwrap_or(f64::NAN),
         }
     }
@@ -268,6 +343,15 @@ impl ScalarDistribution {
                 let mass = standard_normal_mass(a, b);
                 mean + sd * (standard_normal_density(a) - standard_normal_density(b)) / mass
             }
+            ScalarDistribution::FoldedNormal { mean, sd } => {
+                if sd == 0.0 {
+                    return mean.abs();
+                }
+                sd * (2.0 / std::f64::consts::PI).sqrt() * (-0.5 * (mean / sd).powi(2)).exp()
+                    + mean * (1.0 - 2.0 * standard_normal_cdf(-mean / sd))
+            }
+            ScalarDistribution::Rayleigh { sigma } => sigma * (0.5 * std::f64::consts::PI).sqrt(),
+            ScalarDistribution::Lognormal { mu, sigma } => (mu + 0.5 * sigma * sigma).exp(),
             other => other.as_normal().map(|(m, _)| m).unwrap_or(f64::NAN),
         }
     }
@@ -310,6 +394,16 @@ impl ScalarDistribution {
                     standard_normal_quantile(pa + u * (pb - pa))
                 };
                 (mean + sd * z).clamp(lower, upper)
+            }
+            ScalarDistribution::FoldedNormal { mean, sd } => {
+                (mean + sd * standard_normal_quantile(open_unit(rng))).abs()
+            }
+            ScalarDistribution::Rayleigh { sigma } => {
+                // 1 − u is in (0, 1) as u is: −ln of it is positive and finite.
+                sigma * (-2.0 * (1.0 - open_unit(rng)).ln()).sqrt()
+            }
+            ScalarDistribution::Lognormal { mu, sigma } => {
+                (mu + sigma * standard_normal_quantile(open_unit(rng))).exp()
             }
             normal => {
                 let (mean, sd) = normal.as_normal().unwrap_or((0.0, 0.0));
@@ -382,7 +476,7 @@ mod tests {
                 1.0 - 2.0 / std::f64::consts::PI,
             ),
         ];
-        for (d, mean, var) in cases {
+        for (d, mean, var) in cases.into_iter().chain(magnitude_laws()) {
             d.validate("d").unwrap();
             assert!((d.mean() - mean).abs() < 1e-12, "{d:?} closed-form mean");
             assert!(
@@ -395,6 +489,60 @@ mod tests {
             // Var of the sample variance ≈ (μ4 − σ⁴)/n ≤ 2σ⁴/n·(1 + kurtosis/2); 10 % is
             // over 20 standard errors for these light-tailed laws at n = 2e5.
             assert!((v - var).abs() < 0.02 * var, "{d:?}: var {v} vs {var}");
+        }
+    }
+
+    /// The non-negative laws with their closed-form means and variances: a folded standard
+    /// normal (√(2/π), 1 − 2/π), a folded N(1, 0.5²) (mean 0.5·√(2/π)·e^(−2) +
+    /// (1 − 2Φ(−2)), variance 1.25 − mean²), Rayleigh σ = 2 (2·√(π/2), (4 − π)/2·4) and
+    /// lognormal (0, 0.5) (e^(1/8), (e^(1/4) − 1)·e^(1/4)).
+    fn magnitude_laws() -> Vec<(ScalarDistribution, f64, f64)> {
+        let pi = std::f64::consts::PI;
+        let shifted_mean =
+            0.5 * (2.0 / pi).sqrt() * (-2.0f64).exp() + (1.0 - 2.0 * standard_normal_cdf(-2.0));
+        vec![
+            (
+                ScalarDistribution::FoldedNormal { mean: 0.0, sd: 1.0 },
+                (2.0 / pi).sqrt(),
+                1.0 - 2.0 / pi,
+            ),
+            (
+                ScalarDistribution::FoldedNormal { mean: 1.0, sd: 0.5 },
+                shifted_mean,
+                1.25 - shifted_mean * shifted_mean,
+            ),
+            (
+                ScalarDistribution::Rayleigh { sigma: 2.0 },
+                2.0 * (0.5 * pi).sqrt(),
+                (4.0 - pi) / 2.0 * 4.0,
+            ),
+            (
+                ScalarDistribution::Lognormal {
+                    mu: 0.0,
+                    sigma: 0.5,
+                },
+                0.125f64.exp(),
+                (0.25f64.exp() - 1.0) * 0.25f64.exp(),
+            ),
+        ]
+    }
+
+    #[test]
+    fn tolerance_quantiles_are_the_99_865_percent_points() {
+        // P(R ≤ 3.6353·σ) = 1 − exp(−3.6353²/2) = 0.99865; P(|Z| ≤ 3.2051) = 0.99865.
+        assert!((1.0 - (-0.5 * RAYLEIGH_QUANTILE.powi(2)).exp() - 0.99865).abs() < 1e-12);
+        let folded = 1.0 - 2.0 * standard_normal_upper_tail(FOLDED_QUANTILE);
+        assert!((folded - 0.99865).abs() < 1e-12, "{folded}");
+    }
+
+    #[test]
+    fn magnitudes_are_never_negative() {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        for (d, _, _) in magnitude_laws() {
+            assert!((0..100_000).all(|_| {
+                let x = d.sample(&mut rng);
+                x.is_finite() && x >= 0.0
+            }));
         }
     }
 

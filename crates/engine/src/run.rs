@@ -213,6 +213,8 @@ struct Plan<'a> {
     sketch_frames: Vec<(f64, f64)>,
     /// The only output whose values are kept, when the caller needs one.
     only_output: Option<usize>,
+    /// Per output: whether flagged samples conform (`flagged_conform`).
+    flagged_conform: Vec<bool>,
 }
 
 impl<'a> Plan<'a> {
@@ -400,7 +402,22 @@ impl<'a> Plan<'a> {
                 acc.flagged += flags.iter().filter(|&&flag| is_set(flag)).count() as u64;
             }
             match &mut acc.distribution {
-                Distribution::Values(all) => all.extend_from_slice(kept),
+                Distribution::Values(all) => {
+                    match flags {
+                        // The values a conformity target reads: a flagged sample lies beyond
+                        // every limit.
+                        Some((flags, ConditionEffect::NonConforming))
+                            if self.only_output == Some(o) && !self.flagged_conform[o] =>
+                        {
+                            all.extend(
+                                values.iter().zip(flags).filter(|(v, _)| v.is_finite()).map(
+                                    |(&v, &flag)| if is_set(flag) { f64::INFINITY } else { v },
+                                ),
+                            )
+                        }
+                        _ => all.extend_from_slice(kept),
+                    }
+                }
                 Distribution::Sketch {
                     sketch,
                     center,
@@ -427,7 +444,11 @@ pub fn run(
 
 /// [`run`] for a caller that needs the distribution of one output only (the allocation):
 /// the other outputs keep their moments and counts but no values or sketch
-/// ([`Distribution::Dropped`]), so memory grows with one output's values.
+/// ([`Distribution::Dropped`]), so memory grows with one output's values. The values kept
+/// are those a conformity target reads: a sample flagged non-conforming by the output's
+/// indicator (and not allowed to conform by its spec) is kept as +∞, beyond every limit,
+/// so a percentile target counts it as the worst assembly it is; the moments keep the real
+/// values.
 pub fn run_for_output(
     scenario: &Scenario,
     settings: RunSettings,
@@ -466,6 +487,7 @@ fn run_keeping(
         conditions: scenario.outputs.iter().map(|o| o.condition).collect(),
         sketch_frames: vec![(0.0, 1.0); scenario.outputs.len()],
         only_output,
+        flagged_conform: scenario.outputs.iter().map(|o| o.flagged_conform).collect(),
     };
     if !exact {
         plan.sketch_frames = plan.pilot_sketch_frames()?;

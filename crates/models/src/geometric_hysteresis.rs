@@ -42,13 +42,36 @@
 //!   φ = ε + θ (001 Eq. 5–8), at `sun_gear_axial_position_mm` along the shaft.
 //! - A negative stage sum is a preloaded stage: it has no free play, and it cannot take up
 //!   the free play of the stages in series with it, so each stage is clipped at zero and
-//!   the sample is flagged in the `interference` indicator.
+//!   the sample is flagged in the `interference` indicator. A preloaded assembly is not a
+//!   conforming one whatever its lost motion (the overlap loads the pins and bearings
+//!   without torque, raises the friction and the no-load torque): `hysteresis_arcmin` is
+//!   qualified by `interference` as non-conforming, so the engine counts preloaded samples
+//!   out of the lost-motion spec unless the scenario's spec says `flagged_conform`. The
+//!   preload itself is an output: `preload_arcmin` = Σ max(0, −stage), the overlap of the
+//!   stages as an output angle (0 exactly when every stage clearance is ≥ 0), and
+//!   `cycloid_preload_um`, the cycloid stage's overlap per flank along the contact normal,
+//!   max(0, −Δφ34)·e·zc/2 (Eq. 16 divides the sum of both flanks' normal clearances by the
+//!   lever e·zc), so a spec can bound either.
+//!
+//! Selective fitting (`pin_classes` K > 1, docs/models.md §2.5). Pins are sorted into K
+//! diameter classes of width w (`pin_class_width_mm`), class k centred at
+//! c_k = (k − (K − 1)/2)·w on the pin radius. The fitter measures the disc and the housing
+//! and fits, per assembly, the class whose centre brings the predicted cycloid-stage
+//! clearance Δφ34 closest to the window [`fit_window_lower_arcmin`,
+//! `fit_window_upper_arcmin`] (distance 0 inside it; among classes inside, the one nearest
+//! the window's centre). The input `pin_radius_error_mm` stays the production deviation
+//! δr_rp of a pin, so one scenario serves any K: a pin taken from class k sits in it where
+//! production put it within its own class, d = δr_rp − w·round(δr_rp/w) (for classes
+//! narrow against the production spread this is uniform on ±w/2, as the sizes within a
+//! class are), which the fitter cannot see; the fitted pin radius error is c_k + d.
+//! `pin_class` reports the class fitted (0 = smallest pins), so the report's histogram of
+//! it is the class usage. K = 1 is no fitting: c_0 = 0 and d = δr_rp.
 
 use rvtol_deviation::{point_displacement, Shown};
 
 use crate::{
-    ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputKind, OutputSpec, ParamSpec,
-    ARCMIN_PER_RAD,
+    ConditionEffect, ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputCondition,
+    OutputKind, OutputSpec, ParamSpec, ARCMIN_PER_RAD,
 };
 
 /// Tilt angle of a shaft from its end deflection Y over its length L: β = arcsin(Y/L), rad
@@ -178,10 +201,34 @@ const OUTPUTS: &[(&str, &str, &str, OutputKind)] = &[
     (
         "interference",
         "fraction",
-        "1 when a stage clearance is negative (preloaded assembly)",
+        "1 when a stage clearance is negative (a preloaded assembly: not conforming to the lost-motion spec)",
         OutputKind::Indicator,
     ),
+    (
+        "preload_arcmin",
+        "arcmin",
+        "overlap of the preloaded stages as an output angle, Σ max(0, −stage); 0 when every stage has clearance",
+        OutputKind::Continuous,
+    ),
+    (
+        "cycloid_preload_um",
+        "µm",
+        "cycloid-stage overlap per flank along the contact normal, max(0, −Δφ34)·e·zc/2",
+        OutputKind::Continuous,
+    ),
+    (
+        "pin_class",
+        "1",
+        "pin diameter class fitted (0 = smallest pins; always 0 without selective fitting)",
+        OutputKind::Continuous,
+    ),
 ];
+
+/// The outputs of the model, in order (a model that embeds this one sizes its buffer with
+/// it).
+pub const OUTPUT_COUNT: usize = 8;
+/// Index of `hysteresis_arcmin` among the outputs.
+pub const HYSTERESIS: usize = 0;
 
 const PARAMS: &[ParamSpec] = &[
     ParamSpec {
@@ -250,7 +297,34 @@ const PARAMS: &[ParamSpec] = &[
         description: "z of the sun mesh from the input shaft's deviation reference point",
         default: Some(0.0),
     },
+    ParamSpec {
+        name: "pin_classes",
+        unit: "1",
+        description: "K, pin diameter classes for selective fitting (1: no fitting; at most 16)",
+        default: Some(1.0),
+    },
+    ParamSpec {
+        name: "pin_class_width_mm",
+        unit: "mm",
+        description: "w, width of a pin class on the pin radius (needed when K > 1)",
+        default: Some(0.0),
+    },
+    ParamSpec {
+        name: "fit_window_lower_arcmin",
+        unit: "arcmin",
+        description: "lower end of the cycloid-stage clearance window the fitter aims at",
+        default: Some(0.0),
+    },
+    ParamSpec {
+        name: "fit_window_upper_arcmin",
+        unit: "arcmin",
+        description: "upper end of the window (needed when K > 1)",
+        default: Some(0.0),
+    },
 ];
+
+/// Most pin classes of selective fitting.
+pub const MAX_PIN_CLASSES: u32 = 16;
 
 /// Registry entry.
 pub const ENTRY: ModelEntry = ModelEntry {
@@ -274,6 +348,13 @@ pub struct GeometricHysteresis {
     /// Eq. 17: Kn = kn_equidistant·Δr_rp + kn_shift·Δr_p (1/mm).
     kn_equidistant: f64,
     kn_shift: f64,
+    /// e·zc/2 in µm per rad: a cycloid-stage angle as a clearance per flank.
+    flank_um_per_rad: f64,
+    /// Selective fitting: the class centres c_k on the pin radius (one class of 0 without
+    /// fitting), their width, and the clearance window (arcmin).
+    class_centres: Vec<f64>,
+    class_width: f64,
+    fit_window: (f64, f64),
     inputs: Vec<InputSpec>,
     outputs: Vec<OutputSpec>,
 }
@@ -343,6 +424,42 @@ impl GeometricHysteresis {
         let center_distance = params.positive("center_distance_mm", None)?;
         let sun_pitch_radius = params.positive("sun_pitch_radius_mm", None)?;
         let sun_gear_axial_position = params.number("sun_gear_axial_position_mm", Some(0.0))?;
+        let classes = params.count("pin_classes", Some(1.0))?;
+        if classes > MAX_PIN_CLASSES {
+            return Err(ModelError::new(
+                "pin_classes",
+                format!("must be at most {MAX_PIN_CLASSES}, got {classes}"),
+            ));
+        }
+        let class_width = params.number("pin_class_width_mm", Some(0.0))?;
+        let window = (
+            params.number("fit_window_lower_arcmin", Some(0.0))?,
+            params.number("fit_window_upper_arcmin", Some(0.0))?,
+        );
+        if classes > 1 {
+            if class_width.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+                return Err(ModelError::new(
+                    "pin_class_width_mm",
+                    format!(
+                        "selective fitting with {classes} classes needs a positive class width, got {}",
+                        Shown(class_width)
+                    ),
+                ));
+            }
+            if window.1.partial_cmp(&window.0) != Some(std::cmp::Ordering::Greater) {
+                return Err(ModelError::new(
+                    "fit_window_upper_arcmin",
+                    format!(
+                        "the fit window needs an upper end above its lower end {}, got {}",
+                        Shown(window.0),
+                        Shown(window.1)
+                    ),
+                ));
+            }
+        }
+        let class_centres: Vec<f64> = (0..classes)
+            .map(|k| (k as f64 - 0.5 * (classes as f64 - 1.0)) * class_width)
+            .collect();
         params.reject_unknown(&PARAMS.iter().map(|p| p.name).collect::<Vec<_>>())?;
         // 000 Eq. 4.
         let ratio = 1.0
@@ -355,6 +472,10 @@ impl GeometricHysteresis {
             ratio,
             center_distance,
             sun_gear_axial_position,
+            flank_um_per_rad: 1000.0 * e * zc / 2.0,
+            class_centres,
+            class_width,
+            fit_window: window,
             involute_scale: ARCMIN_PER_RAD
                 / (2.0
                     * sun_pitch_radius
@@ -390,7 +511,11 @@ impl GeometricHysteresis {
                     unit: unit.into(),
                     description,
                     kind,
-                    condition: None,
+                    // A preloaded assembly does not conform to the lost-motion spec.
+                    condition: (name == "hysteresis_arcmin").then_some(OutputCondition {
+                        indicator: "interference",
+                        effect: ConditionEffect::NonConforming,
+                    }),
                 })
                 .collect(),
         })
@@ -428,21 +553,25 @@ impl ErrorModel for GeometricHysteresis {
     fn evaluate_columns(&self, inputs: &[&[f64]], outputs: &mut [f64]) {
         let n = outputs.len() / N_OUTPUTS;
         let columns: [&[f64]; N_INPUTS] = std::array::from_fn(|i| &inputs[i][..n]);
-        let (hysteresis, rest) = outputs.split_at_mut(n);
-        let (involute, rest) = rest.split_at_mut(n);
-        let (cycloid, rest) = rest.split_at_mut(n);
-        let (crank, interference) = rest.split_at_mut(n);
-        let interference = &mut interference[..n];
         let mut any_exact = false;
-        for r in 0..n {
-            let x: [f64; N_INPUTS] = std::array::from_fn(|i| columns[i][r]);
-            let [h, i, c, k, f] = self.row(&x, series_tilt);
-            hysteresis[r] = h;
-            involute[r] = i;
-            cycloid[r] = c;
-            crank[r] = k;
-            interference[r] = f;
-            any_exact |= needs_cosine(tilt_squared(&x));
+        {
+            let mut columns_out = outputs.chunks_exact_mut(n);
+            let mut next = || columns_out.next().expect("one column per output");
+            let out: [&mut [f64]; N_OUTPUTS] = std::array::from_fn(|_| next());
+            let [hysteresis, involute, cycloid, crank, interference, preload, flank, class] = out;
+            for r in 0..n {
+                let x: [f64; N_INPUTS] = std::array::from_fn(|i| columns[i][r]);
+                let [h, i, c, k, f, p, u, q] = self.row(&x, series_tilt);
+                hysteresis[r] = h;
+                involute[r] = i;
+                cycloid[r] = c;
+                crank[r] = k;
+                interference[r] = f;
+                preload[r] = p;
+                flank[r] = u;
+                class[r] = q;
+                any_exact |= needs_cosine(tilt_squared(&x));
+            }
         }
         if any_exact {
             let mut out = [0.0; N_OUTPUTS];
@@ -461,7 +590,7 @@ impl ErrorModel for GeometricHysteresis {
 
 /// Inputs and outputs of the model.
 const N_INPUTS: usize = 18;
-const N_OUTPUTS: usize = 5;
+const N_OUTPUTS: usize = OUTPUT_COUNT;
 /// β² below which cos β and 1/cos β are taken from their series (β = 1e-3 rad).
 const TILT_SERIES_LIMIT: f64 = 1e-6;
 /// Largest relative difference allowed between a given curtate ratio K1 and e·z_p/r_p.
@@ -501,8 +630,8 @@ fn exact_tilt(beta_squared: f64) -> (f64, f64) {
 }
 
 impl GeometricHysteresis {
-    /// One row: [hysteresis, involute, cycloid, crank, interference], with cos β and
-    /// 1/cos β from `tilt` (of β²).
+    /// One row: [hysteresis, involute, cycloid, crank, interference, preload, cycloid
+    /// preload per flank, pin class], with cos β and 1/cos β from `tilt` (of β²).
     #[inline(always)]
     fn row(&self, x: &[f64; N_INPUTS], tilt: impl Fn(f64) -> (f64, f64)) -> [f64; N_OUTPUTS] {
         let (e_ws, e_wi) = (x[0], x[1]);
@@ -521,6 +650,7 @@ impl GeometricHysteresis {
         let involute = -(e_ws + e_wi) * self.involute_scale * tilted_distance * sec_beta;
 
         // Cycloid–pin stage, Eq. 16 and 17, every term in arcmin.
+        let mut fitted_class = 0.0;
         let mut cycloid = 0.0;
         for (c, value) in self.cycloid_coefficients.iter().zip(&x[2..12]) {
             cycloid += c * value;
@@ -528,16 +658,57 @@ impl GeometricHysteresis {
         let k_n = self.kn_equidistant * mod_equidistant + self.kn_shift * mod_shift;
         cycloid -= 2.0 * ARCMIN_PER_RAD * k_n * eccentricity_err;
 
+        // Selective fitting: the class whose centre brings the clearance the fitter sees
+        // closest to the window; the pins' place within their class, d, unseen.
+        if self.class_centres.len() > 1 {
+            let pin_coefficient = self.cycloid_coefficients[3];
+            let without_pins = cycloid - pin_coefficient * x[5];
+            let within_class = x[5] - self.class_width * (x[5] / self.class_width).round();
+            let (class, centre) = self.fit(without_pins);
+            cycloid = without_pins + pin_coefficient * (centre + within_class);
+            fitted_class = class;
+        }
+
         // Crank bearing clearance, Eq. 20.
         let crank = crank_clearance * cos_beta * ARCMIN_PER_RAD / tilted_distance;
 
+        let overlap = (-involute).max(0.0) + (-cycloid).max(0.0) + (-crank).max(0.0);
         [
             involute.max(0.0) + cycloid.max(0.0) + crank.max(0.0),
             involute,
             cycloid,
             crank,
             f64::from(u8::from(involute.min(cycloid).min(crank) < 0.0)),
+            overlap,
+            (-cycloid).max(0.0) / ARCMIN_PER_RAD * self.flank_um_per_rad,
+            fitted_class,
         ]
+    }
+
+    /// The pin class fitted to an assembly whose cycloid-stage clearance with pins of the
+    /// nominal radius would be `seen` arcmin, and its centre on the pin radius: the class
+    /// minimising the distance of the clearance to the fit window, ties (inside the window)
+    /// broken towards the window's centre.
+    #[inline(always)]
+    fn fit(&self, seen: f64) -> (f64, f64) {
+        let (lower, upper) = self.fit_window;
+        let middle = 0.5 * (lower + upper);
+        let coefficient = self.cycloid_coefficients[3];
+        let (mut best_class, mut best_centre) = (0.0, self.class_centres[0]);
+        let mut best = f64::INFINITY;
+        for (k, &centre) in self.class_centres.iter().enumerate() {
+            let clearance = seen + coefficient * centre;
+            let outside = (lower - clearance).max(clearance - upper).max(0.0);
+            // Distance first; within the window the distance from its centre, scaled so
+            // it never outweighs a distance outside.
+            let score = outside + 1e-9 * (clearance - middle).abs();
+            if score < best {
+                best = score;
+                best_class = k as f64;
+                best_centre = centre;
+            }
+        }
+        (best_class, best_centre)
     }
 }
 
@@ -562,10 +733,127 @@ mod tests {
         x
     }
 
-    fn eval(x: &[f64; 18]) -> [f64; 5] {
-        let mut out = [0.0; 5];
+    fn eval(x: &[f64; 18]) -> [f64; OUTPUT_COUNT] {
+        let mut out = [0.0; OUTPUT_COUNT];
         model().evaluate(x, &mut out);
         out
+    }
+
+    /// The RV-20E with K pin classes of width w and the fit window [lower, upper].
+    fn fitted(classes: f64, width: f64, window: (f64, f64)) -> GeometricHysteresis {
+        GeometricHysteresis::from_params(
+            &GeometricHysteresis::rv20e_params()
+                .with_number("pin_classes", classes)
+                .with_number("pin_class_width_mm", width)
+                .with_number("fit_window_lower_arcmin", window.0)
+                .with_number("fit_window_upper_arcmin", window.1),
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn preload_is_zero_exactly_when_every_clearance_is_positive() {
+        // Table 9 nominal: every stage has clearance, no preload. A pin circle 10 µm small
+        // turns the cycloid stage negative: its overlap is the preload, per flank
+        // max(0, −Δφ34)/(10800/π)·e·zc/2 (e·zc = 35.1 mm).
+        let out = eval(&table9_nominal());
+        assert!(out[1] > 0.0 && out[2] > 0.0 && out[3] > 0.0);
+        assert_eq!((out[4], out[5], out[6], out[7]), (0.0, 0.0, 0.0, 0.0));
+        let mut x = table9_nominal();
+        x[4] = -0.010;
+        let out = eval(&x);
+        assert!(out[2] < 0.0, "{}", out[2]);
+        assert_eq!(out[4], 1.0);
+        assert_eq!(out[5], -out[2]);
+        let per_flank = -out[2] / ARCMIN_PER_RAD * 1000.0 * 0.9 * 39.0 / 2.0;
+        assert!((out[6] - per_flank).abs() < 1e-12 * per_flank);
+    }
+
+    #[test]
+    fn one_pin_class_is_no_fitting() {
+        let plain = model();
+        let single = fitted(1.0, 0.002, (0.0, 0.1));
+        let mut x = table9_nominal();
+        x[4] = 0.004;
+        x[5] = -0.002;
+        let (mut a, mut b) = ([0.0; OUTPUT_COUNT], [0.0; OUTPUT_COUNT]);
+        plain.evaluate(&x, &mut a);
+        single.evaluate(&x, &mut b);
+        assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits));
+    }
+
+    #[test]
+    fn the_fitter_picks_the_class_that_reaches_the_window() {
+        // δr_rp enters Δφ34 with −2·10800/(π·e·zc) = −195.9 arcmin/mm (Eq. 16): one class of
+        // w = 2 µm moves the clearance by 0.392 arcmin. Four classes at −3, −1, 1, 3 µm.
+        let model = fitted(4.0, 0.002, (0.0, 0.1));
+        let coefficient = -2.0 * ARCMIN_PER_RAD / (0.9 * 39.0);
+        let centres = [-0.003, -0.001, 0.001, 0.003];
+        for shift in [-0.012, -0.006, 0.0, 0.004, 0.008, 0.015] {
+            let mut x = table9_nominal();
+            x[4] = shift; // the pin circle moves the clearance the fitter must correct
+                          // A production deviation of 4.4 µm lies 0.4 µm from its class's centre (2 µm
+                          // classes): the place within the class the fitter cannot see.
+            x[5] = 0.0044;
+            let mut out = [0.0; OUTPUT_COUNT];
+            model.evaluate(&x, &mut out);
+            let class = out[7] as usize;
+            // The class the fitter chose minimises the distance of the clearance it saw.
+            let seen = |k: usize| {
+                out[2] - coefficient * (0.0004 + centres[class]) + coefficient * centres[k]
+            };
+            let distance = |c: f64| (0.0 - c).max(c - 0.1).max(0.0);
+            for k in 0..4 {
+                assert!(
+                    distance(seen(class)) <= distance(seen(k)) + 1e-12,
+                    "shift {shift}: class {class} vs {k}"
+                );
+            }
+            // The clearance is the seen one plus the unseen deviation's effect.
+            assert!((out[2] - (seen(class) + coefficient * 0.0004)).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn fitting_pulls_every_reachable_clearance_into_reach_of_the_window() {
+        // Over a sweep of pin-circle errors whose clearance the four classes can reach, the
+        // fitted clearance (without within-class deviation) lies within half a class step
+        // (0.196 arcmin) of the window.
+        let model = fitted(4.0, 0.002, (0.0, 0.1));
+        let half_step = 0.5 * 0.002 * 2.0 * ARCMIN_PER_RAD / (0.9 * 39.0);
+        for i in 0..=40 {
+            let mut x = table9_nominal();
+            x[4] = -0.004 + 0.0002 * i as f64;
+            let mut out = [0.0; OUTPUT_COUNT];
+            model.evaluate(&x, &mut out);
+            let outside = (0.0 - out[2]).max(out[2] - 0.1).max(0.0);
+            assert!(outside <= half_step + 1e-12, "δr_p {}: {}", x[4], out[2]);
+        }
+    }
+
+    #[test]
+    fn selective_fitting_needs_a_width_and_a_window() {
+        for (key, params) in [
+            (
+                "pin_class_width_mm",
+                GeometricHysteresis::rv20e_params()
+                    .with_number("pin_classes", 3.0)
+                    .with_number("fit_window_upper_arcmin", 0.1),
+            ),
+            (
+                "fit_window_upper_arcmin",
+                GeometricHysteresis::rv20e_params()
+                    .with_number("pin_classes", 3.0)
+                    .with_number("pin_class_width_mm", 0.002),
+            ),
+            (
+                "pin_classes",
+                GeometricHysteresis::rv20e_params().with_number("pin_classes", 17.0),
+            ),
+        ] {
+            let err = GeometricHysteresis::from_params(&params).err().unwrap();
+            assert_eq!(err.key, key, "{err}");
+        }
     }
 
     #[test]
@@ -713,7 +1001,7 @@ mod tests {
             .map(|i| rows.iter().map(|x| x[i]).collect())
             .collect();
         let inputs: Vec<&[f64]> = columns.iter().map(Vec::as_slice).collect();
-        let mut outputs = vec![0.0; 5 * n];
+        let mut outputs = vec![0.0; OUTPUT_COUNT * n];
         model.evaluate_columns(&inputs, &mut outputs);
         for (r, x) in rows.iter().enumerate() {
             let expected = eval(x);

@@ -360,9 +360,9 @@ impl TorsionCurve {
 
     /// The clearance c (arcmin) of 000 for one row.
     fn clearance(&self, x: &[f64]) -> f64 {
-        let mut out = [0.0; 5];
+        let mut out = [0.0; geometric_hysteresis::OUTPUT_COUNT];
         self.hysteresis.evaluate(&x[..HYSTERESIS_INPUTS], &mut out);
-        out[0]
+        out[geometric_hysteresis::HYSTERESIS]
     }
 
     /// c and E(|T|) at the torques of the drawn curve, T_j = T_r·(j − 50)/50, j = 0..=100;
@@ -546,7 +546,7 @@ mod tests {
         let reference =
             GeometricHysteresis::from_params(&GeometricHysteresis::rv20e_params()).unwrap();
         for x in [nominal(), perturbed()] {
-            let mut expected = [0.0; 5];
+            let mut expected = [0.0; geometric_hysteresis::OUTPUT_COUNT];
             reference.evaluate(&x[..18], &mut expected);
             let out = eval(&model, &x);
             assert_eq!(out[3], expected[0]);

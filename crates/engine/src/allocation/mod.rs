@@ -162,6 +162,10 @@ pub struct Allocation {
     pub iterations: usize,
     /// Monte Carlo evaluations run (including the verification).
     pub evaluations: usize,
+    /// The lever values of the answer (empty without levers).
+    pub levers: Vec<LeverChoice>,
+    /// Every lever combination tried (empty without levers).
+    pub lever_options: Vec<LeverOption>,
 }
 
 /// The optimisation problem, with everything an evaluation needs.
@@ -191,9 +195,202 @@ struct Point {
     cost: f64,
 }
 
+/// A lever's value in an allocation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LeverChoice {
+    /// The lever's name.
+    pub name: String,
+    /// The model parameter it sets, as a path (`models[0].params.pin_classes`).
+    pub param: String,
+    /// The value.
+    pub value: f64,
+    /// Its cost.
+    pub cost: f64,
+}
+
+/// One combination of lever values tried, with the allocation found for it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LeverOption {
+    /// The value of each lever, in the order of [`Allocation::levers`].
+    pub values: Vec<f64>,
+    /// Cost of the lever values.
+    pub lever_cost: f64,
+    /// Cost of the proposed tolerances.
+    pub tolerance_cost: f64,
+    /// `met`, `not verified` or `infeasible`.
+    pub status: &'static str,
+    /// The verification run's figure.
+    pub verification: f64,
+}
+
 /// Runs the allocation. `scenario_text` is the scenario file the `scenario` was compiled
 /// from; `progress` is told the number of Monte Carlo evaluations done so far.
+///
+/// With levers (`allocation.levers`: a model parameter such as the number of pin classes
+/// of selective fitting, with candidate values and their costs), every combination of
+/// lever values is a scenario of its own whose tolerances are allocated as described in
+/// the module documentation; the answer is the combination whose tolerances and lever
+/// values together cost least among those verified to meet the target (else among those
+/// feasible, else the one closest to the target). Every combination is reported.
 pub fn allocate(
+    scenario: &Scenario,
+    scenario_text: &str,
+    output: &str,
+    target: Target,
+    settings: AllocationSettings,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<Allocation, ScenarioError> {
+    let levers = &scenario.allocation_levers;
+    if levers.is_empty() {
+        return allocate_tolerances(scenario, scenario_text, output, target, settings, progress);
+    }
+    let document: Value = serde_json::from_str(scenario_text)
+        .map_err(|err| ScenarioError::new("JSON syntax", err.to_string()))?;
+    let done = std::cell::Cell::new(0usize);
+    let mut tried: Vec<(Vec<usize>, Allocation)> = Vec::new();
+    for combination in lever_combinations(levers) {
+        let mut variant = document.clone();
+        set_lever_values(&mut variant, levers, &combination)?;
+        let text = variant.to_string();
+        let lever_scenario = Scenario::from_json(&text, &scenario.name).map_err(|err| {
+            ScenarioError::new(
+                err.path,
+                format!("{} (with {})", err.message, describe(levers, &combination)),
+            )
+        })?;
+        let before = done.get();
+        let allocation =
+            allocate_tolerances(&lever_scenario, &text, output, target, settings, &|n| {
+                progress(before + n)
+            })?;
+        done.set(before + allocation.evaluations);
+        tried.push((combination, allocation));
+    }
+    let lever_cost = |combination: &[usize]| -> f64 {
+        levers
+            .iter()
+            .zip(combination)
+            .map(|(lever, &i)| lever.costs[i])
+            .sum()
+    };
+    let rank = |status: &str| match status {
+        "met" => 0,
+        "not verified" => 1,
+        _ => 2,
+    };
+    let options: Vec<LeverOption> = tried
+        .iter()
+        .map(|(combination, allocation)| LeverOption {
+            values: levers
+                .iter()
+                .zip(combination)
+                .map(|(lever, &i)| lever.values[i])
+                .collect(),
+            lever_cost: lever_cost(combination),
+            tolerance_cost: allocation.proposed_cost,
+            status: allocation.status(),
+            verification: allocation.verification.figure,
+        })
+        .collect();
+    let best = (0..tried.len())
+        .min_by(|&a, &b| {
+            let key = |i: usize| {
+                let (combination, allocation) = &tried[i];
+                let status = rank(allocation.status());
+                let merit = if status < 2 {
+                    allocation.proposed_cost + lever_cost(combination)
+                } else {
+                    target.excess(allocation.verification.figure)
+                };
+                (status, merit)
+            };
+            let (ka, kb) = (key(a), key(b));
+            ka.0.cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
+        })
+        .expect("at least one lever combination");
+    let (combination, mut allocation) = tried.swap_remove(best);
+    allocation.levers = levers
+        .iter()
+        .zip(&combination)
+        .map(|(lever, &i)| LeverChoice {
+            name: lever.name.clone(),
+            param: format!("models[{}].params.{}", lever.model, lever.key),
+            value: lever.values[i],
+            cost: lever.costs[i],
+        })
+        .collect();
+    allocation.lever_options = options;
+    allocation.evaluations = done.get();
+    Ok(allocation)
+}
+
+/// Every combination of lever values, as indices into each lever's values, the first
+/// lever varying slowest.
+fn lever_combinations(levers: &[spec::Lever]) -> Vec<Vec<usize>> {
+    let mut combinations = vec![Vec::new()];
+    for lever in levers {
+        combinations = combinations
+            .into_iter()
+            .flat_map(|prefix| {
+                (0..lever.values.len()).map(move |i| {
+                    let mut next = prefix.clone();
+                    next.push(i);
+                    next
+                })
+            })
+            .collect();
+    }
+    combinations
+}
+
+fn describe(levers: &[spec::Lever], combination: &[usize]) -> String {
+    levers
+        .iter()
+        .zip(combination)
+        .map(|(lever, &i)| {
+            format!(
+                "{} = {}",
+                lever.name,
+                rvtol_deviation::Shown(lever.values[i])
+            )
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Sets each lever's model parameter in a scenario document to the value `combination`
+/// picks.
+fn set_lever_values(
+    document: &mut Value,
+    levers: &[spec::Lever],
+    combination: &[usize],
+) -> Result<(), ScenarioError> {
+    for (lever, &i) in levers.iter().zip(combination) {
+        let params = document
+            .get_mut("models")
+            .and_then(|models| models.get_mut(lever.model))
+            .and_then(|model| {
+                let object = model.as_object_mut()?;
+                Some(
+                    object
+                        .entry("params")
+                        .or_insert_with(|| Value::Object(Default::default())),
+                )
+            })
+            .and_then(Value::as_object_mut)
+            .ok_or_else(|| {
+                ScenarioError::new(
+                    format!("allocation.levers.{}", lever.name),
+                    "its model has no params object",
+                )
+            })?;
+        params.insert(lever.key.clone(), Value::from(lever.values[i]));
+    }
+    Ok(())
+}
+
+/// The allocation of the tolerances alone (the scenario's levers as written).
+fn allocate_tolerances(
     scenario: &Scenario,
     scenario_text: &str,
     output: &str,
@@ -440,6 +637,8 @@ impl Problem<'_> {
             common_scale: common,
             iterations,
             evaluations: self.evaluations.get(),
+            levers: Vec::new(),
+            lever_options: Vec::new(),
         })
     }
 
@@ -494,7 +693,9 @@ impl Problem<'_> {
         (self.progress)(self.evaluations.get());
         let accumulator = result.outputs.swap_remove(self.output);
         let out = accumulator.out_of_spec(self.flagged_conform);
-        let hidden_out = out - accumulator.below_lower - accumulator.above_upper;
+        // Flagged samples are +∞ among the kept values (run_for_output): the interpolated
+        // fraction above the upper limit counts them already.
+        let hidden_out = accumulator.non_finite + accumulator.excluded;
         let Distribution::Values(mut values) = accumulator.distribution else {
             unreachable!("allocation runs keep every value");
         };
@@ -766,8 +967,23 @@ pub fn proposal_document(
     scenario_text: &str,
     allocation: &Allocation,
 ) -> Result<String, ScenarioError> {
-    let document: Value = serde_json::from_str(scenario_text)
+    let mut document: Value = serde_json::from_str(scenario_text)
         .map_err(|err| ScenarioError::new("JSON syntax", err.to_string()))?;
+    for lever in &allocation.levers {
+        let (model, key) = lever
+            .param
+            .strip_prefix("models[")
+            .and_then(|rest| rest.split_once("].params."))
+            .and_then(|(index, key)| Some((index.parse::<usize>().ok()?, key)))
+            .ok_or_else(|| ScenarioError::new(&lever.param, "not a model parameter path"))?;
+        let params = document
+            .get_mut("models")
+            .and_then(|models| models.get_mut(model))
+            .and_then(|model| model.get_mut("params"))
+            .and_then(Value::as_object_mut)
+            .ok_or_else(|| ScenarioError::new(&lever.param, "changed since it was validated"))?;
+        params.insert(key.to_string(), Value::from(lever.value));
+    }
     let sources: Vec<AllocatableSource> = allocation
         .sources
         .iter()
@@ -830,6 +1046,20 @@ fn evaluate_figure(
         }
         TargetFigure::Mean => symmetric(mean, moments.mean_standard_error()),
         TargetFigure::Sd => symmetric(sd, moments.sd_standard_error()),
+        // The indices are undefined when samples are out of spec in a way the values do not
+        // show (as in the run report): no Cp or Cpk target can be met then.
+        TargetFigure::Cp | TargetFigure::Cpk
+            if out_of_spec.hidden > 0 || sorted.last().is_some_and(|v| v.is_infinite()) =>
+        {
+            return Some(Evaluation {
+                figure: f64::NAN,
+                standard_error: f64::NAN,
+                interval: (f64::NAN, f64::NAN),
+                n: n as u64,
+                mean,
+                sd,
+            });
+        }
         TargetFigure::Cp => {
             let cp = capability_from_moments(mean, sd, limits?).cp?;
             symmetric(cp, cp * sd_relative_se)

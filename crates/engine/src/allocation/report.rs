@@ -124,6 +124,55 @@ pub struct AllocationReport {
     pub iterations: usize,
     /// Monte Carlo runs made.
     pub evaluations: usize,
+    /// The lever values of the answer (absent without levers).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub levers: Vec<LeverReport>,
+    /// Every combination of lever values tried (absent without levers).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub lever_options: Vec<LeverOptionReport>,
+}
+
+/// A lever's value in the answer.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LeverReport {
+    /// The lever's name.
+    pub lever: String,
+    /// The model parameter it sets.
+    pub param: String,
+    /// Its value.
+    pub value: f64,
+    /// Its cost (added to the tolerances' cost).
+    pub cost: f64,
+}
+
+/// One combination of lever values and the allocation found for it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LeverOptionReport {
+    /// Each lever's value, in the order of `levers`.
+    pub values: Vec<f64>,
+    /// Cost of the lever values.
+    pub lever_cost: f64,
+    /// Cost of the tolerances proposed for them.
+    pub tolerance_cost: f64,
+    /// Their sum.
+    pub total_cost: f64,
+    /// `met`, `not verified` or `infeasible`.
+    pub status: &'static str,
+    /// The verification run's figure.
+    pub verification: f64,
+}
+
+/// A target figure as text: a number, or why there is none. A percentile is +∞ when the
+/// samples flagged non-conforming (kept beyond every limit) reach into its tail; a
+/// capability index has no value when such samples exist.
+fn figure_text(value: f64) -> String {
+    if value.is_finite() {
+        format_sig(value)
+    } else if value == f64::INFINITY {
+        "beyond the limits (flagged samples in the tail)".to_string()
+    } else {
+        "n/a (flagged or non-finite samples)".to_string()
+    }
 }
 
 impl AllocationReport {
@@ -170,6 +219,28 @@ impl AllocationReport {
             verification: FigureReport::new(&a.verification, a.settings.verification_seed),
             iterations: a.iterations,
             evaluations: a.evaluations,
+            levers: a
+                .levers
+                .iter()
+                .map(|l| LeverReport {
+                    lever: l.name.clone(),
+                    param: l.param.clone(),
+                    value: l.value,
+                    cost: l.cost,
+                })
+                .collect(),
+            lever_options: a
+                .lever_options
+                .iter()
+                .map(|o| LeverOptionReport {
+                    values: o.values.clone(),
+                    lever_cost: o.lever_cost,
+                    tolerance_cost: o.tolerance_cost,
+                    total_cost: o.lever_cost + o.tolerance_cost,
+                    status: o.status,
+                    verification: o.verification,
+                })
+                .collect(),
         }
     }
 
@@ -263,6 +334,41 @@ impl AllocationReport {
             ));
         }
         out.push('\n');
+        if !self.levers.is_empty() {
+            let names: Vec<&str> = self.levers.iter().map(|l| l.lever.as_str()).collect();
+            let lever_cost: f64 = self.levers.iter().map(|l| l.cost).sum();
+            out.push_str(&format!(
+                "levers: {} (cost {}); total with the tolerances {}\n",
+                self.levers
+                    .iter()
+                    .map(|l| format!("{} = {}", l.lever, format_sig(l.value)))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                format_sig(lever_cost),
+                format_sig(lever_cost + self.proposed_cost)
+            ));
+            out.push_str(&format!(
+                "  {:<24} {:>11} {:>15} {:>11}  {:<13} {}\n",
+                names.join(", "),
+                "lever cost",
+                "tolerance cost",
+                "total",
+                "status",
+                "verification"
+            ));
+            for option in &self.lever_options {
+                let values: Vec<String> = option.values.iter().map(|v| format_sig(*v)).collect();
+                out.push_str(&format!(
+                    "  {:<24} {:>11} {:>15} {:>11}  {:<13} {}\n",
+                    values.join(", "),
+                    format_sig(option.lever_cost),
+                    format_sig(option.tolerance_cost),
+                    format_sig(option.total_cost),
+                    option.status,
+                    figure_text(option.verification)
+                ));
+            }
+        }
         match &self.common_scale {
             Some(c) => out.push_str(&format!(
                 "every tolerance × {} instead (within its bounds): cost {}\n",
@@ -275,9 +381,9 @@ impl AllocationReport {
             format!(
                 "{label:<26} {} = {} (95 % CI {} .. {}), mean {}, sd {}, seed {}\n",
                 self.target.split_whitespace().next().unwrap_or(""),
-                format_sig(f.value),
-                format_sig(f.ci[0]),
-                format_sig(f.ci[1]),
+                figure_text(f.value),
+                figure_text(f.ci[0]),
+                figure_text(f.ci[1]),
                 format_sig(f.mean),
                 format_sig(f.sd),
                 f.seed

@@ -8,6 +8,8 @@
 //!   fraction of the band);
 //! - uniform [l, u]: about its centre; triangular (l, m, u): about its mode;
 //! - normal (μ, σ): σ → s·σ; truncated normal: σ and both bounds' distances from μ;
+//! - folded normal: its signed band as a tolerance band; Rayleigh: its upper tolerance
+//!   (σ scales by s); lognormal: the spread of the log, upper → median·(upper/median)^s;
 //! - a part's tolerance band Δτ → s·Δτ (001 Eq. 9–12 scale every σ and the Eq. 11
 //!   bound by s, so the acceptance rate is unchanged); a part's standard deviations → s·σ,
 //!   its covariance → s²·Σ.
@@ -130,6 +132,26 @@ fn scale_node(node: &mut Value, kind: ToleranceKind, s: f64) -> Option<()> {
             let (mean, sd) = (number(truncated, "mean")?, number(truncated, "sd")?);
             set(truncated, "sd", s * sd)?;
             scale_about(truncated, mean, s)
+        }
+        ToleranceKind::VariableFoldedNormal => {
+            let band = node.get_mut("distribution")?.get_mut("folded_normal")?;
+            let centre = 0.5 * (number(band, "lower")? + number(band, "upper")?);
+            scale_about(band, centre, s)?;
+            if let Some(shift) = number(band, "mean_shift") {
+                set(band, "mean_shift", s * shift)?;
+            }
+            Some(())
+        }
+        ToleranceKind::VariableRayleigh => {
+            let rayleigh = node.get_mut("distribution")?.get_mut("rayleigh")?;
+            let upper = number(rayleigh, "upper")?;
+            set(rayleigh, "upper", s * upper)
+        }
+        ToleranceKind::VariableLognormal => {
+            // σ of the log → s·σ about the median: upper → median·(upper/median)^s.
+            let lognormal = node.get_mut("distribution")?.get_mut("lognormal")?;
+            let (median, upper) = (number(lognormal, "median")?, number(lognormal, "upper")?);
+            set(lognormal, "upper", median * (upper / median).powf(s))
         }
     }
 }

@@ -40,6 +40,13 @@ pub enum ToleranceKind {
     VariableTriangular,
     /// `variables[i]` with `truncated_normal`: 3σ.
     VariableTruncatedNormal,
+    /// `variables[i]` with `folded_normal`: the half-width of the band of the signed
+    /// quantity.
+    VariableFoldedNormal,
+    /// `variables[i]` with `rayleigh`: the upper tolerance (99.865 % quantile at Cp = 1).
+    VariableRayleigh,
+    /// `variables[i]` with `lognormal`: a factor on the spread of the log.
+    VariableLognormal,
 }
 
 impl ToleranceKind {
@@ -48,7 +55,11 @@ impl ToleranceKind {
         match self {
             ToleranceKind::PartToleranceBand => "tolerance band Δτ",
             ToleranceKind::PartCovariance | ToleranceKind::PartSd => "factor on the sd",
-            ToleranceKind::VariableToleranceBand => "± band half-width",
+            ToleranceKind::VariableToleranceBand | ToleranceKind::VariableFoldedNormal => {
+                "± band half-width"
+            }
+            ToleranceKind::VariableRayleigh => "upper tolerance",
+            ToleranceKind::VariableLognormal => "factor on the log sd",
             ToleranceKind::VariableUniform | ToleranceKind::VariableTriangular => "± half-width",
             ToleranceKind::VariableNormal | ToleranceKind::VariableTruncatedNormal => "3σ",
         }
@@ -325,6 +336,116 @@ pub(crate) struct AllocationFile {
     #[allow(dead_code)]
     description: Option<String>,
     sources: BTreeMap<String, AllocationSourceFile>,
+    #[serde(default)]
+    levers: BTreeMap<String, LeverFile>,
+}
+
+/// A discrete design choice as written: a model parameter and its candidate values with
+/// their costs.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LeverFile {
+    /// Documentation for the reader of the file; not used.
+    #[serde(default)]
+    #[allow(dead_code)]
+    description: Option<String>,
+    param: String,
+    values: Vec<f64>,
+    cost: Vec<f64>,
+}
+
+/// A discrete design choice `rvtol allocate` makes besides the tolerances: a model
+/// parameter (the number of pin classes of selective fitting) set to one of its candidate
+/// values, each with a cost added to the tolerances' cost.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Lever {
+    /// The lever's name (its key in `allocation.levers`).
+    pub name: String,
+    /// Index of the model whose parameter it sets.
+    pub model: usize,
+    /// The parameter's key.
+    pub key: String,
+    /// Candidate values.
+    pub values: Vec<f64>,
+    /// Cost of each value.
+    pub costs: Vec<f64>,
+}
+
+/// Most candidate combinations of all levers together (each is a whole allocation).
+pub const MAX_LEVER_COMBINATIONS: usize = 64;
+
+/// The `allocation.levers` of a scenario with `n_models` models.
+pub(crate) fn compile_levers(
+    file: &AllocationFile,
+    n_models: usize,
+) -> Result<Vec<Lever>, ScenarioError> {
+    let mut levers = Vec::new();
+    let mut combinations = 1usize;
+    for (name, lever) in &file.levers {
+        let path = format!("allocation.levers.{name}");
+        let parsed = lever
+            .param
+            .strip_prefix("models[")
+            .and_then(|rest| rest.split_once("].params."))
+            .and_then(|(index, key)| Some((index.parse::<usize>().ok()?, key)))
+            .filter(|(_, key)| !key.is_empty() && !key.contains('.'));
+        let Some((model, key)) = parsed else {
+            return Err(ScenarioError::new(
+                format!("{path}.param"),
+                format!(
+                    "{:?} is not a model parameter path such as \"models[0].params.pin_classes\"",
+                    lever.param
+                ),
+            ));
+        };
+        if model >= n_models {
+            return Err(ScenarioError::new(
+                format!("{path}.param"),
+                format!("the scenario has {n_models} models, no models[{model}]"),
+            ));
+        }
+        if lever.values.is_empty() {
+            return Err(ScenarioError::new(
+                format!("{path}.values"),
+                "give at least one candidate value",
+            ));
+        }
+        if lever.cost.len() != lever.values.len() {
+            return Err(ScenarioError::new(
+                format!("{path}.cost"),
+                format!(
+                    "give one cost per value: {} values, {} costs",
+                    lever.values.len(),
+                    lever.cost.len()
+                ),
+            ));
+        }
+        for (i, &c) in lever.cost.iter().enumerate() {
+            if !(c.is_finite() && c >= 0.0) {
+                return Err(ScenarioError::new(
+                    format!("{path}.cost[{i}]"),
+                    format!("must be a finite number ≥ 0, got {}", Shown(c)),
+                ));
+            }
+        }
+        combinations = combinations.saturating_mul(lever.values.len());
+        if combinations > MAX_LEVER_COMBINATIONS {
+            return Err(ScenarioError::new(
+                format!("{path}.values"),
+                format!(
+                    "the levers give more than {MAX_LEVER_COMBINATIONS} combinations, each a whole allocation; offer fewer values"
+                ),
+            ));
+        }
+        levers.push(Lever {
+            name: name.clone(),
+            model,
+            key: key.to_string(),
+            values: lever.values.clone(),
+            costs: lever.cost.clone(),
+        });
+    }
+    Ok(levers)
 }
 
 impl AllocationFile {

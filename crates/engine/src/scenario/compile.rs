@@ -3,7 +3,9 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
-use rvtol_deviation::{InputSpaceBuilder, PartSpec, ScalarDistribution, Shown, SixDof};
+use rvtol_deviation::{
+    InputSpaceBuilder, PartSpec, ScalarDistribution, Shown, SixDof, RAYLEIGH_QUANTILE,
+};
 use rvtol_models::{ConditionEffect, ModelParams, OutputKind, ParamValue};
 
 use super::file::{DistributionFile, PartFile, ScenarioFile, SpecFile, VariableFile};
@@ -11,7 +13,7 @@ use super::{
     Binding, BoundModel, ColumnInfo, InputGroup, OutputInfo, Scenario, ScenarioError,
     DEFAULT_SAMPLES, DEFAULT_SEED,
 };
-use crate::allocation::spec::{compile_allocation, ToleranceKind, ToleranceSource};
+use crate::allocation::spec::{compile_allocation, compile_levers, ToleranceKind, ToleranceSource};
 use crate::stats::SpecLimits;
 
 fn fixed_array<const N: usize>(path: &str, values: &[f64]) -> Result<[f64; N], ScenarioError> {
@@ -130,6 +132,11 @@ fn variable_tolerance(path: &str, variable: &VariableFile) -> ToleranceSource {
         DistributionFile::TruncatedNormal { sd, .. } => {
             (ToleranceKind::VariableTruncatedNormal, 3.0 * sd)
         }
+        DistributionFile::FoldedNormal { lower, upper, .. } => {
+            (ToleranceKind::VariableFoldedNormal, 0.5 * (upper - lower))
+        }
+        DistributionFile::Rayleigh { upper, .. } => (ToleranceKind::VariableRayleigh, upper),
+        DistributionFile::Lognormal { .. } => (ToleranceKind::VariableLognormal, 1.0),
     };
     ToleranceSource {
         name: variable.name.clone(),
@@ -140,8 +147,24 @@ fn variable_tolerance(path: &str, variable: &VariableFile) -> ToleranceSource {
     }
 }
 
-fn distribution(d: &DistributionFile) -> (ScalarDistribution, &'static str) {
-    match *d {
+/// The distribution a variable's file entry describes, and the key of its object; a
+/// tolerance-style parameter that cannot give a distribution (Cp ≤ 0, a median ≤ 0) is an
+/// error at `path` (the variable's `distribution`).
+fn distribution(
+    path: &str,
+    d: &DistributionFile,
+) -> Result<(ScalarDistribution, &'static str), ScenarioError> {
+    let positive_cp = |kind: &str, cp: f64| {
+        if cp > 0.0 {
+            Ok(cp)
+        } else {
+            Err(ScenarioError::new(
+                format!("{path}.{kind}.cp"),
+                format!("process capability must be positive, got {}", Shown(cp)),
+            ))
+        }
+    };
+    Ok(match *d {
         DistributionFile::Normal { mean, sd } => {
             (ScalarDistribution::Normal { mean, sd }, "normal")
         }
@@ -180,7 +203,76 @@ fn distribution(d: &DistributionFile) -> (ScalarDistribution, &'static str) {
             },
             "truncated_normal",
         ),
-    }
+        DistributionFile::FoldedNormal {
+            lower,
+            upper,
+            cp,
+            mean_shift,
+        } => {
+            let cp = positive_cp("folded_normal", cp)?;
+            if upper < lower {
+                return Err(ScenarioError::new(
+                    format!("{path}.folded_normal.upper"),
+                    format!(
+                        "upper limit {} is below lower limit {}",
+                        Shown(upper),
+                        Shown(lower)
+                    ),
+                ));
+            }
+            (
+                ScalarDistribution::FoldedNormal {
+                    mean: 0.5 * (lower + upper) + mean_shift,
+                    sd: (upper - lower) / (6.0 * cp),
+                },
+                "folded_normal",
+            )
+        }
+        DistributionFile::Rayleigh { upper, cp } => {
+            let cp = positive_cp("rayleigh", cp)?;
+            if upper < 0.0 {
+                return Err(ScenarioError::new(
+                    format!("{path}.rayleigh.upper"),
+                    format!(
+                        "a magnitude's upper tolerance must not be negative, got {}",
+                        Shown(upper)
+                    ),
+                ));
+            }
+            (
+                ScalarDistribution::Rayleigh {
+                    sigma: upper / (RAYLEIGH_QUANTILE * cp),
+                },
+                "rayleigh",
+            )
+        }
+        DistributionFile::Lognormal { median, upper, cp } => {
+            let cp = positive_cp("lognormal", cp)?;
+            if median <= 0.0 {
+                return Err(ScenarioError::new(
+                    format!("{path}.lognormal.median"),
+                    format!("must be positive, got {}", Shown(median)),
+                ));
+            }
+            if upper < median {
+                return Err(ScenarioError::new(
+                    format!("{path}.lognormal.upper"),
+                    format!(
+                        "the upper tolerance {} is below the median {}",
+                        Shown(upper),
+                        Shown(median)
+                    ),
+                ));
+            }
+            (
+                ScalarDistribution::Lognormal {
+                    mu: median.ln(),
+                    sigma: (upper / median).ln() / (3.0 * cp),
+                },
+                "lognormal",
+            )
+        }
+    })
 }
 
 fn model_params(
@@ -294,16 +386,21 @@ pub(super) fn compile(
     }
     for (i, variable) in &file.variables {
         let path = format!("variables[{i}]");
-        let (dist, kind) = distribution(&variable.distribution);
-        let checked = check_name(&format!("{path}.name"), &variable.name).and_then(|()| {
-            dist.validate(&format!("{path}.distribution.{kind}"))
-                .map_err(ScenarioError::from)
-        });
-        if let Err(err) = checked {
-            report(Err(err));
-            broken.insert(variable.name.clone());
-            continue;
-        }
+        let checked = check_name(&format!("{path}.name"), &variable.name)
+            .and_then(|()| distribution(&format!("{path}.distribution"), &variable.distribution))
+            .and_then(|(dist, kind)| {
+                dist.validate(&format!("{path}.distribution.{kind}"))
+                    .map(|()| dist)
+                    .map_err(ScenarioError::from)
+            });
+        let dist = match checked {
+            Ok(dist) => dist,
+            Err(err) => {
+                report(Err(err));
+                broken.insert(variable.name.clone());
+                continue;
+            }
+        };
         let column = builder.add_scalar(&path, dist);
         sources.push(InputGroup {
             name: variable.name.clone(),
@@ -525,6 +622,13 @@ pub(super) fn compile(
 
     let sensitivity_groups = sensitivity_groups(&file, &sources, &broken, &mut report);
 
+    let allocation_levers = match &file.allocation {
+        Some(section) => compile_levers(section, file.models.len()).unwrap_or_else(|err| {
+            report(Err(err));
+            Vec::new()
+        }),
+        None => Vec::new(),
+    };
     let allocation = match &file.allocation {
         // A source that could not be built is reported already; its allocation is not
         // checked again.
@@ -561,6 +665,7 @@ pub(super) fn compile(
         models,
         outputs,
         allocation,
+        allocation_levers,
     })
 }
 

@@ -134,6 +134,28 @@ pub(super) enum DistributionFile {
         lower: f64,
         upper: f64,
     },
+    /// The magnitude |X| of a tolerance-band quantity X.
+    FoldedNormal {
+        lower: f64,
+        upper: f64,
+        #[serde(default = "default_cp")]
+        cp: f64,
+        #[serde(default)]
+        mean_shift: f64,
+    },
+    /// A radial magnitude whose 99.865 % quantile is `upper` at Cp = 1.
+    Rayleigh {
+        upper: f64,
+        #[serde(default = "default_cp")]
+        cp: f64,
+    },
+    /// A lognormal quantity with its median and the 99.865 % quantile `upper` at Cp = 1.
+    Lognormal {
+        median: f64,
+        upper: f64,
+        #[serde(default = "default_cp")]
+        cp: f64,
+    },
 }
 
 #[derive(Debug, Deserialize)]

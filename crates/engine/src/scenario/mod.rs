@@ -17,7 +17,7 @@ use std::path::Path;
 use rvtol_deviation::InputSpace;
 use rvtol_models::{ConditionEffect, ErrorModel, OutputKind};
 
-use crate::allocation::spec::AllocatableSource;
+use crate::allocation::spec::{AllocatableSource, Lever};
 use crate::stats::SpecLimits;
 
 pub use file::{MAX_COVARIANCE, MAX_DEVIATION, MAX_PARAMETER};
@@ -155,6 +155,8 @@ pub struct Scenario {
     /// The sources `rvtol allocate` may change (the `allocation` section; empty without
     /// one), in scenario order.
     pub allocation: Vec<AllocatableSource>,
+    /// The discrete design choices `rvtol allocate` may make (`allocation.levers`).
+    pub allocation_levers: Vec<Lever>,
 }
 
 impl Scenario {
