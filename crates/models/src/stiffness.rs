@@ -476,9 +476,8 @@ mod tests {
         let cross = shaft.influence(9.5, 18.5);
         assert_eq!(modes.symmetric, direct + cross);
         assert!(modes.antisymmetric < modes.symmetric && modes.antisymmetric > 0.0);
-        // Two equal loads P at x1 and L − x1: bending deflection at x1 by the closed form
-        // P·x1²·(3L − 4x1)/(6EI)... for the pure-bending part (Roark Table 8.1 case 1e,
-        // symmetric two loads): w(x1) = P·a²(3L − 4a)/(6EI) with a = x1.
+        // Two equal loads P at a = x1 and L − a, bending alone: the deflection under a load
+        // is P·a²·(3L − 4a)/(6EI) (the symmetric two-load case of Roark Table 8.1).
         let bending_only = CrankShaft {
             shear_rigidity: f64::INFINITY,
             ..shaft
