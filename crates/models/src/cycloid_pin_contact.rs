@@ -83,7 +83,7 @@ use crate::{
 /// Largest pin count the model accepts (per-sample arrays live on the stack).
 pub const MAX_PINS: usize = 128;
 /// The parameters of one disc and its pins: what a model that embeds this one hands over
-/// under the same keys (see [`CycloidPinContact::of_two_crank_disc`]).
+/// under the same keys (see [`CycloidPinContact::of_disc`]).
 const DISC_KEYS: [&str; 12] = [
     "pin_count",
     "cycloid_teeth",

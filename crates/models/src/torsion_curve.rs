@@ -66,6 +66,13 @@
 //! - Both flanks alike: the negative branch mirrors the positive one (|T|).
 //! - A row with a non-finite input, or k·(1 + x_k) ≤ 0, gives NaN outputs (the engine counts
 //!   them).
+//!
+//! Left out (docs/models.md §13 says why and how much): the disc body and the deformation of
+//! the bores around the rows, the carrier plates and the housing, the main bearings (no
+//! torque about the axis), the support bearings' preload and the rows' edge loading under
+//! the shaft's slope, the disc's shift along its eccentric in the load sharing (under 1 % of
+//! E), the planet gear's force on the crank shaft, the friction of the support and main
+//! bearings and of the seals, the input shaft's torsion.
 
 use crate::cycloid_pin_contact::CycloidPinContact;
 use crate::geometric_hysteresis::{self, GeometricHysteresis};
