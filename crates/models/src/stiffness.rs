@@ -35,8 +35,9 @@
 //! support A; each pillar is clamped in both plates (a fixed–guided beam) and twists:
 //!   K_c = n_p·r_p²/(L_p³/(12·E·h·b³/12) + L_p/(κ_r·G·b·h)) + n_p·G·J_p/L_p
 //!   κ_r = 5/6 (rectangle), J_p = β·max(b,h)·min(b,h)³, β from Roark Table 10.7 case 4;
-//! support B moves tangentially by the carrier twist, i.e. at x1 by
-//!     c_car = m·S_B·a_w²·(x1/L)/K_c   (symmetric mode only)
+//! support B moves tangentially by the carrier twist, which moves the eccentric planes by
+//! x1/L and x2/L of it; the two discs carrying equal shares, the output sees their mean:
+//!     c_car = m·S_B·a_w²·((x1 + x2)/(2L))/K_c   (symmetric mode only)
 //!
 //! involute stage (input locked): the sun–planet mesh (ISO 6336-1 mesh stiffness c_γ per mm
 //! of face width b) and the crank's torsion between its planet and its eccentrics turn the
@@ -344,7 +345,10 @@ impl CrankSide {
         let support_symmetric = s_a * weight_a * compliance_a + s_b * weight_b * compliance_b;
         let support_antisymmetric =
             anti_a * weight_a * compliance_a + anti_b * weight_b * compliance_b;
-        let carrier = m * s_b * a * a * weight_b / self.carrier_stiffness;
+        // Support B's tangential shift reaches the planes x1 and x2 by x1/L and x2/L; the
+        // two discs share the load equally, so the output sees the mean.
+        let mean_plane = 0.5 * (self.shaft.first + self.shaft.second) / self.shaft.span;
+        let carrier = m * s_b * a * a * mean_plane / self.carrier_stiffness;
         ChainTerms {
             needle: (symmetric + antisymmetric) * needle,
             shaft: symmetric * modes.symmetric + antisymmetric * modes.antisymmetric,
