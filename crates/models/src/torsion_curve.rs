@@ -64,6 +64,10 @@
 //!   vanishes with the load on a stage with free play, so its loop closes at zero torque
 //!   unless the stage is preloaded.
 //! - Both flanks alike: the negative branch mirrors the positive one (|T|).
+//! - 6-DOF parts: 000's input shaft (du, dv, dα, dβ at the sun mesh through 001 Eq. 5–8)
+//!   acts on the involute free play only; dw and dγ move no mesh. The cranks sit at their
+//!   design places (their deviations are `crank_elastic_error`'s), so the chain is the same
+//!   for every crank and crank angle.
 //! - A row with a non-finite input, or k·(1 + x_k) ≤ 0, gives NaN outputs (the engine counts
 //!   them).
 //!
