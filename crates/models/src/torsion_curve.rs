@@ -48,8 +48,9 @@
 //! Readings (docs/models.md §13):
 //! - One profile. 000's printed Eq. 16 gives its own design modification (Δr_rp = −0.010,
 //!   Δr_p = −0.012 mm) +0.27 arcmin of free play, while the same numbers in 000's Eq. 13–15
-//!   and in 003's clearance form overlap the flanks by 0.33 arcmin: the printed first line
-//!   puts √(1 − K1²) on the equidistant term too. The default takes the free play from the
+//!   and in 003's clearance form overlap the flanks by 0.26 arcmin at the disc (0.33 with
+//!   Table 8's printed K1 = 0.72): the printed first line puts √(1 − K1²) on the
+//!   equidistant term too. The default takes the free play from the
 //!   clearances the load sharing uses, so that both see one profile; `clearance_reading` = 0
 //!   keeps 000's printed term for the free play (and then the two disagree).
 //! - Preload. A cycloid stage whose flanks overlap has no free play: both flanks carry
