@@ -56,7 +56,7 @@ fn unchanged_scenario_with_the_same_seed_reproduces_every_figure() {
 
 #[test]
 fn false_alarm_rate_over_50_seeds_is_at_most_nominal() {
-    // Family-wise level α = FAMILY_FALSE_ALARM (Bonferroni over the 30 figures). Over 50
+    // Family-wise level α = FAMILY_FALSE_ALARM (Bonferroni over the gated figures). Over 50
     // independent seeds the number of failing checks is at most Binomial(50, α) if the bands
     // are right: for α = 1 %, P(≥ 4) = 0.0016, so more than 3 failures means the bands are
     // too narrow.
@@ -138,7 +138,8 @@ fn cli_exit_codes_and_junit() {
     let xml = std::fs::read_to_string(&junit).unwrap();
     assert!(xml.starts_with("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<testsuites"));
     assert!(xml.contains("failures=\"0\""));
-    assert_eq!(xml.matches("<testcase ").count(), 30);
+    let figures = rvtol_engine::gate::gated_figure_count(&scenario(&rv20e_text()));
+    assert_eq!(xml.matches("<testcase ").count(), figures);
 
     let out = run_rvtol(&[
         "check",
@@ -156,7 +157,7 @@ fn cli_exit_codes_and_junit() {
         .any(|l| l.starts_with("moved: hysteresis_arcmin")));
     let xml = std::fs::read_to_string(&junit).unwrap();
     assert!(xml.contains("<failure message=\"moved: "));
-    assert_eq!(xml.matches("<testcase ").count(), 30);
+    assert_eq!(xml.matches("<testcase ").count(), figures);
     assert!(xml.trim_end().ends_with("</testsuite>\n</testsuites>"));
 
     // A broken baseline file is bad input: exit 2 with one line naming the path.

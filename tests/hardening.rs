@@ -369,8 +369,17 @@ fn requests_that_cannot_fit_are_refused_before_they_start() {
         ]),
         2,
     );
+    // 8 bytes per kept value: 1e9 samples of each continuous output, the figure named.
+    let continuous = rvtol_engine::Scenario::load(&scenario)
+        .expect("load")
+        .continuous_outputs()
+        .len();
     assert!(
-        run.starts_with("error: run: needs about 32.2 GB of memory (4,000,000,000 kept values for exact percentiles of 4 outputs), more than the 1.1 GB available (--max-memory): lower --exact-percentile-limit"),
+        run.starts_with(&format!(
+            "error: run: needs about {:.1} GB of memory ({},000,000,000 kept values for exact percentiles of {continuous} outputs), more than the 1.1 GB available (--max-memory): lower --exact-percentile-limit",
+            8.0 * continuous as f64 + 0.064 + 8.0 * continuous as f64 * 4.194304e-3,
+            continuous
+        )),
         "{run}"
     );
     let sensitivity = one_line(

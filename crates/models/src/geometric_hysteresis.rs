@@ -227,8 +227,6 @@ const OUTPUTS: &[(&str, &str, &str, OutputKind)] = &[
 /// The outputs of the model, in order (a model that embeds this one sizes its buffer with
 /// it).
 pub const OUTPUT_COUNT: usize = 8;
-/// Index of `hysteresis_arcmin` among the outputs.
-pub const HYSTERESIS: usize = 0;
 
 const PARAMS: &[ParamSpec] = &[
     ParamSpec {

@@ -14,6 +14,7 @@ mod geometric_hysteresis;
 mod linear_stack;
 mod params;
 mod spectrum;
+mod stiffness;
 mod test_functions;
 mod torsion_curve;
 mod transmission_error;
@@ -24,6 +25,10 @@ pub use geometric_hysteresis::{tilt_from_deflection, GeometricHysteresis};
 pub use linear_stack::LinearStack;
 pub use params::{ModelError, ModelParams, ParamValue};
 pub use spectrum::RealFft;
+pub use stiffness::{
+    line_contact_approach, Carrier, ChainTerms, CrankShaft, CrankSide, InvoluteStage, RollerRow,
+    ShaftModes, PALMGREN_LINE, STRIBECK_LINE,
+};
 pub use test_functions::{Ishigami, SobolG};
 pub use torsion_curve::TorsionCurve;
 pub use transmission_error::TransmissionError;
