@@ -57,6 +57,10 @@ use crate::{
     OutputSpec, ParamSpec, Series, ARCSEC_PER_RAD,
 };
 
+mod two_discs;
+
+use two_discs::{CrankClosure, DiscContact, Physical, TwoDiscScratch};
+
 /// Largest crank count.
 const MAX_CRANKS: usize = 6;
 /// Inputs per crank, in order.
@@ -204,7 +208,43 @@ const PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "tooth_profile_errors",
         unit: "",
-        description: "1: add an input tooth_profile_error_mm_j per tooth space of the disc",
+        description: "1: add an input per tooth space of each disc (tooth_profile_error_mm_d_j; document_002: tooth_profile_error_mm_j of its one disc)",
+        default: Some(0.0),
+    },
+    ParamSpec {
+        name: "reading",
+        unit: "text",
+        description: "\"physical\" (default): two discs 180° apart, four-bar crank closure, no output pin-hole term, interference flagged (docs/models.md §12); \"document_002\": 002's literal reading (one disc, mean of the cranks, output pin-hole runout at r6, disc-side errors 1:1 at the output)",
+        default: None,
+    },
+    ParamSpec {
+        name: "disc_contact",
+        unit: "text",
+        description: "physical reading: \"first_contact\" (default; light load: the disc that touches first carries the output) or \"load_shared\" (both discs loaded: the mean of their contact angles)",
+        default: None,
+    },
+    ParamSpec {
+        name: "crank_closure",
+        unit: "text",
+        description: "physical reading: \"four_bar\" (default; a rigid disc turns to fit its crank pins) or \"averaged\" (the crank bearings take up the pins' differences; 002's reading)",
+        default: None,
+    },
+    ParamSpec {
+        name: "crank_circle_radius_mm",
+        unit: "mm",
+        description: "a_w, radius of the crank circle (physical reading; 36 mm for the RV40E, document 004's a0)",
+        default: None,
+    },
+    ParamSpec {
+        name: "disc_spacing_mm",
+        unit: "mm",
+        description: "s, axial distance between the two discs' mid-planes (physical reading; crank tilts act at ±s/2)",
+        default: None,
+    },
+    ParamSpec {
+        name: "sun_plane_offset_mm",
+        unit: "mm",
+        description: "L_s, axial distance from the input shaft's deviation reference to the sun's mid-plane (physical reading; input shaft tilts act there)",
         default: Some(0.0),
     },
 ];
@@ -218,9 +258,13 @@ pub const ENTRY: ModelEntry = ModelEntry {
     example_params: rv40e_params,
 };
 
-/// The RV40E of document 002 Table 1.
+/// The RV40E of document 002 Table 1, with the crank circle of document 004 (a0 = 36 mm)
+/// and discs 12 mm apart (the 10 mm face width of scenarios/rv40e-elastic.json and a 2 mm
+/// gap, assumed).
 fn rv40e_params() -> ModelParams {
     ModelParams::new()
+        .with_number("crank_circle_radius_mm", 36.0)
+        .with_number("disc_spacing_mm", 12.0)
         .with_number("sun_teeth", 9.0)
         .with_number("planet_teeth", 27.0)
         .with_number("module_mm", 2.0)
@@ -339,6 +383,8 @@ pub struct TransmissionError {
     fft: RealFft,
     inputs: Vec<InputSpec>,
     outputs: Vec<OutputSpec>,
+    /// The physical reading's data; None for document 002's literal reading.
+    physical: Option<Box<Physical>>,
 }
 
 /// Per-thread work state of the first-contact search, refilled for every row: the per-pin
@@ -357,6 +403,8 @@ struct Search {
     curve: Vec<f64>,
     /// The FFT's work buffer.
     work: Vec<Complex>,
+    /// The physical reading's work state.
+    two: TwoDiscScratch,
 }
 
 // Per-thread work state (no allocation per sample).
@@ -413,61 +461,69 @@ impl TransmissionError {
         let feedback = params.flag("carrier_feedback", true)?;
         let per_pin = params.flag("pin_position_errors", false)?;
         let per_tooth = params.flag("tooth_profile_errors", false)?;
-        params.reject_unknown(&PARAMS.iter().map(|p| p.name).collect::<Vec<_>>())?;
-
-        let mut inputs: Vec<InputSpec> = FIXED_INPUTS
-            .iter()
-            .map(|(name, description)| InputSpec {
-                name: name.to_string(),
-                unit: "mm".into(),
-                description,
-            })
-            .collect();
-        for k in 1..=cranks {
-            for (name, description) in CRANK_INPUTS {
-                inputs.push(InputSpec {
-                    name: format!("{name}_{k}"),
-                    unit: "mm".into(),
-                    description,
-                });
+        let reading = params.text("reading", "physical")?;
+        let literal = match reading.as_str() {
+            "physical" => false,
+            "document_002" => true,
+            other => {
+                return Err(ModelError::new(
+                    "reading",
+                    format!("must be \"physical\" or \"document_002\", got \"{other}\""),
+                ))
             }
-        }
-        if per_pin {
-            for i in 1..=pins {
-                inputs.push(InputSpec {
-                    name: format!("pin_radial_error_mm_{i}"),
-                    unit: "mm".into(),
-                    description: "radial position error of pin i (outward), housing frame",
-                });
-            }
-            for i in 1..=pins {
-                inputs.push(InputSpec {
-                    name: format!("pin_tangential_error_mm_{i}"),
-                    unit: "mm".into(),
-                    description: "tangential position error of pin i, housing frame",
-                });
-            }
-        }
-        if per_tooth {
-            for j in 1..=cycloid_teeth {
-                inputs.push(InputSpec { name: format!("tooth_profile_error_mm_{j}"), unit: "mm".into(), description: "normal profile error of tooth space j of the disc, disc frame (positive: clearance)" });
-            }
-        }
-        let output = |name: String, description: &'static str| OutputSpec {
-            name,
-            unit: "arcsec".into(),
-            description,
-            kind: OutputKind::Continuous,
-            condition: None,
         };
-        let outputs = vec![
-            output("te_peak_to_peak_arcsec".into(), "peak-to-peak transmission error over one output revolution"),
-            output("te_rms_arcsec".into(), "rms of the transmission error about its mean"),
-            output("te_mean_arcsec".into(), "mean of the transmission error (a constant angular offset; negative: the output lags)"),
-            output("te_order_1_arcsec".into(), "FFT semi-amplitude of order 1 (once per output revolution)"),
-            output(format!("te_order_{cycloid_teeth}_arcsec"), "FFT semi-amplitude of order z_c (pin-borne errors)"),
-            output(format!("te_order_{pins}_arcsec"), "FFT semi-amplitude of order z_p (crank- and disc-borne errors)"),
-        ];
+        let contact = match params.text("disc_contact", "first_contact")?.as_str() {
+            "first_contact" => DiscContact::FirstContact,
+            "load_shared" => DiscContact::LoadShared,
+            other => {
+                return Err(ModelError::new(
+                    "disc_contact",
+                    format!("must be \"first_contact\" or \"load_shared\", got \"{other}\""),
+                ))
+            }
+        };
+        let closure = match params.text("crank_closure", "four_bar")?.as_str() {
+            "four_bar" => CrankClosure::FourBar,
+            "averaged" => CrankClosure::Averaged,
+            other => {
+                return Err(ModelError::new(
+                    "crank_closure",
+                    format!("must be \"four_bar\" or \"averaged\", got \"{other}\""),
+                ))
+            }
+        };
+        let physical_geometry = if literal {
+            None
+        } else {
+            let crank_radius = params.positive("crank_circle_radius_mm", None)?;
+            if crank_radius <= eccentricity {
+                return Err(ModelError::new(
+                    "crank_circle_radius_mm",
+                    format!("must exceed the eccentricity {eccentricity} mm, got {crank_radius}"),
+                ));
+            }
+            let spacing = params.number("disc_spacing_mm", None)?;
+            if !(spacing >= 0.0 && spacing.is_finite()) {
+                return Err(ModelError::new(
+                    "disc_spacing_mm",
+                    format!("must be a finite length ≥ 0, got {spacing}"),
+                ));
+            }
+            let sun_offset = params.number("sun_plane_offset_mm", Some(0.0))?;
+            if !sun_offset.is_finite() {
+                return Err(ModelError::new(
+                    "sun_plane_offset_mm",
+                    format!("must be finite, got {sun_offset}"),
+                ));
+            }
+            Some((crank_radius, spacing, sun_offset))
+        };
+        params.reject_unknown(&PARAMS.iter().map(|p| p.name).collect::<Vec<_>>())?;
+        let (inputs, outputs) = if literal {
+            literal_specs(cranks, pins, cycloid_teeth, per_pin, per_tooth)
+        } else {
+            two_discs::specs(cranks, pins, cycloid_teeth, per_pin, per_tooth)
+        };
 
         // Phase table: the fractional pin pitch of the eccentric at point j takes
         // N/gcd(z_c·z_p, N) values. A slot s has a positive lever while 0 < s + f < z_p/2.
@@ -547,6 +603,33 @@ impl TransmissionError {
         }
         let curve_points: Vec<Point> = keyed.into_iter().map(|(_, point)| point).collect();
         let alpha = alpha.to_radians();
+        let divisor = if feedback {
+            pins as f64 + sun_teeth / planet_teeth
+        } else {
+            pins as f64
+        };
+        let physical = physical_geometry.map(|(crank_radius, spacing, sun_offset)| {
+            Box::new(two_discs::build(
+                &stage,
+                &table,
+                &curve_points,
+                two_discs::Layout {
+                    points,
+                    common_divisor: g,
+                    cranks,
+                    per_pin,
+                    ratio,
+                },
+                Physical::settings(
+                    contact,
+                    closure,
+                    crank_radius,
+                    spacing,
+                    sun_offset,
+                    cycloid_teeth as f64 / divisor,
+                ),
+            ))
+        });
         Ok(TransmissionError {
             sun_teeth,
             planet_teeth,
@@ -558,11 +641,7 @@ impl TransmissionError {
             points,
             base_radius: module * planet_teeth / 2.0 * alpha.cos(),
             pressure: alpha.sin_cos(),
-            divisor: if feedback {
-                pins as f64 + sun_teeth / planet_teeth
-            } else {
-                pins as f64
-            },
+            divisor,
             per_pin,
             per_tooth,
             table,
@@ -571,6 +650,7 @@ impl TransmissionError {
             fft: RealFft::new(points),
             inputs,
             outputs,
+            physical,
         })
     }
 
@@ -822,11 +902,38 @@ impl TransmissionError {
         });
     }
 
-    /// TE(Θ_j) in arcsec at Θ_j = 2πj/N.
+    /// TE(Θ_j) in arcsec at Θ_j = 2πj/N, from the tables (the physical reading's curve
+    /// also where its discs interfere).
     pub fn curve(&self, inputs: &[f64]) -> Vec<f64> {
         let mut curve = vec![0.0; self.points];
-        SEARCH.with_borrow_mut(|search| self.fill_curve(inputs, search, &mut curve));
+        if self.physical.is_some() {
+            let terms = self.row_terms(inputs);
+            SEARCH.with_borrow_mut(|search| {
+                self.physical_curve(inputs, &terms, &mut search.two, &mut curve, None)
+            });
+            curve.iter_mut().for_each(|v| *v *= ARCSEC_PER_RAD);
+        } else {
+            SEARCH.with_borrow_mut(|search| self.fill_curve(inputs, search, &mut curve));
+        }
         curve
+    }
+
+    /// The physical reading's TE at Θ_j = 2πj/n in arcsec, from the geometry pin by pin
+    /// (no tables, any n; NaN where the discs interfere): the reference of the tabulated
+    /// curve and of its order amplitudes. None for the document_002 reading.
+    pub fn exact_curve(&self, inputs: &[f64], n: usize) -> Option<Vec<f64>> {
+        self.physical.as_ref()?;
+        Some(
+            self.exact_curve_stages(inputs, n)
+                .into_iter()
+                .map(|(te, _)| te * ARCSEC_PER_RAD)
+                .collect(),
+        )
+    }
+
+    /// Whether the model follows the physical reading (two discs).
+    pub fn is_physical(&self) -> bool {
+        self.physical.is_some()
     }
 
     /// Semi-amplitudes of orders 0..N/2 of a curve (order 0: the mean), arcsec.
@@ -839,6 +946,70 @@ impl TransmissionError {
         amplitudes[0] = self.fft.bin(&work, 0).0 / self.points as f64;
         amplitudes
     }
+}
+
+/// The inputs and outputs of document 002's literal reading (one disc).
+fn literal_specs(
+    cranks: usize,
+    pins: usize,
+    cycloid_teeth: usize,
+    per_pin: bool,
+    per_tooth: bool,
+) -> (Vec<InputSpec>, Vec<OutputSpec>) {
+    let mut inputs: Vec<InputSpec> = FIXED_INPUTS
+        .iter()
+        .map(|(name, description)| InputSpec {
+            name: name.to_string(),
+            unit: "mm".into(),
+            description,
+        })
+        .collect();
+    for k in 1..=cranks {
+        for (name, description) in CRANK_INPUTS {
+            inputs.push(InputSpec {
+                name: format!("{name}_{k}"),
+                unit: "mm".into(),
+                description,
+            });
+        }
+    }
+    if per_pin {
+        for i in 1..=pins {
+            inputs.push(InputSpec {
+                name: format!("pin_radial_error_mm_{i}"),
+                unit: "mm".into(),
+                description: "radial position error of pin i (outward), housing frame",
+            });
+        }
+        for i in 1..=pins {
+            inputs.push(InputSpec {
+                name: format!("pin_tangential_error_mm_{i}"),
+                unit: "mm".into(),
+                description: "tangential position error of pin i, housing frame",
+            });
+        }
+    }
+    if per_tooth {
+        for j in 1..=cycloid_teeth {
+            inputs.push(InputSpec { name: format!("tooth_profile_error_mm_{j}"), unit: "mm".into(), description: "normal profile error of tooth space j of the disc, disc frame (positive: clearance)" });
+        }
+    }
+    let output = |name: String, description: &'static str| OutputSpec {
+        name,
+        unit: "arcsec".into(),
+        description,
+        kind: OutputKind::Continuous,
+        condition: None,
+    };
+    let outputs = vec![
+        output("te_peak_to_peak_arcsec".into(), "peak-to-peak transmission error over one output revolution"),
+        output("te_rms_arcsec".into(), "rms of the transmission error about its mean"),
+        output("te_mean_arcsec".into(), "mean of the transmission error (a constant angular offset; negative: the output lags)"),
+        output("te_order_1_arcsec".into(), "FFT semi-amplitude of order 1 (once per output revolution)"),
+        output(format!("te_order_{cycloid_teeth}_arcsec"), "FFT semi-amplitude of order z_c (pin-borne errors)"),
+        output(format!("te_order_{pins}_arcsec"), "FFT semi-amplitude of order z_p (crank- and disc-borne errors)"),
+    ];
+    (inputs, outputs)
 }
 
 /// The first `chunks` quadruples of a column.
@@ -916,10 +1087,22 @@ impl ErrorModel for TransmissionError {
     }
 
     fn evaluate(&self, inputs: &[f64], outputs: &mut [f64]) {
-        SEARCH.with_borrow_mut(|search| self.evaluate_with(inputs, search, outputs))
+        SEARCH.with_borrow_mut(|search| {
+            if self.physical.is_some() {
+                let Search {
+                    curve, work, two, ..
+                } = search;
+                self.evaluate_physical(inputs, curve, work, two, outputs)
+            } else {
+                self.evaluate_with(inputs, search, outputs)
+            }
+        })
     }
 
     fn curves(&self, inputs: &[f64]) -> Vec<Curve> {
+        if self.physical.is_some() {
+            return self.physical_curves(inputs);
+        }
         let n = self.points;
         let mut stages = vec![StageErrors::default(); n];
         self.trace(inputs, |j, s| stages[j] = s);
@@ -972,6 +1155,13 @@ impl ErrorModel for TransmissionError {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::ParamValue;
+
+    /// The tests of this module check document 002's literal reading; the physical
+    /// reading's are in `two_discs`.
+    fn rv40e_params() -> ModelParams {
+        super::rv40e_params().with("reading", ParamValue::Text("document_002".into()))
+    }
 
     fn rv40e() -> TransmissionError {
         TransmissionError::from_params(&rv40e_params()).unwrap()

@@ -1,0 +1,1226 @@
+//! The physical reading of the transmission error (docs/models.md §12, "physical
+//! reading"): two cycloid discs with eccentrics 180° apart on m cranks, each disc located
+//! by its own eccentrics (four-bar closure), first contact over both discs or the
+//! load-shared mean, crank and input-shaft tilts through 001 Eq. 5–8 at the planes of the
+//! contacts, interference as an indicator, and no output pin-hole term (an output runout
+//! translates the output, it does not turn it).
+//!
+//! Frames and signs. Output (carrier) angle Θ, counter-clockwise positive; TE positive
+//! when the output is ahead. The eccentric of disc 1 points at χ = −z_p·Θ in the carrier
+//! (ψ = Θ + χ = −z_c·Θ in the housing), that of disc 2 at χ + π; each disc's eccentric
+//! frame has x along its eccentric and y its counter-clockwise normal, and a carrier
+//! vector v has the components σ_d·R(z_p·Θ)·v in it (σ_1 = +1, σ_2 = −1). Crank k sits at
+//! β_k = 2π(k − 1)/m on the crank circle a_w, with radial u_k and tangential t_k.
+//!
+//! Per disc d (all lengths mm, angles rad):
+//! - eccentric centre error of crank k at disc d's plane, eccentric frame:
+//!   E_kd = q_kd + a·λ_k·ŷ + σ_d·R(z_p·Θ)·B_kd, with q_kd the eccentric's own error (crank
+//!   frame: magnitude, phase), λ_k the crank's rotation error from the involute stage
+//!   (its lag g_k/(r2·cos α), counter-clockwise because the crank turns clockwise
+//!   against the carrier), and B_kd = R(β_k)·(b_r + z_d·τ_t, b_t − z_d·τ_r) the crank axis
+//!   at the disc plane z_d = ±s/2 (bore position b, axis tilt τ about u_k and t_k; 001
+//!   Eq. 5–8: θ = ω × p).
+//! - disc translation T_d = mean_k E_kd + σ_d·R(z_p·Θ)·r_d (r_d the runout of the disc's
+//!   profile about its crank holes, disc frame = carrier frame).
+//! - disc rotation against the carrier (four-bar closure of a rigid disc on m crank pins
+//!   of equal bearing stiffness: the least-squares fit of the pins, exact across the line
+//!   of the pins for m = 2): ρ_d = Σ_k t_k·E_kd/(m·a_w), with t_k in the same frame;
+//!   for two cranks with eccentric errors e_1 = −e_2 across that line, ρ = e_⊥/a_w =
+//!   (e_1 − e_2)_⊥/(2·a_w). `crank_closure` "averaged" sets ρ_d = 0 (002's reading).
+//! - crank offset C_d = −T_d,y/(a·z_c) − ρ_d: the translation across the eccentric is an
+//!   eccentric phase change T_d,y/a, which the pins turn into a disc rotation
+//!   −T_d,y/(a·z_c) (cycloid relation Θ_disc = −ψ/z_c); the carrier is the disc less ρ_d.
+//! - the pins hold the disc between a drive-flank lag L_d = min over l_i > 0 of g_i/l_i
+//!   and a coast-flank lead K_d = min over l_i < 0 of g_i/|l_i| (g_i the clearances of
+//!   docs/models.md §12 with d_r = T_d,x and disc d's own profile and tooth errors).
+//! - the output follows the disc through the cranks that ride on it: a disc rotation ε
+//!   with the crank held against the carrier turns the output by ε·z_c/z_p (the whole
+//!   carrier, cranks and disc turn about the output axis, where the pin normals have the
+//!   lever a·z_p), and by ε·z_c/D with the carrier feedback (D = z_p + z_s/z_pl); κ =
+//!   z_c/D scales every disc-side term (002 takes κ = 1).
+//!
+//! Output window of disc d: [κ·(C_d − L_d), κ·(C_d + K_d)]. First contact (light load,
+//! the single-flank test): TE = max_d κ·(C_d − L_d); load-shared (both discs loaded, equal
+//! stiffness): TE = mean_d κ·(C_d − L_d). The windows of the two discs must overlap at every
+//! point: where they do not, the profile interferes (a negative play), the sample has no
+//! transmission error and the indicator `profile_interference` is 1.
+//!
+//! The curve is tabulated at N points (the disc-1 slot table of the parent module, a
+//! coast table, disc 2's slots found at the phase half a revolution of the eccentric on);
+//! peak-to-peak is refined at its extremes by the exact geometry (a parabola on the
+//! winning contact near the maximum, the crossing of the two contacts near the minimum,
+//! which is a kink), so it converges as O(h²) in the spacing h = 2π/N instead of O(h).
+
+use std::f64::consts::PI;
+
+use super::{smallest, smallest_ratio, PinTable, TransmissionError, MAX_CRANKS};
+use crate::cycloid::CycloidStage;
+use crate::{ConditionEffect, InputSpec, OutputCondition, OutputKind, OutputSpec};
+
+/// How the two discs share the output.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum DiscContact {
+    /// Light load: the disc that touches first carries the output.
+    FirstContact,
+    /// Both discs loaded with equal stiffness: the mean of their contact angles.
+    LoadShared,
+}
+
+/// How a disc on m crank pins takes up their differences.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum CrankClosure {
+    /// The rigid disc turns to fit its pins (four-bar closure, least squares for m > 2).
+    FourBar,
+    /// The bearings take the differences up; the disc only translates by their mean
+    /// (002's reading).
+    Averaged,
+}
+
+/// Fixed inputs of the physical reading, in order.
+pub(super) const FIXED: [(&str, &str, &str); 8] = [
+    ("sun_runout_x_mm", "mm", "sun (input shaft) centre at the sun plane, sun frame, x"),
+    ("sun_runout_y_mm", "mm", "sun (input shaft) centre at the sun plane, sun frame, y"),
+    (
+        "sun_tilt_x_rad",
+        "rad",
+        "input shaft tilt about x, sun frame (001 Eq. 7: moves the sun plane by −Δα·L_s along y)",
+    ),
+    (
+        "sun_tilt_y_rad",
+        "rad",
+        "input shaft tilt about y, sun frame (001 Eq. 7: moves the sun plane by +Δβ·L_s along x)",
+    ),
+    (
+        "equidistant_modification_mm",
+        "mm",
+        "Δr_rp, equidistant modification of both discs (003; positive: clearance)",
+    ),
+    (
+        "shift_modification_mm",
+        "mm",
+        "Δr_p, shift modification of both discs (003; negative: clearance)",
+    ),
+    (
+        "pin_circle_radius_error_mm",
+        "mm",
+        "δr_p, pin circle radius minus design",
+    ),
+    ("pin_radius_error_mm", "mm", "δr_rp, pin radius minus design"),
+];
+
+/// Inputs per disc d, in order (name stems; the disc number follows).
+pub(super) const PER_DISC: [(&str, &str); 3] = [
+    (
+        "profile_normal_error_mm",
+        "profile error of disc d normal to the profile, every tooth (002 δ31; positive: clearance)",
+    ),
+    (
+        "disc_runout_x_mm",
+        "runout of disc d's profile about its crank holes, disc frame, x (along the eccentric at Θ = 0)",
+    ),
+    (
+        "disc_runout_y_mm",
+        "runout of disc d's profile about its crank holes, disc frame, y",
+    ),
+];
+
+/// Inputs per crank k, in order (name stems; the crank number follows, then the disc).
+pub(super) const PER_CRANK: [(&str, &str, &str); 7] = [
+    (
+        "planet_runout_x_mm",
+        "mm",
+        "planet runout, planet frame, along the eccentric of disc 1",
+    ),
+    (
+        "planet_runout_y_mm",
+        "mm",
+        "planet runout, planet frame, across the eccentric of disc 1",
+    ),
+    (
+        "center_distance_error_mm",
+        "mm",
+        "sun–planet centre distance error, carrier frame (002 δ11)",
+    ),
+    (
+        "crank_axis_radial_error_mm",
+        "mm",
+        "crank axis position midway between the discs, carrier frame, radial",
+    ),
+    (
+        "crank_axis_tangential_error_mm",
+        "mm",
+        "crank axis position midway between the discs, carrier frame, tangential",
+    ),
+    (
+        "crank_axis_tilt_radial_rad",
+        "rad",
+        "crank axis tilt about the radial direction, carrier frame (001 Eq. 7 at the disc planes)",
+    ),
+    (
+        "crank_axis_tilt_tangential_rad",
+        "rad",
+        "crank axis tilt about the tangential direction, carrier frame (001 Eq. 7 at the disc planes)",
+    ),
+];
+
+/// Inputs per eccentric (crank k, disc d), in order.
+pub(super) const PER_ECCENTRIC: [(&str, &str); 2] = [
+    (
+        "crank_eccentricity_error_mm",
+        "eccentric of crank k under disc d: magnitude error, crank frame (002 δ21)",
+    ),
+    (
+        "crank_phase_error_mm",
+        "eccentric of crank k under disc d: position error across the eccentric (counter-clockwise), crank frame",
+    ),
+];
+
+/// Inputs per crank: the crank's own and its two eccentrics'.
+pub(super) const CRANK_STRIDE: usize = PER_CRANK.len() + 2 * PER_ECCENTRIC.len();
+
+/// The model data of the physical reading.
+#[derive(Debug, Clone)]
+pub(super) struct Physical {
+    pub contact: DiscContact,
+    pub closure: CrankClosure,
+    /// a_w, mm.
+    pub crank_radius: f64,
+    /// s/2, mm: the disc planes at z = +s/2 (disc 1) and −s/2 (disc 2).
+    pub half_spacing: f64,
+    /// L_s, mm: from the input shaft's reference to the sun plane.
+    pub sun_offset: f64,
+    /// κ = z_c/D.
+    pub kappa: f64,
+    pub stage: CycloidStage,
+    /// Slots with a negative lever (the coast flank), factors over |l|.
+    pub coast: PinTable,
+    /// Per disc-1 phase p: disc 2's block.
+    pub phase_2: Vec<u32>,
+    /// Tooth space of each entry of disc 2's drive and coast blocks, per disc-1 phase p
+    /// (p·width + e), relative to the same tooth shift k_j as disc 1.
+    pub tooth_2_drive: Vec<u32>,
+    pub tooth_2_coast: Vec<u32>,
+    /// Per curve point (in `curve_points` order): disc 2's whole pin pitches, mod z_p.
+    pub pin_shift_2: Vec<u32>,
+    /// Per point index j: (sin, cos) of z_p·Θ and of (i − 1)·Θ.
+    pub angles: Vec<[f64; 4]>,
+    /// (sin β_k, cos β_k).
+    pub crank_angles: Vec<(f64, f64)>,
+    /// Input offsets: per disc, cranks, pins, teeth.
+    pub disc_base: usize,
+    pub crank_base: usize,
+    pub pin_base: usize,
+    pub tooth_base: usize,
+}
+
+/// What a row contributes, reduced once per row.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct RowTerms {
+    pub d_rp: f64,
+    pub d_p: f64,
+    pub err_rp: f64,
+    pub err_rrp: f64,
+    pub profile: [f64; 2],
+    /// Per crank, λ_k = l0 + l1·cos z_pΘ + l2·sin z_pΘ + l3·cos (i−1)Θ + l4·sin (i−1)Θ, rad.
+    pub lam: [[f64; 5]; MAX_CRANKS],
+    /// Per disc, the mean eccentric error (along, across), eccentric frame.
+    pub q_mean: [(f64, f64); 2],
+    /// Per disc, mean crank axis at the disc plane plus the disc runout, carrier frame.
+    pub v: [(f64, f64); 2],
+    /// Per disc, Σ_k t_k·R(−z_pΘ)·q_kd = p1·cos z_pΘ + p2·sin z_pΘ.
+    pub p1: [f64; 2],
+    pub p2: [f64; 2],
+    /// Per disc, Σ_k t_k·B_kd (carrier frame).
+    pub rho_const: [f64; 2],
+    /// Largest |radial| and |tangential| pin error.
+    pub pin_bound: (f64, f64),
+}
+
+/// A contact branch: the pin in contact on each disc that counts (first contact: one
+/// disc; load-shared: both).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Branch {
+    One { disc: usize, pin: usize },
+    Both { pins: [usize; 2] },
+}
+
+/// The exact geometry at one angle.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Exact {
+    /// TE, rad.
+    pub te: f64,
+    /// Whether the two discs' windows overlap (no interference).
+    pub clear: bool,
+    pub branch: Branch,
+    /// Per disc: κ·(C_d − L_d), κ·(C_d + K_d).
+    pub windows: [(f64, f64); 2],
+    /// −κ·mean λ/z_c: the involute stage's common part, rad.
+    pub involute: f64,
+    /// Per disc κ·C_d, rad.
+    pub crank: [f64; 2],
+}
+
+impl TransmissionError {
+    pub(super) fn physical(&self) -> &Physical {
+        self.physical
+            .as_deref()
+            .expect("called on the physical reading")
+    }
+
+    /// Reduces a row of the physical reading to its per-row terms.
+    pub(super) fn row_terms(&self, inputs: &[f64]) -> RowTerms {
+        let ph = self.physical();
+        let m = self.cranks;
+        let (sin_a, cos_a) = self.pressure;
+        let inverse_base = 1.0 / self.base_radius;
+        let (sun_x, sun_y) = (
+            inputs[0] + ph.sun_offset * inputs[3],
+            inputs[1] - ph.sun_offset * inputs[2],
+        );
+        let mut terms = RowTerms {
+            d_rp: inputs[4],
+            d_p: inputs[5],
+            err_rp: inputs[6],
+            err_rrp: inputs[7],
+            ..RowTerms::default()
+        };
+        for d in 0..2 {
+            let disc = &inputs[ph.disc_base + 3 * d..ph.disc_base + 3 * (d + 1)];
+            terms.profile[d] = disc[0];
+            terms.v[d] = (disc[1], disc[2]);
+        }
+        let mean = 1.0 / m as f64;
+        for k in 0..m {
+            let row = &inputs[ph.crank_base + CRANK_STRIDE * k..][..CRANK_STRIDE];
+            let (sb, cb) = ph.crank_angles[k];
+            // Involute stage: action line n_k = sin α·u_k + cos α·t_k; lag g_k/(r2·cos α).
+            let n = (sin_a * cb - cos_a * sb, sin_a * sb + cos_a * cb);
+            let (px, py) = (row[0], row[1]);
+            terms.lam[k] = [
+                row[2] * sin_a * inverse_base,
+                (n.0 * px + n.1 * py) * inverse_base,
+                (n.0 * py - n.1 * px) * inverse_base,
+                -(n.0 * sun_x + n.1 * sun_y) * inverse_base,
+                -(n.1 * sun_x - n.0 * sun_y) * inverse_base,
+            ];
+            let (b_r, b_t, tau_r, tau_t) = (row[3], row[4], row[5], row[6]);
+            for d in 0..2 {
+                let z = if d == 0 {
+                    ph.half_spacing
+                } else {
+                    -ph.half_spacing
+                };
+                let (r, t) = (b_r + z * tau_t, b_t - z * tau_r);
+                // Carrier frame: R(β_k)·(r, t).
+                let b = (r * cb - t * sb, r * sb + t * cb);
+                terms.v[d].0 += b.0 * mean;
+                terms.v[d].1 += b.1 * mean;
+                terms.rho_const[d] += t;
+                let (qx, qy) = (row[7 + 2 * d], row[8 + 2 * d]);
+                terms.q_mean[d].0 += qx * mean;
+                terms.q_mean[d].1 += qy * mean;
+                // t_k·R(−θ)·q = (−sin β, cos β)·(qx c + qy s, −qx s + qy c).
+                terms.p1[d] += -sb * qx + cb * qy;
+                terms.p2[d] += -sb * qy - cb * qx;
+            }
+        }
+        // (v started from the disc runouts, weight 1, before the crank means were added.)
+        if self.per_pin {
+            let pins = &inputs[ph.pin_base..ph.pin_base + 2 * self.pins];
+            let (radial, tangential) = pins.split_at(self.pins);
+            terms.pin_bound = (
+                radial.iter().fold(0.0, |a, v| f64::max(a, v.abs())),
+                tangential.iter().fold(0.0, |a, v| f64::max(a, v.abs())),
+            );
+        }
+        terms
+    }
+
+    /// C_d for both discs and the involute stage's common part at one angle, from
+    /// (sin, cos) of z_p·Θ and of (i − 1)·Θ.
+    #[inline(always)]
+    pub(super) fn crank_offsets(&self, terms: &RowTerms, angles: [f64; 4]) -> ([f64; 2], f64) {
+        let ph = self.physical();
+        let [s, c, ss, cs] = angles;
+        let m = self.cranks as f64;
+        let (mut lam_sum, mut four) = (0.0, 0.0);
+        for (l, &(sb, cb)) in terms.lam[..self.cranks].iter().zip(&ph.crank_angles) {
+            let lam = l[0] + l[1] * c + l[2] * s + l[3] * cs + l[4] * ss;
+            lam_sum += lam;
+            four += lam * (cb * c - sb * s);
+        }
+        let a = self.eccentricity;
+        let lam_mean = lam_sum / m;
+        let inverse_azc = 1.0 / (a * self.cycloid_teeth as f64);
+        let inverse_aw = 1.0 / (m * ph.crank_radius);
+        let mut offsets = [0.0; 2];
+        for (d, offset) in offsets.iter_mut().enumerate() {
+            let sigma = if d == 0 { 1.0 } else { -1.0 };
+            let across =
+                terms.q_mean[d].1 + a * lam_mean + sigma * (terms.v[d].0 * s + terms.v[d].1 * c);
+            let rho = match ph.closure {
+                CrankClosure::FourBar => {
+                    (sigma * (terms.p1[d] * c + terms.p2[d] * s + a * four) + terms.rho_const[d])
+                        * inverse_aw
+                }
+                CrankClosure::Averaged => 0.0,
+            };
+            *offset = -across * inverse_azc - rho;
+        }
+        (offsets, -ph.kappa * lam_mean / self.cycloid_teeth as f64)
+    }
+
+    /// T_d,x, the disc displacement along its eccentric, from (sin, cos) of z_p·Θ.
+    #[inline(always)]
+    pub(super) fn along(terms: &RowTerms, d: usize, s: f64, c: f64) -> f64 {
+        let sigma = if d == 0 { 1.0 } else { -1.0 };
+        terms.q_mean[d].0 + sigma * (terms.v[d].0 * c - terms.v[d].1 * s)
+    }
+
+    /// The clearance ratio g/|l| of pin `pin` (0-based) on disc d at Θ, with its lever's
+    /// sign, from the geometry (no tables): the reference the tables must reproduce.
+    pub(super) fn exact_ratio(
+        &self,
+        inputs: &[f64],
+        terms: &RowTerms,
+        d: usize,
+        pin: usize,
+        theta: f64,
+    ) -> (f64, f64) {
+        let ph = self.physical();
+        let zp = self.pins as f64;
+        let zc = self.cycloid_teeth as f64;
+        let phi = (2.0 * PI * pin as f64 / zp + zc * theta + d as f64 * PI).rem_euclid(2.0 * PI);
+        let factors = ph.stage.pin_factors(phi);
+        let (sin, cos) = phi.sin_cos();
+        let k1 = ph.stage.k1();
+        let root = (1.0 + k1 * k1 - 2.0 * k1 * cos).sqrt();
+        // Both flanks see the modification mirrored: |sin φ| in its factors.
+        let (equidistant, shift) = if sin >= 0.0 {
+            (factors.equidistant, factors.shift)
+        } else {
+            (
+                1.0 + sin / root,
+                -(1.0 - k1 * cos + (1.0 - k1 * k1).sqrt() * sin) / root,
+            )
+        };
+        let (zs, zc_theta) = (zp * theta).sin_cos();
+        let d_r = Self::along(terms, d, zs, zc_theta);
+        let (pin_r, pin_t) = if self.per_pin {
+            (
+                inputs[ph.pin_base + pin],
+                inputs[ph.pin_base + self.pins + pin],
+            )
+        } else {
+            (0.0, 0.0)
+        };
+        let tooth = if self.per_tooth {
+            let r_p = ph.stage.pin_circle_radius;
+            let polar = (r_p * sin).atan2(r_p * cos - self.eccentricity);
+            let space =
+                ((zc * (polar - zp * theta) / (2.0 * PI)).round() as i64).rem_euclid(zc as i64);
+            inputs[ph.tooth_base + d * self.cycloid_teeth + space as usize]
+        } else {
+            0.0
+        };
+        let g = terms.d_rp * equidistant
+            + terms.d_p * shift
+            + d_r * factors.eccentric
+            + (terms.err_rp + pin_r) * factors.radial
+            + pin_t * factors.tangential
+            + terms.profile[d]
+            - terms.err_rrp
+            + tooth;
+        (g / factors.lever.abs(), factors.lever)
+    }
+
+    /// The whole physical geometry at Θ, pin by pin: the reference of the tabulated curve
+    /// and the refinement of its extremes.
+    pub(super) fn exact(&self, inputs: &[f64], terms: &RowTerms, theta: f64) -> Exact {
+        let ph = self.physical();
+        let angles = {
+            let (s, c) = (self.pins as f64 * theta).sin_cos();
+            let (ss, cs) = ((self.ratio() - 1.0) * theta).sin_cos();
+            [s, c, ss, cs]
+        };
+        let (offsets, involute) = self.crank_offsets(terms, angles);
+        let mut windows = [(0.0, 0.0); 2];
+        let mut winners = [0; 2];
+        for d in 0..2 {
+            let (mut lag, mut lead, mut winner) = (f64::INFINITY, f64::INFINITY, 0);
+            for pin in 0..self.pins {
+                let (ratio, lever) = self.exact_ratio(inputs, terms, d, pin, theta);
+                if lever > 1e-12 * self.eccentricity {
+                    if ratio < lag {
+                        (lag, winner) = (ratio, pin);
+                    }
+                } else if lever < -1e-12 * self.eccentricity {
+                    lead = lead.min(ratio);
+                }
+            }
+            windows[d] = (
+                ph.kappa * (offsets[d] - lag),
+                ph.kappa * (offsets[d] + lead),
+            );
+            winners[d] = winner;
+        }
+        let (te, branch) = match ph.contact {
+            DiscContact::FirstContact => {
+                let disc = if windows[1].0 > windows[0].0 { 1 } else { 0 };
+                (
+                    windows[disc].0,
+                    Branch::One {
+                        disc,
+                        pin: winners[disc],
+                    },
+                )
+            }
+            DiscContact::LoadShared => (
+                0.5 * (windows[0].0 + windows[1].0),
+                Branch::Both { pins: winners },
+            ),
+        };
+        let drive = windows[0].0.max(windows[1].0);
+        let coast = windows[0].1.min(windows[1].1);
+        Exact {
+            te,
+            clear: coast >= drive,
+            branch,
+            windows,
+            involute,
+            crank: [ph.kappa * offsets[0], ph.kappa * offsets[1]],
+        }
+    }
+
+    /// The value of one contact branch at Θ (a lower bound of TE there), or None where
+    /// one of its pins has no driving lever.
+    pub(super) fn branch_value(
+        &self,
+        inputs: &[f64],
+        terms: &RowTerms,
+        branch: Branch,
+        theta: f64,
+    ) -> Option<f64> {
+        let ph = self.physical();
+        let angles = {
+            let (s, c) = (self.pins as f64 * theta).sin_cos();
+            let (ss, cs) = ((self.ratio() - 1.0) * theta).sin_cos();
+            [s, c, ss, cs]
+        };
+        let (offsets, _) = self.crank_offsets(terms, angles);
+        let one = |d: usize, pin: usize| {
+            let (ratio, lever) = self.exact_ratio(inputs, terms, d, pin, theta);
+            (lever > 0.0).then(|| ph.kappa * (offsets[d] - ratio))
+        };
+        match branch {
+            Branch::One { disc, pin } => one(disc, pin),
+            Branch::Both { pins } => Some(0.5 * (one(0, pins[0])? + one(1, pins[1])?)),
+        }
+    }
+
+    /// Fills `curve` (N values, rad) from the tables; returns false when the profile
+    /// interferes at some point (the curve is then incomplete).
+    pub(super) fn physical_curve(
+        &self,
+        inputs: &[f64],
+        terms: &RowTerms,
+        scratch: &mut TwoDiscScratch,
+        curve: &mut [f64],
+        mut stages: Option<&mut [[f64; 3]]>,
+    ) -> bool {
+        let ph = self.physical();
+        let n = self.points;
+        let table = &self.table;
+        let coast_table = &ph.coast;
+        let width = table.width;
+        let (pins, teeth) = (self.pins, self.cycloid_teeth);
+        // The smooth part, point by point in index order.
+        scratch.offsets.resize(n, [0.0; 2]);
+        scratch.involute.resize(n, 0.0);
+        for ((offset, involute), &angles) in scratch
+            .offsets
+            .iter_mut()
+            .zip(scratch.involute.iter_mut())
+            .zip(&ph.angles)
+        {
+            (*offset, *involute) = self.crank_offsets(terms, angles);
+        }
+        // Pin errors repeated (and reversed for the coast flank), tooth errors repeated.
+        let repeat = |target: &mut Vec<f64>, values: &[f64], len: usize, reverse: bool| {
+            target.clear();
+            if values.is_empty() {
+                target.resize(len, 0.0);
+            } else if reverse {
+                target.extend(values.iter().rev().cycle().take(len));
+            } else {
+                target.extend(values.iter().cycle().take(len));
+            }
+        };
+        let n_pins = if self.per_pin { pins } else { 0 };
+        let pin_inputs = &inputs[ph.pin_base..ph.pin_base + 2 * n_pins];
+        let (pin_radial, pin_tangential) = pin_inputs.split_at(n_pins);
+        repeat(&mut scratch.pin_radial, pin_radial, pins + width, false);
+        repeat(&mut scratch.pin_tangential, pin_tangential, pins + width, false);
+        repeat(&mut scratch.coast_radial, pin_radial, pins + width, true);
+        repeat(&mut scratch.coast_tangential, pin_tangential, pins + width, true);
+        let n_teeth = if self.per_tooth { teeth } else { 0 };
+        for d in 0..2 {
+            let errors = &inputs[ph.tooth_base + d * n_teeth..ph.tooth_base + (d + 1) * n_teeth];
+            repeat(&mut scratch.tooth[d], errors, 2 * teeth, false);
+        }
+        for heads in [&mut scratch.drive, &mut scratch.coast] {
+            for head in heads.iter_mut() {
+                head.resize(width, 0.0);
+            }
+        }
+        let kappa = ph.kappa;
+        let (bound_r, bound_t) = terms.pin_bound;
+        let mut clear = true;
+        for group in &self.groups {
+            let points = &self.curve_points[group.start as usize..group.end as usize];
+            let p = group.phase as usize;
+            let (s, c) = points[0].crank;
+            let tooth_shift = points[0].tooth_shift as usize;
+            let mut coast_bound = [0.0; 2];
+            for d in 0..2 {
+                let block = if d == 0 { p } else { ph.phase_2[p] as usize };
+                let block = block * width..(block + 1) * width;
+                let drive_teeth = if d == 0 {
+                    &table.tooth[block.clone()]
+                } else {
+                    &ph.tooth_2_drive[p * width..(p + 1) * width]
+                };
+                let coast_teeth = if d == 0 {
+                    &coast_table.tooth[block.clone()]
+                } else {
+                    &ph.tooth_2_coast[p * width..(p + 1) * width]
+                };
+                let space = &scratch.tooth[d][teeth - tooth_shift..];
+                let d_r = Self::along(terms, d, s, c);
+                let constant = terms.profile[d] - terms.err_rrp;
+                fill_heads(
+                    table,
+                    block.clone(),
+                    drive_teeth,
+                    space,
+                    terms,
+                    constant,
+                    d_r,
+                    &mut scratch.drive[d],
+                );
+                fill_heads(
+                    coast_table,
+                    block.clone(),
+                    coast_teeth,
+                    space,
+                    terms,
+                    constant,
+                    d_r,
+                    &mut scratch.coast[d],
+                );
+                // A lower bound of the coast ratio over the group's points.
+                let radial = &coast_table.radial[block.clone()];
+                let tangential = &coast_table.tangential[block];
+                let mut bound = f64::INFINITY;
+                for e in 0..width {
+                    let v = scratch.coast[d][e]
+                        - bound_r * radial[e].abs()
+                        - bound_t * tangential[e].abs();
+                    bound = if v < bound { v } else { bound };
+                }
+                coast_bound[d] = bound;
+            }
+            let best = [smallest(&scratch.drive[0]), smallest(&scratch.drive[1])];
+            let coast_best = [smallest(&scratch.coast[0]), smallest(&scratch.coast[1])];
+            let blocks = [p, ph.phase_2[p] as usize];
+            for (point_index, point) in points.iter().enumerate() {
+                let j = point.index as usize;
+                let offsets = scratch.offsets[j];
+                let shifts = [
+                    point.pin_shift as usize,
+                    ph.pin_shift_2[group.start as usize + point_index] as usize,
+                ];
+                let mut windows = [(0.0, 0.0); 2];
+                for d in 0..2 {
+                    let block = blocks[d] * width..(blocks[d] + 1) * width;
+                    let lag = if self.per_pin {
+                        let pin = pins - shifts[d];
+                        smallest_ratio(
+                            &scratch.drive[d],
+                            &table.radial[block.clone()],
+                            &table.tangential[block],
+                            &scratch.pin_radial[pin..pin + width],
+                            &scratch.pin_tangential[pin..pin + width],
+                        )
+                    } else {
+                        best[d]
+                    };
+                    windows[d] = (
+                        kappa * (offsets[d] - lag),
+                        kappa * (offsets[d] + coast_bound[d]),
+                    );
+                }
+                let drive = if windows[1].0 > windows[0].0 {
+                    windows[1].0
+                } else {
+                    windows[0].0
+                };
+                if windows[0].1.min(windows[1].1) < drive {
+                    // The bound does not clear the point: the exact coast minimum.
+                    for (d, window) in windows.iter_mut().enumerate() {
+                        let lead = if self.per_pin {
+                            let block = blocks[d] * width..(blocks[d] + 1) * width;
+                            let start = shifts[d] % pins;
+                            smallest_ratio(
+                                &scratch.coast[d],
+                                &coast_table.radial[block.clone()],
+                                &coast_table.tangential[block],
+                                &scratch.coast_radial[start..start + width],
+                                &scratch.coast_tangential[start..start + width],
+                            )
+                        } else {
+                            coast_best[d]
+                        };
+                        window.1 = kappa * (offsets[d] + lead);
+                    }
+                    if windows[0].1.min(windows[1].1) < drive || drive.is_nan() {
+                        clear = false;
+                    }
+                }
+                curve[j] = match ph.contact {
+                    DiscContact::FirstContact => drive,
+                    DiscContact::LoadShared => 0.5 * (windows[0].0 + windows[1].0),
+                };
+                if let Some(stages) = stages.as_deref_mut() {
+                    let crank = 0.5 * kappa * (offsets[0] + offsets[1]) - scratch.involute[j];
+                    stages[j] = [scratch.involute[j], crank, curve[j] - scratch.involute[j] - crank];
+                }
+            }
+        }
+        clear
+    }
+}
+
+/// head_e = Δr_rp·eq_e + Δr_p·sh_e + δr_p·rad_e + constant/l_e + d_r·ecc_e + δ_n,j(e)/l_e +
+/// blocked_e, over one block of a slot table.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn fill_heads(
+    table: &PinTable,
+    block: std::ops::Range<usize>,
+    tooth_of: &[u32],
+    space: &[f64],
+    terms: &RowTerms,
+    constant: f64,
+    d_r: f64,
+    head: &mut [f64],
+) {
+    let width = table.width;
+    let blocked = &table.blocked[block.clone()][..width];
+    let inverse_lever = &table.inverse_lever[block.clone()][..width];
+    let equidistant = &table.equidistant[block.clone()][..width];
+    let shift = &table.shift[block.clone()][..width];
+    let eccentric = &table.eccentric[block.clone()][..width];
+    let radial = &table.radial[block][..width];
+    let head = &mut head[..width];
+    for (value, &t) in head.iter_mut().zip(&tooth_of[..width]) {
+        *value = space[t as usize];
+    }
+    for e in 0..width {
+        head[e] = terms.d_rp * equidistant[e]
+            + terms.d_p * shift[e]
+            + terms.err_rp * radial[e]
+            + constant * inverse_lever[e]
+            + d_r * eccentric[e]
+            + head[e] * inverse_lever[e]
+            + blocked[e];
+    }
+}
+
+/// Per-thread work state of the physical reading.
+#[derive(Debug, Default)]
+pub(super) struct TwoDiscScratch {
+    pub offsets: Vec<[f64; 2]>,
+    pub involute: Vec<f64>,
+    pub pin_radial: Vec<f64>,
+    pub pin_tangential: Vec<f64>,
+    pub coast_radial: Vec<f64>,
+    pub coast_tangential: Vec<f64>,
+    pub tooth: [Vec<f64>; 2],
+    pub drive: [Vec<f64>; 2],
+    pub coast: [Vec<f64>; 2],
+}
+
+/// The sizes the tables of the physical reading are built for.
+pub(super) struct Layout {
+    /// N.
+    pub points: usize,
+    /// g = gcd(z_c·z_p, N): the fractional pin pitch steps by g/N.
+    pub common_divisor: usize,
+    pub cranks: usize,
+    pub per_pin: bool,
+    /// i.
+    pub ratio: f64,
+}
+
+/// The options of the physical reading, before its tables are built.
+pub(super) struct Settings {
+    contact: DiscContact,
+    closure: CrankClosure,
+    crank_radius: f64,
+    half_spacing: f64,
+    sun_offset: f64,
+    kappa: f64,
+}
+
+impl Physical {
+    pub(super) fn settings(
+        contact: DiscContact,
+        closure: CrankClosure,
+        crank_radius: f64,
+        spacing: f64,
+        sun_offset: f64,
+        kappa: f64,
+    ) -> Settings {
+        Settings {
+            contact,
+            closure,
+            crank_radius,
+            half_spacing: spacing / 2.0,
+            sun_offset,
+            kappa,
+        }
+    }
+}
+
+/// round(z_c·λ/2π − f) mod z_c: the tooth space of the slot at φ from its disc's eccentric,
+/// λ the slot's polar angle about the disc centre, f the fractional pin pitch of disc 1.
+fn tooth_space(stage: &CycloidStage, phi: f64, fraction: f64) -> u32 {
+    let (sin, cos) = phi.sin_cos();
+    let r_p = stage.pin_circle_radius;
+    let polar = (r_p * sin).atan2(r_p * cos - stage.eccentricity);
+    ((stage.teeth as f64 * polar / (2.0 * PI) - fraction).round() as i64)
+        .rem_euclid(stage.teeth as i64) as u32
+}
+
+/// Builds the coast table, disc 2's phases and tooth columns, and the per-point angles.
+pub(super) fn build(
+    stage: &CycloidStage,
+    drive: &PinTable,
+    curve_points: &[super::Point],
+    layout: Layout,
+    settings: Settings,
+) -> Physical {
+    let (pins, teeth) = (stage.pins, stage.teeth);
+    let n = layout.points;
+    let g = layout.common_divisor;
+    let phases = n / g;
+    let width = drive.width;
+    let k1 = stage.k1();
+    let fraction_of = |p: usize| p as f64 * g as f64 / n as f64;
+    // Disc 2 sees the pins half a revolution of the eccentric on: z_p·N/2 in units of 1/N
+    // pin pitch, which N/2 being a multiple of g keeps on the phase grid.
+    let half_turn = pins * n / 2;
+    let phase_2: Vec<u32> = (0..phases)
+        .map(|p| (((p * g + half_turn) % n) / g) as u32)
+        .collect();
+    // Coast slots: entry e is slot s = z_p − 1 − e, at φ = 2π(s + f)/z_p with sin φ < 0.
+    let mut coast = PinTable {
+        width,
+        ..PinTable::default()
+    };
+    for p in 0..phases {
+        let fraction = fraction_of(p);
+        for e in 0..width {
+            let phi = 2.0 * PI * ((pins as f64 - 1.0 - e as f64) + fraction) / pins as f64;
+            let (sin, cos) = phi.sin_cos();
+            if e >= pins || sin >= -1e-12 {
+                coast.blocked.push(f64::INFINITY);
+                for column in [
+                    &mut coast.inverse_lever,
+                    &mut coast.equidistant,
+                    &mut coast.shift,
+                    &mut coast.eccentric,
+                    &mut coast.radial,
+                    &mut coast.tangential,
+                ] {
+                    column.push(0.0);
+                }
+                coast.tooth.push(0);
+                continue;
+            }
+            let factors = stage.pin_factors(phi);
+            let s = (1.0 + k1 * k1 - 2.0 * k1 * cos).sqrt();
+            let inverse_lever = -1.0 / factors.lever;
+            coast.blocked.push(0.0);
+            coast.inverse_lever.push(inverse_lever);
+            // The modification is mirror-symmetric: |sin φ| = −sin φ in its factors.
+            coast.equidistant.push((1.0 + sin / s) * inverse_lever);
+            coast
+                .shift
+                .push(-(1.0 - k1 * cos + (1.0 - k1 * k1).sqrt() * sin) / s * inverse_lever);
+            coast.eccentric.push(factors.eccentric * inverse_lever);
+            coast.radial.push(factors.radial * inverse_lever);
+            coast.tangential.push(factors.tangential * inverse_lever);
+            coast.tooth.push(tooth_space(stage, phi, fraction));
+        }
+    }
+    // Disc 2's tooth spaces, per disc-1 phase, relative to disc 1's tooth shift.
+    let mut tooth_2_drive = Vec::with_capacity(phases * width);
+    let mut tooth_2_coast = Vec::with_capacity(phases * width);
+    for p in 0..phases {
+        let fraction = fraction_of(p);
+        let fraction_2 = fraction_of(phase_2[p] as usize);
+        for e in 0..width {
+            let drive_phi = 2.0 * PI * (e as f64 + fraction_2) / pins as f64;
+            tooth_2_drive.push(if drive.blocked[phase_2[p] as usize * width + e] == 0.0 {
+                tooth_space(stage, drive_phi, fraction)
+            } else {
+                0
+            });
+            let coast_phi =
+                2.0 * PI * ((pins as f64 - 1.0 - e as f64) + fraction_2) / pins as f64;
+            tooth_2_coast.push(if coast.blocked[phase_2[p] as usize * width + e] == 0.0 {
+                tooth_space(stage, coast_phi, fraction)
+            } else {
+                0
+            });
+        }
+    }
+    let pin_shift_2 = curve_points
+        .iter()
+        .map(|point| {
+            let turns = teeth * pins * point.index as usize + half_turn;
+            ((turns / n) % pins) as u32
+        })
+        .collect();
+    let angles = (0..n)
+        .map(|j| {
+            let theta = 2.0 * PI * j as f64 / n as f64;
+            let (s, c) = (2.0 * PI * ((pins * j) % n) as f64 / n as f64).sin_cos();
+            let (ss, cs) = ((layout.ratio - 1.0) * theta).sin_cos();
+            [s, c, ss, cs]
+        })
+        .collect();
+    let crank_angles = (0..layout.cranks)
+        .map(|k| (2.0 * PI * k as f64 / layout.cranks as f64).sin_cos())
+        .collect();
+    let disc_base = FIXED.len();
+    let crank_base = disc_base + 2 * PER_DISC.len();
+    let pin_base = crank_base + CRANK_STRIDE * layout.cranks;
+    let tooth_base = pin_base + if layout.per_pin { 2 * pins } else { 0 };
+    Physical {
+        contact: settings.contact,
+        closure: settings.closure,
+        crank_radius: settings.crank_radius,
+        half_spacing: settings.half_spacing,
+        sun_offset: settings.sun_offset,
+        kappa: settings.kappa,
+        stage: *stage,
+        coast,
+        phase_2,
+        tooth_2_drive,
+        tooth_2_coast,
+        pin_shift_2,
+        angles,
+        crank_angles,
+        disc_base,
+        crank_base,
+        pin_base,
+        tooth_base,
+    }
+}
+
+/// The inputs and outputs of the physical reading.
+pub(super) fn specs(
+    cranks: usize,
+    pins: usize,
+    teeth: usize,
+    per_pin: bool,
+    per_tooth: bool,
+) -> (Vec<InputSpec>, Vec<OutputSpec>) {
+    let input = |name: String, unit: &str, description: &'static str| InputSpec {
+        name,
+        unit: unit.into(),
+        description,
+    };
+    let mut inputs: Vec<InputSpec> = FIXED
+        .iter()
+        .map(|(name, unit, description)| input(name.to_string(), unit, description))
+        .collect();
+    for d in 1..=2 {
+        for (name, description) in PER_DISC {
+            inputs.push(input(format!("{name}_{d}"), "mm", description));
+        }
+    }
+    for k in 1..=cranks {
+        for (name, unit, description) in PER_CRANK {
+            inputs.push(input(format!("{name}_{k}"), unit, description));
+        }
+        for d in 1..=2 {
+            for (name, description) in PER_ECCENTRIC {
+                inputs.push(input(format!("{name}_{k}_{d}"), "mm", description));
+            }
+        }
+    }
+    if per_pin {
+        for i in 1..=pins {
+            inputs.push(input(
+                format!("pin_radial_error_mm_{i}"),
+                "mm",
+                "radial position error of pin i (outward), housing frame, both disc planes",
+            ));
+        }
+        for i in 1..=pins {
+            inputs.push(input(
+                format!("pin_tangential_error_mm_{i}"),
+                "mm",
+                "tangential position error of pin i, housing frame, both disc planes",
+            ));
+        }
+    }
+    if per_tooth {
+        for d in 1..=2 {
+            for j in 1..=teeth {
+                inputs.push(input(
+                    format!("tooth_profile_error_mm_{d}_{j}"),
+                    "mm",
+                    "normal profile error of tooth space j of disc d, both flanks, disc frame (positive: clearance); space 1 on disc d's eccentric at Θ = 0",
+                ));
+            }
+        }
+    }
+    let condition = Some(OutputCondition {
+        indicator: INTERFERENCE,
+        effect: ConditionEffect::Excluded,
+    });
+    let output = |name: String, description: &'static str| OutputSpec {
+        name,
+        unit: "arcsec".into(),
+        description,
+        kind: OutputKind::Continuous,
+        condition,
+    };
+    let outputs = vec![
+        output("te_peak_to_peak_arcsec".into(), "peak-to-peak transmission error over one output revolution (extremes refined on the exact geometry)"),
+        output("te_rms_arcsec".into(), "rms of the transmission error about its mean"),
+        output("te_mean_arcsec".into(), "mean of the transmission error (a constant angular offset; negative: the output lags)"),
+        output("te_order_1_arcsec".into(), "semi-amplitude of order 1 (once per output revolution)"),
+        output(format!("te_order_{teeth}_arcsec"), "semi-amplitude of order z_c (pin-borne errors that differ between the two discs)"),
+        output(format!("te_order_{pins}_arcsec"), "semi-amplitude of order z_p (crank- and disc-borne errors)"),
+        output(format!("te_order_{}_arcsec", 2 * teeth), "semi-amplitude of order 2·z_c (pin-borne errors seen by both discs)"),
+        output(format!("te_order_{}_arcsec", 2 * pins), "semi-amplitude of order 2·z_p (crank-borne errors the two discs see in opposition)"),
+        OutputSpec {
+            name: INTERFERENCE.into(),
+            unit: "fraction".into(),
+            description: "1 when the two discs' angular windows between the pins fail to overlap somewhere on the revolution (a profile that interferes: no transmission error)",
+            kind: OutputKind::Indicator,
+            condition: None,
+        },
+    ];
+    (inputs, outputs)
+}
+
+/// Name of the interference indicator.
+pub(super) const INTERFERENCE: &str = "profile_interference";
+
+impl TransmissionError {
+    /// [`crate::ErrorModel::evaluate`] of the physical reading.
+    pub(super) fn evaluate_physical(
+        &self,
+        inputs: &[f64],
+        curve: &mut Vec<f64>,
+        work: &mut Vec<super::Complex>,
+        scratch: &mut TwoDiscScratch,
+        outputs: &mut [f64],
+    ) {
+        let n_out = outputs.len();
+        if inputs.iter().any(|v| !v.is_finite()) {
+            outputs.iter_mut().for_each(|o| *o = f64::NAN);
+            return;
+        }
+        let terms = self.row_terms(inputs);
+        curve.resize(self.points, 0.0);
+        if !self.physical_curve(inputs, &terms, scratch, curve, None) {
+            outputs[..n_out - 1].iter_mut().for_each(|o| *o = f64::NAN);
+            outputs[n_out - 1] = 1.0;
+            return;
+        }
+        let n = self.points;
+        let quads = curve.as_chunks::<4>().0;
+        let (mut lo, mut hi, mut sum) = ([f64::INFINITY; 4], [f64::NEG_INFINITY; 4], [0.0; 4]);
+        for quad in quads {
+            for lane in 0..4 {
+                let v = quad[lane];
+                lo[lane] = if v < lo[lane] { v } else { lo[lane] };
+                hi[lane] = if v > hi[lane] { v } else { hi[lane] };
+                sum[lane] += v;
+            }
+        }
+        let (lo, hi) = (
+            lo.into_iter().fold(f64::INFINITY, f64::min),
+            hi.into_iter().fold(f64::NEG_INFINITY, f64::max),
+        );
+        let sum = (sum[0] + sum[1]) + (sum[2] + sum[3]);
+        let mean = sum / n as f64;
+        let mut squares = [0.0; 4];
+        for quad in quads {
+            for lane in 0..4 {
+                squares[lane] += (quad[lane] - mean) * (quad[lane] - mean);
+            }
+        }
+        let var = ((squares[0] + squares[1]) + (squares[2] + squares[3])) / n as f64;
+        let (lo, hi) = self.refine_extremes(inputs, &terms, curve, lo, hi);
+        work.resize(n / 2, (0.0, 0.0));
+        self.fft.transform(curve, work);
+        let (zc, zp) = (self.cycloid_teeth, self.pins);
+        let orders = [1, zc, zp, 2 * zc, 2 * zp].map(|k| self.fft.amplitude(work, k));
+        let to_arcsec = crate::ARCSEC_PER_RAD;
+        outputs[0] = (hi - lo) * to_arcsec;
+        outputs[1] = var.sqrt() * to_arcsec;
+        outputs[2] = mean * to_arcsec;
+        for (out, order) in outputs[3..8].iter_mut().zip(orders) {
+            *out = order * to_arcsec;
+        }
+        outputs[8] = 0.0;
+        if !outputs[..8].iter().all(|v| v.is_finite()) {
+            outputs.iter_mut().for_each(|o| *o = f64::NAN);
+        }
+    }
+
+    /// The curve's extremes refined on the exact geometry, rad. Near the maximum (a smooth
+    /// maximum of one contact branch, since TE is the upper envelope of its branches) the
+    /// winning branch's parabola through three points gives its vertex, whose branch value
+    /// is a lower bound of TE there; near the minimum (a kink where two branches cross) the
+    /// crossing of the two branches' chords gives the angle at which TE is evaluated
+    /// exactly. Both can only widen the sampled range towards the true one.
+    pub(super) fn refine_extremes(
+        &self,
+        inputs: &[f64],
+        terms: &RowTerms,
+        curve: &[f64],
+        lo: f64,
+        hi: f64,
+    ) -> (f64, f64) {
+        let n = self.points;
+        let h = 2.0 * PI / n as f64;
+        let at = |j: usize| 2.0 * PI * j as f64 / n as f64;
+        let position = |value: f64| curve.iter().position(|v| *v == value);
+        let (Some(j_hi), Some(j_lo)) = (position(hi), position(lo)) else {
+            return (lo, hi);
+        };
+        let mut best_hi = hi;
+        let top = self.exact(inputs, terms, at(j_hi));
+        let values = [-h, 0.0, h].map(|dt| self.branch_value(inputs, terms, top.branch, at(j_hi) + dt));
+        if let [Some(before), Some(centre), Some(after)] = values {
+            let curvature = before - 2.0 * centre + after;
+            if curvature < 0.0 {
+                let t = (0.5 * (before - after) / curvature).clamp(-1.0, 1.0);
+                if let Some(v) = self.branch_value(inputs, terms, top.branch, at(j_hi) + t * h) {
+                    best_hi = best_hi.max(v);
+                }
+            }
+        }
+        let mut best_lo = lo;
+        let bottom = self.exact(inputs, terms, at(j_lo));
+        for side in [-1.0, 1.0] {
+            let theta = at(j_lo) + side * h;
+            let near = self.exact(inputs, terms, theta);
+            if near.branch == bottom.branch {
+                continue;
+            }
+            // Chords of the two branches from Θ_lo (t = 0) to its neighbour (t = 1).
+            let (Some(a_lo), Some(b_near)) = (
+                self.branch_value(inputs, terms, near.branch, at(j_lo)),
+                self.branch_value(inputs, terms, bottom.branch, theta),
+            ) else {
+                continue;
+            };
+            let (a_near, b_lo) = (near.te, bottom.te);
+            let denominator = (a_near - a_lo) - (b_near - b_lo);
+            if denominator == 0.0 {
+                continue;
+            }
+            let t = (b_lo - a_lo) / denominator;
+            if t > 0.0 && t < 1.0 {
+                let crossing = self.exact(inputs, terms, at(j_lo) + side * t * h);
+                best_lo = best_lo.min(crossing.te);
+            }
+        }
+        (best_lo, best_hi)
+    }
+
+    /// The curve of one row from the exact geometry at `n` points (rad; NaN where the
+    /// discs interfere), with the stage parts [involute, crank, contact].
+    pub(super) fn exact_curve_stages(&self, inputs: &[f64], n: usize) -> Vec<(f64, [f64; 3])> {
+        let terms = self.row_terms(inputs);
+        (0..n)
+            .map(|j| {
+                let exact = self.exact(inputs, &terms, 2.0 * PI * j as f64 / n as f64);
+                let te = if exact.clear { exact.te } else { f64::NAN };
+                let crank = 0.5 * (exact.crank[0] + exact.crank[1]) - exact.involute;
+                (te, [exact.involute, crank, te - exact.involute - crank])
+            })
+            .collect()
+    }
+}
+
+/// Points of the exact curve the spectrum of `rvtol curve` is taken from: 2^16, so that the
+/// contact's harmonics up to order 32768 are resolved before the orders up to N/2 are
+/// listed (at N points the harmonics of the mesh order z_c·z_p alias).
+pub(super) const SPECTRUM_POINTS: usize = 1 << 16;
+
+impl TransmissionError {
+    /// The curves of the physical reading: the tabulated curve with its stage parts, and
+    /// the order spectrum (orders 1..N/2) of the exact curve at [`SPECTRUM_POINTS`].
+    pub(super) fn physical_curves(&self, inputs: &[f64]) -> Vec<crate::Curve> {
+        use crate::{Curve, CurveStyle, Series, ARCSEC_PER_RAD};
+        let n = self.points;
+        let terms = self.row_terms(inputs);
+        let mut curve = vec![0.0; n];
+        let mut stages = vec![[0.0; 3]; n];
+        let mut scratch = TwoDiscScratch::default();
+        self.physical_curve(inputs, &terms, &mut scratch, &mut curve, Some(&mut stages));
+        let degrees = |j: usize| 360.0 * j as f64 / n as f64;
+        let series = |label: &str, value: &dyn Fn(usize) -> f64| Series {
+            label: label.into(),
+            points: (0..n).map(|j| (degrees(j), value(j) * ARCSEC_PER_RAD)).collect(),
+        };
+        let exact: Vec<f64> = self
+            .exact_curve_stages(inputs, SPECTRUM_POINTS)
+            .into_iter()
+            .map(|(te, _)| te * ARCSEC_PER_RAD)
+            .collect();
+        let fft = crate::RealFft::new(SPECTRUM_POINTS);
+        let mut work = vec![(0.0, 0.0); SPECTRUM_POINTS / 2];
+        fft.transform(&exact, &mut work);
+        vec![
+            Curve {
+                name: "transmission_error".into(),
+                title: "Transmission error over one output revolution (two discs)".into(),
+                x_label: "output angle (deg)".into(),
+                y_label: "transmission error (arcsec)".into(),
+                style: CurveStyle::Lines,
+                series: vec![
+                    series("total", &|j| curve[j]),
+                    series("involute stage (common to the cranks)", &|j| stages[j][0]),
+                    series("cranks (translation and four-bar, mean of the discs)", &|j| stages[j][1]),
+                    series("cycloid–pin contact (first contact over both discs)", &|j| stages[j][2]),
+                ],
+            },
+            Curve {
+                name: "transmission_error_spectrum".into(),
+                title: "Order spectrum of the transmission error".into(),
+                x_label: "order (cycles per output revolution)".into(),
+                y_label: "semi-amplitude (arcsec)".into(),
+                style: CurveStyle::LogStems,
+                series: vec![Series {
+                    label: format!("exact curve, {SPECTRUM_POINTS} points"),
+                    points: (1..=n / 2)
+                        .map(|k| (k as f64, fft.amplitude(&work, k)))
+                        .collect(),
+                }],
+            },
+        ]
+    }
+}
