@@ -393,16 +393,10 @@ impl TransmissionError {
         let phi = (2.0 * PI * pin as f64 / zp + zc * theta + d as f64 * PI).rem_euclid(2.0 * PI);
         let factors = ph.stage.pin_factors(phi);
         let (sin, cos) = phi.sin_cos();
-        let k1 = ph.stage.k1();
-        let root = (1.0 + k1 * k1 - 2.0 * k1 * cos).sqrt();
-        // Both flanks see the modification mirrored: |sin φ| in its factors.
         let (equidistant, shift) = if sin >= 0.0 {
             (factors.equidistant, factors.shift)
         } else {
-            (
-                1.0 + sin / root,
-                -(1.0 - k1 * cos + (1.0 - k1 * k1).sqrt() * sin) / root,
-            )
+            coast_modification(&ph.stage, phi)
         };
         let (zs, zc_theta) = (zp * theta).sin_cos();
         let d_r = Self::along(terms, d, zs, zc_theta);
@@ -793,6 +787,25 @@ impl Physical {
     }
 }
 
+/// The factors of Δr_rp and Δr_p in the clearance of a coast-flank pin at φ (sin φ < 0),
+/// measured, like the drive flank's standard form, from the disc turned into drive-flank
+/// contact. The centred modified disc has the mirror-symmetric clearance
+/// c0 = Δr_rp − Δr_p·(1 − K1·cos φ)/S on both flanks; the standard form of the drive flank
+/// is c0 − l·δ* with the half play δ* = (Δr_rp − Δr_p·√(1 − K1²))/(e·z_c) (the disc turned
+/// by δ* until the pin at cos φ = K1 touches); the coast flank then has c0 + |l|·δ*.
+/// Over both flanks the play is 2δ*, 000's (2Δr_rp − 2Δr_p·√(1 − K1²))/(e·z_c).
+fn coast_modification(stage: &CycloidStage, phi: f64) -> (f64, f64) {
+    let k1 = stage.k1();
+    let (sin, cos) = phi.sin_cos();
+    let s = (1.0 + k1 * k1 - 2.0 * k1 * cos).sqrt();
+    let lever = stage.eccentricity * stage.teeth as f64 * sin.abs() / s;
+    let per_radian = lever / (stage.eccentricity * stage.teeth as f64);
+    (
+        1.0 + per_radian,
+        -(1.0 - k1 * cos) / s - (1.0 - k1 * k1).sqrt() * per_radian,
+    )
+}
+
 /// round(z_c·λ/2π − f) mod z_c: the tooth space of the slot at φ from its disc's eccentric,
 /// λ the slot's polar angle about the disc centre, f the fractional pin pitch of disc 1.
 fn tooth_space(stage: &CycloidStage, phi: f64, fraction: f64) -> u32 {
@@ -850,15 +863,12 @@ pub(super) fn build(
                 continue;
             }
             let factors = stage.pin_factors(phi);
-            let s = (1.0 + k1 * k1 - 2.0 * k1 * cos).sqrt();
             let inverse_lever = -1.0 / factors.lever;
+            let (equidistant, shift) = coast_modification(stage, phi);
             coast.blocked.push(0.0);
             coast.inverse_lever.push(inverse_lever);
-            // The modification is mirror-symmetric: |sin φ| = −sin φ in its factors.
-            coast.equidistant.push((1.0 + sin / s) * inverse_lever);
-            coast
-                .shift
-                .push(-(1.0 - k1 * cos + (1.0 - k1 * k1).sqrt() * sin) / s * inverse_lever);
+            coast.equidistant.push(equidistant * inverse_lever);
+            coast.shift.push(shift * inverse_lever);
             coast.eccentric.push(factors.eccentric * inverse_lever);
             coast.radial.push(factors.radial * inverse_lever);
             coast.tangential.push(factors.tangential * inverse_lever);
@@ -1222,5 +1232,396 @@ impl TransmissionError {
                 }],
             },
         ]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{ErrorModel, ModelParams, ParamValue, ARCSEC_PER_RAD};
+
+    fn params() -> ModelParams {
+        super::super::rv40e_params()
+    }
+
+    fn with(params: ModelParams) -> TransmissionError {
+        TransmissionError::from_params(&params).unwrap()
+    }
+
+    fn text(params: ModelParams, key: &str, value: &str) -> ModelParams {
+        params.with(key, ParamValue::Text(value.into()))
+    }
+
+    fn row(model: &TransmissionError, set: &[(&str, f64)]) -> Vec<f64> {
+        let mut row = vec![0.0; model.inputs().len()];
+        for (name, value) in set {
+            row[model.input_index(name).unwrap_or_else(|| panic!("{name}"))] = *value;
+        }
+        row
+    }
+
+    fn outputs(model: &TransmissionError, row: &[f64]) -> Vec<f64> {
+        let mut out = vec![0.0; model.outputs().len()];
+        model.evaluate(row, &mut out);
+        out
+    }
+
+    /// 003's modification: a play 2δ* = 2(Δr_rp − Δr_p·√(1 − K1²))/(a·z_c) = 126.9″ per
+    /// disc (see `coast_modification`).
+    const MODIFIED: [(&str, f64); 2] = [
+        ("equidistant_modification_mm", 0.01),
+        ("shift_modification_mm", -0.008),
+    ];
+
+    /// 5 µm, the error size of 002 Table 2.
+    const DELTA: f64 = 0.005;
+
+    /// κ = z_c/D with D = z_p + z_s/z_pl = 121/3 (carrier feedback).
+    const KAPPA: f64 = 39.0 / (121.0 / 3.0);
+
+    fn xorshift(seed: u64) -> impl FnMut() -> f64 {
+        let mut state = seed;
+        move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        }
+    }
+
+    /// A row with every input set: modification with play, and every error a few µm (tilts
+    /// a few µm over the disc spacing).
+    fn busy_row(model: &TransmissionError, seed: u64) -> Vec<f64> {
+        let mut next = xorshift(seed);
+        let mut row: Vec<f64> = model
+            .inputs()
+            .iter()
+            .map(|input| {
+                let scale = if input.unit == "rad" { 0.004 / 12.0 } else { 0.004 };
+                scale * next()
+            })
+            .collect();
+        for (name, value) in MODIFIED {
+            row[model.input_index(name).unwrap()] = value;
+        }
+        row
+    }
+
+    #[test]
+    fn tabulated_curve_equals_the_exact_geometry() {
+        // The tables (disc 1's slots, the coast slots, disc 2 half a revolution of the
+        // eccentric on, per-group sums) against the geometry recomputed pin by pin at every
+        // point, with every input set: for the RV40E's 40 pins, for an odd pin count (disc
+        // 2's slots then sit half a pitch off disc 1's) and for 3 pins in 4 slots, each
+        // with 2 and 3 cranks and both contact readings.
+        for (zp, cranks, contact) in [
+            (40, 2, "first_contact"),
+            (40, 3, "load_shared"),
+            (41, 2, "first_contact"),
+            (41, 3, "load_shared"),
+            (3, 2, "first_contact"),
+        ] {
+            let model = with(text(
+                params()
+                    .with_number("pin_count", zp as f64)
+                    .with_number("cycloid_teeth", (zp - 1) as f64)
+                    .with_number("crank_count", cranks as f64)
+                    .with_number("sun_plane_offset_mm", 40.0)
+                    .with_number("pin_position_errors", 1.0)
+                    .with_number("tooth_profile_errors", 1.0),
+                "disc_contact",
+                contact,
+            ));
+            let row = busy_row(&model, 0x2545_f491_4f6c_dd1d ^ zp as u64);
+            let tabulated = model.curve(&row);
+            let exact = model.exact_curve(&row, model.points()).unwrap();
+            for (j, (a, b)) in tabulated.iter().zip(&exact).enumerate() {
+                assert!(
+                    (a - b).abs() < 1e-9 * b.abs().max(1.0),
+                    "{zp} pins, {cranks} cranks, {contact}, point {j}: {a} vs {b}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn perfect_reducer_has_no_error() {
+        let model = with(params());
+        let out = outputs(&model, &row(&model, &[]));
+        assert_eq!(out, vec![0.0; 9]);
+    }
+
+    #[test]
+    fn four_bar_closure_turns_the_disc_by_the_eccentric_difference_over_2_aw() {
+        // Crank 1's eccentric under disc 1 is 5 µm long, crank 2's 5 µm short: the disc's
+        // pins are q1 − q2 = 2δ apart along the eccentric, whose component across the line
+        // of the cranks, 2δ·sin(z_p·Θ), turns the rigid disc by (q1 − q2)⊥/(2·a_w) =
+        // δ·sin(z_p·Θ)/a_w against the carrier (semi-amplitude 28.648″ at a_w = 36 mm);
+        // the carrier follows at −ρ, so C_1 = −ρ. Disc 2's eccentrics are exact (C_2 = 0),
+        // and with the cranks averaged (002) nothing turns.
+        let model = with(params());
+        let row = row(
+            &model,
+            &[
+                ("crank_eccentricity_error_mm_1_1", DELTA),
+                ("crank_eccentricity_error_mm_2_1", -DELTA),
+            ],
+        );
+        let terms = model.row_terms(&row);
+        assert!((DELTA / 36.0 * ARCSEC_PER_RAD - 28.648).abs() < 5e-4);
+        for j in 0..model.points() {
+            let angles = model.physical().angles[j];
+            let (offsets, _) = model.crank_offsets(&terms, angles);
+            let rho = -DELTA * angles[0] / 36.0;
+            assert!((offsets[0] + rho).abs() < 1e-15, "{j}: {offsets:?} {rho}");
+            assert_eq!(offsets[1], 0.0);
+        }
+        let averaged = with(text(params(), "crank_closure", "averaged"));
+        let terms = averaged.row_terms(&row);
+        for &angles in &averaged.physical().angles {
+            assert_eq!(averaged.crank_offsets(&terms, angles).0, [0.0, 0.0]);
+        }
+    }
+
+    #[test]
+    fn paired_cranks_turn_the_two_discs_in_opposition() {
+        // Crank 1's two eccentrics 5 µm long, crank 2's 5 µm short (a crank pair that is
+        // not matched): the discs' eccentrics point opposite ways, so disc 2 turns by −ρ
+        // where disc 1 turns by ρ = −δ·sin(z_p·Θ)/a_w. Load-shared, the output takes the
+        // mean: nothing changes. First contact, it follows the disc ahead: κ·|ρ| added to
+        // the modified curve, a full-wave rectified sine of semi-amplitude κ·δ/a_w =
+        // 27.701″ with mean (2/π)·κ·δ/a_w and order-2z_p amplitude (4/3π)·κ·δ/a_w, and
+        // nothing at order z_p. The discs' windows, 126.9″ wide, stay 2·28.6″ apart at
+        // most: they overlap.
+        let pairs = [
+            ("crank_eccentricity_error_mm_1_1", DELTA),
+            ("crank_eccentricity_error_mm_1_2", DELTA),
+            ("crank_eccentricity_error_mm_2_1", -DELTA),
+            ("crank_eccentricity_error_mm_2_2", -DELTA),
+        ];
+        let amplitude = KAPPA * DELTA / 36.0 * ARCSEC_PER_RAD;
+        assert!((amplitude - 27.701).abs() < 5e-4, "{amplitude}");
+        for contact in ["first_contact", "load_shared"] {
+            let model = with(text(params(), "disc_contact", contact));
+            let reference = model.curve(&row(&model, &MODIFIED));
+            let mut set = MODIFIED.to_vec();
+            set.extend(pairs);
+            let paired = row(&model, &set);
+            let curve = model.curve(&paired);
+            for (j, (v, r)) in curve.iter().zip(&reference).enumerate() {
+                let rectified = amplitude * model.physical().angles[j][0].abs();
+                let expected = if contact == "load_shared" { 0.0 } else { rectified };
+                assert!((v - r - expected).abs() < 1e-9, "{contact} {j}: {v} {r}");
+            }
+            let out = outputs(&model, &paired);
+            assert_eq!(out[8], 0.0, "no interference");
+        }
+        // The rectified sine's own spectrum, from its closed form (modification off, so
+        // the reference curve is the flat mesh with a uniform offset removed by the FFT).
+        let model = with(params());
+        let base = model.curve(&row(&model, &MODIFIED));
+        let mut set = MODIFIED.to_vec();
+        set.extend(pairs);
+        let curve = model.curve(&row(&model, &set));
+        let difference: Vec<f64> = curve.iter().zip(&base).map(|(a, b)| a - b).collect();
+        let spectrum = model.spectrum(&difference);
+        // |sin x| = 2/π − (4/π)·Σ_n cos(2nx)/(4n² − 1), x = z_pΘ: order 80·n. On 4096
+        // points the term n aliases onto order 80 when 80·(n ∓ 1) is a multiple of 4096
+        // (n = 256·m ± 1) and onto the mean when 80·n is (n = 256·m): those terms bound
+        // the difference. Order 40 takes no alias (80·n ∓ 40 is never a multiple of 4096).
+        let term = |n: f64| 4.0 / (PI * (4.0 * n * n - 1.0)) * amplitude;
+        // Terms m < M summed, the tail m ≥ M bounded by 2A/(π·256²·(M − 1)) (the terms
+        // are below 2A/(π·(256·m)²)·(1 + 1e-5) there).
+        let last = 10_000;
+        let aliases = |offset: f64| -> f64 {
+            let head: f64 = (1..last)
+                .map(|m| 256.0 * m as f64)
+                .map(|n| term(n - offset) + term(n + offset))
+                .sum();
+            let tail = 2.0 * amplitude / (PI * 65536.0 * (last - 1) as f64) * (1.0 + 1e-5);
+            (head + tail) * if offset == 0.0 { 0.5 } else { 1.0 }
+        };
+        assert!(spectrum[40] < 1e-9, "{}", spectrum[40]);
+        let order_80 = (spectrum[80] - term(1.0)).abs();
+        assert!(order_80 < aliases(1.0) + 1e-9, "{order_80} {}", aliases(1.0));
+        let mean = (spectrum[0] - 2.0 / PI * amplitude).abs();
+        assert!(mean < aliases(0.0) + 1e-9, "{mean} {}", aliases(0.0));
+    }
+
+    #[test]
+    fn crank_phase_error_on_every_eccentric_lags_by_delta_over_a_d() {
+        // Every eccentric 5 µm across (counter-clockwise, against the eccentric's
+        // clockwise turn in the carrier): a pure translation T_y = δ, the disc turns by
+        // −δ/(a·z_c) and the output by κ times that, −δ/(a·D) = −20.455″ (002's Δθ2 over
+        // the cycloid ratio is δ/(a·z_c) = 21.155″: it forgets that the cranks ride on the
+        // output). The same as the crank rotation λ = δ/a that the involute stage gives,
+        // which reaches the output divided by D.
+        let model = with(params());
+        let set: Vec<(&str, f64)> = [
+            "crank_phase_error_mm_1_1",
+            "crank_phase_error_mm_1_2",
+            "crank_phase_error_mm_2_1",
+            "crank_phase_error_mm_2_2",
+        ]
+        .iter()
+        .map(|name| (*name, DELTA))
+        .collect();
+        let lag = DELTA / (1.25 * 121.0 / 3.0) * ARCSEC_PER_RAD;
+        assert!((lag - 20.456).abs() < 5e-4, "{lag}");
+        let curve = model.curve(&row(&model, &set));
+        assert!(curve.iter().all(|v| (v + lag).abs() < 1e-9), "{}", curve[0]);
+    }
+
+    #[test]
+    fn involute_stage_is_the_crank_rotation_over_d() {
+        // Centre distance +5 µm on both planets: each crank lags by δ·tan α/r2 (the mesh gap
+        // δ·sin α over the base radius r2·cos α), which reaches the output as −δ·tan α/
+        // (r2·D) = −0.345″ (validation.md: 0.348″ with the divisor 40, ×120/121 with the
+        // feedback), as in 002's reading. Equal on both cranks, it turns no disc.
+        let model = with(params());
+        let set = [
+            ("center_distance_error_mm_1", DELTA),
+            ("center_distance_error_mm_2", DELTA),
+        ];
+        let lag = DELTA * 20f64.to_radians().tan() / (27.0 * 121.0 / 3.0) * ARCSEC_PER_RAD;
+        let curve = model.curve(&row(&model, &set));
+        assert!(curve.iter().all(|v| (v + lag).abs() < 1e-12), "{}", curve[0]);
+    }
+
+    #[test]
+    fn pin_errors_cancel_at_odd_multiples_of_39_with_symmetric_discs() {
+        // Pin-borne errors with identical discs: disc 2 sees disc 1's pins half a
+        // revolution of the eccentric later, Θ + π/z_c, so the first-contact envelope
+        // max(TE_1(Θ), TE_1(Θ + π/z_c)) has the period 2π/(2·z_c): nothing at order 39 (on
+        // the 4096-point grid the samples of order 78·n cannot alias onto an odd multiple
+        // of 39 either, 4096·m ± 39 being odd), its content at 78. The load-shared mean
+        // cancels the same way. One disc's profile error breaks the symmetry and order 39
+        // returns; with disc 2 retracted by 20 µm of profile (85″ of extra play, more than
+        // the pin errors' ratios move) the curve is disc 1's alone, κ times 002's one-disc
+        // curve for the same pins.
+        let mut next = xorshift(99);
+        let pins: Vec<(String, f64)> = (1..=40)
+            .flat_map(|i| {
+                [
+                    (format!("pin_radial_error_mm_{i}"), 0.003 * next()),
+                    (format!("pin_tangential_error_mm_{i}"), 0.003 * next()),
+                ]
+            })
+            .collect();
+        let pins: Vec<(&str, f64)> = pins.iter().map(|(n, v)| (n.as_str(), *v)).collect();
+        let mut set = MODIFIED.to_vec();
+        set.extend(&pins);
+        for contact in ["first_contact", "load_shared"] {
+            let model = with(text(
+                params().with_number("pin_position_errors", 1.0),
+                "disc_contact",
+                contact,
+            ));
+            let out = outputs(&model, &row(&model, &set));
+            let (order_39, order_78) = (out[4], out[6]);
+            assert!(order_78 > 0.05, "{contact}: {order_78}");
+            assert!(order_39 < 1e-12 * order_78.max(1.0), "{contact}: {order_39}");
+            let mut asymmetric = set.clone();
+            asymmetric.push(("profile_normal_error_mm_1", 0.001));
+            let out = outputs(&model, &row(&model, &asymmetric));
+            assert!(out[4] > 1e-3, "{contact}: {}", out[4]);
+        }
+        let model = with(params().with_number("pin_position_errors", 1.0));
+        let literal = with(
+            params()
+                .with_number("pin_position_errors", 1.0)
+                .with("reading", ParamValue::Text("document_002".into())),
+        );
+        let mut retracted = set.clone();
+        retracted.push(("profile_normal_error_mm_2", 0.02));
+        let curve = model.curve(&row(&model, &retracted));
+        let one_disc = literal.curve(&row(&literal, &set));
+        for (j, (a, b)) in curve.iter().zip(&one_disc).enumerate() {
+            assert!((a - KAPPA * b).abs() < 1e-9, "{j}: {a} vs {}", KAPPA * b);
+        }
+    }
+
+    #[test]
+    fn crank_pattern_offset_moves_both_discs_in_opposition() {
+        // The output flange's crank bores offset together from the main-bearing axis by b
+        // (the physical reading of a flange runout: 002's δ41 has no pin holes to act on
+        // in an RV reducer): both discs translate by b in the carrier, which their opposite
+        // eccentrics see in opposition. Across the eccentric: C_d = ∓b·sin(z_pΘ)/(a·z_c)
+        // (b = (δ, 0) in the carrier, disc 1's eccentric at −z_pΘ); along it: ±b·cos(z_pΘ).
+        // Nothing turns a disc (equal bores), and no input of the physical reading is named
+        // after the output pin holes.
+        let model = with(params());
+        assert!(model.input_index("output_runout_x_mm").is_none());
+        let terms = model.row_terms(&row(
+            &model,
+            &[
+                ("crank_axis_radial_error_mm_1", DELTA),
+                ("crank_axis_radial_error_mm_2", -DELTA),
+            ],
+        ));
+        for &angles in &model.physical().angles {
+            let (offsets, _) = model.crank_offsets(&terms, angles);
+            let across = -DELTA * angles[0] / (1.25 * 39.0);
+            assert!((offsets[0] - across).abs() < 1e-18, "{offsets:?} {across}");
+            assert!((offsets[1] + across).abs() < 1e-18, "{offsets:?} {across}");
+            let along = DELTA * angles[1];
+            assert!((TransmissionError::along(&terms, 0, angles[0], angles[1]) - along).abs() < 1e-18);
+            assert!((TransmissionError::along(&terms, 1, angles[0], angles[1]) + along).abs() < 1e-18);
+        }
+    }
+
+    #[test]
+    fn crank_tilt_displaces_the_two_disc_planes_oppositely() {
+        // 001 Eq. 5–8: a tilt τ_t of crank 1 about its tangential direction moves its axis
+        // radially by +τ_t·s/2 at disc 1 and −τ_t·s/2 at disc 2, exactly as radial bore
+        // errors of +τ_t·s/2 and −τ_t·s/2 would at each plane; the mean over the two cranks
+        // halves it. A tilt about the radial direction moves the axis tangentially by
+        // −τ_r·z. The sun's tilt acts at L_s: Δβ·L_s along x, −Δα·L_s along y.
+        let model = with(params().with_number("sun_plane_offset_mm", 40.0));
+        let tau = 1e-4;
+        let terms = model.row_terms(&row(&model, &[("crank_axis_tilt_tangential_rad_1", tau)]));
+        assert!((terms.v[0].0 - tau * 6.0 / 2.0).abs() < 1e-18);
+        assert!((terms.v[1].0 + tau * 6.0 / 2.0).abs() < 1e-18);
+        let terms = model.row_terms(&row(&model, &[("crank_axis_tilt_radial_rad_1", tau)]));
+        assert!((terms.rho_const[0] + tau * 6.0).abs() < 1e-18);
+        assert!((terms.rho_const[1] - tau * 6.0).abs() < 1e-18);
+        let tilted = model.curve(&row(&model, &[("sun_tilt_y_rad", 1e-4), ("sun_tilt_x_rad", -5e-5)]));
+        let shifted = model.curve(&row(
+            &model,
+            &[("sun_runout_x_mm", 1e-4 * 40.0), ("sun_runout_y_mm", 5e-5 * 40.0)],
+        ));
+        for (a, b) in tilted.iter().zip(&shifted) {
+            assert!((a - b).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn an_interfering_profile_is_flagged_and_has_no_transmission_error() {
+        // A disc 20 µm too full (profile error −0.020 mm on disc 1): its play 2δ* = 126.9″
+        // shrinks by 2·0.020/(a·z_c)-ish, 169″ at the longest lever: negative; and at the
+        // pins by the eccentric the clearance Δr_rp − Δr_p = 18 µm turns negative on both
+        // flanks, where 002's reading reports a lead of thousands of arcseconds (a
+        // negative clearance over a lever near zero). Here the indicator is 1 and every
+        // continuous output NaN; 5 µm too full (42″ less play) still fits.
+        let model = with(params());
+        let mut set = MODIFIED.to_vec();
+        set.push(("profile_normal_error_mm_1", -0.020));
+        let out = outputs(&model, &row(&model, &set));
+        assert_eq!(out[8], 1.0);
+        assert!(out[..8].iter().all(|v| v.is_nan()), "{out:?}");
+        let mut set = MODIFIED.to_vec();
+        set.push(("profile_normal_error_mm_1", -0.005));
+        let out = outputs(&model, &row(&model, &set));
+        assert_eq!(out[8], 0.0);
+        assert!(out[..8].iter().all(|v| v.is_finite()), "{out:?}");
+        for spec in model.outputs() {
+            let expected = (spec.kind == crate::OutputKind::Continuous).then_some(
+                crate::OutputCondition {
+                    indicator: INTERFERENCE,
+                    effect: crate::ConditionEffect::Excluded,
+                },
+            );
+            assert_eq!(spec.condition, expected, "{}", spec.name);
+        }
     }
 }
