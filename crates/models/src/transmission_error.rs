@@ -177,7 +177,7 @@ const PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "output_pin_circle_radius_mm",
         unit: "mm",
-        description: "r6, radius of the output pin holes",
+        description: "r6, radius of the output pin holes (document_002 reading only: 002's δ41 term; the physical reading has no such term)",
         default: None,
     },
     ParamSpec {
@@ -436,7 +436,6 @@ impl TransmissionError {
         let stage = CycloidStage::from_params(params, 256)?;
         let (pins, cycloid_teeth) = (stage.pins, stage.teeth);
         let (pin_circle_radius, eccentricity) = (stage.pin_circle_radius, stage.eccentricity);
-        let output_radius = params.positive("output_pin_circle_radius_mm", None)?;
         let cranks = params.count("crank_count", Some(2.0))? as usize;
         if cranks > MAX_CRANKS {
             return Err(ModelError::new(
@@ -491,6 +490,12 @@ impl TransmissionError {
                     format!("must be \"four_bar\" or \"averaged\", got \"{other}\""),
                 ))
             }
+        };
+        // r6 belongs to 002's output pin-hole term, which only its literal reading has.
+        let output_radius = if literal {
+            params.positive("output_pin_circle_radius_mm", None)?
+        } else {
+            0.0
         };
         let physical_geometry = if literal {
             None
@@ -613,6 +618,7 @@ impl TransmissionError {
                 &stage,
                 &table,
                 &curve_points,
+                &groups,
                 two_discs::Layout {
                     points,
                     common_divisor: g,

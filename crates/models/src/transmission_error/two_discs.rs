@@ -202,8 +202,15 @@ pub(super) struct Physical {
     pub tooth_2_coast: Vec<u32>,
     /// Per curve point (in `curve_points` order): disc 2's whole pin pitches, mod z_p.
     pub pin_shift_2: Vec<u32>,
+    /// Per group: the pin shifts of its first point on each disc, when it has LANES points
+    /// whose shifts advance by `lane_stride` (mod z_p) from one to the next.
+    pub lane_shifts: Vec<Option<[u32; 2]>>,
+    /// Δ = z_c·z_p·(N/g)/N mod z_p, the pin-shift stride within a group.
+    pub lane_stride: usize,
     /// Per point index j: (sin, cos) of z_p·Θ and of (i − 1)·Θ.
     pub angles: Vec<[f64; 4]>,
+    /// The same as four columns.
+    pub columns: [Vec<f64>; 4],
     /// (sin β_k, cos β_k).
     pub crank_angles: Vec<(f64, f64)>,
     /// Input offsets: per disc, cranks, pins, teeth.
@@ -370,6 +377,104 @@ impl TransmissionError {
         (offsets, -ph.kappa * lam_mean / self.cycloid_teeth as f64)
     }
 
+    /// The coefficients of C_d over the products [1, x, y, u, w, x², xy, y², xu, yu, xw, yw]
+    /// of x = cos z_pΘ, y = sin z_pΘ, u = cos (i−1)Θ, w = sin (i−1)Θ: the expansion of
+    /// [`Self::crank_offsets`] (λ_k is linear in x, y, u, w; the four-bar term multiplies
+    /// it by cos(β_k + z_pΘ) = cos β_k·x − sin β_k·y).
+    pub(super) fn offset_coefficients(&self, terms: &RowTerms) -> [[f64; 12]; 2] {
+        let ph = self.physical();
+        let m = self.cranks as f64;
+        let a = self.eccentricity;
+        let inverse_azc = 1.0 / (a * self.cycloid_teeth as f64);
+        let inverse_aw = 1.0 / (m * ph.crank_radius);
+        // Means of the λ coefficients, and Σ_k l_i·cos β_k, Σ_k l_i·sin β_k.
+        let (mut mean, mut lc, mut ls) = ([0.0; 5], [0.0; 5], [0.0; 5]);
+        for (l, &(sb, cb)) in terms.lam[..self.cranks].iter().zip(&ph.crank_angles) {
+            for i in 0..5 {
+                mean[i] += l[i] / m;
+                lc[i] += l[i] * cb;
+                ls[i] += l[i] * sb;
+            }
+        }
+        let mut coefficients = [[0.0; 12]; 2];
+        for (d, c) in coefficients.iter_mut().enumerate() {
+            let sigma = if d == 0 { 1.0 } else { -1.0 };
+            let (vx, vy) = terms.v[d];
+            let across = [
+                terms.q_mean[d].1 + a * mean[0],
+                a * mean[1] + sigma * vy,
+                a * mean[2] + sigma * vx,
+                a * mean[3],
+                a * mean[4],
+            ];
+            for i in 0..5 {
+                c[i] = -across[i] * inverse_azc;
+            }
+            if ph.closure == CrankClosure::FourBar {
+                let rho = [
+                    terms.rho_const[d],
+                    sigma * (terms.p1[d] + a * lc[0]),
+                    sigma * (terms.p2[d] - a * ls[0]),
+                    0.0,
+                    0.0,
+                    sigma * a * lc[1],
+                    sigma * a * (lc[2] - ls[1]),
+                    -sigma * a * ls[2],
+                    sigma * a * lc[3],
+                    -sigma * a * ls[3],
+                    sigma * a * lc[4],
+                    -sigma * a * ls[4],
+                ];
+                for i in 0..12 {
+                    c[i] -= rho[i] * inverse_aw;
+                }
+            }
+        }
+        coefficients
+    }
+
+    /// A floor under each disc's coast-flank ratio over the whole revolution, rad: the
+    /// centred clearance c0 = Δr_rp − Δr_p·(1 − K1·cos φ)/S is at least Δr_rp −
+    /// max(Δr_p, 0) + max(−Δr_p, 0)·√(1 − K1²) (the factor (1 − K1·cos φ)/S lies in
+    /// [√(1 − K1²), 1], its minimum at cos φ = K1), every error's factor is at most 1 in
+    /// magnitude (the tangential one at most K1), and
+    /// |l| ≤ a·z_c: a non-negative numerator floor N gives a ratio of at least δ* + N/(a·z_c),
+    /// δ* = (Δr_rp − Δr_p·√(1 − K1²))/(a·z_c) the half play. −∞ when N < 0 (the exact coast
+    /// minimum is then taken wherever the floor does not clear a point).
+    pub(super) fn coast_floor(&self, inputs: &[f64], terms: &RowTerms) -> [f64; 2] {
+        let ph = self.physical();
+        let k1 = ph.stage.k1();
+        let azc = self.eccentricity * self.cycloid_teeth as f64;
+        let half_play = (terms.d_rp - terms.d_p * (1.0 - k1 * k1).sqrt()) / azc;
+        let (bound_r, bound_t) = terms.pin_bound;
+        let mut floors = [f64::NEG_INFINITY; 2];
+        for (d, floor) in floors.iter_mut().enumerate() {
+            let teeth = if self.per_tooth {
+                let start = ph.tooth_base + d * self.cycloid_teeth;
+                inputs[start..start + self.cycloid_teeth]
+                    .iter()
+                    .fold(0.0, |a, v| f64::max(a, v.abs()))
+            } else {
+                0.0
+            };
+            let along = terms.q_mean[d].0.abs() + terms.v[d].0.hypot(terms.v[d].1);
+            let errors = along
+                + terms.err_rp.abs()
+                + bound_r
+                + k1 * bound_t
+                + terms.profile[d].abs()
+                + terms.err_rrp.abs()
+                + teeth;
+            let centred = terms.d_rp - terms.d_p.max(0.0)
+                + (-terms.d_p).max(0.0) * (1.0 - k1 * k1).sqrt();
+            let numerator = centred - errors;
+            if numerator >= 0.0 {
+                *floor = half_play + numerator / azc;
+            }
+        }
+        floors
+    }
+
     /// T_d,x, the disc displacement along its eccentric, from (sin, cos) of z_p·Θ.
     #[inline(always)]
     pub(super) fn along(terms: &RowTerms, d: usize, s: f64, c: f64) -> f64 {
@@ -378,7 +483,9 @@ impl TransmissionError {
     }
 
     /// The clearance ratio g/|l| of pin `pin` (0-based) on disc d at Θ, with its lever's
-    /// sign, from the geometry (no tables): the reference the tables must reproduce.
+    /// sign, from the geometry (no tables): the reference the tables must reproduce. `d_r`
+    /// is the disc's displacement along its eccentric at Θ ([`Self::along`]).
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn exact_ratio(
         &self,
         inputs: &[f64],
@@ -386,20 +493,34 @@ impl TransmissionError {
         d: usize,
         pin: usize,
         theta: f64,
+        d_r: f64,
+    ) -> (f64, f64) {
+        let zp = self.pins as f64;
+        let phi = 2.0 * PI * pin as f64 / zp + self.cycloid_teeth as f64 * theta + d as f64 * PI;
+        let (sin, cos) = phi.rem_euclid(2.0 * PI).sin_cos();
+        self.exact_ratio_at(inputs, terms, d, pin, theta, d_r, (sin, cos))
+    }
+
+    /// [`Self::exact_ratio`] with (sin φ, cos φ) of the pin given.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn exact_ratio_at(
+        &self,
+        inputs: &[f64],
+        terms: &RowTerms,
+        d: usize,
+        pin: usize,
+        theta: f64,
+        d_r: f64,
+        (sin, cos): (f64, f64),
     ) -> (f64, f64) {
         let ph = self.physical();
-        let zp = self.pins as f64;
-        let zc = self.cycloid_teeth as f64;
-        let phi = (2.0 * PI * pin as f64 / zp + zc * theta + d as f64 * PI).rem_euclid(2.0 * PI);
-        let factors = ph.stage.pin_factors(phi);
-        let (sin, cos) = phi.sin_cos();
+        let factors = ph.stage.pin_factors_at(sin, cos);
         let (equidistant, shift) = if sin >= 0.0 {
             (factors.equidistant, factors.shift)
         } else {
-            coast_modification(&ph.stage, phi)
+            coast_modification(&ph.stage, sin, cos)
         };
-        let (zs, zc_theta) = (zp * theta).sin_cos();
-        let d_r = Self::along(terms, d, zs, zc_theta);
         let (pin_r, pin_t) = if self.per_pin {
             (
                 inputs[ph.pin_base + pin],
@@ -409,10 +530,11 @@ impl TransmissionError {
             (0.0, 0.0)
         };
         let tooth = if self.per_tooth {
+            let zc = self.cycloid_teeth as f64;
             let r_p = ph.stage.pin_circle_radius;
             let polar = (r_p * sin).atan2(r_p * cos - self.eccentricity);
-            let space =
-                ((zc * (polar - zp * theta) / (2.0 * PI)).round() as i64).rem_euclid(zc as i64);
+            let space = ((zc * (polar - self.pins as f64 * theta) / (2.0 * PI)).round() as i64)
+                .rem_euclid(zc as i64);
             inputs[ph.tooth_base + d * self.cycloid_teeth + space as usize]
         } else {
             0.0
@@ -431,6 +553,18 @@ impl TransmissionError {
     /// The whole physical geometry at Θ, pin by pin: the reference of the tabulated curve
     /// and the refinement of its extremes.
     pub(super) fn exact(&self, inputs: &[f64], terms: &RowTerms, theta: f64) -> Exact {
+        self.exact_flanks(inputs, terms, theta, true)
+    }
+
+    /// [`Self::exact`], the coast flank only when `coast` (else its windows' upper ends
+    /// are +∞ and `clear` is true).
+    pub(super) fn exact_flanks(
+        &self,
+        inputs: &[f64],
+        terms: &RowTerms,
+        theta: f64,
+        coast: bool,
+    ) -> Exact {
         let ph = self.physical();
         let angles = {
             let (s, c) = (self.pins as f64 * theta).sin_cos();
@@ -440,10 +574,30 @@ impl TransmissionError {
         let (offsets, involute) = self.crank_offsets(terms, angles);
         let mut windows = [(0.0, 0.0); 2];
         let mut winners = [0; 2];
+        // Pin φ by rotation: pin 1 at z_c·Θ (+π on disc 2), then one pitch at a time.
+        let (pitch_sin, pitch_cos) = (2.0 * PI / self.pins as f64).sin_cos();
         for d in 0..2 {
+            let d_r = Self::along(terms, d, angles[0], angles[1]);
+            let start = (self.cycloid_teeth as f64 * theta + d as f64 * PI).rem_euclid(2.0 * PI);
             let (mut lag, mut lead, mut winner) = (f64::INFINITY, f64::INFINITY, 0);
+            let mut previous = (0.0, 1.0);
             for pin in 0..self.pins {
-                let (ratio, lever) = self.exact_ratio(inputs, terms, d, pin, theta);
+                // Exact sin_cos every 8 pins keeps the rotation's rounding at the 1e-15 level.
+                let (sin, cos) = if pin % 8 == 0 {
+                    (start + 2.0 * PI * pin as f64 / self.pins as f64).sin_cos()
+                } else {
+                    let (sin, cos) = previous;
+                    (
+                        sin * pitch_cos + cos * pitch_sin,
+                        cos * pitch_cos - sin * pitch_sin,
+                    )
+                };
+                previous = (sin, cos);
+                if !coast && sin <= 0.0 {
+                    continue;
+                }
+                let (ratio, lever) =
+                    self.exact_ratio_at(inputs, terms, d, pin, theta, d_r, (sin, cos));
                 if lever > 1e-12 * self.eccentricity {
                     if ratio < lag {
                         (lag, winner) = (ratio, pin);
@@ -503,7 +657,8 @@ impl TransmissionError {
         };
         let (offsets, _) = self.crank_offsets(terms, angles);
         let one = |d: usize, pin: usize| {
-            let (ratio, lever) = self.exact_ratio(inputs, terms, d, pin, theta);
+            let d_r = Self::along(terms, d, angles[0], angles[1]);
+            let (ratio, lever) = self.exact_ratio(inputs, terms, d, pin, theta, d_r);
             (lever > 0.0).then(|| ph.kappa * (offsets[d] - ratio))
         };
         match branch {
@@ -513,14 +668,15 @@ impl TransmissionError {
     }
 
     /// Fills `curve` (N values, rad) from the tables; returns false when the profile
-    /// interferes at some point (the curve is then incomplete).
+    /// interferes at some point (the curve is then still filled, from the drive flanks).
+    /// With `stages`, also the parts [involute, cranks, contact] per point.
     pub(super) fn physical_curve(
         &self,
         inputs: &[f64],
         terms: &RowTerms,
         scratch: &mut TwoDiscScratch,
         curve: &mut [f64],
-        mut stages: Option<&mut [[f64; 3]]>,
+        stages: Option<&mut [[f64; 3]]>,
     ) -> bool {
         let ph = self.physical();
         let n = self.points;
@@ -528,16 +684,28 @@ impl TransmissionError {
         let coast_table = &ph.coast;
         let width = table.width;
         let (pins, teeth) = (self.pins, self.cycloid_teeth);
-        // The smooth part, point by point in index order.
-        scratch.offsets.resize(n, [0.0; 2]);
-        scratch.involute.resize(n, 0.0);
-        for ((offset, involute), &angles) in scratch
-            .offsets
-            .iter_mut()
-            .zip(scratch.involute.iter_mut())
-            .zip(&ph.angles)
-        {
-            (*offset, *involute) = self.crank_offsets(terms, angles);
+        // The smooth part, point by point in index order, from its expansion in products of
+        // the sinusoids of z_p·Θ and (i − 1)·Θ (the loop vectorises).
+        let coefficients = self.offset_coefficients(terms);
+        let [sin, cos, sun_sin, sun_cos] = &ph.columns;
+        for (d, offsets) in scratch.offsets.iter_mut().enumerate() {
+            offsets.resize(n, 0.0);
+            let a = &coefficients[d];
+            let angles = sin.iter().zip(cos).zip(sun_sin.iter().zip(sun_cos));
+            for (offset, ((&y, &x), (&w, &u))) in offsets.iter_mut().zip(angles) {
+                *offset = a[0]
+                    + a[1] * x
+                    + a[2] * y
+                    + a[3] * u
+                    + a[4] * w
+                    + a[5] * (x * x)
+                    + a[6] * (x * y)
+                    + a[7] * (y * y)
+                    + a[8] * (x * u)
+                    + a[9] * (y * u)
+                    + a[10] * (x * w)
+                    + a[11] * (y * w);
+            }
         }
         // Pin errors repeated (and reversed for the coast flank), tooth errors repeated.
         let repeat = |target: &mut Vec<f64>, values: &[f64], len: usize, reverse: bool| {
@@ -568,131 +736,351 @@ impl TransmissionError {
             }
         }
         let kappa = ph.kappa;
+        let first_contact = ph.contact == DiscContact::FirstContact;
+        // The coast flank matters only where the two discs' windows might not overlap:
+        // first a floor for the whole row, then, where it is too low, one per group
+        // (the group's coast sums less the largest pin terms), then the exact minimum.
+        let row_floor = self.coast_floor(inputs, terms);
+        let row_floor_holds = row_floor.iter().all(|f| f.is_finite());
         let (bound_r, bound_t) = terms.pin_bound;
+        let TwoDiscScratch {
+            offsets,
+            pin_radial,
+            pin_tangential,
+            lane_radial,
+            lane_tangential,
+            coast_radial,
+            coast_tangential,
+            tooth,
+            drive,
+            coast,
+        } = scratch;
         let mut clear = true;
-        for group in &self.groups {
+        // Pin errors in lane order: lane_radial[q][m] = δr of pin (q − m·Δ) mod z_p, Δ the
+        // stride of the pin shift between a lane group's consecutive points.
+        let lane_rows = pins + width;
+        for (target, source) in [
+            (&mut *lane_radial, &*pin_radial),
+            (&mut *lane_tangential, &*pin_tangential),
+        ] {
+            target.clear();
+            target.extend((0..lane_rows).map(|q| {
+                std::array::from_fn(|m| source[(q + m * (pins - ph.lane_stride)) % pins])
+            }));
+        }
+        for (group_index, group) in self.groups.iter().enumerate() {
             let points = &self.curve_points[group.start as usize..group.end as usize];
             let p = group.phase as usize;
+            let blocks = [p, ph.phase_2[p] as usize];
             let (s, c) = points[0].crank;
             let tooth_shift = points[0].tooth_shift as usize;
-            let mut coast_bound = [0.0; 2];
-            for d in 0..2 {
-                let block = if d == 0 { p } else { ph.phase_2[p] as usize };
-                let block = block * width..(block + 1) * width;
-                let drive_teeth = if d == 0 {
-                    &table.tooth[block.clone()]
-                } else {
-                    &ph.tooth_2_drive[p * width..(p + 1) * width]
-                };
-                let coast_teeth = if d == 0 {
-                    &coast_table.tooth[block.clone()]
-                } else {
-                    &ph.tooth_2_coast[p * width..(p + 1) * width]
-                };
-                let space = &scratch.tooth[d][teeth - tooth_shift..];
-                let d_r = Self::along(terms, d, s, c);
-                let constant = terms.profile[d] - terms.err_rrp;
-                fill_heads(
-                    table,
-                    block.clone(),
-                    drive_teeth,
-                    space,
-                    terms,
-                    constant,
-                    d_r,
-                    &mut scratch.drive[d],
-                );
-                fill_heads(
-                    coast_table,
-                    block.clone(),
-                    coast_teeth,
-                    space,
-                    terms,
-                    constant,
-                    d_r,
-                    &mut scratch.coast[d],
-                );
-                // A lower bound of the coast ratio over the group's points.
-                let radial = &coast_table.radial[block.clone()];
-                let tangential = &coast_table.tangential[block];
-                let mut bound = f64::INFINITY;
-                for e in 0..width {
-                    let v = scratch.coast[d][e]
-                        - bound_r * radial[e].abs()
-                        - bound_t * tangential[e].abs();
-                    bound = if v < bound { v } else { bound };
+            let along = [Self::along(terms, 0, s, c), Self::along(terms, 1, s, c)];
+            let teeth_of = |d: usize, drive_flank: bool| -> &[u32] {
+                let block = blocks[d] * width..(blocks[d] + 1) * width;
+                match (d, drive_flank) {
+                    (0, true) => &table.tooth[block],
+                    (0, false) => &coast_table.tooth[block],
+                    (_, true) => &ph.tooth_2_drive[p * width..(p + 1) * width],
+                    (_, false) => &ph.tooth_2_coast[p * width..(p + 1) * width],
                 }
-                coast_bound[d] = bound;
+            };
+            let same_block = blocks[0] == blocks[1];
+            if same_block {
+                // Even pin counts: disc 2 sees disc 1's slots; one pass over the block.
+                let [first, second] = drive;
+                fill_heads_pair(
+                    table,
+                    blocks[0] * width..(blocks[0] + 1) * width,
+                    [teeth_of(0, true), teeth_of(1, true)],
+                    [
+                        &tooth[0][teeth - tooth_shift..],
+                        &tooth[1][teeth - tooth_shift..],
+                    ],
+                    terms,
+                    along,
+                    [first, second],
+                );
+            } else {
+                for d in 0..2 {
+                    fill_heads(
+                        table,
+                        blocks[d] * width..(blocks[d] + 1) * width,
+                        teeth_of(d, true),
+                        &tooth[d][teeth - tooth_shift..],
+                        terms,
+                        terms.profile[d] - terms.err_rrp,
+                        along[d],
+                        &mut drive[d],
+                    );
+                }
             }
-            let best = [smallest(&scratch.drive[0]), smallest(&scratch.drive[1])];
-            let coast_best = [smallest(&scratch.coast[0]), smallest(&scratch.coast[1])];
-            let blocks = [p, ph.phase_2[p] as usize];
+            let fill_coast = |coast: &mut [Vec<f64>; 2]| {
+                for d in 0..2 {
+                    fill_heads(
+                        coast_table,
+                        blocks[d] * width..(blocks[d] + 1) * width,
+                        teeth_of(d, false),
+                        &tooth[d][teeth - tooth_shift..],
+                        terms,
+                        terms.profile[d] - terms.err_rrp,
+                        along[d],
+                        &mut coast[d],
+                    );
+                }
+            };
+            let mut coast_filled = false;
+            let floor = if row_floor_holds {
+                row_floor
+            } else {
+                fill_coast(coast);
+                coast_filled = true;
+                let mut floor = [0.0; 2];
+                for d in 0..2 {
+                    let block = blocks[d] * width..(blocks[d] + 1) * width;
+                    floor[d] = smallest_less_pins(
+                        &coast[d],
+                        &coast_table.radial[block.clone()],
+                        &coast_table.tangential[block],
+                        bound_r,
+                        bound_t,
+                    );
+                }
+                floor
+            };
+            let best = [smallest(&drive[0]), smallest(&drive[1])];
+            let radial = [
+                &table.radial[blocks[0] * width..(blocks[0] + 1) * width],
+                &table.radial[blocks[1] * width..(blocks[1] + 1) * width],
+            ];
+            let tangential = [
+                &table.tangential[blocks[0] * width..(blocks[0] + 1) * width],
+                &table.tangential[blocks[1] * width..(blocks[1] + 1) * width],
+            ];
+            // The slots that can hold a disc's minimum at any of the group's points: those
+            // whose sum less the largest pin terms is below the smallest sum plus them (in
+            // whole quadruples).
+            let candidates = [0, 1].map(|d| {
+                if self.per_pin && ph.lane_shifts[group_index].is_none() {
+                    candidate_slots(&drive[d], radial[d], tangential[d], bound_r, bound_t)
+                } else {
+                    [0, width]
+                }
+            });
+            // A group of LANES points whose pins advance by a fixed stride: its minima for
+            // all its points at once, the points as vector lanes.
+            let lanes = match ph.lane_shifts[group_index] {
+                Some(first) if self.per_pin => Some([0, 1].map(|d| {
+                    lane_lags(
+                        &drive[d],
+                        radial[d],
+                        tangential[d],
+                        candidates[d],
+                        &lane_radial[pins - first[d] as usize..],
+                        &lane_tangential[pins - first[d] as usize..],
+                    )
+                })),
+                _ => None,
+            };
             for (point_index, point) in points.iter().enumerate() {
                 let j = point.index as usize;
-                let offsets = scratch.offsets[j];
+                let offset = [offsets[0][j], offsets[1][j]];
                 let shifts = [
                     point.pin_shift as usize,
                     ph.pin_shift_2[group.start as usize + point_index] as usize,
                 ];
-                let mut windows = [(0.0, 0.0); 2];
-                for d in 0..2 {
-                    let block = blocks[d] * width..(blocks[d] + 1) * width;
-                    let lag = if self.per_pin {
-                        let pin = pins - shifts[d];
-                        smallest_ratio(
-                            &scratch.drive[d],
-                            &table.radial[block.clone()],
-                            &table.tangential[block],
-                            &scratch.pin_radial[pin..pin + width],
-                            &scratch.pin_tangential[pin..pin + width],
-                        )
-                    } else {
-                        best[d]
-                    };
-                    windows[d] = (
-                        kappa * (offsets[d] - lag),
-                        kappa * (offsets[d] + coast_bound[d]),
+                // low_d = κ·(C_d − L_d); first contact needs only their maximum, one scan
+                // over both discs' slots of ratio − C_d.
+                let (low, drive_end) = if let Some(lags) = &lanes {
+                    let low = [0, 1].map(|d| kappa * (offset[d] - lags[d][point_index]));
+                    (low, if low[1] > low[0] { low[1] } else { low[0] })
+                } else if !self.per_pin {
+                    let low = [kappa * (offset[0] - best[0]), kappa * (offset[1] - best[1])];
+                    (low, if low[1] > low[0] { low[1] } else { low[0] })
+                } else if first_contact {
+                    let (first, second) = (pins - shifts[0], pins - shifts[1]);
+                    let ([a0, a1], [b0, b1]) = (candidates[0], candidates[1]);
+                    let least = smallest_ratio_pair(
+                        [&drive[0][a0..a1], &drive[1][b0..b1]],
+                        [&radial[0][a0..a1], &radial[1][b0..b1]],
+                        [&tangential[0][a0..a1], &tangential[1][b0..b1]],
+                        [
+                            &pin_radial[first + a0..first + a1],
+                            &pin_radial[second + b0..second + b1],
+                        ],
+                        [
+                            &pin_tangential[first + a0..first + a1],
+                            &pin_tangential[second + b0..second + b1],
+                        ],
+                        offset,
                     );
-                }
-                let drive = if windows[1].0 > windows[0].0 {
-                    windows[1].0
+                    ([0.0; 2], -kappa * least)
                 } else {
-                    windows[0].0
+                    let (first, second) = (pins - shifts[0], pins - shifts[1]);
+                    let lag = [
+                        smallest_ratio(
+                            &drive[0],
+                            radial[0],
+                            tangential[0],
+                            &pin_radial[first..first + width],
+                            &pin_tangential[first..first + width],
+                        ),
+                        smallest_ratio(
+                            &drive[1],
+                            radial[1],
+                            tangential[1],
+                            &pin_radial[second..second + width],
+                            &pin_tangential[second..second + width],
+                        ),
+                    ];
+                    let low = [kappa * (offset[0] - lag[0]), kappa * (offset[1] - lag[1])];
+                    (low, if low[1] > low[0] { low[1] } else { low[0] })
                 };
-                if windows[0].1.min(windows[1].1) < drive {
-                    // The bound does not clear the point: the exact coast minimum.
-                    for (d, window) in windows.iter_mut().enumerate() {
+                let high = (kappa * (offset[0] + floor[0])).min(kappa * (offset[1] + floor[1]));
+                if !(high >= drive_end) {
+                    // The floor does not clear the point: the exact coast minimum.
+                    if !coast_filled {
+                        fill_coast(coast);
+                        coast_filled = true;
+                    }
+                    let mut high = f64::INFINITY;
+                    for d in 0..2 {
                         let lead = if self.per_pin {
                             let block = blocks[d] * width..(blocks[d] + 1) * width;
                             let start = shifts[d] % pins;
                             smallest_ratio(
-                                &scratch.coast[d],
+                                &coast[d],
                                 &coast_table.radial[block.clone()],
                                 &coast_table.tangential[block],
-                                &scratch.coast_radial[start..start + width],
-                                &scratch.coast_tangential[start..start + width],
+                                &coast_radial[start..start + width],
+                                &coast_tangential[start..start + width],
                             )
                         } else {
-                            coast_best[d]
+                            smallest(&coast[d])
                         };
-                        window.1 = kappa * (offsets[d] + lead);
+                        high = high.min(kappa * (offset[d] + lead));
                     }
-                    if windows[0].1.min(windows[1].1) < drive || drive.is_nan() {
+                    if !(high >= drive_end) {
                         clear = false;
                     }
                 }
-                curve[j] = match ph.contact {
-                    DiscContact::FirstContact => drive,
-                    DiscContact::LoadShared => 0.5 * (windows[0].0 + windows[1].0),
+                curve[j] = if first_contact {
+                    drive_end
+                } else {
+                    0.5 * (low[0] + low[1])
                 };
-                if let Some(stages) = stages.as_deref_mut() {
-                    let crank = 0.5 * kappa * (offsets[0] + offsets[1]) - scratch.involute[j];
-                    stages[j] = [scratch.involute[j], crank, curve[j] - scratch.involute[j] - crank];
-                }
+            }
+        }
+        if let Some(stages) = stages {
+            for (j, stage) in stages.iter_mut().enumerate() {
+                let involute = self.crank_offsets(terms, ph.angles[j]).1;
+                let crank = 0.5 * kappa * (offsets[0][j] + offsets[1][j]) - involute;
+                *stage = [involute, crank, curve[j] - involute - crank];
             }
         }
         clear
     }
+}
+
+/// min over both discs d and their slots e of head_de + δr·radial_de + δt·tangential_de −
+/// C_d: −max_d (C_d − L_d), one reduction for the two discs.
+#[inline(always)]
+fn smallest_ratio_pair(
+    head: [&[f64]; 2],
+    radial: [&[f64]; 2],
+    tangential: [&[f64]; 2],
+    pin_radial: [&[f64]; 2],
+    pin_tangential: [&[f64]; 2],
+    offset: [f64; 2],
+) -> f64 {
+    let mut lanes = [f64::INFINITY; 4];
+    for d in 0..2 {
+        let count = head[d].len() / 4;
+        let (h, a, b) = (
+            super::quads(head[d], count),
+            super::quads(radial[d], count),
+            super::quads(tangential[d], count),
+        );
+        let (pa, pb) = (
+            super::quads(pin_radial[d], count),
+            super::quads(pin_tangential[d], count),
+        );
+        for c in 0..count {
+            for lane in 0..4 {
+                let v = h[c][lane] + pa[c][lane] * a[c][lane] + pb[c][lane] * b[c][lane]
+                    - offset[d];
+                lanes[lane] = if v < lanes[lane] { v } else { lanes[lane] };
+            }
+        }
+    }
+    super::smallest_lane(lanes)
+}
+
+/// Points of a lane group.
+pub(super) const LANES: usize = 8;
+
+/// The smallest ratio of each of a lane group's points over the slots [range), with the
+/// pin errors in lane order from the group's first pin row.
+#[inline(always)]
+fn lane_lags(
+    head: &[f64],
+    radial: &[f64],
+    tangential: &[f64],
+    range: [usize; 2],
+    pin_radial: &[[f64; LANES]],
+    pin_tangential: &[[f64; LANES]],
+) -> [f64; LANES] {
+    let mut lags = [f64::INFINITY; LANES];
+    for e in range[0]..range[1] {
+        let (h, a, b) = (head[e], radial[e], tangential[e]);
+        let (pr, pt) = (&pin_radial[e], &pin_tangential[e]);
+        for m in 0..LANES {
+            let v = h + pr[m] * a + pt[m] * b;
+            lags[m] = if v < lags[m] { v } else { lags[m] };
+        }
+    }
+    lags
+}
+
+/// The range [first, last) of slots, in whole quadruples, outside which no slot can hold
+/// the minimum of head_e + δr·radial_e + δt·tangential_e for |δr| ≤ R, |δt| ≤ T: a slot
+/// whose head_e − R·|radial_e| − T·|tangential_e| exceeds min_f(head_f + R·|radial_f| +
+/// T·|tangential_f|) never does.
+#[inline(always)]
+fn candidate_slots(head: &[f64], radial: &[f64], tangential: &[f64], r: f64, t: f64) -> [usize; 2] {
+    let width = head.len();
+    let mut upper = f64::INFINITY;
+    for e in 0..width {
+        let v = head[e] + r * radial[e].abs() + t * tangential[e].abs();
+        upper = if v < upper { v } else { upper };
+    }
+    let reach = |e: usize| head[e] - r * radial[e].abs() - t * tangential[e].abs() <= upper;
+    match (0..width).position(reach) {
+        Some(first) => {
+            let last = (0..width).rposition(reach).unwrap_or(first);
+            [first / 4 * 4, (last / 4 + 1) * 4]
+        }
+        // Only when a sum is NaN: scan everything, so that the NaN reaches the curve.
+        None => [0, width],
+    }
+}
+
+/// min over e of head_e − R·|radial_e| − T·|tangential_e|: the smallest value a slot's
+/// ratio can take over any pin errors with |δr| ≤ R and |δt| ≤ T.
+#[inline(always)]
+fn smallest_less_pins(head: &[f64], radial: &[f64], tangential: &[f64], r: f64, t: f64) -> f64 {
+    let mut lanes = [f64::INFINITY; 4];
+    let (head, radial, tangential) = (
+        head.as_chunks::<4>().0,
+        radial.as_chunks::<4>().0,
+        tangential.as_chunks::<4>().0,
+    );
+    for ((h, a), b) in head.iter().zip(radial).zip(tangential) {
+        for lane in 0..4 {
+            let v = h[lane] - r * a[lane].abs() - t * b[lane].abs();
+            lanes[lane] = if v < lanes[lane] { v } else { lanes[lane] };
+        }
+    }
+    super::smallest_lane(lanes)
 }
 
 /// head_e = Δr_rp·eq_e + Δr_p·sh_e + δr_p·rad_e + constant/l_e + d_r·ecc_e + δ_n,j(e)/l_e +
@@ -731,11 +1119,58 @@ fn fill_heads(
     }
 }
 
+/// [`fill_heads`] for both discs over one block (disc 2 in disc 1's slots): the table's
+/// columns are read once.
+#[inline(always)]
+fn fill_heads_pair(
+    table: &PinTable,
+    block: std::ops::Range<usize>,
+    tooth_of: [&[u32]; 2],
+    space: [&[f64]; 2],
+    terms: &RowTerms,
+    along: [f64; 2],
+    [first, second]: [&mut Vec<f64>; 2],
+) {
+    let width = table.width;
+    let blocked = &table.blocked[block.clone()][..width];
+    let inverse_lever = &table.inverse_lever[block.clone()][..width];
+    let equidistant = &table.equidistant[block.clone()][..width];
+    let shift = &table.shift[block.clone()][..width];
+    let eccentric = &table.eccentric[block.clone()][..width];
+    let radial = &table.radial[block][..width];
+    let (first, second) = (&mut first[..width], &mut second[..width]);
+    for e in 0..width {
+        first[e] = space[0][tooth_of[0][e] as usize];
+        second[e] = space[1][tooth_of[1][e] as usize];
+    }
+    let constant = [
+        terms.profile[0] - terms.err_rrp,
+        terms.profile[1] - terms.err_rrp,
+    ];
+    for e in 0..width {
+        let common = terms.d_rp * equidistant[e]
+            + terms.d_p * shift[e]
+            + terms.err_rp * radial[e]
+            + blocked[e];
+        first[e] = common
+            + constant[0] * inverse_lever[e]
+            + along[0] * eccentric[e]
+            + first[e] * inverse_lever[e];
+        second[e] = common
+            + constant[1] * inverse_lever[e]
+            + along[1] * eccentric[e]
+            + second[e] * inverse_lever[e];
+    }
+}
+
 /// Per-thread work state of the physical reading.
 #[derive(Debug, Default)]
 pub(super) struct TwoDiscScratch {
-    pub offsets: Vec<[f64; 2]>,
-    pub involute: Vec<f64>,
+    /// Pin errors in lane order (see `physical_curve`).
+    pub lane_radial: Vec<[f64; LANES]>,
+    pub lane_tangential: Vec<[f64; LANES]>,
+    /// Per disc, C_d at every point, rad.
+    pub offsets: [Vec<f64>; 2],
     pub pin_radial: Vec<f64>,
     pub pin_tangential: Vec<f64>,
     pub coast_radial: Vec<f64>,
@@ -794,9 +1229,8 @@ impl Physical {
 /// is c0 − l·δ* with the half play δ* = (Δr_rp − Δr_p·√(1 − K1²))/(e·z_c) (the disc turned
 /// by δ* until the pin at cos φ = K1 touches); the coast flank then has c0 + |l|·δ*.
 /// Over both flanks the play is 2δ*, 000's (2Δr_rp − 2Δr_p·√(1 − K1²))/(e·z_c).
-fn coast_modification(stage: &CycloidStage, phi: f64) -> (f64, f64) {
+fn coast_modification(stage: &CycloidStage, sin: f64, cos: f64) -> (f64, f64) {
     let k1 = stage.k1();
-    let (sin, cos) = phi.sin_cos();
     let s = (1.0 + k1 * k1 - 2.0 * k1 * cos).sqrt();
     let lever = stage.eccentricity * stage.teeth as f64 * sin.abs() / s;
     let per_radian = lever / (stage.eccentricity * stage.teeth as f64);
@@ -821,6 +1255,7 @@ pub(super) fn build(
     stage: &CycloidStage,
     drive: &PinTable,
     curve_points: &[super::Point],
+    groups: &[super::Group],
     layout: Layout,
     settings: Settings,
 ) -> Physical {
@@ -864,7 +1299,7 @@ pub(super) fn build(
             }
             let factors = stage.pin_factors(phi);
             let inverse_lever = -1.0 / factors.lever;
-            let (equidistant, shift) = coast_modification(stage, phi);
+            let (equidistant, shift) = coast_modification(stage, sin, cos);
             coast.blocked.push(0.0);
             coast.inverse_lever.push(inverse_lever);
             coast.equidistant.push(equidistant * inverse_lever);
@@ -897,14 +1332,31 @@ pub(super) fn build(
             });
         }
     }
-    let pin_shift_2 = curve_points
+    let pin_shift_2: Vec<u32> = curve_points
         .iter()
         .map(|point| {
             let turns = teeth * pins * point.index as usize + half_turn;
             ((turns / n) % pins) as u32
         })
         .collect();
-    let angles = (0..n)
+    let lane_stride = (teeth * pins / g) % pins;
+    let lane_shifts = groups
+        .iter()
+        .map(|group| {
+            let (start, end) = (group.start as usize, group.end as usize);
+            if end - start != LANES {
+                return None;
+            }
+            let first = [curve_points[start].pin_shift, pin_shift_2[start]];
+            let regular = (0..LANES).all(|m| {
+                let expected = |k: u32| ((k as usize + m * lane_stride) % pins) as u32;
+                curve_points[start + m].pin_shift == expected(first[0])
+                    && pin_shift_2[start + m] == expected(first[1])
+            });
+            regular.then_some(first)
+        })
+        .collect();
+    let angles: Vec<[f64; 4]> = (0..n)
         .map(|j| {
             let theta = 2.0 * PI * j as f64 / n as f64;
             let (s, c) = (2.0 * PI * ((pins * j) % n) as f64 / n as f64).sin_cos();
@@ -932,6 +1384,9 @@ pub(super) fn build(
         tooth_2_drive,
         tooth_2_coast,
         pin_shift_2,
+        lane_shifts,
+        lane_stride,
+        columns: [0, 1, 2, 3].map(|i| angles.iter().map(|a| a[i]).collect()),
         angles,
         crank_angles,
         disc_base,
@@ -1120,8 +1575,9 @@ impl TransmissionError {
             return (lo, hi);
         };
         let mut best_hi = hi;
-        let top = self.exact(inputs, terms, at(j_hi));
-        let values = [-h, 0.0, h].map(|dt| self.branch_value(inputs, terms, top.branch, at(j_hi) + dt));
+        let top = self.exact_flanks(inputs, terms, at(j_hi), false);
+        let values =
+            [-h, 0.0, h].map(|dt| self.branch_value(inputs, terms, top.branch, at(j_hi) + dt));
         if let [Some(before), Some(centre), Some(after)] = values {
             let curvature = before - 2.0 * centre + after;
             if curvature < 0.0 {
@@ -1131,30 +1587,26 @@ impl TransmissionError {
                 }
             }
         }
+        // The kink at the minimum lies towards the lower neighbour.
         let mut best_lo = lo;
-        let bottom = self.exact(inputs, terms, at(j_lo));
-        for side in [-1.0, 1.0] {
-            let theta = at(j_lo) + side * h;
-            let near = self.exact(inputs, terms, theta);
-            if near.branch == bottom.branch {
-                continue;
-            }
+        let (previous, next) = (curve[(j_lo + n - 1) % n], curve[(j_lo + 1) % n]);
+        let side = if previous < next { -1.0 } else { 1.0 };
+        let bottom = self.exact_flanks(inputs, terms, at(j_lo), false);
+        let theta = at(j_lo) + side * h;
+        let near = self.exact_flanks(inputs, terms, theta, false);
+        if near.branch != bottom.branch {
             // Chords of the two branches from Θ_lo (t = 0) to its neighbour (t = 1).
-            let (Some(a_lo), Some(b_near)) = (
+            if let (Some(a_lo), Some(b_near)) = (
                 self.branch_value(inputs, terms, near.branch, at(j_lo)),
                 self.branch_value(inputs, terms, bottom.branch, theta),
-            ) else {
-                continue;
-            };
-            let (a_near, b_lo) = (near.te, bottom.te);
-            let denominator = (a_near - a_lo) - (b_near - b_lo);
-            if denominator == 0.0 {
-                continue;
-            }
-            let t = (b_lo - a_lo) / denominator;
-            if t > 0.0 && t < 1.0 {
-                let crossing = self.exact(inputs, terms, at(j_lo) + side * t * h);
-                best_lo = best_lo.min(crossing.te);
+            ) {
+                let (a_near, b_lo) = (near.te, bottom.te);
+                let denominator = (a_near - a_lo) - (b_near - b_lo);
+                let t = (b_lo - a_lo) / denominator;
+                if t > 0.0 && t < 1.0 {
+                    let crossing = self.exact_flanks(inputs, terms, at(j_lo) + side * t * h, false);
+                    best_lo = best_lo.min(crossing.te);
+                }
             }
         }
         (best_lo, best_hi)
@@ -1623,5 +2075,68 @@ mod tests {
             );
             assert_eq!(spec.condition, expected, "{}", spec.name);
         }
+    }
+}
+#[cfg(test)]
+mod timing_tmp {
+    use super::*;
+    use crate::ErrorModel;
+    fn best(mut f: impl FnMut()) -> std::time::Duration {
+        (0..30).map(|_| { let t = std::time::Instant::now(); for _ in 0..10 { f(); } t.elapsed() / 10 }).min().unwrap()
+    }
+    #[test]
+    fn timing() {
+        let pins_on = std::env::var("NOPINS").is_err();
+        let p = super::super::rv40e_params().with_number("pin_position_errors", if pins_on {1.0} else {0.0}).with_number("tooth_profile_errors", 1.0);
+        let model = TransmissionError::from_params(&p).unwrap();
+        let mut state = 7u64;
+        let mut next = move || { state ^= state << 13; state ^= state >> 7; state ^= state << 17; (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5 };
+        let mut row: Vec<f64> = model.inputs().iter().map(|i| if i.unit == "rad" {0.0} else {0.004 * next()}).collect();
+        row[4] = 0.01; row[5] = -0.008;
+        let terms = model.row_terms(&row);
+        let mut scratch = TwoDiscScratch::default();
+        let mut curve = vec![0.0; 4096];
+        let mut out = vec![0.0; 9];
+        let lp = super::super::rv40e_params().with_number("pin_position_errors", 1.0).with_number("tooth_profile_errors", 1.0).with("reading", crate::ParamValue::Text("document_002".into()));
+        let lit = TransmissionError::from_params(&lp).unwrap();
+        let lrow = vec![0.001; lit.inputs().len()];
+        let mut lout = vec![0.0; 6];
+        let tl = best(|| lit.evaluate(&lrow, &mut lout));
+        let tp = best(|| model.evaluate(&row, &mut out));
+        let tc = best(|| { model.physical_curve(&row, &terms, &mut scratch, &mut curve, None); });
+        let lo = curve.iter().cloned().fold(f64::INFINITY, f64::min);
+        let hi = curve.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+        let tr = best(|| { std::hint::black_box(model.refine_extremes(&row, &terms, &curve, lo, hi)); });
+        let fft = crate::RealFft::new(4096);
+        let mut work = vec![(0.0, 0.0); 2048];
+        let tf = best(|| fft.transform(&curve, &mut work));
+        eprintln!("min times: literal {:?} physical {:?} curve {:?} refine {:?} fft {:?}", tl, tp, tc, tr, tf);
+    }
+}
+
+#[cfg(test)]
+mod width_tmp {
+    use super::*;
+    #[test]
+    fn widths() {
+        use crate::ErrorModel;
+        let p = super::super::rv40e_params().with_number("pin_position_errors", 1.0).with_number("tooth_profile_errors", 1.0);
+        let model = TransmissionError::from_params(&p).unwrap();
+        let mut state = 7u64;
+        let mut next = move || { state ^= state << 13; state ^= state >> 7; state ^= state << 17; (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5 };
+        let mut row: Vec<f64> = model.inputs().iter().map(|i| if i.unit == "rad" {0.0} else {0.004 * next()}).collect();
+        row[4] = 0.01; row[5] = -0.008;
+        let terms = model.row_terms(&row);
+        eprintln!("bounds {:?}", terms.pin_bound);
+        let table = &model.table; let w = table.width;
+        let mut hist = vec![0; 6];
+        for p in 0..512 {
+            let block = p*w..(p+1)*w;
+            let mut head = vec![0.0; w];
+            fill_heads(table, block.clone(), &table.tooth[block.clone()], &vec![0.0; 80], &terms, 0.0, 0.0, &mut head);
+            let c = candidate_slots(&head, &table.radial[block.clone()], &table.tangential[block.clone()], terms.pin_bound.0, terms.pin_bound.1);
+            hist[(c[1]-c[0])/4] += 1;
+        }
+        eprintln!("quads histogram {:?}", hist);
     }
 }
