@@ -889,10 +889,13 @@ impl TransmissionError {
             }
         }
         let var = ((squares[0] + squares[1]) + (squares[2] + squares[3])) / n;
-        search.work.resize(self.points / 2, (0.0, 0.0));
-        self.fft.transform(&curve, &mut search.work);
+        // The split transform has the interleaved one's bits and vectorises.
+        let (re, im) = (&mut search.two.fft_re, &mut search.two.fft_im);
+        re.resize(self.points / 2, 0.0);
+        im.resize(self.points / 2, 0.0);
+        self.fft.transform_split(&curve, re, im);
         let [first, cycloid, pins] =
-            [1, self.cycloid_teeth, self.pins].map(|k| self.fft.amplitude(&search.work, k));
+            [1, self.cycloid_teeth, self.pins].map(|k| self.fft.split_amplitude(re, im, k));
         outputs[..6].copy_from_slice(&[hi - lo, var.sqrt(), mean, first, cycloid, pins]);
         if !(hi - lo).is_finite() || !sum.is_finite() {
             outputs.iter_mut().for_each(|o| *o = f64::NAN);

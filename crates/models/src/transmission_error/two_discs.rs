@@ -207,6 +207,10 @@ pub(super) struct Physical {
     pub lane_shifts: Vec<Option<[u32; 2]>>,
     /// Δ = z_c·z_p·(N/g)/N mod z_p, the pin-shift stride within a group.
     pub lane_stride: usize,
+    /// Whether every group's points share z_p·Θ and (i − 1)·Θ (an integral sun order
+    /// that the group spacing N/g turns by whole revolutions): C_d is then one value per
+    /// group.
+    pub uniform_groups: bool,
     /// Per point index j: (sin, cos) of z_p·Θ and of (i − 1)·Θ.
     pub angles: Vec<[f64; 4]>,
     /// The same as four columns.
@@ -259,8 +263,6 @@ pub(super) struct Exact {
     /// Whether the two discs' windows overlap (no interference).
     pub clear: bool,
     pub branch: Branch,
-    /// Per disc: κ·(C_d − L_d), κ·(C_d + K_d).
-    pub windows: [(f64, f64); 2],
     /// −κ·mean λ/z_c: the involute stage's common part, rad.
     pub involute: f64,
     /// Per disc κ·C_d, rad.
@@ -634,7 +636,6 @@ impl TransmissionError {
             te,
             clear: coast >= drive,
             branch,
-            windows,
             involute,
             crank: [ph.kappa * offsets[0], ph.kappa * offsets[1]],
         }
@@ -687,24 +688,28 @@ impl TransmissionError {
         // The smooth part, point by point in index order, from its expansion in products of
         // the sinusoids of z_p·Θ and (i − 1)·Θ (the loop vectorises).
         let coefficients = self.offset_coefficients(terms);
-        let [sin, cos, sun_sin, sun_cos] = &ph.columns;
+        let smooth = |d: usize, [y, x, w, u]: [f64; 4]| {
+            let a = &coefficients[d];
+            a[0] + a[1] * x
+                + a[2] * y
+                + a[3] * u
+                + a[4] * w
+                + a[5] * (x * x)
+                + a[6] * (x * y)
+                + a[7] * (y * y)
+                + a[8] * (x * u)
+                + a[9] * (y * u)
+                + a[10] * (x * w)
+                + a[11] * (y * w)
+        };
         for (d, offsets) in scratch.offsets.iter_mut().enumerate() {
             offsets.resize(n, 0.0);
-            let a = &coefficients[d];
-            let angles = sin.iter().zip(cos).zip(sun_sin.iter().zip(sun_cos));
-            for (offset, ((&y, &x), (&w, &u))) in offsets.iter_mut().zip(angles) {
-                *offset = a[0]
-                    + a[1] * x
-                    + a[2] * y
-                    + a[3] * u
-                    + a[4] * w
-                    + a[5] * (x * x)
-                    + a[6] * (x * y)
-                    + a[7] * (y * y)
-                    + a[8] * (x * u)
-                    + a[9] * (y * u)
-                    + a[10] * (x * w)
-                    + a[11] * (y * w);
+            if !ph.uniform_groups {
+                let [sin, cos, sun_sin, sun_cos] = &ph.columns;
+                let angles = sin.iter().zip(cos).zip(sun_sin.iter().zip(sun_cos));
+                for (offset, ((&y, &x), (&w, &u))) in offsets.iter_mut().zip(angles) {
+                    *offset = smooth(d, [y, x, w, u]);
+                }
             }
         }
         // Pin errors repeated (and reversed for the coast flank), tooth errors repeated.
@@ -754,6 +759,7 @@ impl TransmissionError {
             tooth,
             drive,
             coast,
+            ..
         } = scratch;
         let mut clear = true;
         // Pin errors in lane order: lane_radial[q][m] = δr of pin (q − m·Δ) mod z_p, Δ the
@@ -764,9 +770,23 @@ impl TransmissionError {
             (&mut *lane_tangential, &*pin_tangential),
         ] {
             target.clear();
-            target.extend((0..lane_rows).map(|q| {
-                std::array::from_fn(|m| source[(q + m * (pins - ph.lane_stride)) % pins])
-            }));
+            target.resize(lane_rows, [0.0; LANES]);
+            if self.per_pin {
+                // Column m is the pin list turned by m·Δ: walk it with a wrapping index.
+                let step = pins - ph.lane_stride;
+                let mut first = 0;
+                for m in 0..LANES {
+                    let mut index = first;
+                    for row in target.iter_mut() {
+                        row[m] = source[index];
+                        index += 1;
+                        if index == pins {
+                            index = 0;
+                        }
+                    }
+                    first = (first + step) % pins;
+                }
+            }
         }
         for (group_index, group) in self.groups.iter().enumerate() {
             let points = &self.curve_points[group.start as usize..group.end as usize];
@@ -775,6 +795,15 @@ impl TransmissionError {
             let (s, c) = points[0].crank;
             let tooth_shift = points[0].tooth_shift as usize;
             let along = [Self::along(terms, 0, s, c), Self::along(terms, 1, s, c)];
+            if ph.uniform_groups {
+                let angles = ph.angles[points[0].index as usize];
+                for (d, offsets) in offsets.iter_mut().enumerate() {
+                    let value = smooth(d, angles);
+                    for point in points {
+                        offsets[point.index as usize] = value;
+                    }
+                }
+            }
             let teeth_of = |d: usize, drive_flank: bool| -> &[u32] {
                 let block = blocks[d] * width..(blocks[d] + 1) * width;
                 match (d, drive_flank) {
@@ -881,6 +910,39 @@ impl TransmissionError {
                 })),
                 _ => None,
             };
+            // The lane group's points in one pass when the floor clears them all.
+            if let Some(lags) = &lanes {
+                let mut values = [0.0; LANES];
+                let mut cleared = true;
+                let mut offset = [[0.0; LANES]; 2];
+                for (m, point) in points.iter().enumerate() {
+                    let j = point.index as usize;
+                    offset[0][m] = offsets[0][j];
+                    offset[1][m] = offsets[1][j];
+                }
+                for m in 0..LANES {
+                    let low = [
+                        kappa * (offset[0][m] - lags[0][m]),
+                        kappa * (offset[1][m] - lags[1][m]),
+                    ];
+                    let drive_end = if low[1] > low[0] { low[1] } else { low[0] };
+                    let high_0 = kappa * (offset[0][m] + floor[0]);
+                    let high_1 = kappa * (offset[1][m] + floor[1]);
+                    let high = if high_1 < high_0 { high_1 } else { high_0 };
+                    cleared &= high >= drive_end;
+                    values[m] = if first_contact {
+                        drive_end
+                    } else {
+                        0.5 * (low[0] + low[1])
+                    };
+                }
+                if cleared {
+                    for (point, value) in points.iter().zip(values) {
+                        curve[point.index as usize] = value;
+                    }
+                    continue;
+                }
+            }
             for (point_index, point) in points.iter().enumerate() {
                 let j = point.index as usize;
                 let offset = [offsets[0][j], offsets[1][j]];
@@ -1166,6 +1228,9 @@ fn fill_heads_pair(
 /// Per-thread work state of the physical reading.
 #[derive(Debug, Default)]
 pub(super) struct TwoDiscScratch {
+    /// The FFT's columns.
+    pub fft_re: Vec<f64>,
+    pub fft_im: Vec<f64>,
     /// Pin errors in lane order (see `physical_curve`).
     pub lane_radial: Vec<[f64; LANES]>,
     pub lane_tangential: Vec<[f64; LANES]>,
@@ -1264,7 +1329,6 @@ pub(super) fn build(
     let g = layout.common_divisor;
     let phases = n / g;
     let width = drive.width;
-    let k1 = stage.k1();
     let fraction_of = |p: usize| p as f64 * g as f64 / n as f64;
     // Disc 2 sees the pins half a revolution of the eccentric on: z_p·N/2 in units of 1/N
     // pin pitch, which N/2 being a multiple of g keeps on the phase grid.
@@ -1360,7 +1424,13 @@ pub(super) fn build(
         .map(|j| {
             let theta = 2.0 * PI * j as f64 / n as f64;
             let (s, c) = (2.0 * PI * ((pins * j) % n) as f64 / n as f64).sin_cos();
-            let (ss, cs) = ((layout.ratio - 1.0) * theta).sin_cos();
+            // An integral sun order (120 for the RV40E) reduced exactly, as z_p·j is.
+            let sun = layout.ratio - 1.0;
+            let (ss, cs) = if sun.fract() == 0.0 {
+                (2.0 * PI * ((sun as usize * j) % n) as f64 / n as f64).sin_cos()
+            } else {
+                (sun * theta).sin_cos()
+            };
             [s, c, ss, cs]
         })
         .collect();
@@ -1386,6 +1456,12 @@ pub(super) fn build(
         pin_shift_2,
         lane_shifts,
         lane_stride,
+        uniform_groups: groups.iter().all(|group| {
+            let first = angles[curve_points[group.start as usize].index as usize];
+            curve_points[group.start as usize..group.end as usize]
+                .iter()
+                .all(|point| angles[point.index as usize] == first)
+        }),
         columns: [0, 1, 2, 3].map(|i| angles.iter().map(|a| a[i]).collect()),
         angles,
         crank_angles,
@@ -1536,10 +1612,14 @@ impl TransmissionError {
         }
         let var = ((squares[0] + squares[1]) + (squares[2] + squares[3])) / n as f64;
         let (lo, hi) = self.refine_extremes(inputs, &terms, curve, lo, hi);
-        work.resize(n / 2, (0.0, 0.0));
-        self.fft.transform(curve, work);
+        let _ = work;
+        scratch.fft_re.resize(n / 2, 0.0);
+        scratch.fft_im.resize(n / 2, 0.0);
+        self.fft
+            .transform_split(curve, &mut scratch.fft_re, &mut scratch.fft_im);
         let (zc, zp) = (self.cycloid_teeth, self.pins);
-        let orders = [1, zc, zp, 2 * zc, 2 * zp].map(|k| self.fft.amplitude(work, k));
+        let orders = [1, zc, zp, 2 * zc, 2 * zp]
+            .map(|k| self.fft.split_amplitude(&scratch.fft_re, &scratch.fft_im, k));
         let to_arcsec = crate::ARCSEC_PER_RAD;
         outputs[0] = (hi - lo) * to_arcsec;
         outputs[1] = var.sqrt() * to_arcsec;
@@ -2075,68 +2155,5 @@ mod tests {
             );
             assert_eq!(spec.condition, expected, "{}", spec.name);
         }
-    }
-}
-#[cfg(test)]
-mod timing_tmp {
-    use super::*;
-    use crate::ErrorModel;
-    fn best(mut f: impl FnMut()) -> std::time::Duration {
-        (0..30).map(|_| { let t = std::time::Instant::now(); for _ in 0..10 { f(); } t.elapsed() / 10 }).min().unwrap()
-    }
-    #[test]
-    fn timing() {
-        let pins_on = std::env::var("NOPINS").is_err();
-        let p = super::super::rv40e_params().with_number("pin_position_errors", if pins_on {1.0} else {0.0}).with_number("tooth_profile_errors", 1.0);
-        let model = TransmissionError::from_params(&p).unwrap();
-        let mut state = 7u64;
-        let mut next = move || { state ^= state << 13; state ^= state >> 7; state ^= state << 17; (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5 };
-        let mut row: Vec<f64> = model.inputs().iter().map(|i| if i.unit == "rad" {0.0} else {0.004 * next()}).collect();
-        row[4] = 0.01; row[5] = -0.008;
-        let terms = model.row_terms(&row);
-        let mut scratch = TwoDiscScratch::default();
-        let mut curve = vec![0.0; 4096];
-        let mut out = vec![0.0; 9];
-        let lp = super::super::rv40e_params().with_number("pin_position_errors", 1.0).with_number("tooth_profile_errors", 1.0).with("reading", crate::ParamValue::Text("document_002".into()));
-        let lit = TransmissionError::from_params(&lp).unwrap();
-        let lrow = vec![0.001; lit.inputs().len()];
-        let mut lout = vec![0.0; 6];
-        let tl = best(|| lit.evaluate(&lrow, &mut lout));
-        let tp = best(|| model.evaluate(&row, &mut out));
-        let tc = best(|| { model.physical_curve(&row, &terms, &mut scratch, &mut curve, None); });
-        let lo = curve.iter().cloned().fold(f64::INFINITY, f64::min);
-        let hi = curve.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
-        let tr = best(|| { std::hint::black_box(model.refine_extremes(&row, &terms, &curve, lo, hi)); });
-        let fft = crate::RealFft::new(4096);
-        let mut work = vec![(0.0, 0.0); 2048];
-        let tf = best(|| fft.transform(&curve, &mut work));
-        eprintln!("min times: literal {:?} physical {:?} curve {:?} refine {:?} fft {:?}", tl, tp, tc, tr, tf);
-    }
-}
-
-#[cfg(test)]
-mod width_tmp {
-    use super::*;
-    #[test]
-    fn widths() {
-        use crate::ErrorModel;
-        let p = super::super::rv40e_params().with_number("pin_position_errors", 1.0).with_number("tooth_profile_errors", 1.0);
-        let model = TransmissionError::from_params(&p).unwrap();
-        let mut state = 7u64;
-        let mut next = move || { state ^= state << 13; state ^= state >> 7; state ^= state << 17; (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5 };
-        let mut row: Vec<f64> = model.inputs().iter().map(|i| if i.unit == "rad" {0.0} else {0.004 * next()}).collect();
-        row[4] = 0.01; row[5] = -0.008;
-        let terms = model.row_terms(&row);
-        eprintln!("bounds {:?}", terms.pin_bound);
-        let table = &model.table; let w = table.width;
-        let mut hist = vec![0; 6];
-        for p in 0..512 {
-            let block = p*w..(p+1)*w;
-            let mut head = vec![0.0; w];
-            fill_heads(table, block.clone(), &table.tooth[block.clone()], &vec![0.0; 80], &terms, 0.0, 0.0, &mut head);
-            let c = candidate_slots(&head, &table.radial[block.clone()], &table.tangential[block.clone()], terms.pin_bound.0, terms.pin_bound.1);
-            hist[(c[1]-c[0])/4] += 1;
-        }
-        eprintln!("quads histogram {:?}", hist);
     }
 }
