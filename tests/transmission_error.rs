@@ -257,7 +257,10 @@ fn peak_to_peak_converges_with_the_point_count() {
         );
         figures.push((points, sampled, refined));
     }
-    let floor = figures.iter().map(|f| f.2).fold(f64::NEG_INFINITY, f64::max);
+    let floor = figures
+        .iter()
+        .map(|f| f.2)
+        .fold(f64::NEG_INFINITY, f64::max);
     for &(points, sampled, _) in &figures {
         let spacing = 2.0 * std::f64::consts::PI / points as f64;
         assert!(

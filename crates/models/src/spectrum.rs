@@ -116,7 +116,10 @@ impl RealFft {
         let mut half = 1;
         while half < m {
             let twiddles = &self.twiddles[half - 1..2 * half - 1];
-            for (block_re, block_im) in re.chunks_exact_mut(2 * half).zip(im.chunks_exact_mut(2 * half)) {
+            for (block_re, block_im) in re
+                .chunks_exact_mut(2 * half)
+                .zip(im.chunks_exact_mut(2 * half))
+            {
                 let (lower_re, upper_re) = block_re.split_at_mut(half);
                 let (lower_im, upper_im) = block_im.split_at_mut(half);
                 for j in 0..half {

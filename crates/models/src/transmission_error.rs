@@ -2,7 +2,20 @@
 //! revolution by the action-line increment principle (document 002, RV40E), with the
 //! corrections of validation.md; its peak-to-peak, rms and order amplitudes by FFT.
 //!
-//! Kinematics (validation.md 002; docs/models.md §11). Pins fixed in the housing, output
+//! Two readings (parameter `reading`, docs/models.md §12):
+//! - `"physical"` (default, module `two_discs`): two discs with eccentrics 180° apart on
+//!   m cranks, four-bar closure of each disc on its crank pins, first contact over both
+//!   discs (or their load-shared mean), crank and input-shaft tilts at their planes (001
+//!   Eq. 5–8), disc-side errors reaching the output times κ = z_c/D because the cranks
+//!   ride on the output, no output pin-hole term (a runout of the output translates it, it
+//!   does not turn it), interference flagged as an indicator that excludes the sample.
+//! - `"document_002"`: 002 read literally, the model below: one disc, the cranks
+//!   averaged, 002's δ41 at r6, disc-side errors 1:1. It reproduces the one-disc model
+//!   figure for figure (tests/transmission_error.rs).
+//!
+//! Document 002's literal reading:
+//!
+//! Kinematics (validation.md 002; docs/models.md §12). Pins fixed in the housing, output
 //! (carrier) angle Θ. The crank's eccentric direction turns at ψ = −z_c·Θ in the housing,
 //! i.e. at −z_p·Θ relative to the carrier; the disc turns with the output (Θ); the sun
 //! turns at i·Θ with i = 1 + (z_pl/z_s)·z_p (121 for the RV40E; 002's
@@ -1011,12 +1024,30 @@ fn literal_specs(
         condition: None,
     };
     let outputs = vec![
-        output("te_peak_to_peak_arcsec".into(), "peak-to-peak transmission error over one output revolution"),
-        output("te_rms_arcsec".into(), "rms of the transmission error about its mean"),
-        output("te_mean_arcsec".into(), "mean of the transmission error (a constant angular offset; negative: the output lags)"),
-        output("te_order_1_arcsec".into(), "FFT semi-amplitude of order 1 (once per output revolution)"),
-        output(format!("te_order_{cycloid_teeth}_arcsec"), "FFT semi-amplitude of order z_c (pin-borne errors)"),
-        output(format!("te_order_{pins}_arcsec"), "FFT semi-amplitude of order z_p (crank- and disc-borne errors)"),
+        output(
+            "te_peak_to_peak_arcsec".into(),
+            "peak-to-peak transmission error over one output revolution",
+        ),
+        output(
+            "te_rms_arcsec".into(),
+            "rms of the transmission error about its mean",
+        ),
+        output(
+            "te_mean_arcsec".into(),
+            "mean of the transmission error (a constant angular offset; negative: the output lags)",
+        ),
+        output(
+            "te_order_1_arcsec".into(),
+            "FFT semi-amplitude of order 1 (once per output revolution)",
+        ),
+        output(
+            format!("te_order_{cycloid_teeth}_arcsec"),
+            "FFT semi-amplitude of order z_c (pin-borne errors)",
+        ),
+        output(
+            format!("te_order_{pins}_arcsec"),
+            "FFT semi-amplitude of order z_p (crank- and disc-borne errors)",
+        ),
     ];
     (inputs, outputs)
 }

@@ -49,7 +49,8 @@
 //! coast table, disc 2's slots found at the phase half a revolution of the eccentric on);
 //! peak-to-peak is refined at its extremes by the exact geometry (a parabola on the
 //! winning contact near the maximum, the crossing of the two contacts near the minimum,
-//! which is a kink), so it converges as O(h²) in the spacing h = 2π/N instead of O(h).
+//! which is a kink): the sampled extremes are off by up to L·h/2 (L the largest slope,
+//! h = 2π/N), the refined ones only move towards the true ones (tests/transmission_error.rs).
 
 use std::f64::consts::PI;
 
@@ -78,8 +79,16 @@ pub(super) enum CrankClosure {
 
 /// Fixed inputs of the physical reading, in order.
 pub(super) const FIXED: [(&str, &str, &str); 8] = [
-    ("sun_runout_x_mm", "mm", "sun (input shaft) centre at the sun plane, sun frame, x"),
-    ("sun_runout_y_mm", "mm", "sun (input shaft) centre at the sun plane, sun frame, y"),
+    (
+        "sun_runout_x_mm",
+        "mm",
+        "sun (input shaft) centre at the sun plane, sun frame, x",
+    ),
+    (
+        "sun_runout_y_mm",
+        "mm",
+        "sun (input shaft) centre at the sun plane, sun frame, y",
+    ),
     (
         "sun_tilt_x_rad",
         "rad",
@@ -105,7 +114,11 @@ pub(super) const FIXED: [(&str, &str, &str); 8] = [
         "mm",
         "δr_p, pin circle radius minus design",
     ),
-    ("pin_radius_error_mm", "mm", "δr_rp, pin radius minus design"),
+    (
+        "pin_radius_error_mm",
+        "mm",
+        "δr_rp, pin radius minus design",
+    ),
 ];
 
 /// Inputs per disc d, in order (name stems; the disc number follows).
@@ -467,8 +480,8 @@ impl TransmissionError {
                 + terms.profile[d].abs()
                 + terms.err_rrp.abs()
                 + teeth;
-            let centred = terms.d_rp - terms.d_p.max(0.0)
-                + (-terms.d_p).max(0.0) * (1.0 - k1 * k1).sqrt();
+            let centred =
+                terms.d_rp - terms.d_p.max(0.0) + (-terms.d_p).max(0.0) * (1.0 - k1 * k1).sqrt();
             let numerator = centred - errors;
             if numerator >= 0.0 {
                 *floor = half_play + numerator / azc;
@@ -727,9 +740,19 @@ impl TransmissionError {
         let pin_inputs = &inputs[ph.pin_base..ph.pin_base + 2 * n_pins];
         let (pin_radial, pin_tangential) = pin_inputs.split_at(n_pins);
         repeat(&mut scratch.pin_radial, pin_radial, pins + width, false);
-        repeat(&mut scratch.pin_tangential, pin_tangential, pins + width, false);
+        repeat(
+            &mut scratch.pin_tangential,
+            pin_tangential,
+            pins + width,
+            false,
+        );
         repeat(&mut scratch.coast_radial, pin_radial, pins + width, true);
-        repeat(&mut scratch.coast_tangential, pin_tangential, pins + width, true);
+        repeat(
+            &mut scratch.coast_tangential,
+            pin_tangential,
+            pins + width,
+            true,
+        );
         let n_teeth = if self.per_tooth { teeth } else { 0 };
         for d in 0..2 {
             let errors = &inputs[ph.tooth_base + d * n_teeth..ph.tooth_base + (d + 1) * n_teeth];
@@ -998,7 +1021,7 @@ impl TransmissionError {
                     (low, if low[1] > low[0] { low[1] } else { low[0] })
                 };
                 let high = (kappa * (offset[0] + floor[0])).min(kappa * (offset[1] + floor[1]));
-                if !(high >= drive_end) {
+                if !overlap(high, drive_end) {
                     // The floor does not clear the point: the exact coast minimum.
                     if !coast_filled {
                         fill_coast(coast);
@@ -1021,7 +1044,7 @@ impl TransmissionError {
                         };
                         high = high.min(kappa * (offset[d] + lead));
                     }
-                    if !(high >= drive_end) {
+                    if !overlap(high, drive_end) {
                         clear = false;
                     }
                 }
@@ -1068,13 +1091,19 @@ fn smallest_ratio_pair(
         );
         for c in 0..count {
             for lane in 0..4 {
-                let v = h[c][lane] + pa[c][lane] * a[c][lane] + pb[c][lane] * b[c][lane]
-                    - offset[d];
+                let v =
+                    h[c][lane] + pa[c][lane] * a[c][lane] + pb[c][lane] * b[c][lane] - offset[d];
                 lanes[lane] = if v < lanes[lane] { v } else { lanes[lane] };
             }
         }
     }
     super::smallest_lane(lanes)
+}
+
+/// Whether a window's upper end `high` reaches its lower end `low` (false for NaN).
+#[inline(always)]
+fn overlap(high: f64, low: f64) -> bool {
+    high >= low
 }
 
 /// Points of a lane group.
@@ -1377,19 +1406,19 @@ pub(super) fn build(
     // Disc 2's tooth spaces, per disc-1 phase, relative to disc 1's tooth shift.
     let mut tooth_2_drive = Vec::with_capacity(phases * width);
     let mut tooth_2_coast = Vec::with_capacity(phases * width);
-    for p in 0..phases {
+    for (p, &block_2) in phase_2.iter().enumerate() {
+        let block_2 = block_2 as usize;
         let fraction = fraction_of(p);
-        let fraction_2 = fraction_of(phase_2[p] as usize);
+        let fraction_2 = fraction_of(block_2);
         for e in 0..width {
             let drive_phi = 2.0 * PI * (e as f64 + fraction_2) / pins as f64;
-            tooth_2_drive.push(if drive.blocked[phase_2[p] as usize * width + e] == 0.0 {
+            tooth_2_drive.push(if drive.blocked[block_2 * width + e] == 0.0 {
                 tooth_space(stage, drive_phi, fraction)
             } else {
                 0
             });
-            let coast_phi =
-                2.0 * PI * ((pins as f64 - 1.0 - e as f64) + fraction_2) / pins as f64;
-            tooth_2_coast.push(if coast.blocked[phase_2[p] as usize * width + e] == 0.0 {
+            let coast_phi = 2.0 * PI * ((pins as f64 - 1.0 - e as f64) + fraction_2) / pins as f64;
+            tooth_2_coast.push(if coast.blocked[block_2 * width + e] == 0.0 {
                 tooth_space(stage, coast_phi, fraction)
             } else {
                 0
@@ -1618,8 +1647,10 @@ impl TransmissionError {
         self.fft
             .transform_split(curve, &mut scratch.fft_re, &mut scratch.fft_im);
         let (zc, zp) = (self.cycloid_teeth, self.pins);
-        let orders = [1, zc, zp, 2 * zc, 2 * zp]
-            .map(|k| self.fft.split_amplitude(&scratch.fft_re, &scratch.fft_im, k));
+        let orders = [1, zc, zp, 2 * zc, 2 * zp].map(|k| {
+            self.fft
+                .split_amplitude(&scratch.fft_re, &scratch.fft_im, k)
+        });
         let to_arcsec = crate::ARCSEC_PER_RAD;
         outputs[0] = (hi - lo) * to_arcsec;
         outputs[1] = var.sqrt() * to_arcsec;
@@ -1726,7 +1757,9 @@ impl TransmissionError {
         let degrees = |j: usize| 360.0 * j as f64 / n as f64;
         let series = |label: &str, value: &dyn Fn(usize) -> f64| Series {
             label: label.into(),
-            points: (0..n).map(|j| (degrees(j), value(j) * ARCSEC_PER_RAD)).collect(),
+            points: (0..n)
+                .map(|j| (degrees(j), value(j) * ARCSEC_PER_RAD))
+                .collect(),
         };
         let exact: Vec<f64> = self
             .exact_curve_stages(inputs, SPECTRUM_POINTS)
@@ -1746,8 +1779,14 @@ impl TransmissionError {
                 series: vec![
                     series("total", &|j| curve[j]),
                     series("involute stage (common to the cranks)", &|j| stages[j][0]),
-                    series("cranks (translation and four-bar, mean of the discs)", &|j| stages[j][1]),
-                    series("cycloid–pin contact (first contact over both discs)", &|j| stages[j][2]),
+                    series(
+                        "cranks (translation and four-bar, mean of the discs)",
+                        &|j| stages[j][1],
+                    ),
+                    series(
+                        "cycloid–pin contact (first contact over both discs)",
+                        &|j| stages[j][2],
+                    ),
                 ],
             },
             Curve {
@@ -1829,7 +1868,11 @@ mod tests {
             .inputs()
             .iter()
             .map(|input| {
-                let scale = if input.unit == "rad" { 0.004 / 12.0 } else { 0.004 };
+                let scale = if input.unit == "rad" {
+                    0.004 / 12.0
+                } else {
+                    0.004
+                };
                 scale * next()
             })
             .collect();
@@ -1942,7 +1985,11 @@ mod tests {
             let curve = model.curve(&paired);
             for (j, (v, r)) in curve.iter().zip(&reference).enumerate() {
                 let rectified = amplitude * model.physical().angles[j][0].abs();
-                let expected = if contact == "load_shared" { 0.0 } else { rectified };
+                let expected = if contact == "load_shared" {
+                    0.0
+                } else {
+                    rectified
+                };
                 assert!((v - r - expected).abs() < 1e-9, "{contact} {j}: {v} {r}");
             }
             let out = outputs(&model, &paired);
@@ -1975,7 +2022,11 @@ mod tests {
         };
         assert!(spectrum[40] < 1e-9, "{}", spectrum[40]);
         let order_80 = (spectrum[80] - term(1.0)).abs();
-        assert!(order_80 < aliases(1.0) + 1e-9, "{order_80} {}", aliases(1.0));
+        assert!(
+            order_80 < aliases(1.0) + 1e-9,
+            "{order_80} {}",
+            aliases(1.0)
+        );
         let mean = (spectrum[0] - 2.0 / PI * amplitude).abs();
         assert!(mean < aliases(0.0) + 1e-9, "{mean} {}", aliases(0.0));
     }
@@ -2017,7 +2068,11 @@ mod tests {
         ];
         let lag = DELTA * 20f64.to_radians().tan() / (27.0 * 121.0 / 3.0) * ARCSEC_PER_RAD;
         let curve = model.curve(&row(&model, &set));
-        assert!(curve.iter().all(|v| (v + lag).abs() < 1e-12), "{}", curve[0]);
+        assert!(
+            curve.iter().all(|v| (v + lag).abs() < 1e-12),
+            "{}",
+            curve[0]
+        );
     }
 
     #[test]
@@ -2052,7 +2107,10 @@ mod tests {
             let out = outputs(&model, &row(&model, &set));
             let (order_39, order_78) = (out[4], out[6]);
             assert!(order_78 > 0.05, "{contact}: {order_78}");
-            assert!(order_39 < 1e-12 * order_78.max(1.0), "{contact}: {order_39}");
+            assert!(
+                order_39 < 1e-12 * order_78.max(1.0),
+                "{contact}: {order_39}"
+            );
             let mut asymmetric = set.clone();
             asymmetric.push(("profile_normal_error_mm_1", 0.001));
             let out = outputs(&model, &row(&model, &asymmetric));
@@ -2097,8 +2155,12 @@ mod tests {
             assert!((offsets[0] - across).abs() < 1e-18, "{offsets:?} {across}");
             assert!((offsets[1] + across).abs() < 1e-18, "{offsets:?} {across}");
             let along = DELTA * angles[1];
-            assert!((TransmissionError::along(&terms, 0, angles[0], angles[1]) - along).abs() < 1e-18);
-            assert!((TransmissionError::along(&terms, 1, angles[0], angles[1]) + along).abs() < 1e-18);
+            assert!(
+                (TransmissionError::along(&terms, 0, angles[0], angles[1]) - along).abs() < 1e-18
+            );
+            assert!(
+                (TransmissionError::along(&terms, 1, angles[0], angles[1]) + along).abs() < 1e-18
+            );
         }
     }
 
@@ -2117,10 +2179,16 @@ mod tests {
         let terms = model.row_terms(&row(&model, &[("crank_axis_tilt_radial_rad_1", tau)]));
         assert!((terms.rho_const[0] + tau * 6.0).abs() < 1e-18);
         assert!((terms.rho_const[1] - tau * 6.0).abs() < 1e-18);
-        let tilted = model.curve(&row(&model, &[("sun_tilt_y_rad", 1e-4), ("sun_tilt_x_rad", -5e-5)]));
+        let tilted = model.curve(&row(
+            &model,
+            &[("sun_tilt_y_rad", 1e-4), ("sun_tilt_x_rad", -5e-5)],
+        ));
         let shifted = model.curve(&row(
             &model,
-            &[("sun_runout_x_mm", 1e-4 * 40.0), ("sun_runout_y_mm", 5e-5 * 40.0)],
+            &[
+                ("sun_runout_x_mm", 1e-4 * 40.0),
+                ("sun_runout_y_mm", 5e-5 * 40.0),
+            ],
         ));
         for (a, b) in tilted.iter().zip(&shifted) {
             assert!((a - b).abs() < 1e-12);
@@ -2147,12 +2215,11 @@ mod tests {
         assert_eq!(out[8], 0.0);
         assert!(out[..8].iter().all(|v| v.is_finite()), "{out:?}");
         for spec in model.outputs() {
-            let expected = (spec.kind == crate::OutputKind::Continuous).then_some(
-                crate::OutputCondition {
+            let expected =
+                (spec.kind == crate::OutputKind::Continuous).then_some(crate::OutputCondition {
                     indicator: INTERFERENCE,
                     effect: crate::ConditionEffect::Excluded,
-                },
-            );
+                });
             assert_eq!(spec.condition, expected, "{}", spec.name);
         }
     }
