@@ -220,6 +220,11 @@ pub(super) struct Physical {
     pub lane_shifts: Vec<Option<[u32; 2]>>,
     /// Δ = z_c·z_p·(N/g)/N mod z_p, the pin-shift stride within a group.
     pub lane_stride: usize,
+    /// A(φ), B(φ), C(φ) of [`TransmissionError::coast_floor`] at φ = π·(k + ½)/G,
+    /// k < G = FLOOR_GRID, and their largest slopes |dA/dφ|, |dB/dφ|, |dC/dφ| (taken on a
+    /// grid 64 times finer, by differences, and doubled).
+    pub floor_grid: Vec<[f64; 3]>,
+    pub floor_slopes: [f64; 3],
     /// Whether every group's points share z_p·Θ and (i − 1)·Θ (an integral sun order
     /// that the group spacing N/g turns by whole revolutions): C_d is then one value per
     /// group.
@@ -448,20 +453,24 @@ impl TransmissionError {
         coefficients
     }
 
-    /// A floor under each disc's coast-flank ratio over the whole revolution, rad: the
-    /// centred clearance c0 = Δr_rp − Δr_p·(1 − K1·cos φ)/S is at least Δr_rp −
-    /// max(Δr_p, 0) + max(−Δr_p, 0)·√(1 − K1²) (the factor (1 − K1·cos φ)/S lies in
-    /// [√(1 − K1²), 1], its minimum at cos φ = K1), every error's factor is at most 1 in
-    /// magnitude (the tangential one at most K1), and
-    /// |l| ≤ a·z_c: a non-negative numerator floor N gives a ratio of at least δ* + N/(a·z_c),
-    /// δ* = (Δr_rp − Δr_p·√(1 − K1²))/(a·z_c) the half play. −∞ when N < 0 (the exact coast
-    /// minimum is then taken wherever the floor does not clear a point).
+    /// A floor under each disc's coast-flank ratio over the whole revolution, rad. The
+    /// coast clearance is c0 + errors over |l|, plus the half play δ* = (Δr_rp −
+    /// Δr_p·√(1 − K1²))/(a·z_c), with c0 = Δr_rp − Δr_p·A(φ); every error enters through
+    /// one of A = (1 − K1·cos φ)/S (pin circle, radial pin), B = |K1 − cos φ|/S (the disc's
+    /// displacement along its eccentric), C = K1·|sin φ|/S (tangential pin) or 1 (profile,
+    /// pin radius, tooth space). With P = |δr_p| + max|δr_i|, T = max|δt_i|, D = |δ_n,d| +
+    /// |δr_rp| + max|δ_n,d,j| and |d_r| at most |mean q_x| + |v_d|, the numerator is at least
+    /// N(φ) = Δr_rp − D + (−Δr_p − P)·A − |d_r|·B − T·C, whose minimum over φ is taken on
+    /// a grid of A, B, C less their largest slopes times half the grid spacing. A
+    /// non-negative minimum N gives a ratio of at least δ* + N/(a·z_c) (|l| ≤ a·z_c); else
+    /// −∞, and the coast flank is scanned where the windows need it.
     pub(super) fn coast_floor(&self, inputs: &[f64], terms: &RowTerms) -> [f64; 2] {
         let ph = self.physical();
         let k1 = ph.stage.k1();
         let azc = self.eccentricity * self.cycloid_teeth as f64;
         let half_play = (terms.d_rp - terms.d_p * (1.0 - k1 * k1).sqrt()) / azc;
         let (bound_r, bound_t) = terms.pin_bound;
+        let alpha = -terms.d_p - terms.err_rp.abs() - bound_r;
         let mut floors = [f64::NEG_INFINITY; 2];
         for (d, floor) in floors.iter_mut().enumerate() {
             let teeth = if self.per_tooth {
@@ -473,16 +482,16 @@ impl TransmissionError {
                 0.0
             };
             let along = terms.q_mean[d].0.abs() + terms.v[d].0.hypot(terms.v[d].1);
-            let errors = along
-                + terms.err_rp.abs()
-                + bound_r
-                + k1 * bound_t
-                + terms.profile[d].abs()
-                + terms.err_rrp.abs()
-                + teeth;
-            let centred =
-                terms.d_rp - terms.d_p.max(0.0) + (-terms.d_p).max(0.0) * (1.0 - k1 * k1).sqrt();
-            let numerator = centred - errors;
+            let constant = terms.d_rp - terms.profile[d].abs() - terms.err_rrp.abs() - teeth;
+            let mut least = f64::INFINITY;
+            for &[a, b, c] in &ph.floor_grid {
+                let v = alpha * a - along * b - bound_t * c;
+                least = if v < least { v } else { least };
+            }
+            let [slope_a, slope_b, slope_c] = ph.floor_slopes;
+            let margin = (alpha.abs() * slope_a + along * slope_b + bound_t * slope_c)
+                * (0.5 * PI / ph.floor_grid.len() as f64);
+            let numerator = constant + least - margin;
             if numerator >= 0.0 {
                 *floor = half_play + numerator / azc;
             }
@@ -788,9 +797,10 @@ impl TransmissionError {
         // Pin errors in lane order: lane_radial[q][m] = δr of pin (q − m·Δ) mod z_p, Δ the
         // stride of the pin shift between a lane group's consecutive points.
         let lane_rows = pins + width;
-        for (target, source) in [
-            (&mut *lane_radial, &*pin_radial),
-            (&mut *lane_tangential, &*pin_tangential),
+        let tangential_ratio = ph.stage.k1() / (self.eccentricity * teeth as f64);
+        for (target, source, scale) in [
+            (&mut *lane_radial, &*pin_radial, 1.0),
+            (&mut *lane_tangential, &*pin_tangential, tangential_ratio),
         ] {
             target.clear();
             target.resize(lane_rows, [0.0; LANES]);
@@ -801,7 +811,7 @@ impl TransmissionError {
                 for m in 0..LANES {
                     let mut index = first;
                     for row in target.iter_mut() {
-                        row[m] = source[index];
+                        row[m] = source[index] * scale;
                         index += 1;
                         if index == pins {
                             index = 0;
@@ -925,7 +935,6 @@ impl TransmissionError {
                     lane_lags(
                         &drive[d],
                         radial[d],
-                        tangential[d],
                         candidates[d],
                         &lane_radial[pins - first[d] as usize..],
                         &lane_tangential[pins - first[d] as usize..],
@@ -1112,20 +1121,23 @@ pub(super) const LANES: usize = 8;
 /// The smallest ratio of each of a lane group's points over the slots [range), with the
 /// pin errors in lane order from the group's first pin row.
 #[inline(always)]
+///
+/// A tangential pin displacement δt projects on the contact normal as K1·sin φ/S and the
+/// lever is a·z_c·sin φ/S: its ratio δt·K1/(a·z_c) is the same in every drive slot, so the
+/// lanes carry it ready-made (`pin_tangential` holds δt·K1/(a·z_c)).
 fn lane_lags(
     head: &[f64],
     radial: &[f64],
-    tangential: &[f64],
     range: [usize; 2],
     pin_radial: &[[f64; LANES]],
     pin_tangential: &[[f64; LANES]],
 ) -> [f64; LANES] {
     let mut lags = [f64::INFINITY; LANES];
     for e in range[0]..range[1] {
-        let (h, a, b) = (head[e], radial[e], tangential[e]);
+        let (h, a) = (head[e], radial[e]);
         let (pr, pt) = (&pin_radial[e], &pin_tangential[e]);
         for m in 0..LANES {
-            let v = h + pr[m] * a + pt[m] * b;
+            let v = h + pr[m] * a + pt[m];
             lags[m] = if v < lags[m] { v } else { lags[m] };
         }
     }
@@ -1243,14 +1255,8 @@ fn fill_heads_pair(
             + terms.d_p * shift[e]
             + terms.err_rp * radial[e]
             + blocked[e];
-        first[e] = common
-            + constant[0] * inverse_lever[e]
-            + along[0] * eccentric[e]
-            + first[e] * inverse_lever[e];
-        second[e] = common
-            + constant[1] * inverse_lever[e]
-            + along[1] * eccentric[e]
-            + second[e] * inverse_lever[e];
+        first[e] = common + (constant[0] + first[e]) * inverse_lever[e] + along[0] * eccentric[e];
+        second[e] = common + (constant[1] + second[e]) * inverse_lever[e] + along[1] * eccentric[e];
     }
 }
 
@@ -1332,6 +1338,22 @@ fn coast_modification(stage: &CycloidStage, sin: f64, cos: f64) -> (f64, f64) {
         1.0 + per_radian,
         -(1.0 - k1 * cos) / s - (1.0 - k1 * k1).sqrt() * per_radian,
     )
+}
+
+/// Points of the grid of [`Physical::floor_grid`] over (0, π).
+const FLOOR_GRID: usize = 128;
+
+/// [A, B, C] = [(1 − K1·cos φ)/S, |K1 − cos φ|/S, K1·|sin φ|/S] (the coast floor's factors;
+/// even in φ, so (0, π) covers both flanks).
+fn floor_factors(stage: &CycloidStage, phi: f64) -> [f64; 3] {
+    let k1 = stage.k1();
+    let (sin, cos) = phi.sin_cos();
+    let s = (1.0 + k1 * k1 - 2.0 * k1 * cos).sqrt();
+    [
+        (1.0 - k1 * cos) / s,
+        (k1 - cos).abs() / s,
+        k1 * sin.abs() / s,
+    ]
 }
 
 /// round(z_c·λ/2π − f) mod z_c: the tooth space of the slot at φ from its disc's eccentric,
@@ -1485,6 +1507,24 @@ pub(super) fn build(
         pin_shift_2,
         lane_shifts,
         lane_stride,
+        floor_grid: (0..FLOOR_GRID)
+            .map(|k| floor_factors(stage, PI * (k as f64 + 0.5) / FLOOR_GRID as f64))
+            .collect(),
+        floor_slopes: {
+            let fine = 64 * FLOOR_GRID;
+            let step = PI / fine as f64;
+            let mut slopes = [0.0f64; 3];
+            for k in 0..fine {
+                let (a, b) = (
+                    floor_factors(stage, k as f64 * step),
+                    floor_factors(stage, (k + 1) as f64 * step),
+                );
+                for i in 0..3 {
+                    slopes[i] = slopes[i].max(2.0 * (b[i] - a[i]).abs() / step);
+                }
+            }
+            slopes
+        },
         uniform_groups: groups.iter().all(|group| {
             let first = angles[curve_points[group.start as usize].index as usize];
             curve_points[group.start as usize..group.end as usize]
