@@ -265,7 +265,7 @@ const PARAMS: &[ParamSpec] = &[
 /// Registry entry.
 pub const ENTRY: ModelEntry = ModelEntry {
     name: "transmission_error",
-    summary: "kinematic transmission error over one output revolution by the action-line increment principle (document 002): peak-to-peak, rms, FFT order amplitudes",
+    summary: "kinematic transmission error over one output revolution by the action-line increment principle (document 002), two discs on four-bar cranks (or 002's literal one-disc reading): peak-to-peak, rms, order amplitudes, interference",
     params: PARAMS,
     build: |params| Ok(Box::new(TransmissionError::from_params(params)?)),
     example_params: rv40e_params,
