@@ -142,6 +142,11 @@ fn models(c: &mut Criterion) {
         ("rv80e-contact.json", 256, "cycloid_pin_contact"),
         ("rv40e-elastic.json", 256, "crank_elastic_error"),
         ("rv40e-transmission.json", 16, "transmission_error"),
+        (
+            "rv40e-transmission-002.json",
+            16,
+            "transmission_error_document_002",
+        ),
         ("rv20e-torsion.json", 256, "torsion_curve"),
         ("rv40e-torsion.json", 256, "torsion_curve_rv40e"),
         ("rv80e-torsion.json", 256, "torsion_curve_rv80e"),

@@ -654,14 +654,30 @@ pub fn model_of_output(scenario: &Scenario, output: usize) -> String {
 }
 
 /// Checks that no output lost more than `max_share` of its samples to non-finite values
-/// (the model could not evaluate them): the first output that did is an error naming its
-/// model's JSON path, the count, the share and the first such sample.
+/// (the model could not evaluate them), and that every output has a value at all (its
+/// indicator did not exclude every sample): the first output that fails is an error naming
+/// its model's JSON path, the count, the share and the first such sample.
 pub fn check_non_finite(
     scenario: &Scenario,
     result: &RunResult,
     max_share: f64,
 ) -> Result<(), ScenarioError> {
     for (o, acc) in result.outputs.iter().enumerate() {
+        if acc.moments.n == 0 && acc.excluded > 0 && acc.excluded + acc.non_finite == result.samples
+        {
+            let indicator = scenario.outputs[o]
+                .condition
+                .map_or(String::new(), |(k, _)| scenario.outputs[k].name.clone());
+            return Err(ScenarioError::new(
+                model_of_output(scenario, o),
+                format!(
+                    "{} has no value: {indicator} excludes {} of {} samples and the model could not evaluate the rest; the scenario describes an assembly that cannot be built",
+                    scenario.outputs[o].name,
+                    crate::report::group_thousands(acc.excluded),
+                    crate::report::group_thousands(result.samples),
+                ),
+            ));
+        }
         let share = acc.non_finite as f64 / result.samples as f64;
         if acc.non_finite > 0 && share > max_share {
             return Err(ScenarioError::new(

@@ -116,8 +116,13 @@ impl CycloidStage {
     /// S = √(1 + K1² − 2K1·cos φ), its lever l = e·z_c·sin φ/S about the disc centre and
     /// the projections on its contact normal of each clearance term and displacement.
     pub fn pin_factors(&self, phi: f64) -> PinFactors {
-        let k1 = self.k1();
         let (sin, cos) = phi.sin_cos();
+        self.pin_factors_at(sin, cos)
+    }
+
+    /// [`Self::pin_factors`] from sin φ and cos φ.
+    pub fn pin_factors_at(&self, sin: f64, cos: f64) -> PinFactors {
+        let k1 = self.k1();
         let s = (1.0 + k1 * k1 - 2.0 * k1 * cos).sqrt();
         PinFactors {
             lever: self.eccentricity * self.teeth as f64 * sin / s,

@@ -2,7 +2,20 @@
 //! revolution by the action-line increment principle (document 002, RV40E), with the
 //! corrections of validation.md; its peak-to-peak, rms and order amplitudes by FFT.
 //!
-//! Kinematics (validation.md 002; docs/models.md §11). Pins fixed in the housing, output
+//! Two readings (parameter `reading`, docs/models.md §12):
+//! - `"physical"` (default, module `two_discs`): two discs with eccentrics 180° apart on
+//!   m cranks, four-bar closure of each disc on its crank pins, first contact over both
+//!   discs (or their load-shared mean), crank and input-shaft tilts at their planes (001
+//!   Eq. 5–8), disc-side errors reaching the output times κ = z_c/D because the cranks
+//!   ride on the output, no output pin-hole term (a runout of the output translates it, it
+//!   does not turn it), interference flagged as an indicator that excludes the sample.
+//! - `"document_002"`: 002 read literally, the model below: one disc, the cranks
+//!   averaged, 002's δ41 at r6, disc-side errors 1:1. It reproduces the one-disc model
+//!   figure for figure (tests/transmission_error.rs).
+//!
+//! Document 002's literal reading:
+//!
+//! Kinematics (validation.md 002; docs/models.md §12). Pins fixed in the housing, output
 //! (carrier) angle Θ. The crank's eccentric direction turns at ψ = −z_c·Θ in the housing,
 //! i.e. at −z_p·Θ relative to the carrier; the disc turns with the output (Θ); the sun
 //! turns at i·Θ with i = 1 + (z_pl/z_s)·z_p (121 for the RV40E; 002's
@@ -57,6 +70,10 @@ use crate::{
     Curve, CurveStyle, ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputKind,
     OutputSpec, ParamSpec, Series, ARCSEC_PER_RAD,
 };
+
+mod two_discs;
+
+use two_discs::{CrankClosure, DiscContact, Physical, TwoDiscScratch};
 
 /// Largest crank count.
 const MAX_CRANKS: usize = 6;
@@ -174,7 +191,7 @@ const PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "output_pin_circle_radius_mm",
         unit: "mm",
-        description: "r6, radius of the output pin holes",
+        description: "r6, radius of the output pin holes (document_002 reading only: 002's δ41 term; the physical reading has no such term)",
         default: None,
     },
     ParamSpec {
@@ -205,7 +222,43 @@ const PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "tooth_profile_errors",
         unit: "",
-        description: "1: add an input tooth_profile_error_mm_j per tooth space of the disc",
+        description: "1: add an input per tooth space of each disc (tooth_profile_error_mm_d_j; document_002: tooth_profile_error_mm_j of its one disc)",
+        default: Some(0.0),
+    },
+    ParamSpec {
+        name: "reading",
+        unit: "text",
+        description: "\"physical\" (default): two discs 180° apart, four-bar crank closure, no output pin-hole term, interference flagged (docs/models.md §12); \"document_002\": 002's literal reading (one disc, mean of the cranks, output pin-hole runout at r6, disc-side errors 1:1 at the output)",
+        default: None,
+    },
+    ParamSpec {
+        name: "disc_contact",
+        unit: "text",
+        description: "physical reading: \"first_contact\" (default; light load: the disc that touches first carries the output) or \"load_shared\" (both discs loaded: the mean of their contact angles)",
+        default: None,
+    },
+    ParamSpec {
+        name: "crank_closure",
+        unit: "text",
+        description: "physical reading: \"four_bar\" (default; a rigid disc turns to fit its crank pins) or \"averaged\" (the crank bearings take up the pins' differences; 002's reading)",
+        default: None,
+    },
+    ParamSpec {
+        name: "crank_circle_radius_mm",
+        unit: "mm",
+        description: "a_w, radius of the crank circle (physical reading; 36 mm for the RV40E, document 004's a0)",
+        default: None,
+    },
+    ParamSpec {
+        name: "disc_spacing_mm",
+        unit: "mm",
+        description: "s, axial distance between the two discs' mid-planes (physical reading; crank tilts act at ±s/2)",
+        default: None,
+    },
+    ParamSpec {
+        name: "sun_plane_offset_mm",
+        unit: "mm",
+        description: "L_s, axial distance from the input shaft's deviation reference to the sun's mid-plane (physical reading; input shaft tilts act there)",
         default: Some(0.0),
     },
 ];
@@ -213,15 +266,19 @@ const PARAMS: &[ParamSpec] = &[
 /// Registry entry.
 pub const ENTRY: ModelEntry = ModelEntry {
     name: "transmission_error",
-    summary: "kinematic transmission error over one output revolution by the action-line increment principle (document 002): peak-to-peak, rms, FFT order amplitudes",
+    summary: "kinematic transmission error over one output revolution by the action-line increment principle (document 002), two discs on four-bar cranks (or 002's literal one-disc reading): peak-to-peak, rms, order amplitudes, interference",
     params: PARAMS,
     build: |params| Ok(Box::new(TransmissionError::from_params(params)?)),
     example_params: rv40e_params,
 };
 
-/// The RV40E of document 002 Table 1.
+/// The RV40E of document 002 Table 1, with the crank circle of document 004 (a0 = 36 mm)
+/// and discs 12 mm apart (the 10 mm face width of scenarios/rv40e-elastic.json and a 2 mm
+/// gap, assumed).
 fn rv40e_params() -> ModelParams {
     ModelParams::new()
+        .with_number("crank_circle_radius_mm", 36.0)
+        .with_number("disc_spacing_mm", 12.0)
         .with_number("sun_teeth", 9.0)
         .with_number("planet_teeth", 27.0)
         .with_number("module_mm", 2.0)
@@ -340,6 +397,8 @@ pub struct TransmissionError {
     fft: RealFft,
     inputs: Vec<InputSpec>,
     outputs: Vec<OutputSpec>,
+    /// The physical reading's data; None for document 002's literal reading.
+    physical: Option<Box<Physical>>,
 }
 
 /// Per-thread work state of the first-contact search, refilled for every row: the per-pin
@@ -358,6 +417,8 @@ struct Search {
     curve: Vec<f64>,
     /// The FFT's work buffer.
     work: Vec<Complex>,
+    /// The physical reading's work state.
+    two: TwoDiscScratch,
 }
 
 // Per-thread work state (no allocation per sample).
@@ -389,7 +450,6 @@ impl TransmissionError {
         let stage = CycloidStage::from_params(params, 256)?;
         let (pins, cycloid_teeth) = (stage.pins, stage.teeth);
         let (pin_circle_radius, eccentricity) = (stage.pin_circle_radius, stage.eccentricity);
-        let output_radius = params.positive("output_pin_circle_radius_mm", None)?;
         let cranks = params.count("crank_count", Some(2.0))? as usize;
         if cranks > MAX_CRANKS {
             return Err(ModelError::new(
@@ -414,61 +474,91 @@ impl TransmissionError {
         let feedback = params.flag("carrier_feedback", true)?;
         let per_pin = params.flag("pin_position_errors", false)?;
         let per_tooth = params.flag("tooth_profile_errors", false)?;
-        params.reject_unknown(&PARAMS.iter().map(|p| p.name).collect::<Vec<_>>())?;
-
-        let mut inputs: Vec<InputSpec> = FIXED_INPUTS
-            .iter()
-            .map(|(name, description)| InputSpec {
-                name: name.to_string(),
-                unit: "mm".into(),
-                description,
-            })
-            .collect();
-        for k in 1..=cranks {
-            for (name, description) in CRANK_INPUTS {
-                inputs.push(InputSpec {
-                    name: format!("{name}_{k}"),
-                    unit: "mm".into(),
-                    description,
-                });
+        let reading = params.text("reading", "physical")?;
+        let literal = match reading.as_str() {
+            "physical" => false,
+            "document_002" => true,
+            other => {
+                return Err(ModelError::new(
+                    "reading",
+                    format!("must be \"physical\" or \"document_002\", got \"{other}\""),
+                ))
             }
-        }
-        if per_pin {
-            for i in 1..=pins {
-                inputs.push(InputSpec {
-                    name: format!("pin_radial_error_mm_{i}"),
-                    unit: "mm".into(),
-                    description: "radial position error of pin i (outward), housing frame",
-                });
-            }
-            for i in 1..=pins {
-                inputs.push(InputSpec {
-                    name: format!("pin_tangential_error_mm_{i}"),
-                    unit: "mm".into(),
-                    description: "tangential position error of pin i, housing frame",
-                });
-            }
-        }
-        if per_tooth {
-            for j in 1..=cycloid_teeth {
-                inputs.push(InputSpec { name: format!("tooth_profile_error_mm_{j}"), unit: "mm".into(), description: "normal profile error of tooth space j of the disc, disc frame (positive: clearance)" });
-            }
-        }
-        let output = |name: String, description: &'static str| OutputSpec {
-            name,
-            unit: "arcsec".into(),
-            description,
-            kind: OutputKind::Continuous,
-            condition: None,
         };
-        let outputs = vec![
-            output("te_peak_to_peak_arcsec".into(), "peak-to-peak transmission error over one output revolution"),
-            output("te_rms_arcsec".into(), "rms of the transmission error about its mean"),
-            output("te_mean_arcsec".into(), "mean of the transmission error (a constant angular offset; negative: the output lags)"),
-            output("te_order_1_arcsec".into(), "FFT semi-amplitude of order 1 (once per output revolution)"),
-            output(format!("te_order_{cycloid_teeth}_arcsec"), "FFT semi-amplitude of order z_c (pin-borne errors)"),
-            output(format!("te_order_{pins}_arcsec"), "FFT semi-amplitude of order z_p (crank- and disc-borne errors)"),
-        ];
+        let contact = match params.text("disc_contact", "first_contact")?.as_str() {
+            "first_contact" => DiscContact::FirstContact,
+            "load_shared" => DiscContact::LoadShared,
+            other => {
+                return Err(ModelError::new(
+                    "disc_contact",
+                    format!("must be \"first_contact\" or \"load_shared\", got \"{other}\""),
+                ))
+            }
+        };
+        let closure = match params.text("crank_closure", "four_bar")?.as_str() {
+            "four_bar" => CrankClosure::FourBar,
+            "averaged" => CrankClosure::Averaged,
+            other => {
+                return Err(ModelError::new(
+                    "crank_closure",
+                    format!("must be \"four_bar\" or \"averaged\", got \"{other}\""),
+                ))
+            }
+        };
+        // r6 belongs to 002's output pin-hole term, which only its literal reading has.
+        let output_radius = if literal {
+            params.positive("output_pin_circle_radius_mm", None)?
+        } else {
+            0.0
+        };
+        let physical_geometry = if literal {
+            None
+        } else {
+            let crank_radius = params.positive("crank_circle_radius_mm", None)?;
+            let pin_circle = stage.pin_circle_radius;
+            if crank_radius <= eccentricity || crank_radius >= pin_circle {
+                return Err(ModelError::new(
+                    "crank_circle_radius_mm",
+                    format!(
+                        "must lie between the eccentricity {} mm and the pin circle radius {} mm, got {}",
+                        Shown(eccentricity),
+                        Shown(pin_circle),
+                        Shown(crank_radius)
+                    ),
+                ));
+            }
+            // Geometry that can be: the two discs' mid-planes within a pin-circle radius of
+            // each other, the sun plane within ten of the input shaft's reference.
+            let spacing = params.number("disc_spacing_mm", None)?;
+            if !(0.0..=pin_circle).contains(&spacing) {
+                return Err(ModelError::new(
+                    "disc_spacing_mm",
+                    format!(
+                        "must be a length between 0 and the pin circle radius {} mm, got {}",
+                        Shown(pin_circle),
+                        Shown(spacing)
+                    ),
+                ));
+            }
+            let sun_offset = params.number("sun_plane_offset_mm", Some(0.0))?;
+            if sun_offset.abs() > 10.0 * pin_circle {
+                return Err(ModelError::new(
+                    "sun_plane_offset_mm",
+                    format!(
+                        "must lie within ±10 pin circle radii ({} mm), got {}",
+                        Shown(10.0 * pin_circle),
+                        Shown(sun_offset)
+                    ),
+                ));
+            }
+            Some((crank_radius, spacing, sun_offset))
+        };
+        params.reject_unknown(&PARAMS.iter().map(|p| p.name).collect::<Vec<_>>())?;
+        let (inputs, outputs) = if literal {
+            literal_specs(cranks, pins, cycloid_teeth, per_pin, per_tooth)
+        } else {
+            two_discs::specs(cranks, pins, cycloid_teeth, per_pin, per_tooth)
+        };
 
         // Phase table: the fractional pin pitch of the eccentric at point j takes
         // N/gcd(z_c·z_p, N) values. A slot s has a positive lever while 0 < s + f < z_p/2.
@@ -548,6 +638,34 @@ impl TransmissionError {
         }
         let curve_points: Vec<Point> = keyed.into_iter().map(|(_, point)| point).collect();
         let alpha = alpha.to_radians();
+        let divisor = if feedback {
+            pins as f64 + sun_teeth / planet_teeth
+        } else {
+            pins as f64
+        };
+        let physical = physical_geometry.map(|(crank_radius, spacing, sun_offset)| {
+            Box::new(two_discs::build(
+                &stage,
+                &table,
+                &curve_points,
+                &groups,
+                two_discs::Layout {
+                    points,
+                    common_divisor: g,
+                    cranks,
+                    per_pin,
+                    ratio,
+                },
+                Physical::settings(
+                    contact,
+                    closure,
+                    crank_radius,
+                    spacing,
+                    sun_offset,
+                    cycloid_teeth as f64 / divisor,
+                ),
+            ))
+        });
         Ok(TransmissionError {
             sun_teeth,
             planet_teeth,
@@ -559,11 +677,7 @@ impl TransmissionError {
             points,
             base_radius: module * planet_teeth / 2.0 * alpha.cos(),
             pressure: alpha.sin_cos(),
-            divisor: if feedback {
-                pins as f64 + sun_teeth / planet_teeth
-            } else {
-                pins as f64
-            },
+            divisor,
             per_pin,
             per_tooth,
             table,
@@ -572,6 +686,7 @@ impl TransmissionError {
             fft: RealFft::new(points),
             inputs,
             outputs,
+            physical,
         })
     }
 
@@ -804,10 +919,13 @@ impl TransmissionError {
             }
         }
         let var = ((squares[0] + squares[1]) + (squares[2] + squares[3])) / n;
-        search.work.resize(self.points / 2, (0.0, 0.0));
-        self.fft.transform(&curve, &mut search.work);
+        // The split transform has the interleaved one's bits and vectorises.
+        let (re, im) = (&mut search.two.fft_re, &mut search.two.fft_im);
+        re.resize(self.points / 2, 0.0);
+        im.resize(self.points / 2, 0.0);
+        self.fft.transform_split(&curve, re, im);
         let [first, cycloid, pins] =
-            [1, self.cycloid_teeth, self.pins].map(|k| self.fft.amplitude(&search.work, k));
+            [1, self.cycloid_teeth, self.pins].map(|k| self.fft.split_amplitude(re, im, k));
         outputs[..6].copy_from_slice(&[hi - lo, var.sqrt(), mean, first, cycloid, pins]);
         if !(hi - lo).is_finite() || !sum.is_finite() {
             outputs.iter_mut().for_each(|o| *o = f64::NAN);
@@ -823,11 +941,38 @@ impl TransmissionError {
         });
     }
 
-    /// TE(Θ_j) in arcsec at Θ_j = 2πj/N.
+    /// TE(Θ_j) in arcsec at Θ_j = 2πj/N, from the tables (the physical reading's curve
+    /// also where its discs interfere).
     pub fn curve(&self, inputs: &[f64]) -> Vec<f64> {
         let mut curve = vec![0.0; self.points];
-        SEARCH.with_borrow_mut(|search| self.fill_curve(inputs, search, &mut curve));
+        if self.physical.is_some() {
+            let terms = self.row_terms(inputs);
+            SEARCH.with_borrow_mut(|search| {
+                self.physical_curve(inputs, &terms, &mut search.two, &mut curve, None)
+            });
+            curve.iter_mut().for_each(|v| *v *= ARCSEC_PER_RAD);
+        } else {
+            SEARCH.with_borrow_mut(|search| self.fill_curve(inputs, search, &mut curve));
+        }
         curve
+    }
+
+    /// The physical reading's TE at Θ_j = 2πj/n in arcsec, from the geometry pin by pin
+    /// (no tables, any n; NaN where the discs interfere): the reference of the tabulated
+    /// curve and of its order amplitudes. None for the document_002 reading.
+    pub fn exact_curve(&self, inputs: &[f64], n: usize) -> Option<Vec<f64>> {
+        self.physical.as_ref()?;
+        Some(
+            self.exact_curve_stages(inputs, n)
+                .into_iter()
+                .map(|(te, _)| te * ARCSEC_PER_RAD)
+                .collect(),
+        )
+    }
+
+    /// Whether the model follows the physical reading (two discs).
+    pub fn is_physical(&self) -> bool {
+        self.physical.is_some()
     }
 
     /// Semi-amplitudes of orders 0..N/2 of a curve (order 0: the mean), arcsec.
@@ -840,6 +985,88 @@ impl TransmissionError {
         amplitudes[0] = self.fft.bin(&work, 0).0 / self.points as f64;
         amplitudes
     }
+}
+
+/// The inputs and outputs of document 002's literal reading (one disc).
+fn literal_specs(
+    cranks: usize,
+    pins: usize,
+    cycloid_teeth: usize,
+    per_pin: bool,
+    per_tooth: bool,
+) -> (Vec<InputSpec>, Vec<OutputSpec>) {
+    let mut inputs: Vec<InputSpec> = FIXED_INPUTS
+        .iter()
+        .map(|(name, description)| InputSpec {
+            name: name.to_string(),
+            unit: "mm".into(),
+            description,
+        })
+        .collect();
+    for k in 1..=cranks {
+        for (name, description) in CRANK_INPUTS {
+            inputs.push(InputSpec {
+                name: format!("{name}_{k}"),
+                unit: "mm".into(),
+                description,
+            });
+        }
+    }
+    if per_pin {
+        for i in 1..=pins {
+            inputs.push(InputSpec {
+                name: format!("pin_radial_error_mm_{i}"),
+                unit: "mm".into(),
+                description: "radial position error of pin i (outward), housing frame",
+            });
+        }
+        for i in 1..=pins {
+            inputs.push(InputSpec {
+                name: format!("pin_tangential_error_mm_{i}"),
+                unit: "mm".into(),
+                description: "tangential position error of pin i, housing frame",
+            });
+        }
+    }
+    if per_tooth {
+        for j in 1..=cycloid_teeth {
+            inputs.push(InputSpec { name: format!("tooth_profile_error_mm_{j}"), unit: "mm".into(), description: "normal profile error of tooth space j of the disc, disc frame (positive: clearance)" });
+        }
+    }
+    let output = |name: String, description: &'static str| OutputSpec {
+        name,
+        unit: "arcsec".into(),
+        description,
+        kind: OutputKind::Continuous,
+        condition: None,
+    };
+    let outputs = vec![
+        output(
+            "te_peak_to_peak_arcsec".into(),
+            "peak-to-peak transmission error over one output revolution",
+        ),
+        output(
+            "te_rms_arcsec".into(),
+            "rms of the transmission error about its mean",
+        ),
+        output(
+            "te_mean_arcsec".into(),
+            "mean of the transmission error (a constant angular offset; negative: the output lags)",
+        ),
+        output(
+            "te_order_1_arcsec".into(),
+            "FFT semi-amplitude of order 1 (once per output revolution)",
+        ),
+        output(
+            format!("te_order_{cycloid_teeth}_arcsec"),
+            "FFT semi-amplitude of order z_c (pin-borne errors)",
+        ),
+        output(
+            format!("te_order_{pins}_arcsec"),
+            "FFT semi-amplitude of order z_p (crank- and disc-borne errors)",
+        ),
+    ];
+    (inputs, outputs)
 }
 
 /// The first `chunks` quadruples of a column.
@@ -917,10 +1144,22 @@ impl ErrorModel for TransmissionError {
     }
 
     fn evaluate(&self, inputs: &[f64], outputs: &mut [f64]) {
-        SEARCH.with_borrow_mut(|search| self.evaluate_with(inputs, search, outputs))
+        SEARCH.with_borrow_mut(|search| {
+            if self.physical.is_some() {
+                let Search {
+                    curve, work, two, ..
+                } = search;
+                self.evaluate_physical(inputs, curve, work, two, outputs)
+            } else {
+                self.evaluate_with(inputs, search, outputs)
+            }
+        })
     }
 
     fn curves(&self, inputs: &[f64]) -> Vec<Curve> {
+        if self.physical.is_some() {
+            return self.physical_curves(inputs);
+        }
         let n = self.points;
         let mut stages = vec![StageErrors::default(); n];
         self.trace(inputs, |j, s| stages[j] = s);
@@ -973,6 +1212,13 @@ impl ErrorModel for TransmissionError {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::ParamValue;
+
+    /// The tests of this module check document 002's literal reading; the physical
+    /// reading's are in `two_discs`.
+    fn rv40e_params() -> ModelParams {
+        super::rv40e_params().with("reading", ParamValue::Text("document_002".into()))
+    }
 
     fn rv40e() -> TransmissionError {
         TransmissionError::from_params(&rv40e_params()).unwrap()
