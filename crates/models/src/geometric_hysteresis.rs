@@ -13,11 +13,14 @@
 //! cos α' = a0·cos α·cos β / (a0 + a1)              (a·cos α = a'·cos α', a' of Eq. 19)
 //! Δφ12'  = −(E_ws + E_wi) / (2·r1·i16·cos α') · 10800/π                       (Eq. 5, 12)
 //!
-//! cycloid–pin stage, Eq. 16 with every term converted to arcmin (s = √(1 − K1²)):
-//! Δφ34 = 10800/π · [ (2Δr_rp − 2Δr_p)·s/(e·zc) + 2δr_p·s/(e·zc) − 2δr_rp/(e·zc)
+//! cycloid–pin stage, Eq. 16 with every term converted to arcmin (s = √(1 − K1²)), the
+//! modification backlash as Eq. 13–15 give it, carried to the output by λ:
+//! Δφ34 = λ·10800/π · [ 2(Δr_rp − s·Δr_p)/(e·zc) + 2δr_p·s/(e·zc) − 2δr_rp/(e·zc)
 //!        + δJ/(e·zc) + ΔF_r/(2e·zc) + 2δt·K1/(e·zc) − ΔF_p·K1/(e·zc)
-//!        + 2δΔr_rp/(e·zc) − 2δΔr_p·s/(e·zc) − 2·Kn·δe ]                        (Eq. 16)
+//!        + 2δΔr_rp/(e·zc) − 2δΔr_p·s/(e·zc) − 2·Kn·δe ]                        (Eq. 13–16)
+//! λ    = (zc/zp)·(1 − 1/i16)                                      (docs/models.md §2.6)
 //! Kn   = Δr_rp/(e²·zc) − (zc/(e·rp²·s) + s/(e·zc))·Δr_p                        (Eq. 17)
+//! reading "document_000": Eq. 16 as printed, 2(Δr_rp − Δr_p)·s/(e·zc), and λ = 1
 //!
 //! crank bearing clearance, with the tilted centre distance of Eq. 19:
 //! Δφ56' = Δu·cos β / (a0 + a1) · 10800/π                                      (Eq. 20)
@@ -26,6 +29,20 @@
 //! ```
 //!
 //! Readings taken where document 000 is inconsistent (all in docs/models.md):
+//! - The modification's backlash. Eq. 16 prints (2Δr_rp − 2Δr_p)·√(1 − K1²)/(e·zc); its own
+//!   Eq. 13–15 put √(1 − K1²) on the shift term only, and so does the exact pin geometry:
+//!   the equidistant modification moves the profile by Δr_rp along every normal, the shift
+//!   modification by −Δr_p·(1 − K1·cos φ)/S, and the flanks first touch at the pitch point
+//!   (cos φ = K1, S = s), where the lever is e·zc: backlash 2(Δr_rp − s·Δr_p)/(e·zc), the
+//!   form of document 003 and of the contact model (§10). The default follows it
+//!   (`reading` "physical"); with Table 9's design values it is negative, a preloaded
+//!   design (−0.328 arcmin at the disc), where the printed form gives +0.272 and the
+//!   published 0.5467 arcmin; `reading` "document_000" keeps the printed form.
+//! - The cranks ride on the output. The disc's angle about the housing reaches the output
+//!   through the eccentrics, which the output carries, scaled by λ = (zc/zp)·(1 − 1/i16)
+//!   (0.968 for the RV-20E; the torque balance gives the same factor, §13), so the cycloid
+//!   stage's terms, all angles of the disc, are × λ at the output in the physical reading.
+//!   The involute and crank-bearing terms are output angles already.
 //! - Eq. 16 as printed carries 180·60/π on its first line only; the other terms are bare
 //!   radians. rvtol converts every term (a radian added to arcmin is a unit error). Its
 //!   first line keeps the printed form (√(1 − K1²) on both modification terms): the
@@ -296,6 +313,12 @@ const PARAMS: &[ParamSpec] = &[
         default: Some(0.0),
     },
     ParamSpec {
+        name: "reading",
+        unit: "",
+        description: "\"physical\" (default: Eq. 13–15's backlash, the cycloid stage × λ at the output) or \"document_000\" (Eq. 16 as printed, 1:1)",
+        default: None,
+    },
+    ParamSpec {
         name: "pin_classes",
         unit: "1",
         description: "K, pin diameter classes for selective fitting (1: no fitting; at most 16)",
@@ -422,6 +445,16 @@ impl GeometricHysteresis {
         let center_distance = params.positive("center_distance_mm", None)?;
         let sun_pitch_radius = params.positive("sun_pitch_radius_mm", None)?;
         let sun_gear_axial_position = params.number("sun_gear_axial_position_mm", Some(0.0))?;
+        let physical = match params.text("reading", "physical")?.as_str() {
+            "physical" => true,
+            "document_000" => false,
+            other => {
+                return Err(ModelError::new(
+                    "reading",
+                    format!("must be \"physical\" or \"document_000\", got {other:?}"),
+                ))
+            }
+        };
         let classes = params.count("pin_classes", Some(1.0))?;
         if classes > MAX_PIN_CLASSES {
             return Err(ModelError::new(
@@ -466,6 +499,14 @@ impl GeometricHysteresis {
         let (e, zc, k1) = (eccentricity, cycloid_teeth as f64, curtate_ratio);
         let s = (1.0 - k1 * k1).sqrt();
         let per_ezc = ARCMIN_PER_RAD / (e * zc);
+        // The disc's angle reaches the output through the cranks, which ride on the
+        // output: × λ = (zc/zp)·(1 − 1/i16) in the physical reading, 1:1 in 000's.
+        let to_output = if physical {
+            zc / pin_count as f64 * (1.0 - 1.0 / ratio)
+        } else {
+            1.0
+        };
+        let per_ezc_out = per_ezc * to_output;
         Ok(GeometricHysteresis {
             ratio,
             center_distance,
@@ -481,19 +522,21 @@ impl GeometricHysteresis {
                     * center_distance
                     * pressure_angle_deg.to_radians().cos()),
             cycloid_coefficients: [
-                2.0 * s * per_ezc,  // Δr_rp
-                -2.0 * s * per_ezc, // Δr_p
-                2.0 * s * per_ezc,  // δr_p
-                -2.0 * per_ezc,     // δr_rp
-                per_ezc,            // δJ
-                0.5 * per_ezc,      // ΔF_r
-                2.0 * k1 * per_ezc, // δt
-                -k1 * per_ezc,      // ΔF_p
-                2.0 * per_ezc,      // δΔr_rp
-                -2.0 * s * per_ezc, // δΔr_p
+                // Δr_rp: Eq. 13–15 (and 003's clearance form) 2/(e·zc); printed Eq. 16 2s.
+                if physical { 2.0 } else { 2.0 * s } * per_ezc_out,
+                -2.0 * s * per_ezc_out, // Δr_p
+                2.0 * s * per_ezc_out,  // δr_p
+                -2.0 * per_ezc_out,     // δr_rp
+                per_ezc_out,            // δJ
+                0.5 * per_ezc_out,      // ΔF_r
+                2.0 * k1 * per_ezc_out, // δt
+                -k1 * per_ezc_out,      // ΔF_p
+                2.0 * per_ezc_out,      // δΔr_rp
+                -2.0 * s * per_ezc_out, // δΔr_p
             ],
-            kn_equidistant: 1.0 / (e * e * zc),
-            kn_shift: -(zc / (e * pin_circle_radius * pin_circle_radius * s) + s / (e * zc)),
+            kn_equidistant: to_output / (e * e * zc),
+            kn_shift: -to_output
+                * (zc / (e * pin_circle_radius * pin_circle_radius * s) + s / (e * zc)),
             inputs: INPUTS
                 .iter()
                 .map(|&(name, unit, description)| InputSpec {
@@ -713,10 +756,78 @@ impl GeometricHysteresis {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::ParamValue;
     use proptest::prelude::*;
 
+    /// Document 000 as printed (`reading` "document_000"): the arithmetic of its equations,
+    /// which most tests here pin.
     fn model() -> GeometricHysteresis {
+        GeometricHysteresis::from_params(&document_params()).unwrap()
+    }
+
+    fn document_params() -> ModelParams {
+        GeometricHysteresis::rv20e_params().with("reading", ParamValue::Text("document_000".into()))
+    }
+
+    /// The physical reading, the default.
+    fn physical() -> GeometricHysteresis {
         GeometricHysteresis::from_params(&GeometricHysteresis::rv20e_params()).unwrap()
+    }
+
+    #[test]
+    fn physical_reading_is_eq13_15_carried_to_the_output() {
+        // Eq. 13–15 (and 003's clearance form): the modification's backlash is
+        // 2(Δr_rp − s·Δr_p)/(e·zc), s = √(1 − K1²) = 0.693974 for K1 = 0.72; the cranks ride on
+        // the output, which turns λ = (39/40)(1 − 1/141) = 0.968085 of the disc's angle.
+        // Table 9's design values overlap the flanks: 2(−0.010 + 0.693974·0.012)/35.1 rad =
+        // −0.32758 arcmin at the disc, −0.31712 at the output: the design is preloaded.
+        let lambda = 39.0 / 40.0 * (1.0 - 1.0 / 141.0);
+        let s = (1.0f64 - 0.72 * 0.72).sqrt();
+        let expected = lambda * 2.0 * (-0.010 + s * 0.012) / (0.9 * 39.0) * ARCMIN_PER_RAD;
+        let mut out = [0.0; OUTPUT_COUNT];
+        physical().evaluate(&table9_nominal(), &mut out);
+        assert!(
+            (out[2] - expected).abs() < 1e-12,
+            "{} vs {expected}",
+            out[2]
+        );
+        assert!((expected + 0.31712).abs() < 5e-6, "{expected}");
+        assert_eq!(out[4], 1.0, "the design is preloaded");
+        assert_eq!(out[0], out[1] + out[3], "no cycloid free play");
+        assert_eq!(out[5], -out[2]);
+    }
+
+    #[test]
+    fn physical_error_terms_are_the_documents_times_lambda() {
+        // Every δ-term keeps Eq. 16's coefficient; the physical reading carries it to the
+        // output by λ. Compared on the change each error makes from the design point.
+        let lambda = 39.0 / 40.0 * (1.0 - 1.0 / 141.0);
+        let (document, physical) = (model(), physical());
+        let eval_with = |m: &GeometricHysteresis, x: &[f64; 18]| {
+            let mut out = [0.0; OUTPUT_COUNT];
+            m.evaluate(x, &mut out);
+            out[2]
+        };
+        for i in 4..13 {
+            let mut x = table9_nominal();
+            x[i] += 0.003;
+            let d = eval_with(&document, &x) - eval_with(&document, &table9_nominal());
+            let p = eval_with(&physical, &x) - eval_with(&physical, &table9_nominal());
+            assert!(
+                (p - lambda * d).abs() < 1e-12 * d.abs().max(1.0),
+                "input {i}: {p} vs {d}"
+            );
+        }
+    }
+
+    #[test]
+    fn an_unknown_reading_is_refused() {
+        let err = GeometricHysteresis::from_params(
+            &GeometricHysteresis::rv20e_params().with("reading", ParamValue::Text("both".into())),
+        )
+        .err()
+        .unwrap();
+        assert_eq!(err.key, "reading");
     }
 
     /// Table 9 of document 000 with every manufacturing error (δ-term) at its mean, zero,
@@ -740,7 +851,7 @@ mod tests {
     /// The RV-20E with K pin classes of width w and the fit window [lower, upper].
     fn fitted(classes: f64, width: f64, window: (f64, f64)) -> GeometricHysteresis {
         GeometricHysteresis::from_params(
-            &GeometricHysteresis::rv20e_params()
+            &document_params()
                 .with_number("pin_classes", classes)
                 .with_number("pin_class_width_mm", width)
                 .with_number("fit_window_lower_arcmin", window.0)

@@ -487,12 +487,20 @@ impl TorsionCurve {
     /// Builds the model: 000 and 003 from the same parameter set (their own checks name the
     /// keys), then the crank side and its own parameters.
     pub fn from_params(params: &ModelParams) -> Result<Self, ModelError> {
+        // 000 with its stage terms in the disc frame as printed: the torsion curve builds the
+        // cycloid stage's free play from the pins itself and takes λ to the output there.
         let hysteresis_keys: Vec<&str> = geometric_hysteresis::ENTRY
             .params
             .iter()
             .map(|p| p.name)
+            .filter(|name| *name != "reading")
             .collect();
-        let hysteresis = GeometricHysteresis::from_params(&params.subset(&hysteresis_keys))?;
+        let mut hysteresis_params = params.subset(&hysteresis_keys);
+        hysteresis_params.insert(
+            "reading".to_string(),
+            crate::ParamValue::Text("document_000".to_string()),
+        );
+        let hysteresis = GeometricHysteresis::from_params(&hysteresis_params)?;
         // Selective fitting changes the pins the load sharing sees; the torsion curve
         // models the pins as drawn.
         if params.count("pin_classes", Some(1.0))? != 1 {
@@ -1018,8 +1026,11 @@ mod tests {
         // clearance_reading 0: c is geometric_hysteresis's hysteresis_arcmin for the same
         // row, bit for bit, 0.54823 arcmin at the nominal (000 §5.2: 0.5467 ± 1 %).
         let model = with("clearance_reading", 0.0).unwrap();
-        let reference =
-            GeometricHysteresis::from_params(&GeometricHysteresis::rv20e_params()).unwrap();
+        let reference = GeometricHysteresis::from_params(
+            &GeometricHysteresis::rv20e_params()
+                .with("reading", crate::ParamValue::Text("document_000".into())),
+        )
+        .unwrap();
         for x in [nominal(), perturbed()] {
             let mut expected = [0.0; geometric_hysteresis::OUTPUT_COUNT];
             reference.evaluate(&x[..18], &mut expected);
