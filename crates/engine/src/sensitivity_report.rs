@@ -71,8 +71,12 @@ pub struct OutputSensitivityReport {
     pub variance: f64,
     /// Rows left out for non-finite values.
     pub non_finite_rows: u64,
-    /// Indices, most important first.
+    /// Indices, most important first (none when the output does not vary).
     pub indices: Vec<IndexReport>,
+    /// Why there are no indices, when there are none: an output that does not vary has no
+    /// variance to apportion.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
     /// Screening: contribution %, SRC² and derivatives at the nominal point, per source.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub screening: Option<ScreeningReport>,
@@ -140,9 +144,12 @@ impl SensitivityReport {
                     unit: o.unit,
                     variance: o.variance,
                     non_finite_rows: o.non_finite_rows,
+                    note: (o.variance.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater))
+                        .then(|| "the output does not vary: no variance to apportion".to_string()),
                     indices: o
                         .indices
                         .into_iter()
+                        .filter(|_| o.variance > 0.0)
                         .map(|g| IndexReport {
                             input: g.group,
                             first_order: g.first_order.value,
@@ -251,6 +258,10 @@ impl SensitivityReport {
                 output.unit,
                 format_sig(output.variance),
             ));
+            if let Some(note) = &output.note {
+                lines.push(format!("  {note}"));
+                continue;
+            }
             let width = output
                 .indices
                 .iter()

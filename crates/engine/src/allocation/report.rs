@@ -378,19 +378,33 @@ impl AllocationReport {
             None => out.push_str("no common factor on the tolerances meets the target\n"),
         }
         let figure = |label: &str, f: &FigureReport| {
+            let interval = if f.value.is_finite() {
+                format!(
+                    " (95 % CI {} .. {})",
+                    figure_text(f.ci[0]),
+                    figure_text(f.ci[1])
+                )
+            } else {
+                String::new()
+            };
             format!(
-                "{label:<26} {} = {} (95 % CI {} .. {}), mean {}, sd {}, seed {}\n",
+                "{label:<26} {} = {}{interval}, mean {}, sd {}, seed {}\n",
                 self.target.split_whitespace().next().unwrap_or(""),
                 figure_text(f.value),
-                figure_text(f.ci[0]),
-                figure_text(f.ci[1]),
                 format_sig(f.mean),
                 format_sig(f.sd),
                 f.seed
             )
         };
         out.push('\n');
-        out.push_str(&figure("today:", &self.current));
+        out.push_str(&figure(
+            if self.levers.is_empty() {
+                "today:"
+            } else {
+                "today, with the levers:"
+            },
+            &self.current,
+        ));
         out.push_str(&figure("proposed (optimisation):", &self.proposed));
         out.push_str(&figure("proposed (verification):", &self.verification));
         out.push_str(&format!(
