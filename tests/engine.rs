@@ -209,7 +209,9 @@ fn golden_values_pin_the_random_stream() {
     // and say why in the commit (and the changelog): these are the figures users' CI
     // baselines depend on. Last regenerated when the scenario's runout, pitch error and pin
     // hole clearance became magnitudes (Rayleigh and folded laws) and the cycloid stage took
-    // its physical reading (Eq. 13–15 backlash, λ to the output); the stream is unchanged.
+    // its physical reading (Eq. 13–15 backlash, λ to the output), and again when the
+    // magnitude laws took their normals from the ziggurat in bulk (one block per column
+    // after the inverse-CDF scalars) instead of one inverse-CDF uniform each.
     let scenario = load("rv20e-hysteresis.json");
     let settings = RunSettings {
         samples: 20_000,
@@ -229,4 +231,4 @@ fn golden_values_pin_the_random_stream() {
     assert_eq!(golden, GOLDEN);
 }
 
-const GOLDEN: &str = "0.366982270110 0.217847968788 2.197640641793 14850";
+const GOLDEN: &str = "0.367167897651 0.216661525931 2.100229557574 14861";

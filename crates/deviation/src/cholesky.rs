@@ -204,13 +204,22 @@ mod tests {
     }
 
     proptest! {
-        // Round trip: for any B (n × r), A = B·Bᵀ is PSD of rank ≤ r and L·Lᵀ = A.
+        // Round trip: for any B (n × r), A = B·Bᵀ is PSD of rank ≤ r and L·Lᵀ = A. In
+        // floating point a rank-deficient A can keep a pivot of rounding size beyond rank r
+        // when the rest of A is ill-conditioned (the stopping tolerance n·ε·max diag does not
+        // scale with the condition; proptest found n = 5, r = 4 with a last pivot of 2.8e-13
+        // against 2.3e-14): such a column must carry rounding only, below 1e-10 of the
+        // largest diagonal.
         #[test]
         fn factorisation_round_trip(n in 1usize..8, r in 1usize..8, seed in proptest::collection::vec(-3.0f64..3.0, 64)) {
             let b = DMatrix::from_fn(n, r, |i, j| seed[(i * 8 + j) % 64]);
             let a = &b * b.transpose();
             let factor = pivoted_cholesky(&a);
-            prop_assert!(factor.rank <= r.min(n));
+            let max_diag = (0..n).map(|i| a[(i, i)]).fold(0.0_f64, f64::max);
+            for col in r.min(n)..factor.rank {
+                let energy: f64 = (0..n).map(|row| factor.get(row, col).powi(2)).sum();
+                prop_assert!(energy <= 1e-10 * max_diag, "column {} carries {}", col, energy);
+            }
             let scale = a.abs().max().max(1.0);
             prop_assert!((factor.reconstruct() - &a).abs().max() <= 1e-10 * scale);
         }

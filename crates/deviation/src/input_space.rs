@@ -986,8 +986,12 @@ impl InputSpace {
     /// 1. the standard normals of every unconstrained single and block as one
     ///    [`Ziggurat::fill`]: each single's draws for all rows in turn, then each block's
     ///    draws, `rank` per row, row after row;
-    /// 2. the non-normal scalars, row after row;
-    /// 3. each constraint group in turn: batches of candidates (the rotated z_s of a pair and
+    /// 2. the non-normal scalars drawn by their inverse CDF (uniform, triangular, truncated
+    ///    normal), row after row;
+    /// 3. the magnitude laws (folded normal, Rayleigh, lognormal), column after column,
+    ///    each from one [`Ziggurat::fill`] of its normals for all rows (two per row for the
+    ///    Rayleigh law, consecutive);
+    /// 4. each constraint group in turn: batches of candidates (the rotated z_s of a pair and
     ///    the compaction of singles), or row by row for groups with dense blocks.
     pub fn sample_columns_with<R: Rng + ?Sized>(
         &self,
@@ -1028,11 +1032,32 @@ impl InputSpace {
             }
             block_z = rest;
         }
-        if !self.independent.is_empty() {
+        if self
+            .independent
+            .iter()
+            .any(|(_, d)| d.normals_per_draw() == 0)
+        {
             for r in 0..n_rows {
                 for (column, distribution) in &self.independent {
-                    columns[column * n_rows + r] = distribution.sample(rng);
+                    if distribution.normals_per_draw() == 0 {
+                        columns[column * n_rows + r] = distribution.sample(rng);
+                    }
                 }
+            }
+        }
+        // The magnitude laws, column after column, each from one block of normals.
+        for (column, distribution) in &self.independent {
+            let k = distribution.normals_per_draw();
+            if k == 0 {
+                continue;
+            }
+            let z = prefix(&mut scratch.normals, k * n_rows);
+            normal.fill(rng, z, &mut scratch.ziggurat);
+            for (x, z) in column_mut(columns, *column, n_rows)
+                .iter_mut()
+                .zip(z.chunks_exact(k))
+            {
+                *x = distribution.from_normals(z);
             }
         }
         if counts.groups.len() < self.constrained_groups.len() {

@@ -13,20 +13,25 @@
 //! - `FoldedNormal { mean, sd }`: |X| for X ~ N(μ, σ²), the magnitude of a signed
 //!   deviation (a clearance, a position error's size). Mean σ·√(2/π)·e^(−μ²/2σ²) +
 //!   μ·(1 − 2Φ(−μ/σ)), variance μ² + σ² − mean² (Leone, Nelson & Nottingham 1961). Drawn
-//!   as |μ + σ·Φ⁻¹(u)|.
+//!   as |μ + σ·z|.
 //! - `Rayleigh { sigma }`: the length of a 2-D eccentricity whose two components are
 //!   independent N(0, σ²) (a radial runout, the amplitude of a once-per-revolution pitch
-//!   error). Mean σ·√(π/2), variance (4 − π)/2·σ²; drawn as σ·√(−2·ln(1 − u)).
+//!   error). Mean σ·√(π/2), variance (4 − π)/2·σ²; drawn as σ·√(z1² + z2²), the
+//!   eccentricity itself.
 //! - `Lognormal { mu, sigma }`: exp(μ + σ·Z). Mean e^(μ + σ²/2), variance
-//!   (e^(σ²) − 1)·e^(2μ + σ²); drawn as exp(μ + σ·Φ⁻¹(u)).
+//!   (e^(σ²) − 1)·e^(2μ + σ²); drawn as exp(μ + σ·z).
+//!
+//! The magnitude laws take their standard normals z from the project's ziggurat, the
+//! normal source of every path (in bulk, column by column, in the run's sampler).
 //!
 //! The scenario gives the three non-negative laws from a tolerance the way it gives a
 //! normal from a band ([`RAYLEIGH_QUANTILE`], [`FOLDED_QUANTILE`]): the stated upper limit
 //! is the 99.865 % quantile at Cp = 1, as a band limit is for a normal.
 //!
 //! Normal and tolerance-band parameters join the scenario's multivariate normal (they can
-//! be correlated with part components); the others are drawn independently, each from one
-//! uniform of the stream by its inverse CDF.
+//! be correlated with part components); the others are drawn independently: the uniform,
+//! triangular and truncated normal laws from one uniform of the stream by their inverse
+//! CDF, the magnitude laws from ziggurat normals.
 
 use crate::shown::Shown;
 use rand::{Rng, RngExt};
@@ -108,12 +113,6 @@ pub enum ScalarDistribution {
 pub const RAYLEIGH_QUANTILE: f64 = 3.635_285_597_179_897;
 /// The 99.865 % quantile of |Z| for a standard normal Z, Φ⁻¹(1 − 0.00135/2) = 3.2051.
 pub const FOLDED_QUANTILE: f64 = 3.205_133_180_184_792;
-
-/// A uniform draw in the open interval (0, 1): 53 random bits, centred in their cell.
-#[inline]
-fn open_unit<R: Rng + ?Sized>(rng: &mut R) -> f64 {
-    ((rng.next_u64() >> 11) as f64 + 0.5) * (1.0 / (1u64 << 53) as f64)
-}
 
 fn standard_normal_cdf(x: f64) -> f64 {
     0.5 * erfc(-x / std::f64::consts::SQRT_2)
@@ -356,8 +355,33 @@ impl ScalarDistribution {
         }
     }
 
+    /// Standard normals one draw of a magnitude law takes (1 for the folded normal and the
+    /// lognormal, 2 for the Rayleigh law); 0 for the other kinds, which are drawn by their
+    /// inverse CDF (or by the joint normal).
+    pub fn normals_per_draw(&self) -> usize {
+        match self {
+            ScalarDistribution::FoldedNormal { .. } | ScalarDistribution::Lognormal { .. } => 1,
+            ScalarDistribution::Rayleigh { .. } => 2,
+            _ => 0,
+        }
+    }
+
+    /// A magnitude law's value from its standard normals ([`Self::normals_per_draw`] of
+    /// them): |μ + σ·z|, σ·√(z1² + z2²) (the length of the 2-D eccentricity (σz1, σz2)),
+    /// exp(μ + σ·z). NaN for the other kinds.
+    #[inline]
+    pub fn from_normals(&self, z: &[f64]) -> f64 {
+        match *self {
+            ScalarDistribution::FoldedNormal { mean, sd } => (mean + sd * z[0]).abs(),
+            ScalarDistribution::Rayleigh { sigma } => sigma * (z[0] * z[0] + z[1] * z[1]).sqrt(),
+            ScalarDistribution::Lognormal { mu, sigma } => (mu + sigma * z[0]).exp(),
+            _ => f64::NAN,
+        }
+    }
+
     /// Draws one value. Normal kinds are normally drawn by the joint sampler; this method
-    /// draws them too, for completeness.
+    /// draws them too, for completeness. The magnitude laws take their normals from the
+    /// ziggurat, one at a time ([`Self::from_normals`]).
     #[inline]
     pub fn sample<R: Rng + ?Sized>(&self, rng: &mut R) -> f64 {
         match *self {
@@ -395,15 +419,12 @@ impl ScalarDistribution {
                 };
                 (mean + sd * z).clamp(lower, upper)
             }
-            ScalarDistribution::FoldedNormal { mean, sd } => {
-                (mean + sd * standard_normal_quantile(open_unit(rng))).abs()
-            }
-            ScalarDistribution::Rayleigh { sigma } => {
-                // 1 − u is in (0, 1) as u is: −ln of it is positive and finite.
-                sigma * (-2.0 * (1.0 - open_unit(rng)).ln()).sqrt()
-            }
-            ScalarDistribution::Lognormal { mu, sigma } => {
-                (mu + sigma * standard_normal_quantile(open_unit(rng))).exp()
+            ScalarDistribution::FoldedNormal { .. }
+            | ScalarDistribution::Rayleigh { .. }
+            | ScalarDistribution::Lognormal { .. } => {
+                let normal = crate::normal::Ziggurat::get();
+                let z = [normal.sample(rng), normal.sample(rng)];
+                self.from_normals(&z[..self.normals_per_draw()])
             }
             normal => {
                 let (mean, sd) = normal.as_normal().unwrap_or((0.0, 0.0));

@@ -241,8 +241,8 @@ const OUTPUTS: &[(&str, &str, &str, OutputKind)] = &[
     ),
 ];
 
-/// The outputs of the model, in order (a model that embeds this one sizes its buffer with
-/// it).
+/// The outputs of the model, in order, with selective fitting (a model that embeds this one
+/// sizes its buffer with it); without fitting the last, `pin_class`, is left out.
 pub const OUTPUT_COUNT: usize = 8;
 
 const PARAMS: &[ParamSpec] = &[
@@ -545,7 +545,12 @@ impl GeometricHysteresis {
                     description,
                 })
                 .collect(),
-            outputs: OUTPUTS
+            // `pin_class` only with selective fitting: without it the class is always 0.
+            outputs: OUTPUTS[..if classes > 1 {
+                OUTPUT_COUNT
+            } else {
+                OUTPUT_COUNT - 1
+            }]
                 .iter()
                 .map(|&(name, unit, description, kind)| OutputSpec {
                     name: name.into(),
@@ -584,7 +589,8 @@ impl ErrorModel for GeometricHysteresis {
     #[inline]
     fn evaluate(&self, x: &[f64], out: &mut [f64]) {
         let x: &[f64; N_INPUTS] = x[..N_INPUTS].try_into().expect("18 inputs");
-        out[..N_OUTPUTS].copy_from_slice(&self.row(x, exact_tilt));
+        let n_out = self.outputs.len();
+        out[..n_out].copy_from_slice(&self.row(x, exact_tilt)[..n_out]);
     }
 
     /// The row form over every row of the block: a branch-free loop over contiguous
@@ -592,14 +598,20 @@ impl ErrorModel for GeometricHysteresis {
     /// the rare rows tilted beyond the series' range are then redone by [`Self::evaluate`],
     /// so every row has exactly the bits of the row form.
     fn evaluate_columns(&self, inputs: &[&[f64]], outputs: &mut [f64]) {
-        let n = outputs.len() / N_OUTPUTS;
+        let n_out = self.outputs.len();
+        let n = outputs.len() / n_out;
+        if n == 0 {
+            return;
+        }
         let columns: [&[f64]; N_INPUTS] = std::array::from_fn(|i| &inputs[i][..n]);
         let mut any_exact = false;
         {
+            // Without selective fitting there is no `pin_class` column (the class is 0).
             let mut columns_out = outputs.chunks_exact_mut(n);
-            let mut next = || columns_out.next().expect("one column per output");
-            let out: [&mut [f64]; N_OUTPUTS] = std::array::from_fn(|_| next());
-            let [hysteresis, involute, cycloid, crank, interference, preload, flank, class] = out;
+            let mut next = || columns_out.next();
+            let [hysteresis, involute, cycloid, crank, interference, preload, flank]: [&mut [f64];
+                7] = std::array::from_fn(|_| next().expect("one column per output"));
+            let mut class = next();
             for r in 0..n {
                 let x: [f64; N_INPUTS] = std::array::from_fn(|i| columns[i][r]);
                 let [h, i, c, k, f, p, u, q] = self.row(&x, series_tilt);
@@ -610,7 +622,9 @@ impl ErrorModel for GeometricHysteresis {
                 interference[r] = f;
                 preload[r] = p;
                 flank[r] = u;
-                class[r] = q;
+                if let Some(class) = class.as_deref_mut() {
+                    class[r] = q;
+                }
                 any_exact |= needs_cosine(tilt_squared(&x));
             }
         }
@@ -620,7 +634,7 @@ impl ErrorModel for GeometricHysteresis {
                 let x: [f64; N_INPUTS] = std::array::from_fn(|i| columns[i][r]);
                 if needs_cosine(tilt_squared(&x)) {
                     self.evaluate(&x, &mut out);
-                    for (j, &value) in out.iter().enumerate() {
+                    for (j, &value) in out[..n_out].iter().enumerate() {
                         outputs[j * n + r] = value;
                     }
                 }
@@ -1110,11 +1124,11 @@ mod tests {
             .map(|i| rows.iter().map(|x| x[i]).collect())
             .collect();
         let inputs: Vec<&[f64]> = columns.iter().map(Vec::as_slice).collect();
-        let mut outputs = vec![0.0; OUTPUT_COUNT * n];
+        let mut outputs = vec![0.0; model.outputs().len() * n];
         model.evaluate_columns(&inputs, &mut outputs);
         for (r, x) in rows.iter().enumerate() {
             let expected = eval(x);
-            for (j, value) in expected.iter().enumerate() {
+            for (j, value) in expected[..model.outputs().len()].iter().enumerate() {
                 assert_eq!(
                     outputs[j * n + r].to_bits(),
                     value.to_bits(),
