@@ -7,9 +7,14 @@
 //! output: its fraction. Bands, for a re-run with another seed and the same sample count
 //! (two independent estimates, hence the factor √2 on a one-sample interval):
 //!
-//! - percentile p: the distribution-free interval [X_(l), X_(u)] from order statistics with
-//!   l, u = n·p ∓ z·√(n·p·(1 − p)) (normal approximation to the binomial count of values
-//!   below the true quantile), each side widened by √2 about the estimate;
+//! - percentile p: ± √2·(X_(u) − X_(l))/2 about the estimate, from the order statistics
+//!   of ranks l, u = n·p ∓ z·√(n·p·(1 − p)) (normal approximation to the binomial count of
+//!   values below the true quantile). (X_(u) − X_(l))/2 is z times the sparsity estimate of
+//!   the percentile's standard error √(p(1 − p)/n)/f(x_p) (Siddiqui 1960, Bofinger 1975: a
+//!   central difference of the quantile function); the difference of two independent
+//!   estimates is symmetric, so the band is too. (Widening each side of the one-sample
+//!   interval instead would leave a narrow side where the density is high: in a tail, the
+//!   side towards the body, where a re-run then fails far more often than α says.)
 //! - mean: ± √2·z·sd/√n; sd: ± √2·z·sd·√((g2 + 2)/(4n)) (delta method, g2 the excess
 //!   kurtosis); ppm and fractions: ± √2·z·√(p(1 − p)/n) with p at least 1/n.
 //!
@@ -19,8 +24,8 @@
 //! absolute or relative tolerance in the baseline file, which then replaces its band.
 //!
 //! Memory is bounded as in `rvtol run`: beyond the exact-percentile limit the percentiles
-//! come from the run's quantile sketch and each percentile band is widened by the sketch's
-//! error bound (α·|x − centre|) at both ends.
+//! come from the run's quantile sketch and each percentile's order statistics are moved out
+//! by the sketch's error bound (α·|x − centre|) before the band is formed.
 
 use rvtol_deviation::Shown;
 use serde::{Deserialize, Serialize};
@@ -304,9 +309,8 @@ pub fn measure(
         let mut percentiles = Percentiles::new(acc.distribution, n, min, max);
         for (name, percent) in GATED_PERCENTS {
             let (value, low, high) = percentiles.with_interval(percent, z);
-            let below = std::f64::consts::SQRT_2 * (value - low).max(0.0);
-            let above = std::f64::consts::SQRT_2 * (high - value).max(0.0);
-            push(&info.name, name, value, below, above);
+            let half = std::f64::consts::SQRT_2 * 0.5 * (high - low).max(0.0);
+            push(&info.name, name, value, half, half);
         }
         if info.spec.is_some() {
             // Out of spec among every sample drawn (non-finite, excluded and flagged ones
