@@ -1,7 +1,8 @@
 //! The elastic elements between an RV reducer's output flange and its pins, other than the
 //! pin contacts themselves (those are `cycloid_pin_contact`'s load sharing): the needle row
-//! on each crank eccentric, the crank shaft between its support bearings, the support
-//! bearings, the carrier's wind-up and the involute first stage. `torsion_curve` chains them
+//! on each crank eccentric and the disc body around its bore, the crank shaft between its
+//! support bearings, the support bearings, the carrier's wind-up (pillars and their roots
+//! in the plates) and the involute first stage. `torsion_curve` chains them
 //! in series with the pins (docs/models.md §13); `crank_elastic_error` uses the needle row.
 //!
 //! Units: lengths mm, forces N, torques N·mm, stiffnesses N/mm (translation) and N·mm/rad
@@ -14,6 +15,27 @@
 //! loaded; NSK "Bearing internal load distribution", Eq. 5):
 //!   Q_max = 4.08·F/(Z·cos α),   δ_r(F) = 2·δ(Q_max)/cos α    (two contacts per roller)
 //!   secant stiffness k(F) = F/δ_r(F)
+//!
+//! disc bore (the needle row has no outer ring: the disc is its housing). Palmgren's
+//! formula is the approach of rollers and raceways; the disc around the bore deforms as
+//! well, under the row's load spread as p(ψ) = p0·cos ψ over the loaded half of a bore of
+//! radius a = d_j/2 + D in a plate of thickness t (net force P = π·a·t·p0/2). Plane stress,
+//! the displacement of the bore at the load line, ψ = 0:
+//!   Fourier harmonics of p: p0/π (n = 0), p0/2 (n = 1), 2p0·(−1)^(k+1)/(π(4k² − 1)) (n = 2k)
+//!   n = 0 (Lamé, hole under pressure):          u = p_n·a·(1 + ν)/E
+//!   n ≥ 2 (Michell, hole in an infinite plate):  u = p_n·a·(2n + 1 − ν)/(E·(n² − 1))
+//!   summed (G the Catalan constant, 0.915966):
+//!     u_oval = c_oval·P/(E·t),  c_oval = (2/π²)·((1 + ν) + 2(G − ½) + 2(1 − ν)(½ − π/8))
+//!     (0.46246 for ν = 0.3)
+//!   n = 1, the net force carried to the pins at the rim, R = r_p − a_w from the bore's
+//!   centre: Kelvin's plane-stress point force, bore against rim along the load
+//!     u_net = (1 + ν)(3 − ν)/(4π)·ln(R/a)·P/(E·t)
+//!   c_bore = (c_oval + (1 + ν)(3 − ν)/(4π)·ln(R/a))/(E·t)       (mm/N, linear, both modes)
+//! support bearings' seats: each outer ring sits in a carrier plate as thick as the bearing
+//! is wide (B); Palmgren's formula holds for rings in a rigid housing, so the plate's bore
+//! adds its ovalisation, c_seat = c_oval/(E·B), in series with each support's row (the
+//! net force's path through the plate to the pillars is left out: a deep ring, a few per
+//! cent of the pillars' compliance).
 //!
 //! crank shaft: a uniform solid beam of diameter d on two simple supports (the support
 //! bearings, span L), eccentric planes at x1 = (L − s)/2 and x2 = (L + s)/2; deflection at
@@ -35,6 +57,19 @@
 //! support A; each pillar is clamped in both plates (a fixed–guided beam) and twists:
 //!   K_c = n_p·r_p²/(L_p³/(12·E·h·b³/12) + L_p/(κ_r·G·b·h)) + n_p·G·J_p/L_p
 //!   κ_r = 5/6 (rectangle), J_p = β·max(b,h)·min(b,h)³, β from Roark Table 10.7 case 4;
+//! the plates are not rigid where a pillar enters them: each root is the pillar's section
+//! as a rigid footing on an elastic half-space (sliding Bycroft 1956, rocking Borowicka
+//! 1943, twisting Reissner & Sagoci 1944; Gazetas 1991 Table 1, equivalent radii of
+//! Richart, Hall & Woods 1970):
+//!   K_h = 8·G·R_h/(2 − ν),       R_h = √(b·h/π)
+//!   K_r = 8·G·R_r³/(3(1 − ν)),   R_r = (4·I/π)^¼, I = h·b³/12 (rocking in the tangential plane)
+//!   K_t = 16·G·R_t³/3,           R_t = (2·I_p/π)^¼, I_p = b·h·(b² + h²)/12
+//! with both roots alike the pillar still bends about its middle (moment F·L_p/2 at each
+//! root), so a pillar on its roots has the lateral and twist compliances
+//!   c_lat = L_p³/(12·E·I) + L_p/(κ_r·G·b·h) + 2/K_h + L_p²/(2·K_r),   c_tw = L_p/(G·J_p) + 2/K_t
+//!   K_c = n_p·(r_p²/c_lat + 1/c_tw)
+//! (a plate of finite thickness, and a bolted end plate, are softer than the half-space:
+//! the roots are a lower bound of that compliance);
 //! support B moves tangentially by the carrier twist, which moves the eccentric planes by
 //! x1/L and x2/L of it; the two discs carrying equal shares, the output sees their mean:
 //!     c_car = m·S_B·a_w²·((x1 + x2)/(2L))/K_c   (symmetric mode only)
@@ -49,13 +84,14 @@
 //! Sign convention: every compliance and deflection is a positive magnitude along the
 //! load; the models give them their signs.
 //!
-//! Left out, and why: radial clearance of the rows (their free play is `geometric_
-//! hysteresis`'s Δu; at 2 µm it changes the 50–100 % slope of an RV-20E needle row by
-//! under 1 %, checked in the tests), preload of the support bearings (it stiffens them:
-//! the unpreloaded secant is the softer bound), edge loading of a row whose journal tilts
-//! with the shaft's bending, the disc body and its bores, the housing and the main
-//! bearings (they carry no torque about the axis), the planet gear's force on the crank
-//! shaft (about 3 % of the eccentric loads).
+//! Left out, and why (docs/models.md §13 gives their sizes): radial clearance of the rows
+//! (their free play is `geometric_hysteresis`'s Δu; at 2 µm it changes the 50–100 % slope
+//! of an RV-20E needle row by under 1 %, checked in the tests), preload of the support
+//! bearings (it stiffens them: the unpreloaded secant is the softer bound), edge loading of
+//! a row whose journal tilts with the shaft's bending, the bending of the disc's lobes, the
+//! plates' bores around the support bearings and their in-plane paths to the pillars, the
+//! housing and the main bearings (they carry no torque about the axis), the planet gear's
+//! force on the crank shaft (about 3 % of the eccentric loads).
 
 use std::f64::consts::PI;
 
@@ -100,6 +136,41 @@ impl RollerRow {
     pub fn secant_compliance(&self, load: f64) -> f64 {
         self.radial_deflection(load) / load
     }
+
+    /// c_seat = c_oval/(E·B), the ovalisation of a plate's bore of thickness B (the carrier
+    /// plate around a support bearing's outer ring) under the row's load, mm/N (module
+    /// comment; the net force's path through the plate is not in it).
+    pub fn housing_ovalisation_compliance(thickness: f64, youngs: f64, poisson: f64) -> f64 {
+        bore_ovalisation_factor(poisson) / (youngs * thickness)
+    }
+
+    /// c_bore, the compliance of the plate that is a ringless row's housing (the cycloid
+    /// disc around its crank bore), mm/N: the bore of radius `bore_radius` in a plate of
+    /// `thickness`, its net force carried to a rim `rim_distance` from the bore's centre;
+    /// E (MPa) and ν (module comment: Michell's harmonics n = 0 and n ≥ 2 at the load line
+    /// and Kelvin's point force for n = 1). Linear: the same at every load.
+    pub fn ringless_housing_compliance(
+        bore_radius: f64,
+        rim_distance: f64,
+        thickness: f64,
+        youngs: f64,
+        poisson: f64,
+    ) -> f64 {
+        let net = (1.0 + poisson) * (3.0 - poisson) / (4.0 * PI)
+            * (rim_distance / bore_radius).ln().max(0.0);
+        (bore_ovalisation_factor(poisson) + net) / (youngs * thickness)
+    }
+}
+
+/// Catalan's constant G = Σ (−1)^k/(2k + 1)², to f64 precision.
+const CATALAN: f64 = 0.915_965_594_177_219;
+
+/// c_oval: the displacement of a bore at its load line under a row's load spread as
+/// cos ψ over the loaded half, per P/(E·t), without the net force's n = 1 harmonic
+/// (module comment): (2/π²)·((1 + ν) + 2(G − ½) + 2(1 − ν)(½ − π/8)).
+fn bore_ovalisation_factor(poisson: f64) -> f64 {
+    2.0 / (PI * PI)
+        * ((1.0 + poisson) + 2.0 * (CATALAN - 0.5) + 2.0 * (1.0 - poisson) * (0.5 - PI / 8.0))
 }
 
 /// A crank shaft on its two support bearings with the eccentrics of the two discs.
@@ -216,6 +287,37 @@ impl Carrier {
         let twist = rectangle_torsion_factor(long / short) * long * short.powi(3);
         self.pillars * (self.radius * self.radius * lateral + shear_modulus * twist / length)
     }
+
+    /// The compliances of one pillar root (module comment): (1/K_h sliding, mm/N; 1/K_r
+    /// rocking in the tangential plane and 1/K_t twisting, rad per N·mm), its section a
+    /// rigid footing on an elastic half-space of E (MPa) and ν.
+    pub fn root_compliances(&self, youngs: f64, poisson: f64) -> (f64, f64, f64) {
+        let shear_modulus = youngs / (2.0 * (1.0 + poisson));
+        let (b, h) = (self.width, self.depth);
+        let sliding_radius = (b * h / PI).sqrt();
+        let rocking_radius = (4.0 * h * b.powi(3) / 12.0 / PI).powf(0.25);
+        let twisting_radius = (2.0 * b * h * (b * b + h * h) / 12.0 / PI).powf(0.25);
+        (
+            (2.0 - poisson) / (8.0 * shear_modulus * sliding_radius),
+            3.0 * (1.0 - poisson) / (8.0 * shear_modulus * rocking_radius.powi(3)),
+            3.0 / (16.0 * shear_modulus * twisting_radius.powi(3)),
+        )
+    }
+
+    /// K_c with each pillar on its two elastic roots, N·mm/rad (module comment).
+    pub fn torsional_stiffness_on_elastic_roots(&self, youngs: f64, poisson: f64) -> f64 {
+        let shear_modulus = youngs / (2.0 * (1.0 + poisson));
+        let (b, h, length) = (self.width, self.depth, self.length);
+        let (sliding, rocking, twisting) = self.root_compliances(youngs, poisson);
+        let lateral = length.powi(3) / (12.0 * youngs * h * b.powi(3) / 12.0)
+            + length / (5.0 / 6.0 * shear_modulus * b * h)
+            + 2.0 * sliding
+            + 0.5 * length * length * rocking;
+        let (long, short) = (b.max(h), b.min(h));
+        let twist = rectangle_torsion_factor(long / short) * long * short.powi(3);
+        let twist_compliance = length / (shear_modulus * twist) + 2.0 * twisting;
+        self.pillars * (self.radius * self.radius / lateral + 1.0 / twist_compliance)
+    }
 }
 
 /// β of a solid rectangle's torsion constant J = β·a·b³ (a ≥ b), Roark & Young Table 10.7
@@ -268,10 +370,14 @@ pub struct CrankSide {
     pub pitch_radius: f64,
     /// The needle row of one eccentric.
     pub needle: RollerRow,
+    /// c_bore, the disc around the needle row's bore, mm/N (0: a rigid disc).
+    pub bore_compliance: f64,
     /// The crank shaft.
     pub shaft: CrankShaft,
     /// One support bearing row (both supports alike).
     pub support: RollerRow,
+    /// The carrier plate around one support bearing's outer ring, mm/N (0: rigid plates).
+    pub support_housing_compliance: f64,
     /// K_c, N·mm/rad.
     pub carrier_stiffness: f64,
     /// C_inv, rad per N·mm at the output.
@@ -284,6 +390,8 @@ pub struct CrankSide {
 pub struct ChainTerms {
     /// Needle rows.
     pub needle: f64,
+    /// The discs around the needle rows' bores.
+    pub disc_bore: f64,
     /// Crank shaft bending and shear.
     pub shaft: f64,
     /// Support bearings.
@@ -297,7 +405,7 @@ pub struct ChainTerms {
 impl ChainTerms {
     /// The sum of the terms.
     pub fn total(&self) -> f64 {
-        self.needle + self.shaft + self.support + self.carrier + self.involute
+        self.needle + self.disc_bore + self.shaft + self.support + self.carrier + self.involute
     }
 }
 
@@ -339,8 +447,8 @@ impl CrankSide {
         let load_a = (tangential * s_a).hypot(shared * anti_a);
         let load_b = (tangential * s_b).hypot(shared * anti_b);
         let (compliance_a, compliance_b) = (
-            self.support.secant_compliance(load_a),
-            self.support.secant_compliance(load_b),
+            self.support.secant_compliance(load_a) + self.support_housing_compliance,
+            self.support.secant_compliance(load_b) + self.support_housing_compliance,
         );
         let support_symmetric = s_a * weight_a * compliance_a + s_b * weight_b * compliance_b;
         let support_antisymmetric =
@@ -351,6 +459,7 @@ impl CrankSide {
         let carrier = m * s_b * a * a * mean_plane / self.carrier_stiffness;
         ChainTerms {
             needle: (symmetric + antisymmetric) * needle,
+            disc_bore: (symmetric + antisymmetric) * self.bore_compliance,
             shaft: symmetric * modes.symmetric + antisymmetric * modes.antisymmetric,
             support: symmetric * support_symmetric + antisymmetric * support_antisymmetric,
             carrier: symmetric * carrier,
@@ -541,12 +650,14 @@ mod tests {
                 length: 6.0,
                 contact_angle: 0.0,
             },
+            bore_compliance: 4.0e-7,
             shaft: CrankShaft::new(15.0, 28.0, 9.0, 206_000.0, 0.3),
             support: RollerRow {
                 rollers: 14.0,
                 length: 7.0,
                 contact_angle: 15f64.to_radians(),
             },
+            support_housing_compliance: 2.0e-7,
             carrier_stiffness: 3e8,
             involute_compliance: 1e-11,
         };
@@ -558,10 +669,154 @@ mod tests {
         let half = side.terms(80_000.0, (2300.0, -120.0), 1.0, 167_000.0, 0.5);
         assert!((half.shaft / one.shaft - 0.5).abs() < 1e-15);
         assert!((half.needle / one.needle - 0.5).abs() < 1e-15);
+        assert!((half.disc_bore / one.disc_bore - 0.5).abs() < 1e-15);
         assert_eq!(half.involute, one.involute);
         // A stiffer needle row halves its term only.
         let stiff = side.terms(80_000.0, (2300.0, -120.0), 2.0, 167_000.0, 1.0);
         assert!((stiff.needle / one.needle - 0.5).abs() < 1e-15);
         assert_eq!(stiff.shaft, one.shaft);
+        assert_eq!(stiff.disc_bore, one.disc_bore);
+        // The disc bore is linear and carries both modes like the row: (sym + anti)·c_bore.
+        let symmetric = 80_000.0 / (2.0 * 27.5 * 27.5);
+        let antisymmetric = 2300.0 / (2.0 * 35.1);
+        assert!((one.disc_bore / ((symmetric + antisymmetric) * 4.0e-7) - 1.0).abs() < 1e-14);
+    }
+
+    #[test]
+    fn bore_ovalisation_is_the_sum_of_michells_harmonics() {
+        // The module comment's closed form against the harmonic sum it comes from:
+        // (2/π)·[(1 + ν)/π + Σ_k 2(−1)^(k+1)/(π(4k² − 1))·(4k + 1 − ν)/(4k² − 1)],
+        // the n = 2k term p_n·(2n + 1 − ν)/(n² − 1) with p_n/p0 = 2(−1)^(k+1)/(π(4k² − 1)),
+        // p0·a/E = 2P/(π·E·t). 200 000 terms: the tail is below 1e-15.
+        for nu in [0.0, 0.25, 0.3, 0.45] {
+            let series: f64 = (1..200_000)
+                .map(|k| {
+                    let k = k as f64;
+                    let q = 4.0 * k * k - 1.0;
+                    2.0 * if k as i64 % 2 == 1 { 1.0 } else { -1.0 } / (PI * q)
+                        * (4.0 * k + 1.0 - nu)
+                        / q
+                })
+                .sum();
+            let sum = 2.0 / PI * ((1.0 + nu) / PI + series);
+            assert!((bore_ovalisation_factor(nu) - sum).abs() < 1e-12, "{nu}");
+        }
+        // ν = 0.3: (2/π²)·(1.3 + 2·0.415966 + 1.4·0.107301) = 0.202642·2.282151 = 0.462461.
+        assert!((bore_ovalisation_factor(0.3) - 0.462461).abs() < 1e-6);
+    }
+
+    #[test]
+    fn michells_harmonic_displacement_by_finite_differences() {
+        // The n ≥ 2 displacement u_r(a) = p·a·(2n + 1 − ν)/(E·(n² − 1)) the factor rests on:
+        // Michell's φ = f(r)·cos nθ, f = A·r^−n + B·r^(2−n), decaying at infinity, with
+        // σ_rr = f'/r − n²f/r², σ_θθ = f'', τ_rθ = n·(f'/r − f/r²) (times sin nθ); A and B
+        // solved from σ_rr(a) = −p, τ_rθ(a) = 0, and u_r(a) = −∫_a^∞ ε_rr dr (plane stress,
+        // ε_rr = (σ_rr − ν·σ_θθ)/E) by Simpson's rule on r = a·e^s.
+        let (a, p, e, nu) = (10.0_f64, 1.0_f64, 1.0_f64, 0.3_f64);
+        for n in [2.0_f64, 3.0, 4.0, 7.0] {
+            let coef = |r: f64, aa: f64, bb: f64| {
+                let phi = aa * r.powf(-n) + bb * r.powf(2.0 - n);
+                let d1 = -n * aa * r.powf(-n - 1.0) + (2.0 - n) * bb * r.powf(1.0 - n);
+                let d2 =
+                    n * (n + 1.0) * aa * r.powf(-n - 2.0) + (2.0 - n) * (1.0 - n) * bb * r.powf(-n);
+                let srr = d1 / r - n * n * phi / (r * r);
+                let stt = d2;
+                let trt = n * (d1 / r - phi / (r * r));
+                (srr, stt, trt)
+            };
+            // Linear in (A, B): solve σ_rr(a) = −p, τ_rθ(a) = 0.
+            let (s1, _, t1) = coef(a, 1.0, 0.0);
+            let (s2, _, t2) = coef(a, 0.0, 1.0);
+            let det = s1 * t2 - s2 * t1;
+            let aa = (-p * t2) / det;
+            let bb = (p * t1) / det;
+            // ∫_a^∞ ε_rr dr on r = a·e^s (Simpson in s up to s = 30: the tail beyond,
+            // about e^−30 of the integral for n = 2, is far below the tolerance).
+            let (end, steps) = (30.0, 60_000);
+            let h = end / steps as f64;
+            let f = |s: f64| {
+                let r = a * s.exp();
+                let (srr, stt, _) = coef(r, aa, bb);
+                (srr - nu * stt) / e * r
+            };
+            let mut integral = f(0.0) + f(end);
+            for i in 1..steps {
+                integral += f(i as f64 * h) * if i % 2 == 1 { 4.0 } else { 2.0 };
+            }
+            integral *= h / 3.0;
+            let u = -integral;
+            let closed = p * a * (2.0 * n + 1.0 - nu) / (e * (n * n - 1.0));
+            assert!((u / closed - 1.0).abs() < 1e-6, "n = {n}: {u} vs {closed}");
+        }
+    }
+
+    #[test]
+    fn ringless_housing_of_an_rv20e_disc() {
+        // RV-20E: bore a = 15/2 + 3 = 10.5 mm, rim R = 52 − 27.5 = 24.5 mm, t = 8 mm:
+        // ln(24.5/10.5) = 0.84729786, (1.3·2.7)/(4π) = 0.27931693, so
+        // c_bore = (0.46246078 + 0.27931693·0.84729786)/(206 000·8) = 0.69912537/1 648 000
+        // = 4.242266e-7 mm/N (0.79 µm at the row's 1867 N, beside its 4.99 µm).
+        let c = RollerRow::ringless_housing_compliance(10.5, 24.5, 8.0, 206_000.0, 0.3);
+        let hand = (0.46246078 + 0.27931693 * 0.84729786) / 1_648_000.0;
+        assert!((c / hand - 1.0).abs() < 1e-7, "{c} vs {hand}");
+        assert!((c / 4.242266e-7 - 1.0).abs() < 1e-6);
+        // A rim no farther than the bore leaves the ovalisation alone.
+        let near = RollerRow::ringless_housing_compliance(10.5, 10.0, 8.0, 206_000.0, 0.3);
+        assert!((near * 1_648_000.0 - 0.46246078).abs() < 1e-8);
+    }
+
+    #[test]
+    fn pillar_roots_as_rigid_footings_on_a_half_space() {
+        // 11 × 11 mm pillar (RV-20E), E = 206 000 MPa, ν = 0.3, G = 79 230.77 MPa.
+        // Sliding: R_h = √(121/π) = 6.20609 mm, K_h = 8·G·6.20609/1.7 = 2.31394e6 N/mm.
+        // Rocking: I = 11⁴/12 = 1220.083 mm⁴, R_r = (4I/π)^¼ = 6.27805 mm,
+        // K_r = 8·G·6.27805³/(3·0.7) = 7.46860e7 N·mm/rad.
+        // Twisting: I_p = 2·I, R_t = (2·I_p/π)^¼ = R_r for a square, K_t = 16·G·R_t³/3
+        // = 1.04560e8 N·mm/rad.
+        let carrier = Carrier {
+            pillars: 2.0,
+            radius: 27.5,
+            width: 11.0,
+            depth: 11.0,
+            length: 19.0,
+        };
+        let (e, nu) = (206_000.0_f64, 0.3_f64);
+        let g = e / 2.6;
+        let r_h = (121.0 / PI).sqrt();
+        let r_r = (4.0 * 1220.0833333 / PI).powf(0.25);
+        let r_t = (2.0 * 2440.1666667 / PI).powf(0.25);
+        assert!((r_h - 6.20609).abs() < 1e-5 && (r_r - 6.27805).abs() < 1e-5);
+        let (sliding, rocking, twisting) = carrier.root_compliances(e, nu);
+        assert!((sliding * 8.0 * g * r_h / 1.7 - 1.0).abs() < 1e-9);
+        assert!((1.0 / sliding / 2.31394e6 - 1.0).abs() < 1e-5);
+        assert!((1.0 / rocking / 7.46860e7 - 1.0).abs() < 1e-5);
+        assert!((1.0 / twisting / 1.04560e8 - 1.0).abs() < 1e-5);
+        assert!((rocking * 8.0 * g * r_r.powi(3) / 2.1 - 1.0).abs() < 1e-9);
+        assert!((twisting * 16.0 * g * r_t.powi(3) / 3.0 - 1.0).abs() < 1e-9);
+        // The half-space root is stiffer than O'Donnell's (1960) plane-stress root of the
+        // same section, a slab of the pillar's width: 1/K_r = 3.67/(E·a³) here against
+        // 16.67/π = 5.31 per E·b·h².
+        let odonnell = 16.67 / (PI * e * 11f64.powi(3));
+        assert!(
+            rocking < odonnell && rocking > 0.6 * odonnell,
+            "{rocking} {odonnell}"
+        );
+        // K_c on the roots: lateral 1/K_lat = 19³/(12EI) + 19/((5/6)G·121) + 2/K_h
+        // + 19²/2·(1/K_r) = 4.65241e-6 + 8.6433e-7 + 2.41678e-6 = 7.93352e-6 mm/N, twist
+        // 19/(G·J) + 2/K_t; the roots add 70.5 % to the pillar's lateral compliance.
+        let lateral_rigid =
+            19f64.powi(3) / (12.0 * e * 1220.0833333) + 19.0 / (5.0 / 6.0 * g * 121.0);
+        let lateral = lateral_rigid + 2.0 * sliding + 0.5 * 361.0 * rocking;
+        assert!(
+            (lateral / 7.93352e-6 - 1.0).abs() < 1e-5
+                && (lateral / lateral_rigid - 1.70525).abs() < 1e-4,
+            "{}",
+            lateral / lateral_rigid
+        );
+        let twist = 0.140833 * 11f64.powi(4);
+        let hand = 2.0 * (27.5 * 27.5 / lateral + 1.0 / (19.0 / (g * twist) + 2.0 * twisting));
+        let k = carrier.torsional_stiffness_on_elastic_roots(e, nu);
+        assert!((k / hand - 1.0).abs() < 1e-5, "{k} vs {hand}");
+        assert!(k < carrier.torsional_stiffness(e, nu));
     }
 }

@@ -2,8 +2,9 @@
 //! output torque with the input locked, from −rated to +rated and back, and the catalogue
 //! figures read from it: lost motion, hysteresis loss, torsional rigidity. It combines the
 //! free play of document 000, the pin-contact load sharing of document 003 on the same
-//! profile, the compliance chain of the crank side (needle rows, crank shafts, support
-//! bearings, carrier, involute stage; crates/models/src/stiffness.rs) and Coulomb friction
+//! profile, the compliance chain of the crank side (needle rows and the disc around their
+//! bores, crank shafts, support bearings in their seats, carrier pillars on their roots,
+//! involute stage; crates/models/src/stiffness.rs) and Coulomb friction
 //! at the pins and crank bearings; docs/models.md §13.
 //!
 //! Units: torque in N·m (N·mm inside), angles in arcmin at the output (rad inside),
@@ -32,7 +33,8 @@
 //!           radian of the output)
 //!   T_c   = s_d·λ·(T − s·T_fb)                 (s_d the disc's share of the load)
 //!   β     load sharing of 003 with Σ F_i·(l_i + s·λ·μ_p·h_i) = T_c (cycloid_pin_contact)
-//!   E     = λ·(β − β_ref) + needle + shaft + support + carrier + involute  (CrankSide)
+//!   E     = λ·(β − β_ref) + needle + disc bore + shaft + support + carrier + involute
+//!           (CrankSide; `body_compliance` = 0: no disc bore, rigid seats and plates)
 //!   β_ref = β_f when the stage has free play, else β_0, the zero-torque equilibrium of the
 //!           preloaded flanks (Σ F_i·l_i = 0)
 //!
@@ -72,9 +74,10 @@
 //! - A row with a non-finite input, or k·(1 + x_k) ≤ 0, gives NaN outputs (the engine counts
 //!   them).
 //!
-//! Left out (docs/models.md §13 says why and how much): the disc body and the deformation of
-//! the bores around the rows, the carrier plates and the housing, the main bearings (no
-//! torque about the axis), the support bearings' preload and the rows' edge loading under
+//! Left out (docs/models.md §13 says why and how much): the bending of the disc's lobes, the
+//! plates' bending beyond the pillars' roots and their in-plane paths, the bolted joint of
+//! the end plate, the housing, the main bearings (no torque about the axis; their tilt
+//! under the two discs' couple stays under 1 % of E), the support bearings' preload and the rows' edge loading under
 //! the shaft's slope, the disc's shift along its eccentric in the load sharing (under 1 % of
 //! E), the planet gear's force on the crank shaft, the friction of the support and main
 //! bearings and of the seals, the input shaft's torsion.
@@ -281,6 +284,12 @@ const PARAMS: &[ParamSpec] = &[
         default: None,
     },
     ParamSpec {
+        name: "needle_roller_diameter_mm",
+        unit: "mm",
+        description: "D, needle diameter: the disc's bore is d_j/2 + D; default d_j/5 (the estimation rule of docs/models.md §13)",
+        default: None,
+    },
+    ParamSpec {
         name: "needle_roller_length_mm",
         unit: "mm",
         description: "l, effective needle length",
@@ -314,6 +323,12 @@ const PARAMS: &[ParamSpec] = &[
         name: "support_contact_angle_deg",
         unit: "deg",
         description: "α_s, contact angle of a support bearing (tapered rollers), in [0, 45)",
+        default: None,
+    },
+    ParamSpec {
+        name: "support_bearing_width_mm",
+        unit: "mm",
+        description: "B, width of a support bearing, the thickness of the carrier plate around it; default support_roller_length_mm/0.7 (the estimation rule of docs/models.md §13)",
         default: None,
     },
     ParamSpec {
@@ -363,6 +378,12 @@ const PARAMS: &[ParamSpec] = &[
         unit: "mm",
         description: "l1, planet gear to the nearer support bearing along the crank",
         default: None,
+    },
+    ParamSpec {
+        name: "body_compliance",
+        unit: "1",
+        description: "1: the disc around its crank bores and the pillars' roots in the carrier plates are elastic (docs/models.md §13); 0: rigid disc and plates (the chain before they were added)",
+        default: Some(1.0),
     },
     ParamSpec {
         name: "pin_friction_coefficient",
@@ -457,8 +478,8 @@ impl TorsionCurve {
     /// The RV-20E: 000 Table 8 (K1 as printed, 0.72, for 000's terms; pin radius 2 mm;
     /// a0 = 27.5 mm, also the crank circle), two cranks, rated torque 167 N·m (catalogue),
     /// and the estimated dimensions of docs/models.md §13: disc face width 8 mm, eccentric
-    /// journal 15 mm with 15 needles of 6 mm, support span 30.75 mm with the eccentrics 9 mm
-    /// apart, 30202-size supports (13 rollers of 8.2 mm at 13°), two 11 × 11 × 19 mm
+    /// journal 15 mm with 15 needles of 3 × 6 mm, support span 30.75 mm with the eccentrics
+    /// 9 mm apart, 30202-size supports (13 rollers of 8.2 mm at 13°, 11.75 mm wide), two 11 × 11 × 19 mm
     /// pillars, planet face width 8 mm with an 11 mm overhang; friction 0.02 at the pins
     /// (000 Table 7's dynamic coefficient) and 0.002 in the needle rows (SKF).
     pub fn rv20e_params() -> ModelParams {
@@ -468,12 +489,14 @@ impl TorsionCurve {
             .with_number("crank_circle_radius_mm", 27.5)
             .with_number("crank_journal_diameter_mm", 15.0)
             .with_number("needle_roller_count", 15.0)
+            .with_number("needle_roller_diameter_mm", 3.0)
             .with_number("needle_roller_length_mm", 6.0)
             .with_number("crank_support_span_mm", 30.75)
             .with_number("crank_eccentric_spacing_mm", 9.0)
             .with_number("support_roller_count", 13.0)
             .with_number("support_roller_length_mm", 8.225)
             .with_number("support_contact_angle_deg", 13.0)
+            .with_number("support_bearing_width_mm", 11.75)
             .with_number("carrier_pillar_width_mm", 11.0)
             .with_number("carrier_pillar_depth_mm", 11.0)
             .with_number("carrier_pillar_length_mm", 19.0)
@@ -529,6 +552,8 @@ impl TorsionCurve {
             length: params.positive("needle_roller_length_mm", None)?,
             contact_angle: 0.0,
         };
+        let needle_diameter =
+            params.positive("needle_roller_diameter_mm", Some(0.2 * journal_diameter))?;
         let span = params.positive("crank_support_span_mm", None)?;
         let spacing = params.positive("crank_eccentric_spacing_mm", None)?;
         if spacing >= span {
@@ -550,6 +575,8 @@ impl TorsionCurve {
             length: params.positive("support_roller_length_mm", None)?,
             contact_angle: contact_angle.to_radians(),
         };
+        let support_width =
+            params.positive("support_bearing_width_mm", Some(support.length / 0.7))?;
         let carrier = Carrier {
             pillars: params.count("carrier_pillar_count", Some(cranks as f64))? as f64,
             radius: params.positive("carrier_pillar_radius_mm", Some(crank_circle_radius))?,
@@ -584,17 +611,47 @@ impl TorsionCurve {
         let pin_friction = friction("pin_friction_coefficient")?;
         let bearing_friction = friction("crank_bearing_friction_coefficient")?;
         let consistent_clearance = params.flag("clearance_reading", true)?;
+        let elastic_bodies = params.flag("body_compliance", true)?;
         let rated_torque = params.positive("rated_torque_nm", None)?;
         params.reject_unknown(&PARAMS.iter().map(|p| p.name).collect::<Vec<_>>())?;
         let stage = *contact.stage();
+        // The disc's bore (needle row on the journal) and its rim, the pin circle, along the
+        // crank circle's radius.
+        let bore_radius = 0.5 * journal_diameter + needle_diameter;
+        let rim_distance = stage.pin_circle_radius - crank_circle_radius;
+        if bore_radius >= rim_distance {
+            return Err(ModelError::new(
+                "needle_roller_diameter_mm",
+                format!(
+                    "the disc's bore (crank_journal_diameter_mm/2 + needle_roller_diameter_mm = {bore_radius} mm) must lie inside the pin circle, {rim_distance} mm beyond the crank circle"
+                ),
+            ));
+        }
+        let (bore_compliance, support_housing_compliance, carrier_stiffness) = if elastic_bodies {
+            (
+                RollerRow::ringless_housing_compliance(
+                    bore_radius,
+                    rim_distance,
+                    contact.face_width(),
+                    youngs,
+                    poisson,
+                ),
+                RollerRow::housing_ovalisation_compliance(support_width, youngs, poisson),
+                carrier.torsional_stiffness_on_elastic_roots(youngs, poisson),
+            )
+        } else {
+            (0.0, 0.0, carrier.torsional_stiffness(youngs, poisson))
+        };
         let side = CrankSide {
             cranks: cranks as f64,
             crank_circle_radius,
             pitch_radius: stage.eccentricity * stage.teeth as f64,
             needle,
+            bore_compliance,
             shaft,
             support,
-            carrier_stiffness: carrier.torsional_stiffness(youngs, poisson),
+            support_housing_compliance,
+            carrier_stiffness,
             involute_compliance: involute
                 .output_compliance(hysteresis.ratio(), shaft.torsional_rigidity),
         };
@@ -778,6 +835,7 @@ impl TorsionCurve {
             pins: pins * ARCMIN_PER_RAD,
             chain: ChainTerms {
                 needle: chain.needle * ARCMIN_PER_RAD,
+                disc_bore: chain.disc_bore * ARCMIN_PER_RAD,
                 shaft: chain.shaft * ARCMIN_PER_RAD,
                 support: chain.support * ARCMIN_PER_RAD,
                 carrier: chain.carrier * ARCMIN_PER_RAD,
@@ -1306,6 +1364,46 @@ mod tests {
     }
 
     #[test]
+    fn body_compliance_softens_the_chain_by_its_own_terms() {
+        // body_compliance 0 (rigid disc and plates) against the default: the pins, the
+        // needle rows, the shaft and the involute stage are the same; the disc bore is new,
+        // the supports gain their seats and the carrier its pillar roots (stiffness.rs);
+        // the default needle diameter and support width are the estimation rules' d_j/5 and
+        // l_s/0.7 (3 mm and 11.75 mm on the RV-20E: the same model).
+        let soft = rv20e();
+        let rigid = with("body_compliance", 0.0).unwrap();
+        let x = nominal();
+        let (a, b) = (
+            soft.breakdown(&x, 167.0).unwrap(),
+            rigid.breakdown(&x, 167.0).unwrap(),
+        );
+        assert_eq!(a.pins, b.pins);
+        assert_eq!(a.chain.needle, b.chain.needle);
+        assert_eq!(a.chain.shaft, b.chain.shaft);
+        assert_eq!(a.chain.involute, b.chain.involute);
+        assert_eq!(b.chain.disc_bore, 0.0);
+        assert!(a.chain.disc_bore > 0.0);
+        assert!(a.chain.support > b.chain.support && a.chain.carrier > b.chain.carrier);
+        let mut out = [0.0; 7];
+        let mut out_rigid = [0.0; 7];
+        soft.evaluate(&x, &mut out);
+        rigid.evaluate(&x, &mut out_rigid);
+        assert!(out[2] < out_rigid[2] && out[4] > out_rigid[4]);
+        let keys: Vec<&str> = geometric_hysteresis::ENTRY
+            .params
+            .iter()
+            .chain(PARAMS)
+            .map(|p| p.name)
+            .filter(|name| {
+                !["needle_roller_diameter_mm", "support_bearing_width_mm"].contains(name)
+            })
+            .collect();
+        let defaults = TorsionCurve::rv20e_params().subset(&keys);
+        let by_rule = TorsionCurve::from_params(&defaults).unwrap();
+        assert_eq!(by_rule.crank_side(), soft.crank_side());
+    }
+
+    #[test]
     fn bad_parameters_are_named() {
         let cases = [
             ("rated_torque_nm", 0.0, "rated_torque_nm"),
@@ -1339,6 +1437,19 @@ mod tests {
                 "crank_bearing_friction_coefficient",
             ),
             ("clearance_reading", 2.0, "clearance_reading"),
+            ("body_compliance", 0.5, "body_compliance"),
+            (
+                "needle_roller_diameter_mm",
+                0.0,
+                "needle_roller_diameter_mm",
+            ),
+            // The bore, 7.5 + 17.5 = 25 mm, reaches past the pin circle 24.5 mm away.
+            (
+                "needle_roller_diameter_mm",
+                17.5,
+                "needle_roller_diameter_mm",
+            ),
+            ("support_bearing_width_mm", -1.0, "support_bearing_width_mm"),
             (
                 "crank_bearing_stiffness_n_per_mm",
                 2e5,
