@@ -181,13 +181,17 @@ pub fn curve(scenario_path: &Path, out_dir: &Path) -> Result<()> {
 pub fn validate(scenario_path: &Path) -> Result<()> {
     let text = read_text(scenario_path)?;
     match Scenario::from_json_all_problems(&text, &fallback_name(scenario_path)) {
-        Ok(scenario) => print(&format!(
-            "{}: valid ({} input columns, {} models, {} outputs)\n",
-            scenario_path.display(),
-            scenario.input_space.n_columns(),
-            scenario.models.len(),
-            scenario.outputs.len()
-        )),
+        Ok(scenario) => {
+            let count =
+                |n: usize, noun: &str| format!("{n} {noun}{}", if n == 1 { "" } else { "s" });
+            print(&format!(
+                "{}: valid ({}, {}, {})\n",
+                scenario_path.display(),
+                count(scenario.input_space.n_columns(), "input column"),
+                count(scenario.models.len(), "model"),
+                count(scenario.outputs.len(), "output")
+            ))
+        }
         Err(problems) => {
             let count = problems.len();
             let mut lines: Vec<String> = problems

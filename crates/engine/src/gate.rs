@@ -36,7 +36,8 @@ use crate::run::{
 };
 use crate::scenario::{Scenario, ScenarioError};
 use crate::stats::{
-    order_statistic_interval, percentile_type7_of_sorted, proportion_standard_error, QuantileSketch,
+    order_statistic_interval, percentile_type7_of_sorted, proportion_standard_error,
+    QuantileSketch, StandardisedSketch,
 };
 use rvtol_models::OutputKind;
 
@@ -380,20 +381,16 @@ impl Percentiles {
                 min,
                 max,
             } => {
-                let alpha = sketch.relative_accuracy();
-                let last = (*n - 1) as f64;
-                // The order statistic of 0-based rank r: the sketch's quantile at a q
-                // whose ⌊q·(n − 1)⌋ is r, moved out by its error bound.
-                let at_rank = |rank: f64, outward: f64| {
-                    let q = if last > 0.0 {
-                        ((rank + 0.5) / last).min(1.0)
-                    } else {
-                        0.0
-                    };
-                    let z = sketch.quantile(q).unwrap_or(0.0);
-                    let value = *center + *scale * z + outward * alpha * (*scale * z).abs();
-                    value.clamp(*min, *max)
+                let sketch = StandardisedSketch {
+                    sketch,
+                    center: *center,
+                    scale: *scale,
+                    min: *min,
+                    max: *max,
                 };
+                let last = (*n - 1) as f64;
+                let at_rank =
+                    |rank: f64, outward: f64| sketch.order_statistic(rank as u64, outward);
                 let (nf, p) = (*n as f64, (percent / 100.0).clamp(0.0, 1.0));
                 let value = at_rank((p * last).floor(), 0.0);
                 let reach = z * (nf * p * (1.0 - p)).sqrt();

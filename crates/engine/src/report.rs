@@ -17,8 +17,9 @@ use crate::run::{Distribution, OutputAccumulator, PercentileMethod, RunResult, C
 use crate::scenario::{OutputInfo, Scenario};
 use crate::stats::quantile_sketch::bucket_representative;
 use crate::stats::{
-    capability_from_moments, capability_percentile_method, out_of_spec_interval, percentiles_type7,
-    Histogram, Moments, QuantileSketch, SpecLimits,
+    binomial_rank_interval, capability_from_moments, capability_percentile_method,
+    out_of_spec_interval, percentiles_type7_with_intervals, Histogram, Moments, QuantileSketch,
+    SpecLimits, StandardisedSketch,
 };
 use rvtol_deviation::Shown;
 use rvtol_models::{ConditionEffect, OutputKind};
@@ -55,6 +56,28 @@ impl Serialize for OrderedNumbers {
 impl OrderedNumbers {
     /// The value under `key`.
     pub fn get(&self, key: &str) -> Option<f64> {
+        self.0.iter().find(|(k, _)| k == key).map(|(_, v)| *v)
+    }
+}
+
+/// Intervals keyed by name, serialised as a JSON object of [lower, upper] pairs in the
+/// given order; an end is null where the sample cannot bound it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OrderedIntervals(pub Vec<(String, [Option<f64>; 2])>);
+
+impl Serialize for OrderedIntervals {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        let mut map = serializer.serialize_map(Some(self.0.len()))?;
+        for (key, value) in &self.0 {
+            map.serialize_entry(key, value)?;
+        }
+        map.end()
+    }
+}
+
+impl OrderedIntervals {
+    /// The interval under `key`.
+    pub fn get(&self, key: &str) -> Option<[Option<f64>; 2]> {
         self.0.iter().find(|(k, _)| k == key).map(|(_, v)| *v)
     }
 }
@@ -187,6 +210,11 @@ pub struct OutputReport {
     /// Bound on each percentile's error from the percentile method, in the output's unit:
     /// 0 for exact order statistics; for the sketch, α·|percentile − centre|.
     pub percentile_error_bounds: OrderedNumbers,
+    /// Distribution-free 95 % confidence interval of each percentile: the order
+    /// statistics [X_(l), X_(u)] of the exact binomial ranks (Hahn & Meeker 1991 §5.2;
+    /// `binomial_rank_interval`), from the sketch moved out by its error bound; an end is
+    /// null where too few values lie beyond the percentile to bound it.
+    pub percentile_ci95: OrderedIntervals,
     /// Histogram over [min, max].
     pub histogram: HistogramReport,
     /// Events (samples with value ≠ 0) of an indicator.
@@ -346,12 +374,24 @@ impl RunReport {
                     (f64::NAN, f64::NAN)
                 };
                 let exact_bounds = || vec![0.0; PERCENTS.len()];
-                let (percentiles, bounds, histogram) = match &mut acc.distribution {
+                let n_values = m.n as usize;
+                let rank_intervals = || {
+                    PERCENTS
+                        .iter()
+                        .map(|p| binomial_rank_interval(n_values, p.1 / 100.0, CONFIDENCE))
+                };
+                let (percentiles, bounds, intervals, histogram) = match &mut acc.distribution {
                     Distribution::Values(values) => {
                         let percents: Vec<f64> = PERCENTS.iter().map(|p| p.1).collect();
                         let histogram = Histogram::from_values(values, min, max, HISTOGRAM_BINS);
-                        let found = percentiles_type7(values, &percents);
-                        (found, exact_bounds(), histogram)
+                        let found = percentiles_type7_with_intervals(values, &percents, CONFIDENCE);
+                        let intervals: Vec<[Option<f64>; 2]> = found
+                            .iter()
+                            .map(|f| f.map_or([None, None], |f| [f.lower, f.upper]))
+                            .collect();
+                        let found: Vec<Option<f64>> =
+                            found.iter().map(|f| f.map(|f| f.value)).collect();
+                        (found, exact_bounds(), intervals, histogram)
                     }
                     Distribution::Sketch {
                         sketch,
@@ -374,19 +414,38 @@ impl RunReport {
                             .collect();
                         let histogram =
                             histogram_of_standardised_sketch(sketch, *center, *scale, min, max);
-                        (values, bounds, histogram)
+                        let read = StandardisedSketch {
+                            sketch,
+                            center: *center,
+                            scale: *scale,
+                            min,
+                            max,
+                        };
+                        let intervals = rank_intervals()
+                            .map(|(l, u)| {
+                                [
+                                    l.map(|r| read.order_statistic(r as u64, -1.0)),
+                                    u.map(|r| read.order_statistic(r as u64, 1.0)),
+                                ]
+                            })
+                            .collect();
+                        (values, bounds, intervals, histogram)
                     }
                     Distribution::Dropped => {
                         unreachable!("a run for a report keeps every output's distribution")
                     }
                     Distribution::Indicator => {
                         let zeros = m.n - acc.nonzero;
+                        let value = |rank: usize| if (rank as u64) < zeros { 0.0 } else { 1.0 };
                         (
                             PERCENTS
                                 .iter()
                                 .map(|p| binary_percentile(zeros, m.n, p.1))
                                 .collect(),
                             exact_bounds(),
+                            rank_intervals()
+                                .map(|(l, u)| [l.map(value), u.map(value)])
+                                .collect(),
                             Histogram {
                                 lower_edge: 0.0,
                                 bin_width: 0.5,
@@ -407,6 +466,13 @@ impl RunReport {
                         .iter()
                         .zip(bounds)
                         .map(|((key, _), b)| (key.to_string(), b))
+                        .collect(),
+                );
+                let percentile_ci95 = OrderedIntervals(
+                    PERCENTS
+                        .iter()
+                        .zip(intervals)
+                        .map(|((key, _), i)| (key.to_string(), i))
                         .collect(),
                 );
                 let indicator = info.kind == OutputKind::Indicator;
@@ -453,6 +519,7 @@ impl RunReport {
                     }),
                     percentiles,
                     percentile_error_bounds,
+                    percentile_ci95,
                     histogram: HistogramReport {
                         lower_edge: histogram.lower_edge,
                         bin_width: histogram.bin_width,
@@ -540,6 +607,40 @@ impl RunReport {
                 format_sig(o.min),
                 format_sig(o.max),
             ));
+        }
+        let continuous: Vec<&OutputReport> = self
+            .outputs
+            .iter()
+            .filter(|o| o.kind != "indicator" && o.n > 0)
+            .collect();
+        if !continuous.is_empty() {
+            let sketch = if self.percentile_method.relative_error.is_some() {
+                ", from the sketch moved out by its error bound"
+            } else {
+                ""
+            };
+            lines.push(String::new());
+            lines.push(format!(
+                "95 % confidence intervals of the percentiles (distribution-free, order statistics{sketch})"
+            ));
+            lines.push(format!(
+                "{:<name_width$}  {:>23} {:>23} {:>23}",
+                "output", "P0.135", "P50", "P99.865"
+            ));
+            let end = |x: Option<f64>, open: &str| x.map_or(open.to_string(), format_sig);
+            for o in continuous {
+                let interval = |key: &str| {
+                    let [l, u] = o.percentile_ci95.get(key).unwrap_or([None, None]);
+                    format!("{} .. {}", end(l, "below min"), end(u, "above max"))
+                };
+                lines.push(format!(
+                    "{:<name_width$}  {:>23} {:>23} {:>23}",
+                    o.name,
+                    interval("0.135"),
+                    interval("50"),
+                    interval("99.865")
+                ));
+            }
         }
         let with_spec: Vec<&OutputReport> = self
             .outputs

@@ -74,7 +74,7 @@ pub fn percentiles_type7(values: &mut [f64], percents: &[f64]) -> Vec<Option<f64
         .map(|&percent| type7_position(count, percent))
         .collect();
 
-    let mut ranks: Vec<usize> = positions
+    let ranks: Vec<usize> = positions
         .iter()
         .flatten()
         .flat_map(|&(lower_rank, weight)| {
@@ -82,20 +82,7 @@ pub fn percentiles_type7(values: &mut [f64], percents: &[f64]) -> Vec<Option<f64
             std::iter::once(lower_rank).chain(upper_rank)
         })
         .collect();
-    ranks.sort_unstable();
-    ranks.dedup();
-
-    let mut order_statistics: Vec<(usize, f64)> = Vec::with_capacity(ranks.len());
-    let mut start = 0;
-    for rank in ranks {
-        // rank ≥ start and rank < n, so the sub-slice is never empty.
-        let value = *values[start..]
-            .select_nth_unstable_by(rank - start, f64::total_cmp)
-            .1;
-        order_statistics.push((rank, value));
-        start = rank + 1;
-    }
-
+    let order_statistics = select_ranks(values, ranks);
     let lookup = |rank: usize| -> f64 {
         order_statistics
             .binary_search_by_key(&rank, |&(r, _)| r)
@@ -110,6 +97,133 @@ pub fn percentiles_type7(values: &mut [f64], percents: &[f64]) -> Vec<Option<f64
                     lower
                 } else {
                     interpolate(lower, lookup(lower_rank + 1), weight)
+                }
+            })
+        })
+        .collect()
+}
+
+/// The order statistics of the 0-based `ranks` (any order, duplicates allowed; each
+/// below `values.len()`), as (rank, value) in increasing rank. Selected in increasing
+/// rank order, each within the part of the slice above the previous one; the slice is
+/// reordered in place.
+fn select_ranks(values: &mut [f64], mut ranks: Vec<usize>) -> Vec<(usize, f64)> {
+    ranks.sort_unstable();
+    ranks.dedup();
+    let mut order_statistics: Vec<(usize, f64)> = Vec::with_capacity(ranks.len());
+    let mut start = 0;
+    for rank in ranks {
+        // rank ≥ start and rank < n, so the sub-slice is never empty.
+        let value = *values[start..]
+            .select_nth_unstable_by(rank - start, f64::total_cmp)
+            .1;
+        order_statistics.push((rank, value));
+        start = rank + 1;
+    }
+    order_statistics
+}
+
+/// The 0-based ranks (l, u) of the distribution-free confidence interval
+/// [X_(l), X_(u)] for the quantile of probability `p` from `n` values, at `confidence`
+/// (e.g. 0.95), from the exact binomial law of B, the count of values below the
+/// quantile (B ~ Binomial(n, p) for a continuous distribution): P(X_(l) ≤ x_p < X_(u)) =
+/// P(l + 1 ≤ B ≤ u) ≥ confidence, with l the largest rank such that P(B ≤ l) ≤ α/2 and u
+/// the smallest such that P(B ≤ u) ≥ 1 − α/2 (α = 1 − confidence; Hahn & Meeker 1991
+/// §5.2). `None` for an end the sample cannot bound (too few values beyond the
+/// percentile: the interval is open on that side).
+pub fn binomial_rank_interval(n: usize, p: f64, confidence: f64) -> (Option<usize>, Option<usize>) {
+    use statrs::distribution::{Binomial, DiscreteCDF};
+    let tail = 0.5 * (1.0 - confidence);
+    let p = p.clamp(0.0, 1.0);
+    let Ok(law) = Binomial::new(p, n as u64) else {
+        return (None, None);
+    };
+    // Smallest m in [0, n] with P(B ≤ m) ≥ level (P(B ≤ n) = 1), by bisection.
+    let smallest_at_least = |level: f64| -> u64 {
+        let (mut low, mut high) = (0u64, n as u64);
+        while low < high {
+            let middle = low + (high - low) / 2;
+            if law.cdf(middle) >= level {
+                high = middle;
+            } else {
+                low = middle + 1;
+            }
+        }
+        low
+    };
+    let m = smallest_at_least(tail);
+    let lower = if law.cdf(m) <= tail {
+        Some(m)
+    } else {
+        m.checked_sub(1)
+    };
+    let upper = smallest_at_least(1.0 - tail);
+    (
+        lower.map(|r| r as usize).filter(|&r| r < n),
+        Some(upper as usize).filter(|&r| r < n),
+    )
+}
+
+/// A type 7 percentile with its distribution-free confidence interval
+/// ([`binomial_rank_interval`]); an end is `None` where the sample cannot bound it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PercentileWithInterval {
+    /// The type 7 percentile.
+    pub value: f64,
+    /// X_(l), the interval's lower end.
+    pub lower: Option<f64>,
+    /// X_(u), the interval's upper end.
+    pub upper: Option<f64>,
+}
+
+/// Type 7 percentiles of `values` at each of `percents` (bit for bit those of
+/// [`percentiles_type7`]) with their distribution-free intervals at `confidence`, from one
+/// selection pass over every rank needed. The slice is reordered in place.
+pub fn percentiles_type7_with_intervals(
+    values: &mut [f64],
+    percents: &[f64],
+    confidence: f64,
+) -> Vec<Option<PercentileWithInterval>> {
+    let count = values.len();
+    let positions: Vec<Option<(usize, f64)>> = percents
+        .iter()
+        .map(|&percent| type7_position(count, percent))
+        .collect();
+    let intervals: Vec<(Option<usize>, Option<usize>)> = percents
+        .iter()
+        .map(|&percent| binomial_rank_interval(count, percent / 100.0, confidence))
+        .collect();
+    let mut ranks: Vec<usize> = Vec::new();
+    for (position, &(l, u)) in positions.iter().zip(&intervals) {
+        if let Some((lower_rank, weight)) = *position {
+            ranks.push(lower_rank);
+            if weight > 0.0 {
+                ranks.push(lower_rank + 1);
+            }
+            ranks.extend(l);
+            ranks.extend(u);
+        }
+    }
+    let order_statistics = select_ranks(values, ranks);
+    let lookup = |rank: usize| -> f64 {
+        order_statistics
+            .binary_search_by_key(&rank, |&(r, _)| r)
+            .map_or(f64::NAN, |index| order_statistics[index].1)
+    };
+    positions
+        .iter()
+        .zip(&intervals)
+        .map(|(position, &(l, u))| {
+            position.map(|(lower_rank, weight)| {
+                let lower = lookup(lower_rank);
+                PercentileWithInterval {
+                    value: if weight == 0.0 {
+                        lower
+                    } else {
+                        interpolate(lower, lookup(lower_rank + 1), weight)
+                    },
+                    lower: l.map(lookup),
+                    upper: u.map(lookup),
                 }
             })
         })
@@ -145,6 +259,60 @@ pub fn order_statistic_interval(sorted: &[f64], percent: f64, z: f64) -> Option<
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn binomial_ranks_hold_their_coverage_exactly() {
+        // P(l + 1 ≤ B ≤ u) ≥ 95 % with B ~ Binomial(n, p), and neither end can move
+        // inwards without dropping below it (the interval is the shortest of its form).
+        use statrs::distribution::{Binomial, DiscreteCDF};
+        for (n, p) in [
+            (1000, 0.5),
+            (1000, 0.99865),
+            (20_000, 0.00135),
+            (100, 0.5),
+            (7, 0.3),
+        ] {
+            let law = Binomial::new(p, n as u64).unwrap();
+            let cdf = |k: i64| if k < 0 { 0.0 } else { law.cdf(k as u64) };
+            let (l, u) = binomial_rank_interval(n, p, 0.95);
+            let lo = l.map_or(-1, |l| l as i64);
+            let hi = u.map_or(n as i64, |u| u as i64);
+            let coverage = cdf(hi) - cdf(lo);
+            assert!(coverage >= 0.95, "{n} {p}: {coverage}");
+            assert!(
+                cdf(lo) <= 0.025 && cdf(lo + 1) > 0.025 || l.is_none(),
+                "{n} {p}"
+            );
+            assert!(
+                cdf(hi) >= 0.975 && cdf(hi - 1) < 0.975 || u.is_none(),
+                "{n} {p}"
+            );
+        }
+        // n·(1 − p) = 1.35 values expected above P99.865 of 1000: the upper end is open.
+        assert_eq!(binomial_rank_interval(1000, 0.99865, 0.95).1, None);
+        // The normal approximation at p = 0.5, n = 10⁴: ranks 4902 and 5098 (± 98).
+        let (l, u) = binomial_rank_interval(10_000, 0.5, 0.95);
+        assert!((4900..=4903).contains(&l.unwrap()) && (5097..=5100).contains(&u.unwrap()));
+    }
+
+    #[test]
+    fn percentiles_with_intervals_match_the_plain_ones_and_the_sorted_ranks() {
+        let values: Vec<f64> = (0..1001)
+            .map(|i| ((i * 389) % 1001) as f64 * 0.25)
+            .collect();
+        let percents = [0.135, 2.275, 50.0, 97.725, 99.865];
+        let plain = percentiles_type7(&mut values.clone(), &percents);
+        let with = percentiles_type7_with_intervals(&mut values.clone(), &percents, 0.95);
+        let mut sorted = values.clone();
+        sorted.sort_unstable_by(f64::total_cmp);
+        for ((p, a), b) in percents.iter().zip(&plain).zip(&with) {
+            let b = b.unwrap();
+            assert_eq!(a.unwrap().to_bits(), b.value.to_bits(), "{p}");
+            let (l, u) = binomial_rank_interval(values.len(), p / 100.0, 0.95);
+            assert_eq!(b.lower, l.map(|r| sorted[r]), "{p}");
+            assert_eq!(b.upper, u.map(|r| sorted[r]), "{p}");
+        }
+    }
 
     #[test]
     fn sorted_percentiles_equal_the_selected_ones() {

@@ -22,8 +22,9 @@ pub use capability::{
     ProportionEstimate, SpecLimits,
 };
 pub use exact::{
-    order_statistic_interval, percentile_type7, percentile_type7_of_sorted, percentiles_type7,
+    binomial_rank_interval, order_statistic_interval, percentile_type7, percentile_type7_of_sorted,
+    percentiles_type7, percentiles_type7_with_intervals, PercentileWithInterval,
 };
 pub use histogram::Histogram;
 pub use moments::{proportion_standard_error, Moments};
-pub use quantile_sketch::{QuantileSketch, SketchMismatch};
+pub use quantile_sketch::{QuantileSketch, SketchMismatch, StandardisedSketch};

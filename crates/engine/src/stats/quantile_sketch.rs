@@ -382,7 +382,17 @@ impl QuantileSketch {
             return None;
         }
         let q = q.clamp(0.0, 1.0);
-        let rank = ((q * (self.count - 1) as f64).floor() as u64).min(self.count - 1);
+        self.order_statistic(((q * (self.count - 1) as f64).floor() as u64).min(self.count - 1))
+    }
+
+    /// Estimate of the order statistic of 0-based rank `rank` (clamped to the count), with
+    /// relative error at most alpha against the exact one (as [`Self::quantile`]). `None`
+    /// when the sketch is empty.
+    pub fn order_statistic(&self, rank: u64) -> Option<f64> {
+        if self.count == 0 {
+            return None;
+        }
+        let rank = rank.min(self.count - 1);
         let mut seen = 0u64;
         for (index, count) in self.negative.non_zero().rev() {
             seen += count;
@@ -658,5 +668,36 @@ mod tests {
         let mut of_mapped = QuantileSketch::new(0.001);
         of_mapped.insert_slice(&mapped);
         assert_eq!(standardised, of_mapped);
+    }
+}
+
+/// A sketch of standardised values (x − centre)/scale, as a run keeps for an output beyond
+/// the exact-percentile limit, read back in the output's units.
+#[derive(Debug, Clone, Copy)]
+pub struct StandardisedSketch<'a> {
+    /// The sketch of the standardised values.
+    pub sketch: &'a QuantileSketch,
+    /// The centre subtracted.
+    pub center: f64,
+    /// The scale divided by.
+    pub scale: f64,
+    /// The smallest value seen (every order statistic lies within [min, max]).
+    pub min: f64,
+    /// The largest value seen.
+    pub max: f64,
+}
+
+impl StandardisedSketch<'_> {
+    /// The order statistic of 0-based `rank` in output units, moved by `outward` (−1
+    /// down, +1 up, 0 not) times the sketch's error bound α·|x − centre|, so that with
+    /// outward ≠ 0 it lies beyond the exact order statistic on that side; within
+    /// [min, max]. NaN for an empty sketch.
+    pub fn order_statistic(&self, rank: u64, outward: f64) -> f64 {
+        let Some(z) = self.sketch.order_statistic(rank) else {
+            return f64::NAN;
+        };
+        let x = self.scale * z;
+        (self.center + x + outward * self.sketch.relative_accuracy() * x.abs())
+            .clamp(self.min, self.max)
     }
 }
