@@ -590,7 +590,7 @@ impl ErrorModel for GeometricHysteresis {
     fn evaluate(&self, x: &[f64], out: &mut [f64]) {
         let x: &[f64; N_INPUTS] = x[..N_INPUTS].try_into().expect("18 inputs");
         let n_out = self.outputs.len();
-        out[..n_out].copy_from_slice(&self.row(x, exact_tilt)[..n_out]);
+        out[..n_out].copy_from_slice(&self.row::<true>(x, exact_tilt)[..n_out]);
     }
 
     /// The row form over every row of the block: a branch-free loop over contiguous
@@ -604,30 +604,13 @@ impl ErrorModel for GeometricHysteresis {
             return;
         }
         let columns: [&[f64]; N_INPUTS] = std::array::from_fn(|i| &inputs[i][..n]);
-        let mut any_exact = false;
-        {
-            // Without selective fitting there is no `pin_class` column (the class is 0).
-            let mut columns_out = outputs.chunks_exact_mut(n);
-            let mut next = || columns_out.next();
-            let [hysteresis, involute, cycloid, crank, interference, preload, flank]: [&mut [f64];
-                7] = std::array::from_fn(|_| next().expect("one column per output"));
-            let mut class = next();
-            for r in 0..n {
-                let x: [f64; N_INPUTS] = std::array::from_fn(|i| columns[i][r]);
-                let [h, i, c, k, f, p, u, q] = self.row(&x, series_tilt);
-                hysteresis[r] = h;
-                involute[r] = i;
-                cycloid[r] = c;
-                crank[r] = k;
-                interference[r] = f;
-                preload[r] = p;
-                flank[r] = u;
-                if let Some(class) = class.as_deref_mut() {
-                    class[r] = q;
-                }
-                any_exact |= needs_cosine(tilt_squared(&x));
-            }
-        }
+        // Without selective fitting there is no `pin_class` column (the class is 0), and
+        // the loop is compiled without the fitter.
+        let any_exact = if self.class_centres.len() > 1 {
+            self.column_loop::<true>(&columns, outputs, n)
+        } else {
+            self.column_loop::<false>(&columns, outputs, n)
+        };
         if any_exact {
             let mut out = [0.0; N_OUTPUTS];
             for r in 0..n {
@@ -685,10 +668,52 @@ fn exact_tilt(beta_squared: f64) -> (f64, f64) {
 }
 
 impl GeometricHysteresis {
+    /// The row form over the block's columns into the output columns (`pin_class` last,
+    /// written only with `FIT`); whether any row is tilted beyond the cos β series.
+    #[inline(always)]
+    fn column_loop<const FIT: bool>(
+        &self,
+        columns: &[&[f64]; N_INPUTS],
+        outputs: &mut [f64],
+        n: usize,
+    ) -> bool {
+        let mut columns_out = outputs.chunks_exact_mut(n);
+        let mut next = || columns_out.next().expect("one column per output");
+        let [hysteresis, involute, cycloid, crank, interference, preload, flank]: [&mut [f64]; 7] =
+            std::array::from_fn(|_| next());
+        let mut class = if FIT { Some(next()) } else { None };
+        let mut any_exact = false;
+        for r in 0..n {
+            let x: [f64; N_INPUTS] = std::array::from_fn(|i| columns[i][r]);
+            let [h, i, c, k, f, p, u, q] = self.row::<FIT>(&x, series_tilt);
+            hysteresis[r] = h;
+            involute[r] = i;
+            cycloid[r] = c;
+            crank[r] = k;
+            interference[r] = f;
+            preload[r] = p;
+            flank[r] = u;
+            if FIT {
+                if let Some(class) = class.as_deref_mut() {
+                    class[r] = q;
+                }
+            }
+            any_exact |= needs_cosine(tilt_squared(&x));
+        }
+        any_exact
+    }
+
     /// One row: [hysteresis, involute, cycloid, crank, interference, preload, cycloid
     /// preload per flank, pin class], with cos β and 1/cos β from `tilt` (of β²).
+    ///
+    /// `FIT` false leaves selective fitting out at compile time (the column loop then has
+    /// no branch and vectorises); with `FIT` true it applies when the model fits classes.
     #[inline(always)]
-    fn row(&self, x: &[f64; N_INPUTS], tilt: impl Fn(f64) -> (f64, f64)) -> [f64; N_OUTPUTS] {
+    fn row<const FIT: bool>(
+        &self,
+        x: &[f64; N_INPUTS],
+        tilt: impl Fn(f64) -> (f64, f64),
+    ) -> [f64; N_OUTPUTS] {
         let (e_ws, e_wi) = (x[0], x[1]);
         let (mod_equidistant, mod_shift, eccentricity_err) = (x[2], x[3], x[12]);
         let crank_clearance = x[13];
@@ -715,7 +740,7 @@ impl GeometricHysteresis {
 
         // Selective fitting: the class whose centre brings the clearance the fitter sees
         // closest to the window; the pins' place within their class, d, unseen.
-        if self.class_centres.len() > 1 {
+        if FIT && self.class_centres.len() > 1 {
             let pin_coefficient = self.cycloid_coefficients[3];
             let without_pins = cycloid - pin_coefficient * x[5];
             let within_class = x[5] - self.class_width * (x[5] / self.class_width).round();
