@@ -1126,7 +1126,8 @@ mod tests {
         // (β ≥ 1e-3 rad, redone by the row form: β = 0.02 and 0.05 rad, where the series
         // differs from the cosine, and β = 1e-3 rad, just past the limit), one with a NaN
         // tilt (redone) and one with a NaN clearance (NaN outputs either way).
-        let model = model();
+        // Each reading, with and without selective fitting (the column loop is compiled
+        // with and without the fitter).
         let n = 67;
         let mut rows: Vec<[f64; 18]> = (0..n)
             .map(|r| {
@@ -1149,16 +1150,19 @@ mod tests {
             .map(|i| rows.iter().map(|x| x[i]).collect())
             .collect();
         let inputs: Vec<&[f64]> = columns.iter().map(Vec::as_slice).collect();
-        let mut outputs = vec![0.0; model.outputs().len() * n];
-        model.evaluate_columns(&inputs, &mut outputs);
-        for (r, x) in rows.iter().enumerate() {
-            let expected = eval(x);
-            for (j, value) in expected[..model.outputs().len()].iter().enumerate() {
-                assert_eq!(
-                    outputs[j * n + r].to_bits(),
-                    value.to_bits(),
-                    "row {r} output {j}"
-                );
+        for model in [model(), physical(), fitted(5.0, 0.002, (0.1, 0.3))] {
+            let mut outputs = vec![0.0; model.outputs().len() * n];
+            model.evaluate_columns(&inputs, &mut outputs);
+            for (r, x) in rows.iter().enumerate() {
+                let mut expected = [0.0; OUTPUT_COUNT];
+                model.evaluate(x, &mut expected);
+                for (j, value) in expected[..model.outputs().len()].iter().enumerate() {
+                    assert_eq!(
+                        outputs[j * n + r].to_bits(),
+                        value.to_bits(),
+                        "row {r} output {j}"
+                    );
+                }
             }
         }
         // The tilted rows really leave the series: its cos β differs from the cosine there.
