@@ -93,7 +93,8 @@ pub struct AllocationReport {
     pub unit: String,
     /// The target, normalised (`p99.865 <= 1`).
     pub target: String,
-    /// "met" (verified), "not verified" (the independent run misses the target) or
+    /// "met" (the independent run's figure and its whole 95 % interval satisfy the target),
+    /// "not verified" (they do not: the figure misses, or its interval straddles it) or
     /// "infeasible" (no tolerances within the bounds meet it).
     pub status: &'static str,
     /// Samples of every evaluation.
@@ -412,8 +413,8 @@ impl AllocationReport {
             self.status,
             match self.status {
                 "met" => format!(
-                    "the independent run meets {} (optimised with a margin of {} standard errors; \
-                     {} iterations, {} Monte Carlo runs)",
+                    "the independent run meets {} with its whole 95 % interval (optimised with a \
+                     margin of {:.2} standard errors; {} iterations, {} Monte Carlo runs)",
                     self.target, self.margin_standard_errors, self.iterations, self.evaluations
                 ),
                 "infeasible" => format!(
@@ -422,7 +423,11 @@ impl AllocationReport {
                     self.target
                 ),
                 _ => format!(
-                    "the independent run misses {} by Monte Carlo noise; rerun with more --samples",
+                    "the independent run gives {} (95 % interval {} .. {}), which does not show {} \
+                     with confidence; rerun with more --samples",
+                    format_sig(self.verification.value),
+                    format_sig(self.verification.ci[0]),
+                    format_sig(self.verification.ci[1]),
                     self.target
                 ),
             }
