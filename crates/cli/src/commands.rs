@@ -357,12 +357,14 @@ pub fn baseline(
     ))
 }
 
+#[allow(clippy::too_many_arguments)]
 pub fn check(
     path: &Path,
     baseline_path: &Path,
     seed: Option<u64>,
     junit: Option<&Path>,
     json: Option<&Path>,
+    options: &gate::CheckOptions,
     execution: &Execution,
 ) -> Result<()> {
     let (scenario, text) = read(path)?;
@@ -373,6 +375,18 @@ pub fn check(
     recorded
         .matches(&scenario)
         .map_err(|err| bad_scenario(baseline_path, err))?;
+    for (i, text) in recorded.requirements.iter().enumerate() {
+        gate::parse_requirement(&scenario, text).map_err(|err| {
+            BadInput(format!(
+                "{}: requirements[{i}]: {err}",
+                baseline_path.display()
+            ))
+        })?;
+    }
+    for text in &options.requirements {
+        gate::parse_requirement(&scenario, text)
+            .map_err(|err| BadInput(format!("--require: {err}")))?;
+    }
     let seed = seed.unwrap_or(recorded.seed);
     let settings = RunSettings {
         samples: recorded.samples,
@@ -389,12 +403,13 @@ pub fn check(
     let bar = progress_bar(recorded.samples, execution.quiet);
     let report = pool
         .install(|| {
-            gate::check(
+            gate::check_with(
                 &scenario,
                 &text,
                 &recorded,
                 seed,
                 execution.max_non_finite,
+                options,
                 &|n| bar.inc(n),
             )
         })
@@ -407,7 +422,15 @@ pub fn check(
     if report.passed {
         Ok(())
     } else {
-        Err(Failed("figures moved beyond their baseline bands".into()).into())
+        Err(Failed(
+            if report.comparisons.iter().all(|c| c.passed) {
+                "requirements violated"
+            } else {
+                "figures moved beyond their baseline bands"
+            }
+            .into(),
+        )
+        .into())
     }
 }
 

@@ -148,6 +148,17 @@ enum Command {
         /// Write the JSON report to PATH ("-" for stdout instead of the summary).
         #[arg(long, value_name = "PATH")]
         json: Option<PathBuf>,
+        /// Fail a figure only when it gets worse beyond its band: higher for sd, ppm_out
+        /// and indicator fractions, and for the mean and percentiles of an output with an
+        /// upper spec limit only (lower for a lower limit only); a figure's `worse` in the
+        /// baseline file overrides; the others stay two-sided.
+        #[arg(long)]
+        one_sided: bool,
+        /// An absolute requirement, "[OUTPUT] FIGURE OP VALUE" (e.g. "p99.865 <= 1.5",
+        /// "cpk >= 1.33", "ppm_out <= 2700"); fails only when the re-run's whole interval
+        /// misses it. Repeatable; the baseline's `requirements` apply too.
+        #[arg(long = "require", value_name = "REQUIREMENT")]
+        requirements: Vec<String>,
         #[command(flatten)]
         execution: Execution,
     },
@@ -296,6 +307,8 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             seed,
             junit,
             json,
+            one_sided,
+            requirements,
             execution,
         } => check(
             &scenario,
@@ -303,6 +316,10 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             seed,
             junit.as_deref(),
             json.as_deref(),
+            &rvtol_engine::gate::CheckOptions {
+                one_sided,
+                requirements,
+            },
             &execution,
         ),
         Command::Allocate {

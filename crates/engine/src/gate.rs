@@ -31,10 +31,11 @@ use rvtol_deviation::Shown;
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ContinuousCDF, Normal};
 
+use crate::allocation::spec::{Target, TargetFigure};
 use crate::run::{
     check_non_finite, run, Distribution, RunSettings, DEFAULT_EXACT_PERCENTILE_LIMIT,
 };
-use crate::scenario::{Scenario, ScenarioError};
+use crate::scenario::{OutputInfo, Scenario, ScenarioError};
 use crate::stats::{
     order_statistic_interval, percentile_type7_of_sorted, proportion_standard_error,
     QuantileSketch, StandardisedSketch,
@@ -72,6 +73,24 @@ pub struct Figure {
     /// Relative tolerance (of |value|) that replaces the band, when set.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub relative_tolerance: Option<f64>,
+    /// The direction in which this figure gets worse: a one-sided check fails only on a
+    /// move that way beyond the band (set by hand in the baseline file, or inferred by
+    /// `rvtol check --one-sided`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub worse: Option<Worse>,
+}
+
+/// The direction in which a figure gets worse.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Worse {
+    /// A larger value is worse (a lost motion, an sd, a share out of spec).
+    Higher,
+    /// A smaller value is worse (a value with a lower spec limit only).
+    Lower,
+    /// Neither way is worse against the spec (the lower tail of an output with an upper
+    /// limit only): the figure is reported and never fails a one-sided check.
+    Neither,
 }
 
 impl Figure {
@@ -112,6 +131,10 @@ pub struct Baseline {
     pub z: f64,
     /// The figures.
     pub figures: Vec<Figure>,
+    /// Absolute requirements checked with every re-run (`OUTPUT FIGURE OP VALUE`, e.g.
+    /// `hysteresis_arcmin p99.865 <= 1.5`), besides those given on the command line.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub requirements: Vec<String>,
 }
 
 fn default_exact_percentile_limit() -> u64 {
@@ -270,13 +293,34 @@ pub fn measure(
     max_non_finite: f64,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Vec<Figure>, ScenarioError> {
+    Ok(measure_with_capability(scenario, settings, z, max_non_finite, progress)?.0)
+}
+
+/// [`measure`], and besides the gated figures Cp and Cpk from the moments of each output
+/// with spec limits (for requirements only; not gated), with the same kind of band:
+/// ± √2·z·SE, SE of Cp = Cp·SE(s)/s and of Cpk by the delta method (Bissell 1990 with the
+/// excess kurtosis: Var = 1/(9n) + Cpk²·(g2 + 2)/(4n)). An index is left out when the
+/// values do not show every sample out of spec (non-finite, excluded or flagged ones).
+pub fn measure_with_capability(
+    scenario: &Scenario,
+    settings: RunSettings,
+    z: f64,
+    max_non_finite: f64,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<(Vec<Figure>, Vec<Figure>), ScenarioError> {
     let result = run(scenario, settings, progress)?;
     check_non_finite(scenario, &result, max_non_finite)?;
     let samples = result.samples;
     let two_sample = std::f64::consts::SQRT_2 * z;
     let mut figures = Vec::new();
+    let mut capability = Vec::new();
     let mut push = |output: &str, figure: &str, value: f64, below: f64, above: f64| {
-        figures.push(Figure {
+        let list = if figure == "cp" || figure == "cpk" {
+            &mut capability
+        } else {
+            &mut figures
+        };
+        list.push(Figure {
             output: output.to_string(),
             figure: figure.to_string(),
             value,
@@ -284,6 +328,7 @@ pub fn measure(
             upper: value + above,
             absolute_tolerance: None,
             relative_tolerance: None,
+            worse: None,
         });
     };
     for (info, acc) in scenario.outputs.iter().zip(result.outputs) {
@@ -320,8 +365,28 @@ pub fn measure(
             let half = two_sample * proportion_standard_error(fraction, samples) * 1e6;
             push(&info.name, "ppm_out", fraction * 1e6, half, half);
         }
+        let hidden = acc.non_finite
+            + acc.excluded
+            + if info.flagged_conform {
+                0
+            } else {
+                acc.flagged_within_spec
+            };
+        if let (Some(limits), 0) = (info.spec, hidden) {
+            let indices = crate::stats::capability_from_moments(mean, sd, limits);
+            if let Some(cp) = indices.cp {
+                let half = two_sample * cp * acc.moments.sd_standard_error() / sd;
+                push(&info.name, "cp", cp, half, half);
+            }
+            if let Some(cpk) = indices.cpk {
+                let g2 = acc.moments.excess_kurtosis();
+                let variance = 1.0 / (9.0 * nf) + cpk * cpk * (g2 + 2.0).max(0.0) / (4.0 * nf);
+                let half = two_sample * variance.sqrt();
+                push(&info.name, "cpk", cpk, half, half);
+            }
+        }
     }
-    Ok(figures)
+    Ok((figures, capability))
 }
 
 /// The percentiles of one output, exact (sorted values) or from its sketch.
@@ -429,6 +494,7 @@ pub fn baseline(
         family_false_alarm: FAMILY_FALSE_ALARM,
         z,
         figures,
+        requirements: Vec::new(),
     })
 }
 
@@ -445,8 +511,146 @@ pub struct Comparison {
     pub value: Option<f64>,
     /// Allowed interval.
     pub allowed: [f64; 2],
-    /// Whether the check value lies in the allowed interval.
+    /// The direction that fails, for a one-sided check (null: either).
+    pub worse: Option<Worse>,
+    /// Whether the check value lies in the allowed interval (or beyond it on the better
+    /// side, for a one-sided figure).
     pub passed: bool,
+}
+
+/// One absolute requirement checked against the re-run.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RequirementCheck {
+    /// As written.
+    pub requirement: String,
+    /// Output name.
+    pub output: String,
+    /// Figure name.
+    pub figure: String,
+    /// The figure of the check run (null when it is undefined).
+    pub value: Option<f64>,
+    /// value ± z·SE, z the family's band quantile.
+    pub interval: [f64; 2],
+    /// `met` (the whole interval satisfies it), `within noise` (the interval straddles
+    /// it: not shown violated, passes) or `violated` (the whole interval misses it, or
+    /// the figure is undefined).
+    pub status: &'static str,
+    /// Whether the check passes it (not `violated`).
+    pub passed: bool,
+}
+
+/// How `rvtol check` judges a re-run besides the baseline's bands.
+#[derive(Debug, Clone, Default)]
+pub struct CheckOptions {
+    /// Fail a figure only when it moves beyond its band in the direction that is worse:
+    /// the baseline's `worse`, else inferred ([`inferred_worse`]); a figure with neither
+    /// stays two-sided.
+    pub one_sided: bool,
+    /// Requirements besides the baseline's (`[OUTPUT] FIGURE OP VALUE`).
+    pub requirements: Vec<String>,
+}
+
+/// The direction in which a figure of `output` gets worse, where it follows from the
+/// figure or the spec: an sd, a share out of spec and an indicator's fraction (an event
+/// such as interference or preload) are worse higher. With an upper spec limit only, the
+/// mean, P50 and the upper percentiles are worse higher and the lower tail (P0.135,
+/// P2.275) is neither (it moves up when tolerances tighten, down when the output shifts
+/// down: neither brings an assembly nearer the limit); with a lower limit only, mirrored.
+/// Otherwise (no spec, or both limits) none: the figure stays two-sided.
+pub fn inferred_worse(output: &OutputInfo, figure: &str) -> Option<Worse> {
+    let lower_tail = matches!(figure, "p0.135" | "p2.275");
+    let upper_tail = matches!(figure, "p97.725" | "p99.865");
+    match figure {
+        "sd" | "ppm_out" | "fraction" => Some(Worse::Higher),
+        _ => match output.spec.map(|s| (s.lower, s.upper)) {
+            Some((None, Some(_))) if lower_tail => Some(Worse::Neither),
+            Some((None, Some(_))) => Some(Worse::Higher),
+            Some((Some(_), None)) if upper_tail => Some(Worse::Neither),
+            Some((Some(_), None)) => Some(Worse::Lower),
+            _ => None,
+        },
+    }
+}
+
+/// A requirement `[OUTPUT] FIGURE OP VALUE` on `scenario`: the output (given, or the
+/// scenario's only output with spec limits, or its only continuous output), the gate's
+/// figure name and the target. Figures: mean, sd, p0.135, p2.275, p50, p97.725, p99.865,
+/// ppm_out, cp, cpk (the last three need spec limits).
+pub fn parse_requirement(
+    scenario: &Scenario,
+    text: &str,
+) -> Result<(String, String, Target), String> {
+    let trimmed = text.trim();
+    let (output, rest) = match trimmed.split_once(char::is_whitespace) {
+        Some((first, rest)) if scenario.outputs.iter().any(|o| o.name == first) => {
+            (first.to_string(), rest.trim())
+        }
+        _ => {
+            let with_spec: Vec<&OutputInfo> = scenario
+                .outputs
+                .iter()
+                .filter(|o| o.spec.is_some())
+                .collect();
+            let continuous: Vec<&OutputInfo> = scenario
+                .outputs
+                .iter()
+                .filter(|o| o.kind == OutputKind::Continuous)
+                .collect();
+            let only = match (with_spec.as_slice(), continuous.as_slice()) {
+                ([one], _) | ([], [one]) => one,
+                _ => {
+                    return Err(format!(
+                        "{text:?} names no output: write `OUTPUT {trimmed}` (outputs: {})",
+                        scenario
+                            .outputs
+                            .iter()
+                            .map(|o| o.name.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ))
+                }
+            };
+            (only.name.clone(), trimmed)
+        }
+    };
+    let info = scenario
+        .outputs
+        .iter()
+        .find(|o| o.name == output)
+        .expect("output found above");
+    if info.kind == OutputKind::Indicator {
+        return Err(format!(
+            "{output} is an indicator; its requirement would be on its fraction, which a spec does not give"
+        ));
+    }
+    let target = Target::parse(rest).map_err(|err| format!("{text:?}: {err}"))?;
+    let figure = match target.figure {
+        TargetFigure::Percentile(p) => GATED_PERCENTS
+            .iter()
+            .find(|(_, q)| (q - p).abs() < 1e-9)
+            .map(|(name, _)| name.to_string())
+            .ok_or_else(|| {
+                format!(
+                    "{text:?}: a requirement on a percentile takes one the gate measures: {}",
+                    GATED_PERCENTS
+                        .iter()
+                        .map(|(n, _)| *n)
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
+            })?,
+        TargetFigure::Mean => "mean".into(),
+        TargetFigure::Sd => "sd".into(),
+        TargetFigure::PpmOut | TargetFigure::Cp | TargetFigure::Cpk if info.spec.is_none() => {
+            return Err(format!(
+                "{text:?}: {output} has no spec limits (spec_limits in the scenario)"
+            ))
+        }
+        TargetFigure::PpmOut => "ppm_out".into(),
+        TargetFigure::Cp => "cp".into(),
+        TargetFigure::Cpk => "cpk".into(),
+    };
+    Ok((output, figure, target))
 }
 
 /// The outcome of `rvtol check`.
@@ -462,9 +666,13 @@ pub struct CheckReport {
     pub samples: u64,
     /// JSON paths where the scenario file differs from the baseline's copy.
     pub scenario_changes: Vec<String>,
+    /// Whether figures were checked one-sided where their direction is known.
+    pub one_sided: bool,
     /// Every gated figure.
     pub comparisons: Vec<Comparison>,
-    /// Whether every figure passed.
+    /// Every requirement (the baseline's, then the command line's).
+    pub requirements: Vec<RequirementCheck>,
+    /// Whether every figure and every requirement passed.
     pub passed: bool,
 }
 
@@ -518,7 +726,8 @@ pub fn json_differences(
     out
 }
 
-/// Re-runs the scenario and compares every figure with the baseline.
+/// Re-runs the scenario and compares every figure with the baseline (two-sided, no
+/// requirements besides the baseline's).
 pub fn check(
     scenario: &Scenario,
     scenario_text: &str,
@@ -527,16 +736,59 @@ pub fn check(
     max_non_finite: f64,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<CheckReport, ScenarioError> {
+    check_with(
+        scenario,
+        scenario_text,
+        baseline,
+        seed,
+        max_non_finite,
+        &CheckOptions::default(),
+        progress,
+    )
+}
+
+/// Re-runs the scenario, compares every figure with the baseline and checks every
+/// requirement. With r requirements the family's z is Φ⁻¹(1 − α/(2(m + r))) for the m
+/// figures too (their bands widened by that z over the baseline's), so that an unchanged
+/// scenario that meets its requirements fails with probability at most α overall. A
+/// requirement fails only when its whole interval value ± z·SE misses it.
+pub fn check_with(
+    scenario: &Scenario,
+    scenario_text: &str,
+    baseline: &Baseline,
+    seed: u64,
+    max_non_finite: f64,
+    options: &CheckOptions,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<CheckReport, ScenarioError> {
     baseline.matches(scenario)?;
     let current: serde_json::Value = serde_json::from_str(scenario_text)
         .map_err(|err| ScenarioError::new("JSON syntax", err.to_string()))?;
+    let mut requirements = Vec::new();
+    for (i, text) in baseline.requirements.iter().enumerate() {
+        requirements.push(
+            parse_requirement(scenario, text)
+                .map(|parsed| (text.clone(), parsed))
+                .map_err(|err| ScenarioError::new(format!("requirements[{i}]"), err))?,
+        );
+    }
+    for text in &options.requirements {
+        requirements.push(
+            parse_requirement(scenario, text)
+                .map(|parsed| (text.clone(), parsed))
+                .map_err(|err| ScenarioError::new("--require", err))?,
+        );
+    }
+    let z = band_z(baseline.figures.len() + requirements.len()).max(baseline.z);
+    let widen = z / baseline.z;
     let samples = baseline.samples;
     let settings = RunSettings {
         samples,
         seed,
         exact_percentile_limit: baseline.exact_percentile_limit,
     };
-    let figures = measure(scenario, settings, baseline.z, max_non_finite, progress)?;
+    let (figures, capability) =
+        measure_with_capability(scenario, settings, z, max_non_finite, progress)?;
     let comparisons: Vec<Comparison> = baseline
         .figures
         .iter()
@@ -545,17 +797,69 @@ pub fn check(
                 .iter()
                 .find(|f| f.output == old.output && f.figure == old.figure)
                 .map(|f| f.value);
-            let (low, high) = old.allowed();
+            let (low, high) = match (old.absolute_tolerance, old.relative_tolerance) {
+                (None, None) if widen > 1.0 => (
+                    old.value - widen * (old.value - old.lower),
+                    old.value + widen * (old.upper - old.value),
+                ),
+                _ => old.allowed(),
+            };
+            let worse = old.worse.or_else(|| {
+                let info = scenario.outputs.iter().find(|o| o.name == old.output)?;
+                options
+                    .one_sided
+                    .then(|| inferred_worse(info, &old.figure))
+                    .flatten()
+            });
             // The same seed and samples reproduce the value bit for bit; anything else must
-            // fall in the band.
-            let passed = value.is_some_and(|v| v == old.value || (low <= v && v <= high));
+            // fall in the band, or beyond it on the better side.
+            let passed = value.is_some_and(|v| {
+                v == old.value
+                    || worse == Some(Worse::Neither)
+                    || (low <= v && v <= high)
+                    || (worse == Some(Worse::Higher) && v < low)
+                    || (worse == Some(Worse::Lower) && v > high)
+            });
             Comparison {
                 output: old.output.clone(),
                 figure: old.figure.clone(),
                 baseline: old.value,
                 value,
                 allowed: [low, high],
+                worse,
                 passed,
+            }
+        })
+        .collect();
+    let requirements: Vec<RequirementCheck> = requirements
+        .into_iter()
+        .map(|(text, (output, figure, target))| {
+            let measured = figures
+                .iter()
+                .chain(&capability)
+                .find(|f| f.output == output && f.figure == figure);
+            // The band is ± √2·z·SE (two runs); one run's interval is ± z·SE.
+            let (value, interval) = match measured {
+                Some(f) => {
+                    let reach = 0.5 * (f.upper - f.lower) / std::f64::consts::SQRT_2;
+                    (Some(f.value), [f.value - reach, f.value + reach])
+                }
+                None => (None, [f64::NAN, f64::NAN]),
+            };
+            let meets = |x: f64| target.excess(x) <= 0.0;
+            let status = match value {
+                Some(_) if meets(interval[0]) && meets(interval[1]) => "met",
+                Some(_) if meets(interval[0]) || meets(interval[1]) => "within noise",
+                _ => "violated",
+            };
+            RequirementCheck {
+                requirement: text,
+                output,
+                figure,
+                value,
+                interval,
+                status,
+                passed: status != "violated",
             }
         })
         .collect();
@@ -565,8 +869,10 @@ pub fn check(
         seed,
         samples,
         scenario_changes: json_differences(&baseline.scenario_file, &current, 8),
-        passed: comparisons.iter().all(|c| c.passed),
+        passed: comparisons.iter().all(|c| c.passed) && requirements.iter().all(|r| r.passed),
+        one_sided: options.one_sided,
         comparisons,
+        requirements,
     })
 }
 
@@ -606,18 +912,61 @@ impl CheckReport {
             .collect()
     }
 
+    /// One line per requirement.
+    pub fn requirement_lines(&self) -> Vec<String> {
+        use crate::report::format_sig;
+        self.requirements
+            .iter()
+            .map(|r| match r.value {
+                None => format!(
+                    "violated: {} ({} {} is undefined: samples out of spec that its values do not show, flagged, excluded or not finite)",
+                    r.requirement, r.output, r.figure
+                ),
+                Some(value) => format!(
+                    "{}: {} ({} {}: {}, interval {} .. {}){}",
+                    if r.passed { "requirement" } else { "violated" },
+                    r.requirement,
+                    r.output,
+                    r.figure,
+                    format_sig(value),
+                    format_sig(r.interval[0]),
+                    format_sig(r.interval[1]),
+                    match r.status {
+                        "met" => ": met",
+                        "within noise" => {
+                            ": within Monte Carlo noise of the limit, not shown violated"
+                        }
+                        _ => "",
+                    }
+                ),
+            })
+            .collect()
+    }
+
     /// The summary printed by `rvtol check`.
     pub fn to_text(&self) -> String {
         let failed = self.comparisons.iter().filter(|c| !c.passed).count();
+        let violated = self.requirements.iter().filter(|r| !r.passed).count();
         let mut lines = self.moved_lines();
+        lines.extend(self.requirement_lines());
+        let requirements = if self.requirements.is_empty() {
+            String::new()
+        } else {
+            format!(
+                ", {} of {} requirements not violated",
+                self.requirements.len() - violated,
+                self.requirements.len()
+            )
+        };
         lines.push(format!(
-            "rvtol check {}: {} of {} figures within their baseline bands ({} samples, seed {}){}",
+            "rvtol check {}: {} of {} figures within their baseline bands{}{requirements} ({} samples, seed {}){}",
             self.scenario,
             self.comparisons.len() - failed,
             self.comparisons.len(),
+            if self.one_sided { " or better" } else { "" },
             self.samples,
             self.seed,
-            if failed == 0 { "" } else { ": FAILED" }
+            if failed + violated == 0 { "" } else { ": FAILED" }
         ));
         let mut text = lines.join("\n");
         text.push('\n');
@@ -633,13 +982,13 @@ impl CheckReport {
 
     /// JUnit XML: one test case per figure.
     pub fn to_junit(&self) -> String {
-        let failures = self.comparisons.iter().filter(|c| !c.passed).count();
+        let failures = self.comparisons.iter().filter(|c| !c.passed).count()
+            + self.requirements.iter().filter(|r| !r.passed).count();
+        let tests = self.comparisons.len() + self.requirements.len();
         let mut xml = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
         xml.push_str(&format!(
-            "<testsuites name=\"rvtol check\" tests=\"{}\" failures=\"{failures}\">\n  <testsuite name=\"{}\" tests=\"{}\" failures=\"{failures}\">\n",
-            self.comparisons.len(),
+            "<testsuites name=\"rvtol check\" tests=\"{tests}\" failures=\"{failures}\">\n  <testsuite name=\"{}\" tests=\"{tests}\" failures=\"{failures}\">\n",
             xml_escape(&self.scenario),
-            self.comparisons.len()
         ));
         let lines = self.moved_lines();
         let mut moved = lines.iter();
@@ -658,6 +1007,23 @@ impl CheckReport {
                     xml_escape(&self.scenario),
                     xml_escape(&name),
                     xml_escape(&message)
+                ));
+            }
+        }
+        for (r, line) in self.requirements.iter().zip(self.requirement_lines()) {
+            let name = format!("requirement {}", r.requirement);
+            if r.passed {
+                xml.push_str(&format!(
+                    "    <testcase classname=\"{}\" name=\"{}\"/>\n",
+                    xml_escape(&self.scenario),
+                    xml_escape(&name)
+                ));
+            } else {
+                xml.push_str(&format!(
+                    "    <testcase classname=\"{}\" name=\"{}\">\n      <failure message=\"{}\"/>\n    </testcase>\n",
+                    xml_escape(&self.scenario),
+                    xml_escape(&name),
+                    xml_escape(&line)
                 ));
             }
         }
