@@ -368,3 +368,56 @@ fn curve_writes_csv_and_svg_for_the_transmission_error_and_torsion_models() {
     assert_eq!(output.status.code(), Some(2));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn init_writes_a_valid_runnable_skeleton_for_every_model() {
+    // Every model of the registry: the skeleton validates, runs (finite figures only:
+    // --max-non-finite is 0 by default) and binds every input of the model to a variable.
+    let dir = std::env::temp_dir().join(format!("rvtol-init-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for entry in rvtol_models::all() {
+        let path = dir.join(format!("{}.json", entry.name));
+        let out = run_rvtol(&["init", entry.name, "-o", path.to_str().unwrap()]);
+        assert_eq!(out.status.code(), Some(0), "{}", entry.name);
+        let text = std::fs::read_to_string(&path).unwrap();
+        let scenario: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let model = (entry.build)(&(entry.example_params)()).unwrap();
+        let bound = scenario["models"][0]["inputs"].as_object().unwrap();
+        assert_eq!(bound.len(), model.inputs().len(), "{}", entry.name);
+        for (name, value) in entry.example_inputs {
+            assert!(model.inputs().iter().any(|i| i.name == *name), "{name}");
+            let variable = scenario["variables"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|v| v["name"] == *name)
+                .unwrap();
+            assert_eq!(variable["distribution"]["normal"]["mean"], *value);
+        }
+        let out = run_rvtol(&["validate", path.to_str().unwrap()]);
+        assert_eq!(out.status.code(), Some(0), "{}", entry.name);
+        let report = dir.join(format!("{}.report.json", entry.name));
+        let out = run_rvtol(&[
+            "run",
+            path.to_str().unwrap(),
+            "--samples",
+            "100",
+            "--quiet",
+            "--json",
+            report.to_str().unwrap(),
+        ]);
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "{}: {}",
+            entry.name,
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let out = run_rvtol(&["init", "no_such_model"]);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("geometric_hysteresis"), "{stderr}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -178,6 +178,14 @@ pub fn curve(scenario_path: &Path, out_dir: &Path) -> Result<()> {
     print(&lines)
 }
 
+pub fn init(model: &str, output: Option<&Path>) -> Result<()> {
+    let text = rvtol_engine::scenario::skeleton::skeleton(model).map_err(BadInput)?;
+    match output {
+        Some(path) => write_report(path, &text),
+        None => print(&text),
+    }
+}
+
 pub fn validate(scenario_path: &Path) -> Result<()> {
     let text = read_text(scenario_path)?;
     match Scenario::from_json_all_problems(&text, &fallback_name(scenario_path)) {

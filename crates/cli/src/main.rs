@@ -162,6 +162,15 @@ enum Command {
         #[command(flatten)]
         execution: Execution,
     },
+    /// Print a complete, valid scenario for MODEL to start from: every parameter, every
+    /// input bound to a placeholder variable with its unit (`rvtol models` lists them).
+    Init {
+        /// Model name (`rvtol models`).
+        model: String,
+        /// Write the scenario to PATH instead of standard output.
+        #[arg(short = 'o', long = "output", value_name = "PATH")]
+        output: Option<PathBuf>,
+    },
     /// Check a scenario file without running it; one line per problem.
     Validate {
         /// Scenario file (JSON).
@@ -261,6 +270,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Command::Nominal { scenario, json } => nominal(&scenario, json.as_deref()),
         Command::Curve { scenario, out_dir } => curve(&scenario, &out_dir),
         Command::Validate { scenario } => validate(&scenario),
+        Command::Init { model, output } => init(&model, output.as_deref()),
         Command::Sensitivity {
             scenario,
             samples,

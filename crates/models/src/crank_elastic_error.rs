@@ -365,6 +365,7 @@ pub const ENTRY: ModelEntry = ModelEntry {
     params: PARAMS,
     build: |params| Ok(Box::new(CrankElasticError::from_params(params)?)),
     example_params: CrankElasticError::rv40e_params,
+    example_inputs: &[("output_torque_nm", 412.0)],
 };
 
 /// The load on one disc that enters 004's equilibrium equations.

@@ -254,6 +254,7 @@ pub const ENTRY: ModelEntry = ModelEntry {
             .with_number("crank_count", 3.0)
             .with_number("crank_circle_radius_mm", 42.0)
     },
+    example_inputs: &[("output_torque_nm", 800.0)],
 };
 
 /// The contact model with its design geometry.

@@ -224,6 +224,9 @@ pub struct ModelEntry {
     pub build: fn(&ModelParams) -> Result<Box<dyn ErrorModel>, ModelError>,
     /// Parameters of a representative instance, for `rvtol models`.
     pub example_params: fn() -> ModelParams,
+    /// The inputs of that instance whose design value is not zero (a load torque, a
+    /// design modification), for the skeleton `rvtol init` writes.
+    pub example_inputs: &'static [(&'static str, f64)],
 }
 
 /// Every model rvtol knows, in the order `rvtol models` lists them.

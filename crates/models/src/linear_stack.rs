@@ -51,6 +51,7 @@ pub const ENTRY: ModelEntry = ModelEntry {
             ParamValue::Named(vec![("x1".into(), 1.0), ("x2".into(), -2.0)]),
         )
     },
+    example_inputs: &[],
 };
 
 impl LinearStack {

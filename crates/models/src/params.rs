@@ -53,6 +53,12 @@ impl ModelParams {
         Self::default()
     }
 
+    /// Every parameter set, by key (for writing them out; reading through this does not
+    /// count as use).
+    pub fn entries(&self) -> impl Iterator<Item = (&str, &ParamValue)> {
+        self.values.iter().map(|(k, v)| (k.as_str(), v))
+    }
+
     /// Adds a value (builder style).
     pub fn with(mut self, key: &str, value: ParamValue) -> Self {
         self.values.insert(key.to_string(), value);

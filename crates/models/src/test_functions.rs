@@ -56,6 +56,7 @@ pub const ISHIGAMI_ENTRY: ModelEntry = ModelEntry {
     params: ISHIGAMI_PARAMS,
     build: |params| Ok(Box::new(Ishigami::from_params(params)?)),
     example_params: ModelParams::new,
+    example_inputs: &[],
 };
 
 impl Ishigami {
@@ -143,6 +144,7 @@ pub const SOBOL_G_ENTRY: ModelEntry = ModelEntry {
             ParamValue::Named(vec![("x1".into(), 0.0), ("x2".into(), 1.0), ("x3".into(), 9.0)]),
         )
     },
+    example_inputs: &[],
 };
 
 impl SobolG {

@@ -418,6 +418,12 @@ pub const ENTRY: ModelEntry = ModelEntry {
     params: PARAMS,
     build: |params| Ok(Box::new(TorsionCurve::from_params(params)?)),
     example_params: TorsionCurve::rv20e_params,
+    example_inputs: &[
+        ("common_normal_upper_deviation_mm", 0.0035),
+        ("common_normal_lower_deviation_mm", -0.0309),
+        ("equidistant_modification_mm", -0.010),
+        ("shift_modification_mm", -0.012),
+    ],
 };
 
 /// Points per branch of the drawn curve, −rated..=+rated (the 0 point is drawn twice).

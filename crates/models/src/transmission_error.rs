@@ -270,6 +270,7 @@ pub const ENTRY: ModelEntry = ModelEntry {
     params: PARAMS,
     build: |params| Ok(Box::new(TransmissionError::from_params(params)?)),
     example_params: rv40e_params,
+    example_inputs: &[],
 };
 
 /// The RV40E of document 002 Table 1, with the crank circle of document 004 (a0 = 36 mm)

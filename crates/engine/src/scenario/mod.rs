@@ -11,6 +11,7 @@
 
 mod compile;
 mod file;
+pub mod skeleton;
 
 use std::path::Path;
 
