@@ -83,11 +83,7 @@ pub fn percentiles_type7(values: &mut [f64], percents: &[f64]) -> Vec<Option<f64
         })
         .collect();
     let order_statistics = select_ranks(values, ranks);
-    let lookup = |rank: usize| -> f64 {
-        order_statistics
-            .binary_search_by_key(&rank, |&(r, _)| r)
-            .map_or(f64::NAN, |index| order_statistics[index].1)
-    };
+    let lookup = |rank: usize| order_statistic(&order_statistics, rank);
     positions
         .iter()
         .map(|position| {
@@ -121,6 +117,14 @@ fn select_ranks(values: &mut [f64], mut ranks: Vec<usize>) -> Vec<(usize, f64)> 
         start = rank + 1;
     }
     order_statistics
+}
+
+/// The value of `rank` among the (rank, value) pairs [`select_ranks`] gives; NaN for a
+/// rank that was not selected.
+fn order_statistic(order_statistics: &[(usize, f64)], rank: usize) -> f64 {
+    order_statistics
+        .binary_search_by_key(&rank, |&(r, _)| r)
+        .map_or(f64::NAN, |index| order_statistics[index].1)
 }
 
 /// The 0-based ranks (l, u) of the distribution-free confidence interval
@@ -205,11 +209,7 @@ pub fn percentiles_type7_with_intervals(
         }
     }
     let order_statistics = select_ranks(values, ranks);
-    let lookup = |rank: usize| -> f64 {
-        order_statistics
-            .binary_search_by_key(&rank, |&(r, _)| r)
-            .map_or(f64::NAN, |index| order_statistics[index].1)
-    };
+    let lookup = |rank: usize| order_statistic(&order_statistics, rank);
     positions
         .iter()
         .zip(&intervals)
