@@ -127,7 +127,7 @@ pub fn run(
     bar.finish_and_clear();
     let elapsed = started.elapsed();
     let failure = non_finite_failure(scenario_path, &scenario, &result, execution);
-    let report = RunReport::new(&scenario, result);
+    let report = pool.install(|| RunReport::new(&scenario, result));
     emit(json, || report.to_json(), || report.to_text())?;
     if !execution.quiet && std::io::stderr().is_terminal() {
         note(&format!(
