@@ -6,9 +6,9 @@
 //! `outputs`, an array with per output `name`, `unit`, `kind`, `n`, `non_finite`, `mean`,
 //! `sd`, `skewness`, `excess_kurtosis`, `min`, `max`, `percentiles` (keyed by the percent
 //! as a string), `histogram`; indicator outputs add `events`, `fraction`, `fraction_ci95`;
-//! outputs with spec limits add `spec`, `cp` (null when one-sided), `cpk`,
-//! `cp_percentile`, `cpk_percentile`, `ppm_out`, `ppm_out_ci95`. No timing and no thread
-//! count: the document is byte-identical for the same seed and samples.
+//! outputs with spec limits add `spec`, `cp` (null when one-sided) with `cp_ci95`, `cpk`
+//! with `cpk_ci95`, `cp_percentile`, `cpk_percentile`, `ppm_out`, `ppm_out_ci95`. No timing
+//! and no thread count: the document is byte-identical for the same seed and samples.
 
 use rayon::prelude::*;
 use serde::ser::SerializeMap;
@@ -19,8 +19,8 @@ use crate::scenario::{OutputInfo, Scenario};
 use crate::stats::quantile_sketch::bucket_representative;
 use crate::stats::{
     binomial_rank_interval, capability_from_moments, capability_percentile_method,
-    out_of_spec_interval, percentiles_type7_with_intervals, Histogram, Moments, QuantileSketch,
-    SpecLimits, StandardisedSketch,
+    cpk_on_upper_side, cpk_standard_error, out_of_spec_interval, percentiles_type7_with_intervals,
+    Histogram, Moments, QuantileSketch, SpecLimits, StandardisedSketch,
 };
 use rvtol_deviation::Shown;
 use rvtol_models::{ConditionEffect, OutputKind};
@@ -127,8 +127,13 @@ pub struct CapabilityReport {
     pub spec: SpecReport,
     /// Cp = (U − L)/(6σ); null when one-sided or not given (`capability_note`).
     pub cp: Option<f64>,
+    /// 95 % interval of Cp: Cp·(1 ± z·SE(s)/s), SE(s) = s·√((κ + 2)/(4n)) (delta method).
+    pub cp_ci95: Option<[f64; 2]>,
     /// Cpk = min(U − μ, μ − L)/(3σ) over the limits set; null when not given.
     pub cpk: Option<f64>,
+    /// 95 % interval of Cpk: Cpk ± z·SE, SE by the delta method with the output's skewness
+    /// and kurtosis ([`crate::stats::cpk_standard_error`]; Bissell 1990 for a normal).
+    pub cpk_ci95: Option<[f64; 2]>,
     /// Percentile-method Cp = (U − L)/(P99.865 − P0.135) (ISO 22514-2); null when
     /// one-sided or not given.
     pub cp_percentile: Option<f64>,
@@ -272,7 +277,9 @@ fn capability(
             upper: limits.upper,
         },
         cp: None,
+        cp_ci95: None,
         cpk: None,
+        cpk_ci95: None,
         cp_percentile: None,
         cpk_percentile: None,
         capability_note: None,
@@ -299,6 +306,19 @@ fn capability(
     );
     report.cp = moment.cp;
     report.cpk = moment.cpk;
+    // z of the two-sided 95 % normal interval.
+    const Z95: f64 = 1.959963984540054;
+    let symmetric = |value: f64, se: f64| [value - Z95 * se, value + Z95 * se];
+    report.cp_ci95 = moment
+        .cp
+        .map(|cp| symmetric(cp, cp * m.sd_standard_error() / m.sd()));
+    report.cpk_ci95 = moment.cpk.map(|cpk| {
+        let upper_side = cpk_on_upper_side(m.mean, limits);
+        symmetric(
+            cpk,
+            cpk_standard_error(cpk, upper_side, m.n, m.skewness(), m.excess_kurtosis()),
+        )
+    });
     report.cp_percentile = pct.cp;
     report.cpk_percentile = pct.cpk;
     if report.cpk_percentile.is_none() {
@@ -662,12 +682,21 @@ impl RunReport {
                     (None, None) => String::new(),
                 };
                 let index = |x: Option<f64>| x.map(format_sig).unwrap_or_else(|| "n/a".into());
+                let with_ci = |x: Option<f64>, ci: Option<[f64; 2]>| match (x, ci) {
+                    (Some(x), Some([lo, hi])) => format!(
+                        "{} (95 % CI {} .. {})",
+                        format_sig(x),
+                        format_sig(lo),
+                        format_sig(hi)
+                    ),
+                    (x, _) => index(x),
+                };
                 lines.push(format!(
                     "  {} ({spec} {}): Cp {}  Cpk {}  | percentile method Cp {}  Cpk {}  | out of spec {} ppm (95 % CI {} .. {})",
                     o.name,
                     o.unit,
-                    index(c.cp),
-                    index(c.cpk),
+                    with_ci(c.cp, c.cp_ci95),
+                    with_ci(c.cpk, c.cpk_ci95),
                     index(c.cp_percentile),
                     index(c.cpk_percentile),
                     format_sig(c.ppm_out),

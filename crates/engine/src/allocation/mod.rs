@@ -34,8 +34,9 @@ use serde_json::Value;
 use crate::run::{run_for_output, Distribution, RunSettings};
 use crate::scenario::{Scenario, ScenarioError};
 use crate::stats::{
-    capability_from_moments, order_statistic_interval, out_of_spec_interval,
-    percentile_type7_of_sorted, proportion_standard_error, Moments, SpecLimits,
+    capability_from_moments, cpk_on_upper_side, cpk_standard_error, order_statistic_interval,
+    out_of_spec_interval, percentile_type7_of_sorted, proportion_standard_error, Moments,
+    SpecLimits,
 };
 use spec::{AllocatableSource, CostKind, Target, TargetFigure};
 
@@ -86,7 +87,7 @@ fn tail_fraction(target: &Target) -> Option<f64> {
 }
 
 /// One Monte Carlo evaluation of the target figure.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Evaluation {
     /// The target figure (for ppm_out in the optimisation: from the interpolated
     /// empirical distribution, continuous in the tolerances; in the verification: the
@@ -102,6 +103,23 @@ pub struct Evaluation {
     pub mean: f64,
     /// Standard deviation of the output.
     pub sd: f64,
+    /// The output's distribution in outline: (p in %, type-7 percentile) at
+    /// [`QUANTILE_LEVELS`] (a flagged sample beyond every limit is ±∞).
+    pub quantiles: Vec<(f64, f64)>,
+}
+
+/// The percentile levels (%) of [`Evaluation::quantiles`]: the ±kσ levels of a normal and
+/// enough between them to draw the distribution on a probability scale.
+pub const QUANTILE_LEVELS: [f64; 29] = [
+    0.135, 0.25, 0.5, 1.0, 2.275, 5.0, 10.0, 15.866, 20.0, 25.0, 30.0, 35.0, 40.0, 45.0, 50.0,
+    55.0, 60.0, 65.0, 70.0, 75.0, 80.0, 84.134, 90.0, 95.0, 97.725, 99.0, 99.5, 99.75, 99.865,
+];
+
+fn outline(sorted: &[f64]) -> Vec<(f64, f64)> {
+    QUANTILE_LEVELS
+        .iter()
+        .filter_map(|&p| Some((p, percentile_type7_of_sorted(sorted, p)?)))
+        .collect()
 }
 
 impl Evaluation {
@@ -1074,6 +1092,7 @@ fn evaluate_figure(
                 n: n as u64,
                 mean,
                 sd,
+                quantiles: outline(sorted),
             });
         }
         TargetFigure::Cp => {
@@ -1083,20 +1102,11 @@ fn evaluate_figure(
         TargetFigure::Cpk => {
             let limits = limits?;
             let cpk = capability_from_moments(mean, sd, limits).cpk?;
-            // Delta method on Cpk = ±(limit − mean)/(3σ), with Var(mean) = σ²/n,
-            // Var(s) = σ²(κ + 2)/(4n) and Cov(mean, s) = γ1·σ²/(2n):
-            // Var = 1/(9n) + Cpk²(κ + 2)/(4n) ± Cpk·γ1/(3n), + on the upper side. For a
-            // normal output (κ = γ1 = 0) this is Bissell's (1990) 1/(9n) + Cpk²/(2n).
-            let upper_side = match (limits.lower, limits.upper) {
-                (Some(l), Some(u)) => u - mean <= mean - l,
-                (None, Some(_)) => true,
-                _ => false,
-            };
-            let sign = if upper_side { 1.0 } else { -1.0 };
-            let variance = 1.0 / (9.0 * nf)
-                + cpk * cpk * (excess_kurtosis + 2.0).max(0.0) / (4.0 * nf)
-                + sign * cpk * skewness / (3.0 * nf);
-            symmetric(cpk, variance.max(1.0 / (9.0 * nf)).sqrt())
+            let upper_side = cpk_on_upper_side(mean, limits);
+            symmetric(
+                cpk,
+                cpk_standard_error(cpk, upper_side, n as u64, skewness, excess_kurtosis),
+            )
         }
         TargetFigure::PpmOut => {
             let limits = limits?;
@@ -1134,6 +1144,7 @@ fn evaluate_figure(
         n: n as u64,
         mean,
         sd,
+        quantiles: outline(sorted),
     })
 }
 
@@ -1173,6 +1184,7 @@ mod tests {
             n: 1000,
             mean: 0.0,
             sd: 0.0,
+            quantiles: Vec::new(),
         };
         let at_most = Target::parse("p99.865 <= 1.5").unwrap();
         assert!(!at(1.49, (1.4791, 1.5088)).verifies(&at_most));

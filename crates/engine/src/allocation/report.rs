@@ -55,6 +55,18 @@ pub struct FigureReport {
     pub seed: u64,
     /// Finite samples.
     pub n: u64,
+    /// The output's distribution in outline (for a plot of before and after).
+    pub quantiles: QuantileOutline,
+}
+
+/// Type-7 percentiles `value` at the levels `p` (%); a flagged sample beyond every limit
+/// makes an end ±∞, written as null.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct QuantileOutline {
+    /// Levels, %.
+    pub p: Vec<f64>,
+    /// Percentiles of the output.
+    pub value: Vec<f64>,
 }
 
 impl FigureReport {
@@ -67,6 +79,10 @@ impl FigureReport {
             sd: e.sd,
             seed,
             n: e.n,
+            quantiles: QuantileOutline {
+                p: e.quantiles.iter().map(|q| q.0).collect(),
+                value: e.quantiles.iter().map(|q| q.1).collect(),
+            },
         }
     }
 }

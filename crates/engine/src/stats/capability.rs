@@ -127,6 +127,35 @@ pub fn capability_percentile_method(
     )
 }
 
+/// Whether Cpk = min(Cpu, Cpl) is taken on the upper side (the mean nearer U, or U alone).
+pub fn cpk_on_upper_side(mean: f64, limits: SpecLimits) -> bool {
+    match (limits.lower, limits.upper) {
+        (Some(l), Some(u)) => u - mean <= mean - l,
+        (None, Some(_)) => true,
+        _ => false,
+    }
+}
+
+/// Standard error of the moment-method Cpk by the delta method on Cpk = ±(limit − μ)/(3σ),
+/// with Var(μ̂) = σ²/n, Var(s) = σ²(κ + 2)/(4n) and Cov(μ̂, s) = γ1·σ²/(2n) (κ the excess
+/// kurtosis, γ1 the skewness): Var = 1/(9n) + Cpk²(κ + 2)/(4n) ± Cpk·γ1/(3n), + on the
+/// upper side. For a normal output (κ = γ1 = 0) this is Bissell's (1990) 1/(9n) +
+/// Cpk²/(2n). The variance is kept at or above 1/(9n), the mean's share alone.
+pub fn cpk_standard_error(
+    cpk: f64,
+    upper_side: bool,
+    n: u64,
+    skewness: f64,
+    excess_kurtosis: f64,
+) -> f64 {
+    let nf = n as f64;
+    let sign = if upper_side { 1.0 } else { -1.0 };
+    let variance = 1.0 / (9.0 * nf)
+        + cpk * cpk * (excess_kurtosis + 2.0).max(0.0) / (4.0 * nf)
+        + sign * cpk * skewness / (3.0 * nf);
+    variance.max(1.0 / (9.0 * nf)).sqrt()
+}
+
 /// Clopper–Pearson exact two-sided interval for the out-of-spec fraction,
 /// from `n_out` out-of-spec samples among `n`, at `confidence` (e.g. 0.95).
 ///

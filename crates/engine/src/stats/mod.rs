@@ -18,8 +18,8 @@ pub mod moments;
 pub mod quantile_sketch;
 
 pub use capability::{
-    capability_from_moments, capability_percentile_method, out_of_spec_interval, MomentCapability,
-    ProportionEstimate, SpecLimits,
+    capability_from_moments, capability_percentile_method, cpk_on_upper_side, cpk_standard_error,
+    out_of_spec_interval, MomentCapability, ProportionEstimate, SpecLimits,
 };
 pub use exact::{
     binomial_rank_interval, order_statistic_interval, percentile_type7, percentile_type7_of_sorted,
