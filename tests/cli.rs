@@ -341,6 +341,7 @@ fn curve_writes_csv_and_svg_for_the_transmission_error_and_torsion_models() {
     }
     for stem in [
         "transmission_error",
+        "transmission_error_detail",
         "transmission_error_spectrum",
         "torsion_curve",
     ] {
@@ -355,6 +356,8 @@ fn curve_writes_csv_and_svg_for_the_transmission_error_and_torsion_models() {
             // 4096 points per revolution; orders 1..2048.
             "transmission_error" => assert_eq!(rows, 4096),
             "transmission_error_spectrum" => assert_eq!(rows, 2048),
+            // The first 1/80 of the revolution at 65536 points per revolution, both ends.
+            "transmission_error_detail" => assert_eq!(rows, 820),
             _ => assert!(rows > 100),
         }
     }

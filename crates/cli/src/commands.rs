@@ -25,7 +25,7 @@ use rvtol_engine::{
 
 use crate::limits::{memory_budget, thread_pool, threads};
 use crate::output::{note, print, write_report};
-use crate::{plot, BadInput, Execution, Failed};
+use crate::{BadInput, Execution, Failed};
 
 fn bad_scenario(path: &Path, err: ScenarioError) -> anyhow::Error {
     BadInput(format!("{}: {err}", path.display())).into()
@@ -102,11 +102,58 @@ fn non_finite_failure(
         .map_err(|err| bad_scenario(path, err))
 }
 
+/// Where the reports of a command go: `--json` and `--html`.
+#[derive(Clone, Copy)]
+pub struct Destinations<'a> {
+    pub json: Option<&'a Path>,
+    pub html: Option<&'a Path>,
+}
+
+/// The command line as typed (arguments with spaces or quotes quoted), for the page's
+/// record.
+fn command_line() -> String {
+    std::env::args()
+        .enumerate()
+        .map(|(i, a)| {
+            let a = if i == 0 { "rvtol".to_string() } else { a };
+            if a.is_empty() || a.contains([' ', '"', '\'', '<', '>', '|', '&']) {
+                format!("'{}'", a.replace('\'', "'\\''"))
+            } else {
+                a
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// Writes the HTML page of the reports to `path`.
+fn write_html(
+    path: &Path,
+    scenario_path: &Path,
+    scenario: &Scenario,
+    reports: rvtol_report::Report<'_>,
+) -> Result<()> {
+    let record = rvtol_report::Record {
+        scenario: scenario.name.clone(),
+        description: Some(scenario.description.clone()).filter(|d| !d.is_empty()),
+        source: Some(scenario_path.display().to_string()),
+        command: Some(command_line()),
+        version: env!("CARGO_PKG_VERSION").to_string(),
+    };
+    let page = rvtol_report::render(&rvtol_report::Report { record, ..reports })
+        .map_err(|err| BadInput(format!("{}: {err}", path.display())))?;
+    write_report(path, &page)
+}
+
+fn parsed(json: &str) -> serde_json::Value {
+    serde_json::from_str(json).expect("the engine's JSON report parses")
+}
+
 pub fn run(
     scenario_path: &Path,
     samples: Option<u64>,
     seed: Option<u64>,
-    json: Option<&Path>,
+    to: Destinations<'_>,
     exact_percentile_limit: u64,
     execution: &Execution,
 ) -> Result<()> {
@@ -128,7 +175,28 @@ pub fn run(
     let elapsed = started.elapsed();
     let failure = non_finite_failure(scenario_path, &scenario, &result, execution);
     let report = pool.install(|| RunReport::new(&scenario, result));
-    emit(json, || report.to_json(), || report.to_text())?;
+    let json = report.to_json();
+    emit(to.json, || json.clone(), || report.to_text())?;
+    if let Some(html) = to.html {
+        let curves: Vec<(String, Vec<rvtol_models::Curve>)> = nominal_curves(&scenario)
+            .map_err(|err| bad_scenario(scenario_path, err))?
+            .into_iter()
+            .map(|(model, curves)| (model.to_string(), curves))
+            .collect();
+        let value = parsed(&json);
+        write_html(
+            html,
+            scenario_path,
+            &scenario,
+            rvtol_report::Report {
+                record: Default::default(),
+                run: Some(&value),
+                sensitivity: None,
+                allocation: None,
+                curves: &curves,
+            },
+        )?;
+    }
     if !execution.quiet && std::io::stderr().is_terminal() {
         note(&format!(
             "{} samples in {:.2} s ({:.1} ns per sample)",
@@ -165,8 +233,10 @@ pub fn curve(scenario_path: &Path, out_dir: &Path) -> Result<()> {
         for curve in curves {
             let stem = out_dir.join(&curve.name);
             let (csv, svg) = (stem.with_extension("csv"), stem.with_extension("svg"));
-            write_report(&csv, &plot::to_csv(&curve))?;
-            write_report(&svg, &plot::to_svg(&curve))?;
+            let drawn = rvtol_report::curve_svg(&curve)
+                .map_err(|err| BadInput(format!("{}: {err}", svg.display())))?;
+            write_report(&csv, &rvtol_report::curve_csv(&curve))?;
+            write_report(&svg, &drawn)?;
             lines.push_str(&format!(
                 "{model}: {} -> {}, {}\n",
                 curve.title,
@@ -237,7 +307,7 @@ const MAX_SHAPLEY_DRAWS: u64 = 1_000_000_000;
 pub fn sensitivity(
     path: &Path,
     args: SensitivityArgs,
-    json: Option<&Path>,
+    to: Destinations<'_>,
     execution: &Execution,
 ) -> Result<()> {
     let scenario = load(path)?;
@@ -300,7 +370,23 @@ pub fn sensitivity(
             .map_err(|err| bad_scenario(path, err))?;
         report = report.with_shapley(effects);
     }
-    emit(json, || report.to_json(), || report.to_text())?;
+    let json = report.to_json();
+    emit(to.json, || json.clone(), || report.to_text())?;
+    if let Some(html) = to.html {
+        let value = parsed(&json);
+        write_html(
+            html,
+            path,
+            &scenario,
+            rvtol_report::Report {
+                record: Default::default(),
+                run: None,
+                sensitivity: Some(&value),
+                allocation: None,
+                curves: &[],
+            },
+        )?;
+    }
     let lost: Vec<String> = report
         .outputs
         .iter()
@@ -455,7 +541,7 @@ pub struct AllocateArgs {
 pub fn allocate(
     path: &Path,
     args: AllocateArgs,
-    json: Option<&Path>,
+    to: Destinations<'_>,
     write_scenario: Option<&Path>,
     execution: &Execution,
 ) -> Result<()> {
@@ -511,7 +597,23 @@ pub fn allocate(
         write_report(proposal, &document)?;
     }
     let report = AllocationReport::new(&allocation);
-    emit(json, || report.to_json(), || report.to_text())?;
+    let json = report.to_json();
+    emit(to.json, || json.clone(), || report.to_text())?;
+    if let Some(html) = to.html {
+        let value = parsed(&json);
+        write_html(
+            html,
+            path,
+            &scenario,
+            rvtol_report::Report {
+                record: Default::default(),
+                run: None,
+                sensitivity: None,
+                allocation: Some(&value),
+                curves: &[],
+            },
+        )?;
+    }
     match allocation.status() {
         "met" => Ok(()),
         status => Err(Failed(format!("allocation {status}")).into()),
@@ -552,4 +654,95 @@ pub fn models() -> Result<()> {
         out.push('\n');
     }
     print(&out)
+}
+
+/// `rvtol report`: one page from saved JSON reports of one scenario, with its model curves
+/// when the scenario file is given.
+pub fn report(
+    files: &[std::path::PathBuf],
+    scenario_path: Option<&Path>,
+    output: &Path,
+) -> Result<()> {
+    use rvtol_report::{kind_of, Kind};
+    let scenario_of = |v: &serde_json::Value| v["scenario"].as_str().unwrap_or("").to_string();
+    let mut found: Vec<(Kind, serde_json::Value, &Path)> = Vec::new();
+    for file in files {
+        let text = read_text(file)?;
+        let value: serde_json::Value = serde_json::from_str(&text)
+            .map_err(|err| BadInput(format!("{}: not JSON: {err}", file.display())))?;
+        let kind = kind_of(&value).ok_or_else(|| {
+            BadInput(format!(
+                "{}: not a JSON report of `rvtol run`, `sensitivity` or `allocate`",
+                file.display()
+            ))
+        })?;
+        if let Some((_, first, first_file)) = found.first() {
+            let (this, that) = (scenario_of(&value), scenario_of(first));
+            if this != that {
+                return Err(BadInput(format!(
+                    "{}: a report of scenario '{this}', but {} is of '{that}'; one page shows one scenario",
+                    file.display(),
+                    first_file.display()
+                ))
+                .into());
+            }
+        }
+        if let Some((_, _, first)) = found.iter().find(|(k, _, _)| *k == kind) {
+            return Err(BadInput(format!(
+                "{}: a second {} report (the first is {}); one page shows one of each",
+                file.display(),
+                kind.command(),
+                first.display()
+            ))
+            .into());
+        }
+        found.push((kind, value, file));
+    }
+    let name = found
+        .first()
+        .map(|(_, v, _)| scenario_of(v))
+        .ok_or_else(|| BadInput("no report given".into()))?;
+    let mut description = None;
+    let mut curves = Vec::new();
+    if let Some(path) = scenario_path {
+        let scenario = load(path)?;
+        if scenario.name != name {
+            return Err(BadInput(format!(
+                "{}: scenario '{}', but the reports are of '{name}'",
+                path.display(),
+                scenario.name
+            ))
+            .into());
+        }
+        description = Some(scenario.description.clone()).filter(|d| !d.is_empty());
+        curves = nominal_curves(&scenario)
+            .map_err(|err| bad_scenario(path, err))?
+            .into_iter()
+            .map(|(model, curves)| (model.to_string(), curves))
+            .collect();
+    }
+    let get = |kind: Kind| found.iter().find(|(k, _, _)| *k == kind).map(|(_, v, _)| v);
+    let record = rvtol_report::Record {
+        scenario: name.clone(),
+        description,
+        source: scenario_path.map(|p| p.display().to_string()),
+        command: Some(command_line()),
+        version: env!("CARGO_PKG_VERSION").to_string(),
+    };
+    let page = rvtol_report::render(&rvtol_report::Report {
+        record,
+        run: get(Kind::Run),
+        sensitivity: get(Kind::Sensitivity),
+        allocation: get(Kind::Allocation),
+        curves: &curves,
+    })
+    .map_err(|err| BadInput(format!("{}: {err}", output.display())))?;
+    write_report(output, &page)?;
+    let kinds: Vec<&str> = found.iter().map(|(k, _, _)| k.command()).collect();
+    print(&format!(
+        "{}: report of {} ({})\n",
+        output.display(),
+        name,
+        kinds.join(", ")
+    ))
 }

@@ -8,7 +8,6 @@
 mod commands;
 mod limits;
 mod output;
-mod plot;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -63,6 +62,9 @@ enum Command {
         /// Write the JSON report to PATH ("-" for stdout instead of the table).
         #[arg(long, value_name = "PATH")]
         json: Option<PathBuf>,
+        /// Write an HTML report to PATH: one self-contained page with the plots.
+        #[arg(long, value_name = "PATH")]
+        html: Option<PathBuf>,
         /// Exact percentiles while samples × outputs stays at or below this many values;
         /// a bounded-memory sketch beyond it.
         #[arg(long, value_name = "VALUES", default_value_t = DEFAULT_EXACT_PERCENTILE_LIMIT, value_parser = parse_count, allow_hyphen_values = true)]
@@ -108,6 +110,9 @@ enum Command {
         /// Write the JSON report to PATH ("-" for stdout instead of the table).
         #[arg(long, value_name = "PATH")]
         json: Option<PathBuf>,
+        /// Write an HTML report to PATH: one self-contained page with the plots.
+        #[arg(long, value_name = "PATH")]
+        html: Option<PathBuf>,
         #[command(flatten)]
         execution: Execution,
     },
@@ -205,6 +210,9 @@ enum Command {
         /// Write the JSON report to PATH ("-" for stdout instead of the table).
         #[arg(long, value_name = "PATH")]
         json: Option<PathBuf>,
+        /// Write an HTML report to PATH: one self-contained page with the plots.
+        #[arg(long, value_name = "PATH")]
+        html: Option<PathBuf>,
         /// Write the scenario with the proposed tolerances to PATH.
         #[arg(long, value_name = "PATH")]
         write_scenario: Option<PathBuf>,
@@ -220,6 +228,19 @@ enum Command {
         /// Directory for the files (created when missing).
         #[arg(long, value_name = "DIR", default_value = ".")]
         out_dir: PathBuf,
+    },
+    /// Write one self-contained HTML page (plots, tables, the record to reproduce it)
+    /// from JSON reports of `run`, `sensitivity` and `allocate` of one scenario.
+    Report {
+        /// JSON reports (`--json` of run, sensitivity, allocate), at most one of each.
+        #[arg(required = true)]
+        reports: Vec<PathBuf>,
+        /// The scenario file: adds its description and its models' nominal curves.
+        #[arg(long, value_name = "FILE")]
+        scenario: Option<PathBuf>,
+        /// The HTML file to write.
+        #[arg(short = 'o', long = "output", value_name = "PATH")]
+        output: PathBuf,
     },
     /// List the models with their parameters, inputs and outputs.
     Models,
@@ -257,13 +278,17 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             samples,
             seed,
             json,
+            html,
             exact_percentile_limit,
             execution,
         } => run(
             &scenario,
             samples,
             seed,
-            json.as_deref(),
+            Destinations {
+                json: json.as_deref(),
+                html: html.as_deref(),
+            },
             exact_percentile_limit,
             &execution,
         ),
@@ -281,6 +306,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             permutations,
             outer,
             json,
+            html,
             execution,
         } => sensitivity(
             &scenario,
@@ -293,7 +319,10 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
                 permutations,
                 outer,
             },
-            json.as_deref(),
+            Destinations {
+                json: json.as_deref(),
+                html: html.as_deref(),
+            },
             &execution,
         ),
         Command::Baseline {
@@ -341,6 +370,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             seed,
             verify_seed,
             json,
+            html,
             write_scenario,
             execution,
         } => allocate(
@@ -353,10 +383,18 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
                 seed,
                 verify_seed,
             },
-            json.as_deref(),
+            Destinations {
+                json: json.as_deref(),
+                html: html.as_deref(),
+            },
             write_scenario.as_deref(),
             &execution,
         ),
+        Command::Report {
+            reports,
+            scenario,
+            output,
+        } => report(&reports, scenario.as_deref(), &output),
         Command::Models => models(),
     }
 }
@@ -397,8 +435,10 @@ impl Cli {
             "baseline",
             "check",
             "validate",
+            "init",
             "allocate",
             "curve",
+            "report",
             "models",
         ]
     }

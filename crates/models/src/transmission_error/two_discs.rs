@@ -1783,6 +1783,10 @@ impl TransmissionError {
 /// listed (at N points the harmonics of the mesh order z_c·z_p alias).
 pub(super) const SPECTRUM_POINTS: usize = 1 << 16;
 
+/// The detail curve spans 1/DETAIL_FRACTION of a revolution (4.5°: some 20 cycles of the
+/// RV40E's cycloid–pin mesh, order z_c·z_p = 1560; 819 points).
+const DETAIL_FRACTION: usize = 80;
+
 impl TransmissionError {
     /// The curves of the physical reading: the tabulated curve with its stage parts, and
     /// the order spectrum (orders 1..N/2) of the exact curve at [`SPECTRUM_POINTS`].
@@ -1801,11 +1805,28 @@ impl TransmissionError {
                 .map(|j| (degrees(j), value(j) * ARCSEC_PER_RAD))
                 .collect(),
         };
-        let exact: Vec<f64> = self
-            .exact_curve_stages(inputs, SPECTRUM_POINTS)
-            .into_iter()
+        let exact_stages = self.exact_curve_stages(inputs, SPECTRUM_POINTS);
+        let exact: Vec<f64> = exact_stages
+            .iter()
             .map(|(te, _)| te * ARCSEC_PER_RAD)
             .collect();
+        // The first 1/DETAIL_FRACTION of the revolution on the exact geometry, fine enough
+        // to resolve the cycloid–pin mesh (order z_c·z_p, 1560 for the RV40E), which the
+        // tabulated curve's N points alias.
+        let detail_points = SPECTRUM_POINTS / DETAIL_FRACTION;
+        let detail_degrees = |j: usize| 360.0 * j as f64 / SPECTRUM_POINTS as f64;
+        // Series of the total (part 0) or of stage part − 1.
+        let detail = |label: &str, part: usize| Series {
+            label: label.into(),
+            points: exact_stages[..=detail_points]
+                .iter()
+                .enumerate()
+                .map(|(j, (total, stages))| {
+                    let value = if part == 0 { *total } else { stages[part - 1] };
+                    (detail_degrees(j), value * ARCSEC_PER_RAD)
+                })
+                .collect(),
+        };
         let fft = crate::RealFft::new(SPECTRUM_POINTS);
         let mut work = vec![(0.0, 0.0); SPECTRUM_POINTS / 2];
         fft.transform(&exact, &mut work);
@@ -1827,6 +1848,22 @@ impl TransmissionError {
                         "cycloid–pin contact (first contact over both discs)",
                         &|j| stages[j][2],
                     ),
+                ],
+            },
+            Curve {
+                name: "transmission_error_detail".into(),
+                title: format!(
+                    "Transmission error, the first {}° of the revolution ({SPECTRUM_POINTS} points per revolution)",
+                    360.0 / DETAIL_FRACTION as f64
+                ),
+                x_label: "output angle (deg)".into(),
+                y_label: "transmission error (arcsec)".into(),
+                style: CurveStyle::Lines,
+                series: vec![
+                    detail("total", 0),
+                    detail("involute stage", 1),
+                    detail("cranks", 2),
+                    detail("cycloid–pin contact", 3),
                 ],
             },
             Curve {

@@ -1,0 +1,1035 @@
+//! rvtol-report: one self-contained HTML page (inline SVG, no script, nothing loaded from
+//! a network) from rvtol's JSON reports — `run`, `sensitivity`, `allocate` — and the
+//! models' nominal curves, for a design review and as a reproducible record.
+//!
+//! The page reads the JSON reports, the stable contract of the engine, and nothing else
+//! of the engine: `rvtol run|sensitivity|allocate --html` renders the report it has just
+//! made, `rvtol report` renders saved ones, and both give the same page for the same
+//! reports. Nothing here computes a statistic; the page draws and tabulates what the
+//! reports say. The same reports give the same bytes (no clock, no randomness).
+//!
+//! Layout: [`chart`] draws (plotters, SVG backend), [`html`] builds the markup, this file
+//! reads the reports into sections.
+
+pub mod chart;
+pub mod html;
+
+use rvtol_models::{Curve, CurveStyle};
+use serde_json::Value;
+
+use chart::{BarRow, Cumulative, Limits, Marker};
+use html::{escape, figure, interval, number, table};
+
+/// What the page is a record of.
+#[derive(Debug, Clone, Default)]
+pub struct Record {
+    /// Scenario name.
+    pub scenario: String,
+    /// Its description, when the scenario file is at hand.
+    pub description: Option<String>,
+    /// The scenario file as the user named it.
+    pub source: Option<String>,
+    /// The command that made the page.
+    pub command: Option<String>,
+    /// Version of the rvtol that renders the page.
+    pub version: String,
+}
+
+/// The reports a page shows; any of them may be absent.
+pub struct Report<'a> {
+    /// What the page records.
+    pub record: Record,
+    /// The JSON report of `rvtol run`.
+    pub run: Option<&'a Value>,
+    /// The JSON report of `rvtol sensitivity`.
+    pub sensitivity: Option<&'a Value>,
+    /// The JSON report of `rvtol allocate`.
+    pub allocation: Option<&'a Value>,
+    /// Model name and its curves with every deviation at its mean.
+    pub curves: &'a [(String, Vec<Curve>)],
+}
+
+/// Why a page could not be made, in one line.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReportError(pub String);
+
+impl std::fmt::Display for ReportError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for ReportError {}
+
+impl From<chart::ChartError> for ReportError {
+    fn from(err: chart::ChartError) -> Self {
+        ReportError(format!("cannot draw a chart: {}", err.0))
+    }
+}
+
+/// Which command wrote a JSON report.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    /// `rvtol run`.
+    Run,
+    /// `rvtol sensitivity`.
+    Sensitivity,
+    /// `rvtol allocate`.
+    Allocation,
+}
+
+impl Kind {
+    /// The command's name.
+    pub fn command(self) -> &'static str {
+        match self {
+            Kind::Run => "run",
+            Kind::Sensitivity => "sensitivity",
+            Kind::Allocation => "allocate",
+        }
+    }
+}
+
+/// The kind of a JSON report, from the fields only that command writes.
+pub fn kind_of(report: &Value) -> Option<Kind> {
+    let has = |key: &str| report.get(key).is_some();
+    if !has("rvtol_version") || !has("scenario") {
+        return None;
+    }
+    if has("percentile_method") && has("outputs") {
+        Some(Kind::Run)
+    } else if has("base_samples") && has("outputs") {
+        Some(Kind::Sensitivity)
+    } else if has("target") && has("sources") {
+        Some(Kind::Allocation)
+    } else {
+        None
+    }
+}
+
+fn f(value: &Value, key: &str) -> Option<f64> {
+    value.get(key).and_then(Value::as_f64)
+}
+
+fn s<'v>(value: &'v Value, key: &str) -> Option<&'v str> {
+    value.get(key).and_then(Value::as_str)
+}
+
+fn pair(value: Option<&Value>) -> (Option<f64>, Option<f64>) {
+    match value.and_then(Value::as_array) {
+        Some(a) if a.len() == 2 => (a[0].as_f64(), a[1].as_f64()),
+        _ => (None, None),
+    }
+}
+
+fn array<'v>(value: &'v Value, key: &str, what: &str) -> Result<&'v Vec<Value>, ReportError> {
+    value.get(key).and_then(Value::as_array).ok_or_else(|| {
+        ReportError(format!(
+            "{what}: no `{key}` list: not a report of this rvtol"
+        ))
+    })
+}
+
+/// An HTML id from a name.
+fn anchor(prefix: &str, name: &str) -> String {
+    let clean: String = name
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() {
+                c.to_ascii_lowercase()
+            } else {
+                '-'
+            }
+        })
+        .collect();
+    format!("{prefix}-{clean}")
+}
+
+/// Renders the page.
+pub fn render(report: &Report) -> Result<String, ReportError> {
+    let record = &report.record;
+    let mut body = String::new();
+    let mut nav: Vec<(String, String)> = vec![("record".into(), "Record".into())];
+    let mut sections = String::new();
+    if let Some(run) = report.run {
+        sections.push_str(&run_section(run)?);
+        nav.push(("run".into(), "Output distributions".into()));
+    }
+    if let Some(sensitivity) = report.sensitivity {
+        sections.push_str(&sensitivity_section(sensitivity)?);
+        nav.push(("sensitivity".into(), "Sensitivity".into()));
+    }
+    if let Some(allocation) = report.allocation {
+        sections.push_str(&allocation_section(allocation)?);
+        nav.push(("allocation".into(), "Allocation".into()));
+    }
+    if !report.curves.is_empty() {
+        sections.push_str(&curves_section(report.curves)?);
+        nav.push(("curves".into(), "Model curves".into()));
+    }
+    body.push_str(&format!(
+        "<header>\n<h1>rvtol report: {}</h1>\n",
+        escape(&record.scenario)
+    ));
+    if let Some(description) = &record.description {
+        body.push_str(&format!("<p class=\"lead\">{}</p>\n", escape(description)));
+    }
+    body.push_str("<nav>");
+    for (id, label) in &nav {
+        body.push_str(&format!("<a href=\"#{id}\">{}</a>", escape(label)));
+    }
+    body.push_str("</nav>\n</header>\n");
+    body.push_str(&record_section(report));
+    body.push_str(&sections);
+    body.push_str(&format!(
+        "<footer>Written by rvtol {}. Every figure on this page is read from the JSON reports named under Record; \
+         the same reports give the same page. The page holds no script and loads nothing.</footer>\n",
+        escape(&record.version)
+    ));
+    Ok(html::page(
+        &format!("rvtol report: {}", record.scenario),
+        &body,
+    ))
+}
+
+/// Scenario, command, versions, seeds and sample counts: what reproduces the page.
+fn record_section(report: &Report) -> String {
+    let record = &report.record;
+    let mut rows: Vec<Vec<String>> = vec![vec!["scenario".into(), escape(&record.scenario)]];
+    if let Some(source) = &record.source {
+        rows.push(vec![
+            "scenario file".into(),
+            format!("<code>{}</code>", escape(source)),
+        ]);
+    }
+    if let Some(command) = &record.command {
+        rows.push(vec![
+            "command".into(),
+            format!("<code>{}</code>", escape(command)),
+        ]);
+    }
+    let mut reproduce = |kind: &str, json: &Value, samples_key: &str| {
+        let mut parts = vec![format!(
+            "rvtol {}",
+            escape(s(json, "rvtol_version").unwrap_or("?"))
+        )];
+        if let Some(seed) = json.get("seed").and_then(Value::as_u64) {
+            parts.push(format!("seed {seed}"));
+        }
+        if let Some(verify) = json.get("verification_seed").and_then(Value::as_u64) {
+            parts.push(format!("verification seed {verify}"));
+        }
+        if let Some(n) = json.get(samples_key).and_then(Value::as_u64) {
+            parts.push(format!("{} samples", thousands(n)));
+        }
+        if let Some(method) = json.get("percentile_method") {
+            parts.push(format!(
+                "{} percentiles ({})",
+                escape(s(method, "kind").unwrap_or("?")),
+                escape(s(method, "estimator").unwrap_or(""))
+            ));
+        }
+        if let Some(b) = json.get("bootstrap").and_then(Value::as_u64) {
+            parts.push(format!("{b} bootstrap replicates"));
+        }
+        if let Some(e) = json.get("evaluations").and_then(Value::as_u64) {
+            parts.push(format!("{} evaluations", thousands(e)));
+        }
+        rows.push(vec![kind.into(), parts.join(", ")]);
+    };
+    if let Some(run) = report.run {
+        reproduce("run report", run, "samples");
+    }
+    if let Some(sensitivity) = report.sensitivity {
+        reproduce("sensitivity report", sensitivity, "base_samples");
+    }
+    if let Some(allocation) = report.allocation {
+        reproduce("allocation report", allocation, "samples");
+    }
+    rows.push(vec![
+        "page written by".into(),
+        format!("rvtol {}", escape(&record.version)),
+    ]);
+    let mut out = String::from("<section id=\"record\">\n<h2>Record</h2>\n");
+    out.push_str(&table(&["", ""], &rows, &[]).replacen("<table>", "<table class=\"meta\">", 1));
+    out.push_str("</section>\n");
+    out
+}
+
+/// 1234567 → "1,234,567".
+fn thousands(n: u64) -> String {
+    let digits = n.to_string();
+    let mut out = String::new();
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
+const PERCENTS: [(&str, f64); 7] = [
+    ("0.135", 0.135),
+    ("2.275", 2.275),
+    ("15.866", 15.866),
+    ("50", 50.0),
+    ("84.134", 84.134),
+    ("97.725", 97.725),
+    ("99.865", 99.865),
+];
+
+fn markers(output: &Value) -> Vec<Marker> {
+    let (Some(values), intervals) = (output.get("percentiles"), output.get("percentile_ci95"))
+    else {
+        return Vec::new();
+    };
+    PERCENTS
+        .iter()
+        .filter_map(|&(key, percent)| {
+            let value = values.get(key).and_then(Value::as_f64)?;
+            Some(Marker {
+                percent,
+                value,
+                interval: pair(intervals.and_then(|i| i.get(key))),
+            })
+        })
+        .collect()
+}
+
+fn run_section(run: &Value) -> Result<String, ReportError> {
+    let outputs = array(run, "outputs", "run report")?;
+    let mut out = String::from("<section id=\"run\">\n<h2>Output distributions</h2>\n");
+    out.push_str(&format!(
+        "<p class=\"note\">{} samples, seed {}. Percentile intervals are distribution-free 95 % \
+         confidence intervals from order statistics (exact binomial ranks); an open end means the \
+         interval reaches beyond the sample's extreme. The out-of-spec fraction's interval is \
+         Clopper–Pearson's exact one.</p>\n",
+        thousands(run.get("samples").and_then(Value::as_u64).unwrap_or(0)),
+        run.get("seed").and_then(Value::as_u64).unwrap_or(0)
+    ));
+    let mut indicators = Vec::new();
+    for output in outputs {
+        let name = s(output, "name").unwrap_or("output");
+        let unit = s(output, "unit").unwrap_or("");
+        if s(output, "kind") == Some("indicator") {
+            let (lo, hi) = pair(output.get("fraction_ci95"));
+            indicators.push(vec![
+                escape(name),
+                thousands(output.get("events").and_then(Value::as_u64).unwrap_or(0)),
+                thousands(output.get("n").and_then(Value::as_u64).unwrap_or(0)),
+                format!("{} %", number(f(output, "fraction").map(|v| v * 100.0))),
+                format!(
+                    "{} .. {} %",
+                    number(lo.map(|v| v * 100.0)),
+                    number(hi.map(|v| v * 100.0))
+                ),
+            ]);
+            continue;
+        }
+        out.push_str(&output_block(output, name, unit)?);
+    }
+    if !indicators.is_empty() {
+        out.push_str("<h3>Indicators</h3>\n<p class=\"note\">Outputs that flag a sample (interference, preload): how many samples were flagged.</p>\n");
+        out.push_str(&table(
+            &["indicator", "flagged", "of samples", "fraction", "95 % CI"],
+            &indicators,
+            &[1, 2, 3, 4],
+        ));
+    }
+    out.push_str("</section>\n");
+    Ok(out)
+}
+
+fn output_block(output: &Value, name: &str, unit: &str) -> Result<String, ReportError> {
+    let label = if unit.is_empty() {
+        name.to_string()
+    } else {
+        format!("{name} ({unit})")
+    };
+    let mut out = format!(
+        "<h3 id=\"{}\">{}</h3>\n",
+        anchor("out", name),
+        escape(&label)
+    );
+    let spec = output.get("spec");
+    let limits = Limits {
+        lower: spec.and_then(|s| f(s, "lower")),
+        upper: spec.and_then(|s| f(s, "upper")),
+    };
+    let all_markers = markers(output);
+    let three: Vec<Marker> = all_markers
+        .iter()
+        .filter(|m| [0.135, 50.0, 99.865].contains(&m.percent))
+        .cloned()
+        .collect();
+    let histogram = output.get("histogram");
+    let counts: Vec<u64> = histogram
+        .and_then(|h| h.get("counts"))
+        .and_then(Value::as_array)
+        .map(|c| c.iter().filter_map(Value::as_u64).collect())
+        .unwrap_or_default();
+    let lower_edge = histogram.and_then(|h| f(h, "lower_edge"));
+    let bin_width = histogram.and_then(|h| f(h, "bin_width"));
+    let total: u64 = counts.iter().sum();
+    out.push_str("<div class=\"pair\">\n");
+    match (lower_edge, bin_width) {
+        (Some(lower_edge), Some(bin_width)) if total > 0 => {
+            let svg = chart::histogram(
+                &format!("{name}: histogram"),
+                &label,
+                lower_edge,
+                bin_width,
+                &counts,
+                limits,
+                &three,
+            )?;
+            out.push_str(&figure(
+                &svg,
+                &format!(
+                    "Histogram of the {} samples with a value, {} bins. Dashed: P0.135, P50, P99.865, \
+                     their 95 % intervals shaded. Red: spec limits.",
+                    thousands(total),
+                    counts.len()
+                ),
+            ));
+            let mut cumulative = Vec::with_capacity(counts.len());
+            let mut sum = 0u64;
+            for (k, c) in counts.iter().enumerate() {
+                sum += c;
+                cumulative.push((
+                    lower_edge + bin_width * (k + 1) as f64,
+                    sum as f64 / total as f64,
+                ));
+            }
+            let svg = chart::probability_plot(
+                &format!("{name}: cumulative distribution"),
+                &label,
+                &[Cumulative {
+                    label: "histogram, cumulative at the bin edges".into(),
+                    points: cumulative,
+                }],
+                &all_markers,
+                limits,
+                None,
+            )?;
+            out.push_str(&figure(
+                &svg,
+                "Cumulative distribution on a normal probability scale (a normal distribution is a \
+                 straight line; the tails are spread out): the histogram's cumulative fraction at its \
+                 bin edges, and the seven reported percentiles with their 95 % intervals.",
+            ));
+        }
+        _ => out.push_str("<p class=\"note\">No sample has a value: nothing to draw.</p>\n"),
+    }
+    out.push_str("</div>\n");
+    // Figures.
+    let count = |key: &str| output.get(key).and_then(Value::as_u64).unwrap_or(0);
+    let mut rows = vec![
+        vec!["samples with a value".into(), thousands(count("n"))],
+        vec!["non-finite".into(), thousands(count("non_finite"))],
+    ];
+    if let Some(condition) = output.get("condition") {
+        let effect = s(condition, "effect").unwrap_or("");
+        let reading = match effect {
+            "excluded" => "excluded from the figures",
+            "non-conforming" => "counted out of spec",
+            other => other,
+        };
+        rows.push(vec![
+            format!(
+                "flagged by {}",
+                escape(s(condition, "indicator").unwrap_or("?"))
+            ),
+            format!(
+                "{} ({} %), {}",
+                thousands(
+                    condition
+                        .get("samples")
+                        .and_then(Value::as_u64)
+                        .unwrap_or(0)
+                ),
+                number(f(condition, "fraction").map(|v| v * 100.0)),
+                escape(reading)
+            ),
+        ]);
+    }
+    for (label, key) in [
+        ("mean", "mean"),
+        ("standard deviation", "sd"),
+        ("skewness", "skewness"),
+        ("excess kurtosis", "excess_kurtosis"),
+        ("min", "min"),
+        ("max", "max"),
+    ] {
+        rows.push(vec![label.into(), number(f(output, key))]);
+    }
+    let mut tables = table(&["figure", "value"], &rows, &[1]);
+    let percentile_rows: Vec<Vec<String>> = all_markers
+        .iter()
+        .map(|m| {
+            vec![
+                format!("P{}", m.percent),
+                number(Some(m.value)),
+                interval(m.interval.0, m.interval.1),
+            ]
+        })
+        .collect();
+    tables.push_str(&table(
+        &["percentile", "value", "95 % CI"],
+        &percentile_rows,
+        &[1, 2],
+    ));
+    if limits.lower.is_some() || limits.upper.is_some() {
+        let spec_text = match (limits.lower, limits.upper) {
+            (Some(l), Some(u)) => format!("{} ≤ x ≤ {}", number(Some(l)), number(Some(u))),
+            (Some(l), None) => format!("x ≥ {}", number(Some(l))),
+            (None, Some(u)) => format!("x ≤ {}", number(Some(u))),
+            _ => String::new(),
+        };
+        let with_ci = |value: Option<f64>, key: &str| {
+            let (lo, hi) = pair(output.get(key));
+            match (value, lo, hi) {
+                (Some(v), Some(lo), Some(hi)) => {
+                    format!(
+                        "{} ({} .. {})",
+                        number(Some(v)),
+                        number(Some(lo)),
+                        number(Some(hi))
+                    )
+                }
+                (v, _, _) => number(v),
+            }
+        };
+        let (ppm_lo, ppm_hi) = pair(output.get("ppm_out_ci95"));
+        let mut capability = vec![
+            vec!["spec".into(), escape(&spec_text)],
+            vec![
+                "Cp (moments, 95 % CI)".into(),
+                with_ci(f(output, "cp"), "cp_ci95"),
+            ],
+            vec![
+                "Cpk (moments, 95 % CI)".into(),
+                with_ci(f(output, "cpk"), "cpk_ci95"),
+            ],
+            vec![
+                "Cp (percentiles)".into(),
+                number(f(output, "cp_percentile")),
+            ],
+            vec![
+                "Cpk (percentiles)".into(),
+                number(f(output, "cpk_percentile")),
+            ],
+            vec![
+                "out of spec, ppm (95 % CI)".into(),
+                format!(
+                    "{} ({} .. {})",
+                    number(f(output, "ppm_out")),
+                    number(ppm_lo),
+                    number(ppm_hi)
+                ),
+            ],
+        ];
+        if let Some(note) = s(output, "capability_note") {
+            capability.push(vec!["note".into(), escape(note)]);
+        }
+        tables.push_str(&table(&["capability", "value"], &capability, &[1]));
+    }
+    out.push_str(&format!(
+        "<div class=\"pair\">\n<div>{tables}</div>\n</div>\n"
+    ));
+    Ok(out)
+}
+
+fn sensitivity_section(report: &Value) -> Result<String, ReportError> {
+    let outputs = array(report, "outputs", "sensitivity report")?;
+    let mut out = String::from("<section id=\"sensitivity\">\n<h2>Sensitivity</h2>\n");
+    if let Some(method) = s(report, "method") {
+        out.push_str(&format!(
+            "<p class=\"note\">{}. {} base samples, {} model evaluations; intervals at {} % from {} bootstrap replicates over the {}.</p>\n",
+            escape(method),
+            thousands(report.get("base_samples").and_then(Value::as_u64).unwrap_or(0)),
+            thousands(report.get("evaluations").and_then(Value::as_u64).unwrap_or(0)),
+            number(f(report, "confidence").map(|c| c * 100.0)),
+            report.get("bootstrap").and_then(Value::as_u64).unwrap_or(0),
+            escape(s(report, "bootstrap_unit").unwrap_or("rows"))
+        ));
+    }
+    for output in outputs {
+        let name = s(output, "name").unwrap_or("output");
+        out.push_str(&format!(
+            "<h3 id=\"{}\">{}</h3>\n",
+            anchor("sens", name),
+            escape(name)
+        ));
+        let mut indices: Vec<&Value> = output
+            .get("indices")
+            .and_then(Value::as_array)
+            .map(|a| a.iter().collect())
+            .unwrap_or_default();
+        indices.sort_by(|a, b| {
+            let key = |v: &Value| {
+                f(v, "total")
+                    .filter(|t| t.is_finite())
+                    .unwrap_or(f64::NEG_INFINITY)
+            };
+            key(b).total_cmp(&key(a))
+        });
+        out.push_str("<div class=\"pair\">\n");
+        if !indices.is_empty() {
+            let rows: Vec<BarRow> = indices
+                .iter()
+                .map(|v| {
+                    let ci = |key: &str| match pair(v.get(key)) {
+                        (Some(a), Some(b)) => Some((a, b)),
+                        _ => None,
+                    };
+                    BarRow {
+                        name: s(v, "input").unwrap_or("?").to_string(),
+                        values: vec![
+                            (
+                                f(v, "first_order").unwrap_or(f64::NAN),
+                                ci("first_order_ci"),
+                            ),
+                            (f(v, "total").unwrap_or(f64::NAN), ci("total_ci")),
+                        ],
+                    }
+                })
+                .collect();
+            let svg = chart::horizontal_bars(
+                &format!("{name}: Sobol' indices"),
+                "share of the output variance",
+                &["first order S_i", "total S_Ti"],
+                &rows,
+            )?;
+            out.push_str(&figure(
+                &svg,
+                "Sources sorted by total index. First order: the share of the variance the source \
+                 explains alone; total: with all its interactions. Whiskers: bootstrap intervals.",
+            ));
+        }
+        if let Some(effects) = output.get("shapley").and_then(Value::as_array) {
+            let mut effects: Vec<&Value> = effects.iter().collect();
+            effects.sort_by(|a, b| {
+                let key = |v: &Value| {
+                    f(v, "effect")
+                        .filter(|t| t.is_finite())
+                        .unwrap_or(f64::NEG_INFINITY)
+                };
+                key(b).total_cmp(&key(a))
+            });
+            let rows: Vec<BarRow> = effects
+                .iter()
+                .map(|v| BarRow {
+                    name: s(v, "input").unwrap_or("?").to_string(),
+                    values: vec![(
+                        f(v, "effect").unwrap_or(f64::NAN),
+                        match pair(v.get("ci")) {
+                            (Some(a), Some(b)) => Some((a, b)),
+                            _ => None,
+                        },
+                    )],
+                })
+                .collect();
+            let svg = chart::horizontal_bars(
+                &format!("{name}: Shapley effects"),
+                "share of the output variance",
+                &["Shapley effect"],
+                &rows,
+            )?;
+            out.push_str(&figure(
+                &svg,
+                "Shapley effects: each source's fair share of the variance, interactions and \
+                 correlations split among the sources involved; they sum to 1 and stay \
+                 meaningful when sources are correlated. Whiskers: 95 % intervals.",
+            ));
+        }
+        let screening = output.get("screening");
+        let sources: Vec<&Value> = screening
+            .and_then(|s| s.get("sources"))
+            .and_then(Value::as_array)
+            .map(|a| a.iter().collect())
+            .unwrap_or_default();
+        if !sources.is_empty() {
+            let rows: Vec<BarRow> = sources
+                .iter()
+                .map(|v| BarRow {
+                    name: s(v, "input").unwrap_or("?").to_string(),
+                    values: vec![(f(v, "contribution_percent").unwrap_or(f64::NAN), None)],
+                })
+                .collect();
+            let svg = chart::horizontal_bars(
+                &format!("{name}: linearised contributions"),
+                "share of the linearised variance (%)",
+                &["contribution"],
+                &rows,
+            )?;
+            out.push_str(&figure(
+                &svg,
+                &format!(
+                    "First-order Taylor expansion at the nominal: each source's (∂y/∂x)²·Var(x) as a \
+                     share of their sum. R² of the linear fit to the samples: {} — where it is far \
+                     below 1 the model is not linear over the tolerances, and the Sobol' indices are \
+                     the ranking to trust.",
+                    number(screening.and_then(|s| f(s, "r_squared")))
+                ),
+            ));
+        }
+        out.push_str("</div>\n");
+        let rows: Vec<Vec<String>> = indices
+            .iter()
+            .map(|v| {
+                let (a, b) = pair(v.get("first_order_ci"));
+                let (c, d) = pair(v.get("total_ci"));
+                vec![
+                    escape(s(v, "input").unwrap_or("?")),
+                    number(f(v, "first_order")),
+                    format!("{} .. {}", number(a), number(b)),
+                    number(f(v, "total")),
+                    format!("{} .. {}", number(c), number(d)),
+                ]
+            })
+            .collect();
+        out.push_str(&table(
+            &["source", "first order", "95 % CI", "total", "95 % CI"],
+            &rows,
+            &[1, 2, 3, 4],
+        ));
+    }
+    out.push_str("</section>\n");
+    Ok(out)
+}
+
+fn allocation_section(report: &Value) -> Result<String, ReportError> {
+    let sources = array(report, "sources", "allocation report")?;
+    let output = s(report, "output").unwrap_or("output");
+    let unit = s(report, "unit").unwrap_or("");
+    let target = s(report, "target").unwrap_or("?");
+    let status = s(report, "status").unwrap_or("?");
+    let mut out = String::from("<section id=\"allocation\">\n<h2>Allocation</h2>\n");
+    let class = if status == "met" {
+        "status-met"
+    } else {
+        "status-bad"
+    };
+    out.push_str(&format!(
+        "<p>Output <b>{}</b>, target <code>{}</code>: <span class=\"{class}\">{}</span>. \
+         Total cost {} today, {} proposed.</p>\n",
+        escape(output),
+        escape(target),
+        escape(status),
+        number(f(report, "current_cost")),
+        number(f(report, "proposed_cost")),
+    ));
+    // Tolerance changes.
+    let rows: Vec<BarRow> = sources
+        .iter()
+        .map(|v| BarRow {
+            name: s(v, "source").unwrap_or("?").to_string(),
+            values: vec![(
+                f(v, "factor").map_or(f64::NAN, |factor| (factor - 1.0) * 100.0),
+                None,
+            )],
+        })
+        .collect();
+    out.push_str("<div class=\"pair\">\n");
+    let svg = chart::horizontal_bars(
+        "Proposed change of each tolerance",
+        "proposed / current − 1 (%): right loosens, left tightens",
+        &["tolerance change"],
+        &rows,
+    )?;
+    out.push_str(&figure(
+        &svg,
+        "Each source's proposed tolerance against today's.",
+    ));
+    // Before and after.
+    let distribution = |key: &str| -> Option<Cumulative> {
+        let run = report.get(key)?;
+        let q = run.get("quantiles")?;
+        let p = q.get("p")?.as_array()?;
+        let v = q.get("value")?.as_array()?;
+        let label = match key {
+            "current" => "today".to_string(),
+            "verification" => format!(
+                "proposed, verification run (seed {})",
+                run.get("seed").and_then(Value::as_u64).unwrap_or(0)
+            ),
+            _ => "proposed, optimisation run".to_string(),
+        };
+        Some(Cumulative {
+            label,
+            points: p
+                .iter()
+                .zip(v)
+                .filter_map(|(p, v)| Some((v.as_f64()?, p.as_f64()? / 100.0)))
+                .collect(),
+        })
+    };
+    let lines: Vec<Cumulative> = ["current", "verification"]
+        .iter()
+        .filter_map(|k| distribution(k))
+        .collect();
+    let target_value = target
+        .split_whitespace()
+        .last()
+        .and_then(|v| v.parse::<f64>().ok());
+    // "p99.865 <= 1": the percentile's level and its limit.
+    let percentile_target = target
+        .trim_start()
+        .strip_prefix('p')
+        .and_then(|rest| rest.split_whitespace().next())
+        .and_then(|p| p.parse::<f64>().ok());
+    if !lines.is_empty() {
+        let label = if unit.is_empty() {
+            output.to_string()
+        } else {
+            format!("{output} ({unit})")
+        };
+        let svg = chart::probability_plot(
+            &format!("{output}: before and after"),
+            &label,
+            &lines,
+            &[],
+            Limits::default(),
+            target_value
+                .filter(|_| percentile_target.is_some())
+                .map(|value| chart::Target {
+                    value,
+                    percent: percentile_target,
+                    label: format!("target {target}"),
+                }),
+        )?;
+        out.push_str(&figure(
+            &svg,
+            "The targeted output's cumulative distribution today and with the proposed tolerances \
+             (the independent verification run), on a normal probability scale.",
+        ));
+    }
+    out.push_str("</div>\n");
+    let mut rows = Vec::new();
+    for v in sources {
+        let (lo, hi) = pair(v.get("bounds"));
+        rows.push(vec![
+            escape(s(v, "source").unwrap_or("?")),
+            escape(s(v, "tolerance").unwrap_or("")),
+            escape(s(v, "unit").unwrap_or("")),
+            number(f(v, "current")),
+            number(f(v, "proposed")),
+            format!(
+                "{:+.1} %",
+                f(v, "factor").map_or(f64::NAN, |x| (x - 1.0) * 100.0)
+            )
+            .replace("NaN", "n/a"),
+            format!("{} .. {}", number(lo), number(hi)),
+            number(f(v, "current_cost")),
+            number(f(v, "proposed_cost")),
+            format!("{} %", number(f(v, "variance_share").map(|x| x * 100.0))),
+        ]);
+    }
+    out.push_str(&table(
+        &[
+            "source",
+            "tolerance",
+            "unit",
+            "current",
+            "proposed",
+            "change",
+            "bounds",
+            "cost now",
+            "cost new",
+            "variance share",
+        ],
+        &rows,
+        &[3, 4, 5, 6, 7, 8, 9],
+    ));
+    let mut runs = Vec::new();
+    for (key, label) in [
+        ("current", "today"),
+        ("proposed", "proposed (optimisation run)"),
+        ("verification", "proposed (verification run)"),
+    ] {
+        if let Some(run) = report.get(key) {
+            let (lo, hi) = pair(run.get("ci"));
+            runs.push(vec![
+                label.into(),
+                number(f(run, "value")),
+                format!("{} .. {}", number(lo), number(hi)),
+                number(f(run, "mean")),
+                number(f(run, "sd")),
+                run.get("seed")
+                    .and_then(Value::as_u64)
+                    .map_or("".into(), |s| s.to_string()),
+                thousands(run.get("n").and_then(Value::as_u64).unwrap_or(0)),
+            ]);
+        }
+    }
+    out.push_str(&table(
+        &[
+            "run",
+            "targeted figure",
+            "95 % CI",
+            "mean",
+            "sd",
+            "seed",
+            "samples",
+        ],
+        &runs,
+        &[1, 2, 3, 4, 5, 6],
+    ));
+    if let Some(options) = report.get("lever_options").and_then(Value::as_array) {
+        let levers: Vec<String> = report
+            .get("levers")
+            .and_then(Value::as_array)
+            .map(|l| l.iter().filter_map(|v| s(v, "lever").map(escape)).collect())
+            .unwrap_or_default();
+        let rows: Vec<Vec<String>> = options
+            .iter()
+            .map(|o| {
+                let values: Vec<String> = o
+                    .get("values")
+                    .and_then(Value::as_array)
+                    .map(|v| v.iter().map(|x| number(x.as_f64())).collect())
+                    .unwrap_or_default();
+                vec![
+                    values.join(", "),
+                    number(f(o, "lever_cost")),
+                    number(f(o, "tolerance_cost")),
+                    number(f(o, "total_cost")),
+                    escape(s(o, "status").unwrap_or("")),
+                    number(f(o, "verification")),
+                ]
+            })
+            .collect();
+        let lever_header = if levers.is_empty() {
+            "lever".to_string()
+        } else {
+            levers.join(", ")
+        };
+        out.push_str(&table(
+            &[
+                &lever_header,
+                "lever cost",
+                "tolerance cost",
+                "total",
+                "status",
+                "verification",
+            ],
+            &rows,
+            &[1, 2, 3, 5],
+        ));
+    }
+    out.push_str("</section>\n");
+    Ok(out)
+}
+
+fn curves_section(curves: &[(String, Vec<Curve>)]) -> Result<String, ReportError> {
+    let mut out = String::from(
+        "<section id=\"curves\">\n<h2>Model curves</h2>\n<p class=\"note\">Every deviation at its mean \
+         (the nominal assembly of the scenario).</p>\n",
+    );
+    for (model, list) in curves {
+        out.push_str(&format!(
+            "<h3>{}</h3>\n<div class=\"pair\">\n",
+            escape(model)
+        ));
+        for curve in list {
+            let svg = chart::curve(curve)?;
+            let dense = curve.style == CurveStyle::Lines
+                && curve.series.iter().any(|s| s.points.len() > chart::DENSE);
+            let mut caption = match curve.series.as_slice() {
+                [one] => {
+                    let mut label = one.label.clone();
+                    if let Some(first) = label.get(..1) {
+                        label.replace_range(..1, &first.to_uppercase());
+                    }
+                    format!("{label}.")
+                }
+                _ => String::new(),
+            };
+            if dense {
+                caption.push_str(
+                    " The whole curve. A trace too dense to draw point by point is drawn as its \
+                     band: the least and greatest value in each 1/360 of the axis.",
+                );
+            }
+            out.push_str(&figure(&svg, caption.trim_start()));
+        }
+        out.push_str("</div>\n");
+    }
+    out.push_str("</section>\n");
+    Ok(out)
+}
+
+/// The curve as CSV: one x column and one y column per series when the series share their
+/// x values, else an x and a y column per series (shorter series padded with empty cells).
+pub fn curve_csv(curve: &Curve) -> String {
+    let quote = |s: &str| {
+        if s.contains([',', '"']) {
+            format!("\"{}\"", s.replace('"', "\"\""))
+        } else {
+            s.to_string()
+        }
+    };
+    let shared = curve.series.windows(2).all(|w| {
+        w[0].points.len() == w[1].points.len()
+            && w[0]
+                .points
+                .iter()
+                .zip(&w[1].points)
+                .all(|(a, b)| a.0 == b.0)
+    });
+    let mut out = String::new();
+    if shared {
+        out.push_str(&quote(&curve.x_label));
+        for s in &curve.series {
+            out.push(',');
+            out.push_str(&quote(&format!("{} – {}", s.label, curve.y_label)));
+        }
+        out.push('\n');
+        let rows = curve.series.first().map_or(0, |s| s.points.len());
+        for i in 0..rows {
+            out.push_str(&format!("{}", curve.series[0].points[i].0));
+            for s in &curve.series {
+                out.push_str(&format!(",{}", s.points[i].1));
+            }
+            out.push('\n');
+        }
+    } else {
+        let header: Vec<String> = curve
+            .series
+            .iter()
+            .flat_map(|s| {
+                [
+                    quote(&format!("{} – {}", s.label, curve.x_label)),
+                    quote(&format!("{} – {}", s.label, curve.y_label)),
+                ]
+            })
+            .collect();
+        out.push_str(&header.join(","));
+        out.push('\n');
+        let rows = curve
+            .series
+            .iter()
+            .map(|s| s.points.len())
+            .max()
+            .unwrap_or(0);
+        for i in 0..rows {
+            let cells: Vec<String> = curve
+                .series
+                .iter()
+                .flat_map(|s| match s.points.get(i) {
+                    Some(&(x, y)) => [format!("{x}"), format!("{y}")],
+                    None => [String::new(), String::new()],
+                })
+                .collect();
+            out.push_str(&cells.join(","));
+            out.push('\n');
+        }
+    }
+    out
+}
+
+/// The curve as a standalone SVG chart (`rvtol curve`).
+pub fn curve_svg(curve: &Curve) -> Result<String, ReportError> {
+    Ok(chart::curve(curve)?)
+}

@@ -1,0 +1,264 @@
+//! The HTML report (`--html`, `rvtol report`): for every shipped scenario the page is one
+//! self-contained, well-formed document with a histogram and a cumulative plot per
+//! continuous output, its spec limits and percentile markers drawn, the model curves of
+//! the models that draw them, no NaN or infinity anywhere, nothing loaded from elsewhere
+//! (no script, no external reference), and the same bytes for the same reports; the
+//! sensitivity and allocation sections from their JSON; a report of another scenario is
+//! one line of bad input.
+
+mod common;
+
+use common::{run_rvtol, workspace_dir};
+use serde_json::Value;
+
+fn scenario(file: &str) -> String {
+    workspace_dir()
+        .join("scenarios")
+        .join(file)
+        .display()
+        .to_string()
+}
+
+fn temp_dir(label: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("rvtol-report-{label}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn ok(output: &std::process::Output) {
+    assert_eq!(
+        output.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+}
+
+/// Checks that hold for every page: well-formed frame, balanced figures and SVGs, no
+/// non-finite number, nothing external.
+fn check_page(page: &str, what: &str) {
+    assert!(page.starts_with("<!DOCTYPE html>"), "{what}: no doctype");
+    assert!(page.trim_end().ends_with("</html>"), "{what}: not closed");
+    let count = |needle: &str| page.matches(needle).count();
+    assert_eq!(count("<figure>"), count("</figure>"), "{what}: figures");
+    assert_eq!(count("<svg "), count("</svg>"), "{what}: SVGs");
+    assert_eq!(
+        count("<figure>"),
+        count("<svg "),
+        "{what}: one drawing per figure"
+    );
+    for bad in [
+        "NaN", "inf<", ">inf", "\"inf", "-inf", "Infinity", "<script", "<link", "<img", "src=",
+        "@import", "url(",
+    ] {
+        assert!(!page.contains(bad), "{what}: the page contains {bad:?}");
+    }
+    // The only address is the SVG namespace.
+    for (i, _) in page.match_indices("http") {
+        assert!(
+            page[i..].starts_with("http://www.w3.org/2000/svg"),
+            "{what}: an external address at {}",
+            &page[i..(i + 60).min(page.len())]
+        );
+    }
+}
+
+#[test]
+fn run_html_of_every_shipped_scenario_has_its_plots() {
+    let dir = temp_dir("run");
+    let mut files: Vec<_> = std::fs::read_dir(workspace_dir().join("scenarios"))
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "json"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 10);
+    for path in files {
+        let stem = path.file_stem().unwrap().to_str().unwrap().to_string();
+        let html = dir.join(format!("{stem}.html"));
+        let json = dir.join(format!("{stem}.json"));
+        let samples = if stem.contains("transmission") {
+            "64"
+        } else {
+            "2000"
+        };
+        let output = run_rvtol(&[
+            "run",
+            path.to_str().unwrap(),
+            "--samples",
+            samples,
+            "--json",
+            json.to_str().unwrap(),
+            "--html",
+            html.to_str().unwrap(),
+            "--quiet",
+        ]);
+        ok(&output);
+        let page = std::fs::read_to_string(&html).unwrap();
+        check_page(&page, &stem);
+        let report: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        assert!(page.contains(&format!(
+            "rvtol report: {}",
+            report["scenario"].as_str().unwrap()
+        )));
+        assert!(
+            page.contains(&format!("seed {}", report["seed"])),
+            "{stem}: seed"
+        );
+        let mut continuous = 0;
+        for output in report["outputs"].as_array().unwrap() {
+            let name = output["name"].as_str().unwrap();
+            if output["kind"] == "indicator" {
+                assert!(
+                    page.contains(&format!("<td>{name}</td>")),
+                    "{stem}: indicator {name}"
+                );
+                continue;
+            }
+            if output["n"].as_u64().unwrap() == 0 {
+                continue;
+            }
+            continuous += 1;
+            for chart in ["histogram", "cumulative distribution"] {
+                assert!(
+                    page.contains(&format!("{name}: {chart}")),
+                    "{stem}: {name} {chart}"
+                );
+            }
+            for marker in ["P0.135", "P50", "P99.865"] {
+                assert!(
+                    page.contains(&format!(">\n{marker}\n<")),
+                    "{stem}: {name} {marker}"
+                );
+            }
+            if let Some(spec) = output.get("spec") {
+                for (key, label) in [("lower", "LSL"), ("upper", "USL")] {
+                    if spec[key].is_number() {
+                        assert!(page.contains(label), "{stem}: {name} {label}");
+                    }
+                }
+                assert!(page.contains("Cpk (moments, 95 % CI)"));
+            }
+        }
+        let figures = page.matches("<figure>").count();
+        let curves = match stem.as_str() {
+            "rv40e-transmission" => 3,
+            "rv40e-transmission-002" => 2,
+            s if s.contains("torsion") => 1,
+            _ => 0,
+        };
+        assert_eq!(figures, 2 * continuous + curves, "{stem}: figures");
+        if curves > 0 {
+            assert!(page.contains("id=\"curves\""), "{stem}: curves");
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn report_composes_run_sensitivity_and_allocation_into_one_page() {
+    let dir = temp_dir("compose");
+    let path = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let file = scenario("allocation-linear.json");
+    ok(&run_rvtol(&[
+        "run",
+        &file,
+        "--samples",
+        "20000",
+        "--json",
+        &path("run.json"),
+        "--quiet",
+    ]));
+    ok(&run_rvtol(&[
+        "sensitivity",
+        &file,
+        "--samples",
+        "2048",
+        "--bootstrap",
+        "50",
+        "--json",
+        &path("sens.json"),
+        "--quiet",
+    ]));
+    let allocation = run_rvtol(&[
+        "allocate",
+        &file,
+        "--output",
+        "gap_mm",
+        "--target",
+        "sd <= 0.02",
+        "--samples",
+        "20000",
+        "--json",
+        &path("alloc.json"),
+        "--quiet",
+    ]);
+    assert!(matches!(allocation.status.code(), Some(0 | 1)));
+    let reports = [path("run.json"), path("sens.json"), path("alloc.json")];
+    let mut pages = Vec::new();
+    // The same command twice (the page records the command line).
+    for out in ["a.html", "a.html"] {
+        let mut args = vec!["report".to_string()];
+        args.extend(reports.iter().cloned());
+        args.extend(["--scenario".into(), file.clone(), "-o".into(), path(out)]);
+        let output = run_rvtol(&args);
+        ok(&output);
+        pages.push(std::fs::read_to_string(path(out)).unwrap());
+    }
+    assert!(pages[0] == pages[1], "the same reports give the same bytes");
+    let page = &pages[0];
+    check_page(page, "composed");
+    for id in ["record", "run", "sensitivity", "allocation"] {
+        assert!(
+            page.contains(&format!("<section id=\"{id}\">")),
+            "section {id}"
+        );
+    }
+    // Tornado rows and the allocation's before/after plot.
+    for input in ["x1", "x2", "x3", "x4"] {
+        assert!(page.contains(&format!(">\n{input}\n<")), "bar of {input}");
+    }
+    assert!(page.contains("gap_mm: Sobol&apos; indices"));
+    assert!(page.contains("gap_mm: before and after"));
+    assert!(page.contains("Proposed change of each tolerance"));
+    // The description comes from the scenario file.
+    assert!(page.contains("Chase &amp; Greenwood 1988"));
+
+    // A report of another scenario: one line, exit 2, nothing written.
+    ok(&run_rvtol(&[
+        "run",
+        &scenario("ishigami.json"),
+        "--samples",
+        "1000",
+        "--json",
+        &path("other.json"),
+        "--quiet",
+    ]));
+    let target = path("mixed.html");
+    let output = run_rvtol(&[
+        "report",
+        &path("run.json"),
+        &path("other.json"),
+        "-o",
+        &target,
+    ]);
+    assert_eq!(output.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("one page shows one scenario"), "{stderr}");
+    assert!(!std::path::Path::new(&target).exists());
+    // Two run reports, and a file that is no report.
+    let output = run_rvtol(&[
+        "report",
+        &path("run.json"),
+        &path("run.json"),
+        "-o",
+        &target,
+    ]);
+    assert_eq!(output.status.code(), Some(2));
+    std::fs::write(path("no.json"), "{\"a\": 1}").unwrap();
+    let output = run_rvtol(&["report", &path("no.json"), "-o", &target]);
+    assert_eq!(output.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("not a JSON report"));
+    std::fs::remove_dir_all(&dir).ok();
+}
