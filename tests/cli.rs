@@ -424,3 +424,176 @@ fn init_writes_a_valid_runnable_skeleton_for_every_model() {
     assert!(stderr.contains("geometric_hysteresis"), "{stderr}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn samples_out_writes_the_runs_own_rows_with_the_same_bytes_for_any_thread_count() {
+    // The CSV's outputs are the values the run's statistics are made of: the exact
+    // type-7 median of a column equals the report's P50 bit for bit, and the mean agrees
+    // to rounding; the file is byte-identical for 1 and 2 threads.
+    let dir = std::env::temp_dir().join(format!("rvtol-samples-out-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut files = Vec::new();
+    for threads in ["1", "2"] {
+        let csv = dir.join(format!("samples-{threads}.csv"));
+        let json = dir.join(format!("report-{threads}.json"));
+        let output = run_rvtol(&[
+            "run",
+            &scenario("rv20e-hysteresis.json"),
+            "--samples",
+            "10000",
+            "--threads",
+            threads,
+            "--samples-out",
+            csv.to_str().unwrap(),
+            "--json",
+            json.to_str().unwrap(),
+            "--quiet",
+        ]);
+        assert_eq!(
+            output.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        files.push((std::fs::read(&csv).unwrap(), json));
+    }
+    assert!(files[0].0 == files[1].0, "same seed, same bytes");
+    let text = String::from_utf8(files[0].0.clone()).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(header[0], "sample");
+    assert!(header.contains(&"interference [0/1]"));
+    let column = header
+        .iter()
+        .position(|h| *h == "hysteresis_arcmin [arcmin]")
+        .unwrap();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 10_000);
+    assert!(rows
+        .iter()
+        .enumerate()
+        .all(|(i, r)| r[0] == i.to_string() && r.len() == header.len()));
+    let mut values: Vec<f64> = rows.iter().map(|r| r[column].parse().unwrap()).collect();
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&files[0].1).unwrap()).unwrap();
+    let output = &report["outputs"][0];
+    assert_eq!(output["name"], "hysteresis_arcmin");
+    let mean = values.iter().sum::<f64>() / values.len() as f64;
+    let reported_mean = output["mean"].as_f64().unwrap();
+    assert!((mean - reported_mean).abs() <= 1e-12 * reported_mean.abs());
+    values.sort_by(f64::total_cmp);
+    // Type 7 at p = 0.5 over 10,000 values: the mean of the 5,000th and 5,001st.
+    let median = values[4999] + 0.5 * (values[5000] - values[4999]);
+    assert_eq!(median, output["percentiles"]["50"].as_f64().unwrap());
+
+    // Beyond the table's limit: one line, exit 2, before any work, nothing written.
+    let target = dir.join("too-big.csv");
+    let output = run_rvtol(&[
+        "run",
+        &scenario("rv40e-transmission.json"),
+        "--samples",
+        "1e7",
+        "--samples-out",
+        target.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_eq!(output.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("--samples-out: at most"), "{stderr}");
+    assert!(!target.exists());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn evaluate_on_the_rows_of_samples_out_gives_the_same_file_back() {
+    // `evaluate` recomputes the outputs from the written inputs: numbers written in their
+    // shortest exact form read back to the same bits, and a row's outputs depend on that
+    // row alone, so the file comes back byte for byte.
+    let dir = std::env::temp_dir().join(format!("rvtol-evaluate-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (file, samples) in [
+        ("rv20e-selective-fitting.json", "3000"),
+        ("rv80e-contact.json", "500"),
+    ] {
+        let written = dir.join("samples.csv");
+        let again = dir.join("evaluated.csv");
+        let output = run_rvtol(&[
+            "run",
+            &scenario(file),
+            "--samples",
+            samples,
+            "--samples-out",
+            written.to_str().unwrap(),
+            "--quiet",
+        ]);
+        assert_eq!(output.status.code(), Some(0), "{file}");
+        let output = run_rvtol(&[
+            "evaluate",
+            &scenario(file),
+            "--inputs",
+            written.to_str().unwrap(),
+            "-o",
+            again.to_str().unwrap(),
+        ]);
+        assert_eq!(
+            output.status.code(),
+            Some(0),
+            "{file}: {}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        assert!(
+            std::fs::read(&written).unwrap() == std::fs::read(&again).unwrap(),
+            "{file}: evaluate gave other bytes"
+        );
+    }
+    // Bad rows: one line naming the file, the line and the column; exit 2.
+    let header =
+        "pin_circle_radius_error,pin_radius_error,pin_hole_clearance,cycloid_radial_runout,\
+cycloid_cumulative_pitch_error,equidistant_modification_error,shift_modification_error,\
+eccentricity_error,crank_bearing_clearance,input_shaft.du,input_shaft.dv,input_shaft.dw,\
+input_shaft.dalpha,input_shaft.dbeta,input_shaft.dgamma";
+    let zeros = vec!["0"; 15].join(",");
+    let mut bad_cell = vec!["0"; 15];
+    bad_cell[3] = "1e-3mm";
+    for (contents, expected) in [
+        (format!("{header}\n{zeros}\n"), None),
+        (
+            format!("{header}\n{zeros}\n{}\n", bad_cell.join(",")),
+            Some("line 3, column 'cycloid_radial_runout': not a number: '1e-3mm'"),
+        ),
+        (
+            format!("{header},extra\n{zeros},1\n"),
+            Some("column 'extra' is neither an input nor an output"),
+        ),
+        (
+            "pin_radius_error\n0\n".to_string(),
+            Some("no column for the inputs"),
+        ),
+        (format!("{header}\n"), Some("no rows")),
+    ] {
+        let path = dir.join("rows.csv");
+        std::fs::write(&path, contents).unwrap();
+        let output = run_rvtol(&[
+            "evaluate",
+            &scenario("rv20e-hysteresis.json"),
+            "--inputs",
+            path.to_str().unwrap(),
+        ]);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        match expected {
+            None => {
+                assert_eq!(output.status.code(), Some(0), "{stderr}");
+                let stdout = String::from_utf8_lossy(&output.stdout);
+                assert_eq!(stdout.lines().count(), 2);
+                assert!(stdout.lines().nth(1).unwrap().starts_with("0,"));
+            }
+            Some(message) => {
+                assert_eq!(output.status.code(), Some(2), "{stderr}");
+                assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+                assert!(stderr.contains(message), "{stderr}");
+            }
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

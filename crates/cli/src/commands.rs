@@ -102,11 +102,13 @@ fn non_finite_failure(
         .map_err(|err| bad_scenario(path, err))
 }
 
-/// Where the reports of a command go: `--json` and `--html`.
-#[derive(Clone, Copy)]
+/// Where the reports of a command go: `--json`, `--html` and (`run` only)
+/// `--samples-out`.
+#[derive(Clone, Copy, Default)]
 pub struct Destinations<'a> {
     pub json: Option<&'a Path>,
     pub html: Option<&'a Path>,
+    pub samples: Option<&'a Path>,
 }
 
 /// The command line as typed (arguments with spaces or quotes quoted), for the page's
@@ -163,6 +165,18 @@ pub fn run(
         seed: seed.unwrap_or(scenario.seed),
         exact_percentile_limit,
     };
+    if to.samples.is_some() {
+        let columns = (scenario.input_space.n_columns() + scenario.outputs.len()) as u64;
+        let most = rvtol_engine::run::MAX_SAMPLE_TABLE_VALUES / columns.max(1);
+        if settings.samples > most {
+            return Err(BadInput(format!(
+                "--samples-out: at most {most} samples of this scenario ({columns} columns, {} values), asked {}; run fewer samples",
+                rvtol_engine::run::MAX_SAMPLE_TABLE_VALUES,
+                settings.samples
+            ))
+            .into());
+        }
+    }
     let threads = threads(execution.threads)?;
     check_memory(memory::run(&scenario, &settings, threads), execution, "run")?;
     let pool = thread_pool(threads)?;
@@ -177,6 +191,12 @@ pub fn run(
     let report = pool.install(|| RunReport::new(&scenario, result));
     let json = report.to_json();
     emit(to.json, || json.clone(), || report.to_text())?;
+    if let Some(path) = to.samples {
+        let table = pool
+            .install(|| rvtol_engine::sample_table(&scenario, settings))
+            .map_err(|err| bad_scenario(scenario_path, err))?;
+        write_report(path, &rvtol_engine::report::sample_csv(&scenario, &table))?;
+    }
     if let Some(html) = to.html {
         let curves: Vec<(String, Vec<rvtol_models::Curve>)> = nominal_curves(&scenario)
             .map_err(|err| bad_scenario(scenario_path, err))?
@@ -745,4 +765,117 @@ pub fn report(
         name,
         kinds.join(", ")
     ))
+}
+
+/// `rvtol evaluate`: the models on the rows of a CSV.
+pub fn evaluate(
+    scenario_path: &Path,
+    inputs_path: &Path,
+    output: Option<&Path>,
+    execution: &Execution,
+) -> Result<()> {
+    let scenario = load(scenario_path)?;
+    let text = read_text(inputs_path)?;
+    let at = |line: u64| format!("{}: line {line}", inputs_path.display());
+    let mut reader = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .from_reader(text.as_bytes());
+    let header: Vec<String> = reader
+        .headers()
+        .map_err(|err| BadInput(format!("{}: {err}", at(1))))?
+        .iter()
+        .map(str::to_string)
+        .collect();
+    // "name [unit]" or "name".
+    let name_of = |heading: &str| {
+        heading
+            .rsplit_once(" [")
+            .filter(|(_, unit)| unit.ends_with(']'))
+            .map_or(heading, |(name, _)| name)
+            .to_string()
+    };
+    let names: Vec<String> = header.iter().map(|h| name_of(h)).collect();
+    let known_other =
+        |name: &str| name == "sample" || scenario.outputs.iter().any(|o| o.name == name);
+    // Where each input column is in the file.
+    let mut position = Vec::with_capacity(scenario.columns.len());
+    let mut missing = Vec::new();
+    for column in &scenario.columns {
+        match names.iter().position(|n| *n == column.name) {
+            Some(i) => position.push(i),
+            None => missing.push(column.name.clone()),
+        }
+    }
+    if !missing.is_empty() {
+        return Err(BadInput(format!(
+            "{}: no column for the input{} {} (the header names every input column of the scenario, as `rvtol run --samples-out` writes it)",
+            at(1),
+            if missing.len() > 1 { "s" } else { "" },
+            missing.join(", ")
+        ))
+        .into());
+    }
+    if let Some(unknown) = names
+        .iter()
+        .find(|n| !known_other(n) && !scenario.columns.iter().any(|c| c.name == **n))
+    {
+        return Err(BadInput(format!(
+            "{}: column '{unknown}' is neither an input nor an output of the scenario",
+            at(1)
+        ))
+        .into());
+    }
+    if let Some(dup) = names
+        .iter()
+        .enumerate()
+        .find(|(i, n)| names[..*i].contains(n))
+    {
+        return Err(BadInput(format!("{}: column '{}' appears twice", at(1), dup.1)).into());
+    }
+    let n_inputs = scenario.columns.len();
+    let mut values = Vec::new();
+    for record in reader.records() {
+        let record = record.map_err(|err| {
+            let line = err.position().map_or(0, |p| p.line());
+            BadInput(format!("{}: {err}", at(line)))
+        })?;
+        let line = record.position().map_or(0, |p| p.line());
+        for (c, &i) in position.iter().enumerate() {
+            let cell = record.get(i).unwrap_or("");
+            let value: f64 = cell.parse().map_err(|_| {
+                BadInput(format!(
+                    "{}, column '{}': not a number: '{cell}'",
+                    at(line),
+                    scenario.columns[c].name
+                ))
+            })?;
+            if !value.is_finite() {
+                return Err(BadInput(format!(
+                    "{}, column '{}': not a finite number: '{cell}'",
+                    at(line),
+                    scenario.columns[c].name
+                ))
+                .into());
+            }
+            values.push(value);
+        }
+        if values.len() as u64 > rvtol_engine::run::MAX_SAMPLE_TABLE_VALUES {
+            return Err(BadInput(format!(
+                "{}: more than {} rows of {n_inputs} inputs; split the file",
+                at(line),
+                rvtol_engine::run::MAX_SAMPLE_TABLE_VALUES / n_inputs.max(1) as u64
+            ))
+            .into());
+        }
+    }
+    if values.is_empty() {
+        return Err(BadInput(format!("{}: no rows", inputs_path.display())).into());
+    }
+    let pool = thread_pool(threads(execution.threads)?)?;
+    let table = pool.install(|| rvtol_engine::evaluate::evaluate_rows(&scenario, values));
+    let csv = rvtol_engine::report::sample_csv(&scenario, &table);
+    match output {
+        Some(path) => write_report(path, &csv),
+        None => print(&csv),
+    }
 }

@@ -65,6 +65,10 @@ enum Command {
         /// Write an HTML report to PATH: one self-contained page with the plots.
         #[arg(long, value_name = "PATH")]
         html: Option<PathBuf>,
+        /// Write every sample to PATH as CSV, one row per sample: its index, the drawn
+        /// inputs and the outputs (the run's own values; same seed, same bytes).
+        #[arg(long, value_name = "PATH")]
+        samples_out: Option<PathBuf>,
         /// Exact percentiles while samples × outputs stays at or below this many values;
         /// a bounded-memory sketch beyond it.
         #[arg(long, value_name = "VALUES", default_value_t = DEFAULT_EXACT_PERCENTILE_LIMIT, value_parser = parse_count, allow_hyphen_values = true)]
@@ -229,6 +233,23 @@ enum Command {
         #[arg(long, value_name = "DIR", default_value = ".")]
         out_dir: PathBuf,
     },
+    /// Evaluate the scenario's models on given input rows (a designed experiment,
+    /// measured assemblies, another sampler's design): a CSV with one column per input
+    /// (the header of `run --samples-out`), the outputs per row as CSV.
+    Evaluate {
+        /// Scenario file (JSON).
+        scenario: PathBuf,
+        /// Input rows: CSV with a header naming every input column (`rvtol run
+        /// --samples-out` writes one; a `[unit]` after a name, a `sample` column and
+        /// output columns are allowed).
+        #[arg(long, value_name = "CSV")]
+        inputs: PathBuf,
+        /// Write the rows with their outputs to PATH instead of standard output.
+        #[arg(short = 'o', long = "output", value_name = "PATH")]
+        output: Option<PathBuf>,
+        #[command(flatten)]
+        execution: Execution,
+    },
     /// Write one self-contained HTML page (plots, tables, the record to reproduce it)
     /// from JSON reports of `run`, `sensitivity` and `allocate` of one scenario.
     Report {
@@ -279,6 +300,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             seed,
             json,
             html,
+            samples_out,
             exact_percentile_limit,
             execution,
         } => run(
@@ -288,6 +310,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             Destinations {
                 json: json.as_deref(),
                 html: html.as_deref(),
+                samples: samples_out.as_deref(),
             },
             exact_percentile_limit,
             &execution,
@@ -322,6 +345,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             Destinations {
                 json: json.as_deref(),
                 html: html.as_deref(),
+                samples: None,
             },
             &execution,
         ),
@@ -386,10 +410,17 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             Destinations {
                 json: json.as_deref(),
                 html: html.as_deref(),
+                samples: None,
             },
             write_scenario.as_deref(),
             &execution,
         ),
+        Command::Evaluate {
+            scenario,
+            inputs,
+            output,
+            execution,
+        } => evaluate(&scenario, &inputs, output.as_deref(), &execution),
         Command::Report {
             reports,
             scenario,
@@ -438,6 +469,7 @@ impl Cli {
             "init",
             "allocate",
             "curve",
+            "evaluate",
             "report",
             "models",
         ]

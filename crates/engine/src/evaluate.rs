@@ -116,3 +116,36 @@ impl<'a> ChunkEvaluator<'a> {
         }
     }
 }
+
+/// Evaluates every model on given input rows (row-major, `scenario.input_space.n_columns()`
+/// values per row: a designed experiment, measured assemblies, another sampler's design),
+/// in blocks of [`CHUNK_SIZE`] rows in parallel (the current rayon pool); each row's
+/// outputs depend on that row alone.
+pub fn evaluate_rows(scenario: &Scenario, inputs: Vec<f64>) -> crate::SampleTable {
+    use rayon::prelude::*;
+    let n_inputs = scenario.input_space.n_columns();
+    let n_outputs = scenario.outputs.len();
+    let rows = inputs.len().checked_div(n_inputs).unwrap_or(0);
+    let blocks: Vec<Vec<f64>> = inputs
+        .par_chunks(CHUNK_SIZE * n_inputs.max(1))
+        .map_init(
+            || ChunkEvaluator::new(scenario),
+            |evaluator, block| {
+                let m = block.len() / n_inputs.max(1);
+                evaluator.evaluate(block, m);
+                let mut outputs = Vec::with_capacity(m * n_outputs);
+                for r in 0..m {
+                    outputs.extend(evaluator.output_columns.iter().map(|column| column[r]));
+                }
+                outputs
+            },
+        )
+        .collect();
+    crate::SampleTable {
+        rows,
+        n_inputs,
+        n_outputs,
+        inputs,
+        outputs: blocks.concat(),
+    }
+}

@@ -21,6 +21,7 @@ pub mod stats;
 
 pub use report::{NominalReport, RunReport};
 pub use run::{
-    nominal, nominal_curves, run, RunResult, RunSettings, DEFAULT_EXACT_PERCENTILE_LIMIT,
+    nominal, nominal_curves, run, sample_table, RunResult, RunSettings, SampleTable,
+    DEFAULT_EXACT_PERCENTILE_LIMIT,
 };
 pub use scenario::{Scenario, ScenarioError};

@@ -916,3 +916,48 @@ pub fn group_thousands(n: u64) -> String {
     }
     out
 }
+
+/// The sample table as CSV: a `sample` index column, then one column per input-space
+/// column and one per output, headed `name [unit]` (an indicator `name [0/1]`, its flag); numbers in Rust's shortest form that
+/// reads back to the same value (non-finite values as `NaN`, `inf`, `-inf`, which pandas
+/// and polars read). The same table gives the same bytes.
+pub fn sample_csv(scenario: &Scenario, table: &crate::SampleTable) -> String {
+    let quote = |s: String| {
+        if s.contains([',', '"', '\n']) {
+            format!("\"{}\"", s.replace('"', "\"\""))
+        } else {
+            s
+        }
+    };
+    let heading = |name: &str, unit: Option<&str>| match unit {
+        Some(unit) if !unit.is_empty() => quote(format!("{name} [{unit}]")),
+        _ => quote(name.to_string()),
+    };
+    let mut out = String::from("sample");
+    for column in &scenario.columns {
+        out.push(',');
+        out.push_str(&heading(&column.name, column.unit.as_deref()));
+    }
+    for output in &scenario.outputs {
+        out.push(',');
+        // An indicator's value is its flag, 0 or 1, whatever unit its share is shown in.
+        let unit = if output.kind == OutputKind::Indicator {
+            "0/1"
+        } else {
+            &output.unit
+        };
+        out.push_str(&heading(&output.name, Some(unit)));
+    }
+    out.push('\n');
+    use std::fmt::Write;
+    for r in 0..table.rows {
+        let _ = write!(out, "{r}");
+        let inputs = &table.inputs[r * table.n_inputs..(r + 1) * table.n_inputs];
+        let outputs = &table.outputs[r * table.n_outputs..(r + 1) * table.n_outputs];
+        for v in inputs.iter().chain(outputs) {
+            let _ = write!(out, ",{v}");
+        }
+        out.push('\n');
+    }
+    out
+}

@@ -259,6 +259,17 @@ impl<'a> Plan<'a> {
     /// Draws chunk `chunk` and evaluates the models into `partial.output_columns`;
     /// returns the number of samples, or records the error.
     fn evaluate_chunk(&self, partial: &mut Partial, chunk: u64) -> Option<usize> {
+        self.evaluate_chunk_keeping(partial, chunk, None)
+    }
+
+    /// [`Plan::evaluate_chunk`], appending the drawn input rows (row-major) to `inputs`
+    /// when given.
+    fn evaluate_chunk_keeping(
+        &self,
+        partial: &mut Partial,
+        chunk: u64,
+        mut inputs: Option<&mut Vec<f64>>,
+    ) -> Option<usize> {
         let m = self.chunk_len(chunk);
         let space = &self.scenario.input_space;
         let n_columns = space.n_columns();
@@ -275,6 +286,11 @@ impl<'a> Plan<'a> {
             ) {
                 partial.error = Some((chunk, err.into()));
                 return None;
+            }
+            if let Some(rows) = inputs.as_deref_mut() {
+                for r in 0..block {
+                    rows.extend((0..n_columns).map(|c| columns[c * block + r]));
+                }
             }
             partial.evaluator.evaluate_columns_at(columns, block, first);
         }
@@ -430,6 +446,108 @@ impl<'a> Plan<'a> {
         }
         partial.chunk_moments.push((chunk, moments));
     }
+}
+
+/// The drawn inputs and the models' outputs of every sample of a run, one row per sample
+/// in sample order: the values [`run`] draws and evaluates for the same seed, whatever
+/// the thread count.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SampleTable {
+    /// Rows (samples).
+    pub rows: usize,
+    /// Input-space columns per row ([`Scenario::columns`] order).
+    pub n_inputs: usize,
+    /// Outputs per row ([`Scenario::outputs`] order).
+    pub n_outputs: usize,
+    /// Row-major inputs, `rows × n_inputs`.
+    pub inputs: Vec<f64>,
+    /// Row-major outputs, `rows × n_outputs`.
+    pub outputs: Vec<f64>,
+}
+
+/// Most values (rows × (inputs + outputs)) a [`SampleTable`] holds: 160 MB of numbers.
+pub const MAX_SAMPLE_TABLE_VALUES: u64 = 20_000_000;
+
+/// Draws and evaluates every sample of the run `settings` describes, keeping each row
+/// ([`SampleTable`]); at most [`MAX_SAMPLE_TABLE_VALUES`] values. Uses the current rayon
+/// thread pool; the chunks' rows are joined in chunk order.
+pub fn sample_table(
+    scenario: &Scenario,
+    settings: RunSettings,
+) -> Result<SampleTable, ScenarioError> {
+    if settings.samples == 0 {
+        return Err(ScenarioError::new("samples", "must be at least 1"));
+    }
+    let n_inputs = scenario.input_space.n_columns();
+    let n_outputs = scenario.outputs.len();
+    let values = settings
+        .samples
+        .saturating_mul((n_inputs + n_outputs) as u64);
+    if values > MAX_SAMPLE_TABLE_VALUES {
+        return Err(ScenarioError::new(
+            "samples",
+            format!(
+                "{} samples × {} columns is {values} values, more than the {MAX_SAMPLE_TABLE_VALUES} a sample table holds; write at most {} samples",
+                settings.samples,
+                n_inputs + n_outputs,
+                MAX_SAMPLE_TABLE_VALUES / (n_inputs + n_outputs) as u64
+            ),
+        ));
+    }
+    let plan = Plan {
+        scenario,
+        settings,
+        exact: true,
+        limits: scenario.outputs.iter().map(|o| o.spec).collect(),
+        indicator: scenario
+            .outputs
+            .iter()
+            .map(|o| o.kind == OutputKind::Indicator)
+            .collect(),
+        conditions: scenario.outputs.iter().map(|o| o.condition).collect(),
+        sketch_frames: vec![(0.0, 1.0); n_outputs],
+        only_output: None,
+        flagged_conform: scenario.outputs.iter().map(|o| o.flagged_conform).collect(),
+    };
+    let n_chunks = settings.samples.div_ceil(CHUNK_SIZE as u64);
+    // Per chunk: its input rows and output rows, row-major.
+    type Rows = (Vec<f64>, Vec<f64>);
+    let chunks: Vec<Result<Rows, ScenarioError>> = (0..n_chunks)
+        .into_par_iter()
+        .map_init(
+            || plan.partial(),
+            |partial, chunk| {
+                let mut inputs = Vec::with_capacity(plan.chunk_len(chunk) * n_inputs);
+                let Some(m) = plan.evaluate_chunk_keeping(partial, chunk, Some(&mut inputs)) else {
+                    let (_, err) = partial
+                        .error
+                        .take()
+                        .expect("evaluate_chunk records its error");
+                    return Err(err);
+                };
+                let columns = &partial.evaluator.output_columns;
+                let mut outputs = Vec::with_capacity(m * n_outputs);
+                for r in 0..m {
+                    outputs.extend(columns.iter().map(|column| column[r]));
+                }
+                Ok((inputs, outputs))
+            },
+        )
+        .collect();
+    let rows = settings.samples as usize;
+    let mut table = SampleTable {
+        rows,
+        n_inputs,
+        n_outputs,
+        inputs: Vec::with_capacity(rows * n_inputs),
+        outputs: Vec::with_capacity(rows * n_outputs),
+    };
+    for chunk in chunks {
+        let (inputs, outputs) = chunk?;
+        table.inputs.extend(inputs);
+        table.outputs.extend(outputs);
+    }
+    Ok(table)
 }
 
 /// Runs the scenario. `progress` is called with the number of samples each finished chunk
