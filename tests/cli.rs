@@ -597,3 +597,75 @@ input_shaft.dalpha,input_shaft.dbeta,input_shaft.dgamma";
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn fit_writes_a_part_that_a_scenario_takes_and_refuses_bad_columns() {
+    let dir = std::env::temp_dir().join(format!("rvtol-fit-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = dir.join("measured.csv");
+    // 12 measured parts, components in another order and with the part's prefix and units.
+    let mut text = String::from("carrier.dv [mm],carrier.du [mm],carrier.dw [mm],carrier.dgamma [rad],carrier.dbeta [rad],carrier.dalpha [rad]\n");
+    let mut x = 0.37_f64;
+    for _ in 0..12 {
+        let mut cells = Vec::new();
+        for scale in [0.003, 0.004, 0.002, 1e-5, 4e-5, 5e-5] {
+            x = (x * 9301.0 + 0.49297).fract();
+            cells.push(format!("{}", (x - 0.5) * scale));
+        }
+        text.push_str(&cells.join(","));
+        text.push('\n');
+    }
+    std::fs::write(&csv, text).unwrap();
+    let fragment = dir.join("part.json");
+    let output = run_rvtol(&[
+        "fit",
+        csv.to_str().unwrap(),
+        "--part",
+        "carrier",
+        "-o",
+        fragment.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        output.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert!(String::from_utf8_lossy(&output.stderr).contains("12 measured parts"));
+    let part: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&fragment).unwrap()).unwrap();
+    let covariance = &part["parts"][0]["covariance"];
+    assert_eq!(covariance.as_array().unwrap().len(), 6);
+    // du is the second column of the file but the first component of the part.
+    let var_du = covariance[0][0].as_f64().unwrap();
+    assert!(var_du > 0.0 && var_du < 0.004f64.powi(2));
+    let scenario = serde_json::json!({
+        "name": "fitted",
+        "parts": part["parts"],
+        "models": [{
+            "model": "linear_stack",
+            "params": { "output": "y", "unit": "mm", "coefficients": { "a": 1.0 } },
+            "inputs": { "a": "carrier.du" }
+        }]
+    });
+    let path = dir.join("fitted.json");
+    std::fs::write(&path, scenario.to_string()).unwrap();
+    let output = run_rvtol(&["validate", path.to_str().unwrap()]);
+    assert_eq!(
+        output.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    // A column that is no component of the part: one line, exit 2.
+    std::fs::write(&csv, "du,dv,dw,dalpha,dbeta,dgamma,width\n0,0,0,0,0,0,1\n").unwrap();
+    let output = run_rvtol(&["fit", csv.to_str().unwrap(), "--part", "carrier"]);
+    assert_eq!(output.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.contains("column 'width' is not a component of part carrier"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

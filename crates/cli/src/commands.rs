@@ -879,3 +879,130 @@ pub fn evaluate(
         None => print(&csv),
     }
 }
+
+/// `rvtol fit`: a normal model of measured parts, as a scenario fragment.
+pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()> {
+    use rvtol_engine::fit::{fit as fit_normal, fragment, PART_COMPONENTS};
+    let text = read_text(path)?;
+    let at = |line: u64| format!("{}: line {line}", path.display());
+    let mut reader = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .from_reader(text.as_bytes());
+    let header: Vec<String> = reader
+        .headers()
+        .map_err(|err| BadInput(format!("{}: {err}", at(1))))?
+        .iter()
+        .map(str::to_string)
+        .collect();
+    let split = |heading: &str| match heading.rsplit_once(" [") {
+        Some((name, unit)) if unit.ends_with(']') => (
+            name.to_string(),
+            Some(unit.trim_end_matches(']').to_string()),
+        ),
+        _ => (heading.to_string(), None),
+    };
+    let (mut names, mut units): (Vec<String>, Vec<Option<String>>) =
+        header.iter().map(|h| split(h)).unzip();
+    if let Some(dup) = names
+        .iter()
+        .enumerate()
+        .find(|(i, n)| names[..*i].contains(n))
+    {
+        return Err(BadInput(format!("{}: column '{}' appears twice", at(1), dup.1)).into());
+    }
+    // A part's columns in its component order.
+    let order: Vec<usize> = match part {
+        Some(name) => {
+            if !name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+                || name.is_empty()
+            {
+                return Err(BadInput(format!(
+                    "--part: '{name}' is not a part name (letters, digits, _ and -)"
+                ))
+                .into());
+            }
+            let component = |n: &str| n.strip_prefix(&format!("{name}.")).unwrap_or(n).to_string();
+            if let Some(other) = names
+                .iter()
+                .find(|n| !PART_COMPONENTS.contains(&component(n).as_str()))
+            {
+                return Err(BadInput(format!(
+                    "{}: column '{other}' is not a component of part {name} ({})",
+                    at(1),
+                    PART_COMPONENTS.join(", ")
+                ))
+                .into());
+            }
+            let mut order = Vec::new();
+            for c in PART_COMPONENTS {
+                match names.iter().position(|n| component(n) == c) {
+                    Some(i) => order.push(i),
+                    None => {
+                        return Err(BadInput(format!(
+                            "{}: no column for {name}.{c} (a part needs all six components)",
+                            at(1)
+                        ))
+                        .into())
+                    }
+                }
+            }
+            order
+        }
+        None => (0..names.len()).collect(),
+    };
+    let mut rows = Vec::new();
+    for record in reader.records() {
+        let record = record.map_err(|err| {
+            let line = err.position().map_or(0, |p| p.line());
+            BadInput(format!("{}: {err}", at(line)))
+        })?;
+        let line = record.position().map_or(0, |p| p.line());
+        let mut row = Vec::with_capacity(order.len());
+        for &i in &order {
+            let cell = record.get(i).unwrap_or("");
+            match cell.parse::<f64>() {
+                Ok(v) if v.is_finite() => row.push(v),
+                _ => {
+                    return Err(BadInput(format!(
+                        "{}, column '{}': not a finite number: '{cell}'",
+                        at(line),
+                        names[i]
+                    ))
+                    .into())
+                }
+            }
+        }
+        rows.push(row);
+    }
+    names = order.iter().map(|&i| names[i].clone()).collect();
+    units = order.iter().map(|&i| units[i].clone()).collect();
+    let fitted =
+        fit_normal(&names, &rows).map_err(|err| BadInput(format!("{}: {err}", path.display())))?;
+    let source = path.file_name().map_or_else(
+        || path.display().to_string(),
+        |f| f.to_string_lossy().into_owned(),
+    );
+    let value = fragment(&fitted, part, &units, &source);
+    let text = serde_json::to_string_pretty(&value).expect("a fragment serialises") + "\n";
+    // The diagnostics where a person reads them; the fragment stays clean for a pipe.
+    note(&rvtol_engine::fit::summary(&fitted, &source));
+    let doubtful: Vec<&str> = fitted
+        .names
+        .iter()
+        .zip(&fitted.anderson_darling)
+        .filter(|(_, t)| t.is_some_and(|t| t.p_value < 0.05))
+        .map(|(n, _)| n.as_str())
+        .collect();
+    if !doubtful.is_empty() {
+        note(&format!(
+            "warning: a normal is doubtful for {} (Anderson–Darling p < 0.05): consider another distribution",
+            doubtful.join(", ")
+        ));
+    }
+    match output {
+        Some(out) => write_report(out, &text),
+        None => print(&text),
+    }
+}

@@ -250,6 +250,20 @@ enum Command {
         #[command(flatten)]
         execution: Execution,
     },
+    /// Fit a normal model (mean, shrunk covariance) to measured parts, one row per part
+    /// and one column per deviation component, with normality diagnostics: prints the
+    /// scenario fragment (`variables` and `correlations`, or one part) to paste.
+    Fit {
+        /// Measurements: CSV with a header naming each column (`name` or `name [unit]`).
+        measurements: PathBuf,
+        /// Fit one 6-DOF part of this name: the columns are its du, dv, dw, dalpha,
+        /// dbeta, dgamma (or NAME.du …), in any order.
+        #[arg(long, value_name = "NAME")]
+        part: Option<String>,
+        /// Write the fragment to PATH instead of standard output.
+        #[arg(short = 'o', long = "output", value_name = "PATH")]
+        output: Option<PathBuf>,
+    },
     /// Write one self-contained HTML page (plots, tables, the record to reproduce it)
     /// from JSON reports of `run`, `sensitivity` and `allocate` of one scenario.
     Report {
@@ -421,6 +435,11 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             output,
             execution,
         } => evaluate(&scenario, &inputs, output.as_deref(), &execution),
+        Command::Fit {
+            measurements,
+            part,
+            output,
+        } => fit(&measurements, part.as_deref(), output.as_deref()),
         Command::Report {
             reports,
             scenario,
@@ -470,6 +489,7 @@ impl Cli {
             "allocate",
             "curve",
             "evaluate",
+            "fit",
             "report",
             "models",
         ]

@@ -8,6 +8,7 @@
 
 pub mod allocation;
 pub mod evaluate;
+pub mod fit;
 pub mod gate;
 pub mod memory;
 pub mod report;

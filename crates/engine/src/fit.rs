@@ -1,0 +1,316 @@
+//! `rvtol fit`: a normal model of measured parts (one row per part, one column per
+//! deviation component), ready to paste into a scenario, with the evidence on whether a
+//! normal is the right model.
+//!
+//! - Mean and covariance. The correlations are shrunk by Ledoit & Wolf's (2004, "A
+//!   well-conditioned estimator for large-dimensional covariance matrices", J. Multivariate
+//!   Anal. 88) estimator applied to the standardised data, target the identity: R* = δ·I +
+//!   (1 − δ)·R with δ = min(1, b̄²/d²), d² = ‖R − I‖²_F, b̄² = (1/n²)·Σ_k ‖y_k y_kᵀ − R‖²_F
+//!   = (1/n²)·(Σ_k (y_kᵀy_k)² − n‖R‖²_F). Standardising first keeps the estimator
+//!   independent of the units (a part's mm and rad differ by orders of magnitude), leaves
+//!   every variance at its sample value (n − 1 divisor) and pulls only the correlations
+//!   towards 0, by more when the sample is small; for n ≤ p the sample matrix is singular
+//!   and the shrunk one is not. Σ = D·R*·D, D the sample standard deviations.
+//! - Positive semi-definite repair: eigenvalues below 0 (rounding; a constant column) are
+//!   set to 0 and the largest change of an entry reported.
+//! - Normality. Per component Anderson–Darling's A² with μ and σ estimated, A*² = A²(1 +
+//!   0.75/n + 2.25/n²), p-value from D'Agostino & Stephens (1986, "Goodness-of-Fit
+//!   Techniques", Table 4.9), for n ≥ 8. Jointly Mardia's (1970, Biometrika 57) skewness
+//!   b₁,p (n·b₁,p/6 ~ χ² with p(p + 1)(p + 2)/6 degrees of freedom) and kurtosis b₂,p
+//!   ((b₂,p − p(p + 2))/√(8p(p + 2)/n) ~ N(0, 1), two-sided), when the sample covariance is
+//!   non-singular.
+
+use nalgebra::{DMatrix, SymmetricEigen};
+use serde_json::{json, Value};
+use statrs::distribution::{ChiSquared, ContinuousCDF, Normal};
+
+/// A test statistic and its p-value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Test {
+    /// The statistic (A*², n·b₁/6, or the kurtosis z).
+    pub statistic: f64,
+    /// Its p-value.
+    pub p_value: f64,
+}
+
+/// The fitted normal model and its diagnostics.
+#[derive(Debug, Clone)]
+pub struct Fit {
+    /// Measured parts (rows).
+    pub n: usize,
+    /// Component names, in column order.
+    pub names: Vec<String>,
+    /// Sample means.
+    pub mean: Vec<f64>,
+    /// The shrunk, repaired covariance (p × p, row-major).
+    pub covariance: Vec<f64>,
+    /// Ledoit–Wolf's δ on the correlations (0: the sample correlations, 1: none).
+    pub shrinkage: f64,
+    /// The largest change of an entry by the positive semi-definite repair, when any.
+    pub repair: Option<f64>,
+    /// Anderson–Darling per component (None below 8 parts or for a constant column).
+    pub anderson_darling: Vec<Option<Test>>,
+    /// Mardia's multivariate skewness and kurtosis (None when the sample covariance is
+    /// singular or p = 1).
+    pub mardia: Option<(Test, Test)>,
+}
+
+impl Fit {
+    /// Covariance entry (i, j).
+    pub fn cov(&self, i: usize, j: usize) -> f64 {
+        self.covariance[i * self.names.len() + j]
+    }
+
+    /// Standard deviation of component i.
+    pub fn sd(&self, i: usize) -> f64 {
+        self.cov(i, i).max(0.0).sqrt()
+    }
+}
+
+/// Fits `rows` (n rows of `names.len()` finite values).
+pub fn fit(names: &[String], rows: &[Vec<f64>]) -> Result<Fit, String> {
+    let p = names.len();
+    let n = rows.len();
+    if p == 0 {
+        return Err("no columns".into());
+    }
+    if n < 2 {
+        return Err(format!(
+            "{n} row: a covariance needs at least 2 measured parts"
+        ));
+    }
+    let nf = n as f64;
+    let mean: Vec<f64> = (0..p)
+        .map(|j| rows.iter().map(|r| r[j]).sum::<f64>() / nf)
+        .collect();
+    // Sample standard deviations (n − 1) and the standardised data (1/n scaling, so that
+    // R = YᵀY/n has a unit diagonal).
+    let centred = DMatrix::from_fn(n, p, |k, j| rows[k][j] - mean[j]);
+    let ss: Vec<f64> = (0..p).map(|j| centred.column(j).norm_squared()).collect();
+    let sd: Vec<f64> = ss.iter().map(|s| (s / (nf - 1.0)).sqrt()).collect();
+    let scale: Vec<f64> = ss.iter().map(|s| (s / nf).sqrt()).collect();
+    let y = DMatrix::from_fn(n, p, |k, j| {
+        if scale[j] > 0.0 {
+            centred[(k, j)] / scale[j]
+        } else {
+            0.0
+        }
+    });
+    let mut r = y.transpose() * &y / nf;
+    for j in 0..p {
+        // A constant column keeps a unit diagonal (its variance is 0 in Σ anyway).
+        r[(j, j)] = 1.0;
+    }
+    let identity = DMatrix::<f64>::identity(p, p);
+    let d2 = (&r - &identity).norm_squared();
+    let row_norms: f64 = y.row_iter().map(|row| row.norm_squared().powi(2)).sum();
+    let b2_bar = ((row_norms - nf * r.norm_squared()) / (nf * nf)).max(0.0);
+    let shrinkage = if d2 > 0.0 {
+        (b2_bar / d2).min(1.0)
+    } else {
+        0.0
+    };
+    let shrunk = &identity * shrinkage + &r * (1.0 - shrinkage);
+    let mut sigma = DMatrix::from_fn(p, p, |i, j| sd[i] * sd[j] * shrunk[(i, j)]);
+    // Positive semi-definite repair.
+    let eigen = SymmetricEigen::new(sigma.clone());
+    let mut repair = None;
+    if eigen.eigenvalues.iter().any(|&l| l < 0.0) {
+        let clipped = eigen.eigenvalues.map(|l| l.max(0.0));
+        let repaired =
+            &eigen.eigenvectors * DMatrix::from_diagonal(&clipped) * eigen.eigenvectors.transpose();
+        let repaired = (&repaired + repaired.transpose()) * 0.5;
+        let change = (&repaired - &sigma).amax();
+        repair = Some(change);
+        sigma = repaired;
+    }
+    let anderson_darling = (0..p)
+        .map(|j| anderson_darling(&rows.iter().map(|r| r[j]).collect::<Vec<_>>()))
+        .collect();
+    // Mardia on the columns that vary (a constant one makes the covariance singular).
+    let varying: Vec<usize> = (0..p).filter(|&j| ss[j] > 0.0).collect();
+    let mardia = mardia(&centred.select_columns(varying.iter()));
+    Ok(Fit {
+        n,
+        names: names.to_vec(),
+        mean,
+        covariance: sigma.transpose().iter().copied().collect(),
+        shrinkage,
+        repair,
+        anderson_darling,
+        mardia,
+    })
+}
+
+/// Anderson–Darling A*² and its p-value for a normal with estimated μ and σ (module docs).
+pub fn anderson_darling(values: &[f64]) -> Option<Test> {
+    let n = values.len();
+    if n < 8 {
+        return None;
+    }
+    let nf = n as f64;
+    let mean = values.iter().sum::<f64>() / nf;
+    let sd = (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (nf - 1.0)).sqrt();
+    if sd.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        return None;
+    }
+    let mut z: Vec<f64> = values.iter().map(|v| (v - mean) / sd).collect();
+    z.sort_by(f64::total_cmp);
+    let normal = Normal::standard();
+    // ln Φ(z) and ln(1 − Φ(z)) = ln Φ(−z), each from the side that keeps its precision.
+    let ln_cdf = |x: f64| normal.cdf(x).max(f64::MIN_POSITIVE).ln();
+    let sum: f64 = (0..n)
+        .map(|i| (2 * i + 1) as f64 * (ln_cdf(z[i]) + ln_cdf(-z[n - 1 - i])))
+        .sum();
+    let a2 = -nf - sum / nf;
+    let a = a2 * (1.0 + 0.75 / nf + 2.25 / (nf * nf));
+    let p = if a >= 0.6 {
+        (1.2937 - 5.709 * a + 0.0186 * a * a).exp()
+    } else if a >= 0.34 {
+        (0.9177 - 4.279 * a - 1.38 * a * a).exp()
+    } else if a >= 0.2 {
+        1.0 - (-8.318 + 42.796 * a - 59.938 * a * a).exp()
+    } else {
+        1.0 - (-13.436 + 101.14 * a - 223.73 * a * a).exp()
+    };
+    Some(Test {
+        statistic: a,
+        p_value: p.clamp(0.0, 1.0),
+    })
+}
+
+/// Mardia's skewness and kurtosis tests of the centred rows (module docs).
+fn mardia(centred: &DMatrix<f64>) -> Option<(Test, Test)> {
+    let (n, p) = centred.shape();
+    if p < 2 || n <= p {
+        return None;
+    }
+    let nf = n as f64;
+    let s = centred.transpose() * centred / nf;
+    let cholesky = s.cholesky()?;
+    // Rows whitened: g_ij = w_iᵀ w_j with w = L⁻¹ d.
+    let w = cholesky.l().solve_lower_triangular(&centred.transpose())?;
+    let g = w.transpose() * &w;
+    let b1 = g.iter().map(|v| v.powi(3)).sum::<f64>() / (nf * nf);
+    let b2 = (0..n).map(|i| g[(i, i)].powi(2)).sum::<f64>() / nf;
+    let pf = p as f64;
+    let dof = pf * (pf + 1.0) * (pf + 2.0) / 6.0;
+    let skew = nf * b1 / 6.0;
+    let skew_p = 1.0 - ChiSquared::new(dof).ok()?.cdf(skew);
+    let kurt = (b2 - pf * (pf + 2.0)) / (8.0 * pf * (pf + 2.0) / nf).sqrt();
+    let kurt_p = 2.0 * Normal::standard().cdf(-kurt.abs());
+    Some((
+        Test {
+            statistic: skew,
+            p_value: skew_p,
+        },
+        Test {
+            statistic: kurt,
+            p_value: kurt_p,
+        },
+    ))
+}
+
+/// The components of a part, in a part's column order.
+pub const PART_COMPONENTS: [&str; 6] = ["du", "dv", "dw", "dalpha", "dbeta", "dgamma"];
+
+fn p_text(test: Option<Test>) -> String {
+    match test {
+        Some(t) => format!("{:.3}", t.p_value),
+        None => "n/a".into(),
+    }
+}
+
+/// The diagnostics in one sentence, for the fragment's description.
+pub fn summary(fit: &Fit, source: &str) -> String {
+    let ad: Vec<String> = fit
+        .names
+        .iter()
+        .zip(&fit.anderson_darling)
+        .map(|(name, t)| format!("{name} {}", p_text(*t)))
+        .collect();
+    let mut text = format!(
+        "fitted by rvtol fit from {source}: {} measured parts; Ledoit–Wolf shrinkage of the correlations δ = {:.3}",
+        fit.n, fit.shrinkage
+    );
+    if let Some(change) = fit.repair {
+        text.push_str(&format!(
+            "; positive semi-definite repair changed an entry by at most {change:.3e}"
+        ));
+    }
+    text.push_str(&format!(
+        "; normality, Anderson–Darling p: {}",
+        ad.join(", ")
+    ));
+    match fit.mardia {
+        Some((skew, kurt)) => text.push_str(&format!(
+            "; Mardia skewness p {:.3}, kurtosis p {:.3}",
+            skew.p_value, kurt.p_value
+        )),
+        None => text.push_str("; Mardia n/a (too few parts, or a singular covariance)"),
+    }
+    text.push_str(" (p < 0.05: a normal is doubtful for that component)");
+    text
+}
+
+/// The scenario fragment: one part (`part` named, the six components in order) or one
+/// normal variable per column with their correlations.
+pub fn fragment(fit: &Fit, part: Option<&str>, units: &[Option<String>], source: &str) -> Value {
+    let p = fit.names.len();
+    if let Some(name) = part {
+        let description = summary(fit, source);
+        let covariance: Vec<Vec<f64>> = (0..p)
+            .map(|i| (0..p).map(|j| fit.cov(i, j)).collect())
+            .collect();
+        return json!({
+            "parts": [{
+                "name": name,
+                "description": description,
+                "mean": fit.mean,
+                "covariance": covariance,
+            }]
+        });
+    }
+    let joint = match fit.mardia {
+        Some((skew, kurt)) => format!(
+            "jointly: Ledoit–Wolf shrinkage of the correlations δ = {:.3}, Mardia skewness p {:.3}, kurtosis p {:.3}",
+            fit.shrinkage, skew.p_value, kurt.p_value
+        ),
+        None => format!(
+            "jointly: Ledoit–Wolf shrinkage of the correlations δ = {:.3}",
+            fit.shrinkage
+        ),
+    };
+    let variables: Vec<Value> = (0..p)
+        .map(|i| {
+            let mut v = json!({
+                "name": fit.names[i],
+                "distribution": { "normal": { "mean": fit.mean[i], "sd": fit.sd(i) } },
+            });
+            if let Some(unit) = &units[i] {
+                v["unit"] = json!(unit);
+            }
+            v["description"] = json!(format!(
+                "fitted by rvtol fit from {source}, {} measured parts; Anderson–Darling p {}; {}",
+                fit.n,
+                p_text(fit.anderson_darling[i]),
+                joint
+            ));
+            v
+        })
+        .collect();
+    let mut correlations = Vec::new();
+    for i in 0..p {
+        for j in i + 1..p {
+            let (si, sj) = (fit.sd(i), fit.sd(j));
+            if si > 0.0 && sj > 0.0 {
+                let rho = (fit.cov(i, j) / (si * sj)).clamp(-1.0, 1.0);
+                if rho != 0.0 {
+                    correlations
+                        .push(json!({ "between": [fit.names[i], fit.names[j]], "rho": rho }));
+                }
+            }
+        }
+    }
+    json!({ "variables": variables, "correlations": correlations })
+}
