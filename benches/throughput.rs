@@ -133,7 +133,7 @@ fn model_rows(scenario: &Scenario, rows: usize) -> Vec<Vec<f64>> {
 }
 
 /// Time per sample of each physical model (targets: contact ≤ 20 µs, transmission error
-/// with its curve and FFT ≤ 100 µs); the torsion curve on each of its three scenarios (the
+/// with its curve and order amplitudes ≤ 100 µs); the torsion curve on each of its three scenarios (the
 /// RV-20E's nominal is preloaded, the others are not: one more load case per row).
 fn models(c: &mut Criterion) {
     let mut group = c.benchmark_group("model_per_sample");

@@ -24,7 +24,7 @@ pub use cycloid_pin_contact::{ContactSolution, CycloidPinContact};
 pub use geometric_hysteresis::{tilt_from_deflection, GeometricHysteresis};
 pub use linear_stack::LinearStack;
 pub use params::{ModelError, ModelParams, ParamValue};
-pub use spectrum::RealFft;
+pub use spectrum::{OrderDft, RealFft};
 pub use stiffness::{
     line_contact_approach, Carrier, ChainTerms, CrankShaft, CrankSide, InvoluteStage, RollerRow,
     ShaftModes, PALMGREN_LINE, STRIBECK_LINE,

@@ -1,6 +1,7 @@
 //! `transmission_error`: the kinematic transmission error of an RV reducer over one output
 //! revolution by the action-line increment principle (document 002, RV40E), with the
-//! corrections of validation.md; its peak-to-peak, rms and order amplitudes by FFT.
+//! corrections of validation.md; its peak-to-peak, rms and order amplitudes (by FFT in
+//! document 002's reading, by a direct DFT of the five output orders in the physical one).
 //!
 //! Two readings (parameter `reading`, docs/models.md §12):
 //! - `"physical"` (default, module `two_discs`): two discs with eccentrics 180° apart on
@@ -65,7 +66,7 @@ use std::cell::RefCell;
 use std::f64::consts::PI;
 
 use crate::cycloid::CycloidStage;
-use crate::spectrum::{Complex, RealFft};
+use crate::spectrum::RealFft;
 use crate::{
     Curve, CurveStyle, ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputKind,
     OutputSpec, ParamSpec, Series, ARCSEC_PER_RAD,
@@ -416,8 +417,6 @@ struct Search {
     head: Vec<f64>,
     /// The curve of the row, arcsec.
     curve: Vec<f64>,
-    /// The FFT's work buffer.
-    work: Vec<Complex>,
     /// The physical reading's work state.
     two: TwoDiscScratch,
 }
@@ -1147,10 +1146,8 @@ impl ErrorModel for TransmissionError {
     fn evaluate(&self, inputs: &[f64], outputs: &mut [f64]) {
         SEARCH.with_borrow_mut(|search| {
             if self.physical.is_some() {
-                let Search {
-                    curve, work, two, ..
-                } = search;
-                self.evaluate_physical(inputs, curve, work, two, outputs)
+                let Search { curve, two, .. } = search;
+                self.evaluate_physical(inputs, curve, two, outputs)
             } else {
                 self.evaluate_with(inputs, search, outputs)
             }

@@ -56,6 +56,7 @@ use std::f64::consts::PI;
 
 use super::{smallest, smallest_ratio, PinTable, TransmissionError, MAX_CRANKS};
 use crate::cycloid::CycloidStage;
+use crate::spectrum::OrderDft;
 use crate::{ConditionEffect, InputSpec, OutputCondition, OutputKind, OutputSpec};
 
 /// How the two discs share the output.
@@ -235,6 +236,8 @@ pub(super) struct Physical {
     pub columns: [Vec<f64>; 4],
     /// (sin β_k, cos β_k).
     pub crank_angles: Vec<(f64, f64)>,
+    /// The direct DFT of the output orders 1, z_c, z_p, 2·z_c, 2·z_p.
+    pub orders: OrderDft<5>,
     /// Input offsets: per disc, cranks, pins, teeth.
     pub disc_base: usize,
     pub crank_base: usize,
@@ -1263,7 +1266,7 @@ fn fill_heads_pair(
 /// Per-thread work state of the physical reading.
 #[derive(Debug, Default)]
 pub(super) struct TwoDiscScratch {
-    /// The FFT's columns.
+    /// The FFT's columns (document 002's literal reading).
     pub fft_re: Vec<f64>,
     pub fft_im: Vec<f64>,
     /// Pin errors in lane order (see `physical_curve`).
@@ -1534,6 +1537,7 @@ pub(super) fn build(
         columns: [0, 1, 2, 3].map(|i| angles.iter().map(|a| a[i]).collect()),
         angles,
         crank_angles,
+        orders: OrderDft::new(n, [1, teeth, pins, 2 * teeth, 2 * pins]),
         disc_base,
         crank_base,
         pin_base,
@@ -1631,6 +1635,55 @@ pub(super) fn specs(
     (inputs, outputs)
 }
 
+/// Per lane of a curve's quadruples (the points j ≡ lane mod 4, in index order): the
+/// smallest and the largest value, the quadruple at which each first occurs, and the sum.
+struct LaneStats {
+    lo: [f64; 4],
+    hi: [f64; 4],
+    lo_at: [usize; 4],
+    hi_at: [usize; 4],
+    sum: [f64; 4],
+}
+
+/// [`LaneStats`] of a curve in one pass. Not inlined: inlined, LLVM vectorised the minima
+/// and maxima but summed the lanes one by one (a chain of dependent scalar additions).
+#[inline(never)]
+fn lane_stats(quads: &[[f64; 4]]) -> LaneStats {
+    let (mut lo, mut hi, mut sum) = ([f64::INFINITY; 4], [f64::NEG_INFINITY; 4], [0.0; 4]);
+    let (mut lo_at, mut hi_at) = ([0; 4], [0; 4]);
+    for (q, quad) in quads.iter().enumerate() {
+        for lane in 0..4 {
+            let v = quad[lane];
+            let (below, above) = (v < lo[lane], v > hi[lane]);
+            lo[lane] = if below { v } else { lo[lane] };
+            lo_at[lane] = if below { q } else { lo_at[lane] };
+            hi[lane] = if above { v } else { hi[lane] };
+            hi_at[lane] = if above { q } else { hi_at[lane] };
+            sum[lane] += v;
+        }
+    }
+    LaneStats {
+        lo,
+        hi,
+        lo_at,
+        hi_at,
+        sum,
+    }
+}
+
+/// Per lane, Σ (v − mean)², in index order. Not inlined, for the same reason as
+/// [`lane_stats`].
+#[inline(never)]
+fn lane_squares(quads: &[[f64; 4]], mean: f64) -> [f64; 4] {
+    let mut squares = [0.0; 4];
+    for quad in quads {
+        for lane in 0..4 {
+            squares[lane] += (quad[lane] - mean) * (quad[lane] - mean);
+        }
+    }
+    squares
+}
+
 /// Name of the interference indicator.
 pub(super) const INTERFERENCE: &str = "profile_interference";
 
@@ -1640,7 +1693,6 @@ impl TransmissionError {
         &self,
         inputs: &[f64],
         curve: &mut Vec<f64>,
-        work: &mut Vec<super::Complex>,
         scratch: &mut TwoDiscScratch,
         outputs: &mut [f64],
     ) {
@@ -1658,39 +1710,38 @@ impl TransmissionError {
         }
         let n = self.points;
         let quads = curve.as_chunks::<4>().0;
-        let (mut lo, mut hi, mut sum) = ([f64::INFINITY; 4], [f64::NEG_INFINITY; 4], [0.0; 4]);
-        for quad in quads {
-            for lane in 0..4 {
-                let v = quad[lane];
-                lo[lane] = if v < lo[lane] { v } else { lo[lane] };
-                hi[lane] = if v > hi[lane] { v } else { hi[lane] };
-                sum[lane] += v;
-            }
-        }
+        let lanes = lane_stats(quads);
         let (lo, hi) = (
-            lo.into_iter().fold(f64::INFINITY, f64::min),
-            hi.into_iter().fold(f64::NEG_INFINITY, f64::max),
+            lanes.lo.into_iter().fold(f64::INFINITY, f64::min),
+            lanes.hi.into_iter().fold(f64::NEG_INFINITY, f64::max),
         );
-        let sum = (sum[0] + sum[1]) + (sum[2] + sum[3]);
+        let sum = (lanes.sum[0] + lanes.sum[1]) + (lanes.sum[2] + lanes.sum[3]);
         let mean = sum / n as f64;
-        let mut squares = [0.0; 4];
-        for quad in quads {
-            for lane in 0..4 {
-                squares[lane] += (quad[lane] - mean) * (quad[lane] - mean);
-            }
-        }
+        let squares = lane_squares(quads, mean);
         let var = ((squares[0] + squares[1]) + (squares[2] + squares[3])) / n as f64;
-        let (lo, hi) = self.refine_extremes(inputs, &terms, curve, lo, hi);
-        let _ = work;
-        scratch.fft_re.resize(n / 2, 0.0);
-        scratch.fft_im.resize(n / 2, 0.0);
-        self.fft
-            .transform_split(curve, &mut scratch.fft_re, &mut scratch.fft_im);
-        let (zc, zp) = (self.cycloid_teeth, self.pins);
-        let orders = [1, zc, zp, 2 * zc, 2 * zp].map(|k| {
-            self.fft
-                .split_amplitude(&scratch.fft_re, &scratch.fft_im, k)
-        });
+        // The first point at which each extreme occurs: the lanes' first occurrences (a
+        // search of the curve where an extreme is not finite).
+        let first = |value: f64, lane_values: [f64; 4], at: [usize; 4]| {
+            if value.is_finite() {
+                (0..4)
+                    .filter(|&lane| lane_values[lane] == value)
+                    .map(|lane| 4 * at[lane] + lane)
+                    .min()
+            } else {
+                curve.iter().position(|v| *v == value)
+            }
+        };
+        let (lo, hi) = match (
+            first(lo, lanes.lo, lanes.lo_at),
+            first(hi, lanes.hi, lanes.hi_at),
+        ) {
+            (Some(j_lo), Some(j_hi)) => {
+                self.refine_extremes(inputs, &terms, curve, (lo, j_lo), (hi, j_hi))
+            }
+            _ => (lo, hi),
+        };
+        // Five orders: summed directly, not by an FFT of all N/2.
+        let orders = self.physical().orders.amplitudes(curve);
         let to_arcsec = crate::ARCSEC_PER_RAD;
         outputs[0] = (hi - lo) * to_arcsec;
         outputs[1] = var.sqrt() * to_arcsec;
@@ -1709,22 +1760,19 @@ impl TransmissionError {
     /// winning branch's parabola through three points gives its vertex, whose branch value
     /// is a lower bound of TE there; near the minimum (a kink where two branches cross) the
     /// crossing of the two branches' chords gives the angle at which TE is evaluated
-    /// exactly. Both can only widen the sampled range towards the true one.
+    /// exactly. Both can only widen the sampled range towards the true one. `j_lo`, `j_hi`:
+    /// the first points at which the sampled extremes `lo`, `hi` occur.
     pub(super) fn refine_extremes(
         &self,
         inputs: &[f64],
         terms: &RowTerms,
         curve: &[f64],
-        lo: f64,
-        hi: f64,
+        (lo, j_lo): (f64, usize),
+        (hi, j_hi): (f64, usize),
     ) -> (f64, f64) {
         let n = self.points;
         let h = 2.0 * PI / n as f64;
         let at = |j: usize| 2.0 * PI * j as f64 / n as f64;
-        let position = |value: f64| curve.iter().position(|v| *v == value);
-        let (Some(j_hi), Some(j_lo)) = (position(hi), position(lo)) else {
-            return (lo, hi);
-        };
         let mut best_hi = hi;
         let top = self.exact_flanks(inputs, terms, at(j_hi), false);
         let values =
@@ -1992,6 +2040,36 @@ mod tests {
                     (a - b).abs() < 1e-9 * b.abs().max(1.0),
                     "{zp} pins, {cranks} cranks, {contact}, point {j}: {a} vs {b}"
                 );
+            }
+        }
+    }
+
+    #[test]
+    fn order_outputs_are_the_fft_amplitudes_of_the_curve() {
+        // The outputs' orders come from the direct DFT of the five orders: the same
+        // amplitudes as the FFT of the curve, to the last bits (odd and even pin counts,
+        // an odd one making z_p odd and z_c even).
+        for zp in [40, 41, 13] {
+            let model = with(
+                params()
+                    .with_number("pin_count", zp as f64)
+                    .with_number("cycloid_teeth", (zp - 1) as f64)
+                    .with_number("pin_position_errors", 1.0)
+                    .with_number("tooth_profile_errors", 1.0),
+            );
+            for seed in 0..4 {
+                let row = busy_row(&model, 0x9e37_79b9 ^ (seed << 8) ^ zp as u64);
+                let out = outputs(&model, &row);
+                assert_eq!(out[8], 0.0, "{zp} pins, seed {seed}");
+                let spectrum = model.spectrum(&model.curve(&row));
+                let largest = out[3..8].iter().fold(0.0f64, |a, &b| a.max(b));
+                for (value, k) in out[3..8].iter().zip([1, zp - 1, zp, 2 * zp - 2, 2 * zp]) {
+                    assert!(
+                        (value - spectrum[k]).abs() <= 1e-14 * largest,
+                        "{zp} pins, seed {seed}, order {k}: {value} vs {}",
+                        spectrum[k]
+                    );
+                }
             }
         }
     }
