@@ -560,7 +560,7 @@ input_shaft.dalpha,input_shaft.dbeta,input_shaft.dgamma";
         (format!("{header}\n{zeros}\n"), None),
         (
             format!("{header}\n{zeros}\n{}\n", bad_cell.join(",")),
-            Some("line 3, column 'cycloid_radial_runout': not a number: '1e-3mm'"),
+            Some("line 3, column 'cycloid_radial_runout': not a finite number: '1e-3mm'"),
         ),
         (
             format!("{header},extra\n{zeros},1\n"),

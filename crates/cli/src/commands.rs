@@ -128,13 +128,34 @@ fn command_line() -> String {
         .join(" ")
 }
 
-/// Writes the HTML page of the reports to `path`.
+/// The nominal curves of the scenario's models, for a page.
+fn page_curves(
+    scenario_path: &Path,
+    scenario: &Scenario,
+) -> Result<Vec<(String, Vec<rvtol_models::Curve>)>> {
+    Ok(nominal_curves(scenario)
+        .map_err(|err| bad_scenario(scenario_path, err))?
+        .into_iter()
+        .map(|(model, curves)| (model.to_string(), curves))
+        .collect())
+}
+
+/// Writes the HTML page of one command's JSON report (`kind` says which) to `path`, with
+/// the nominal curves of the scenario's models for a run.
 fn write_html(
     path: &Path,
     scenario_path: &Path,
     scenario: &Scenario,
-    reports: rvtol_report::Report<'_>,
+    kind: rvtol_report::Kind,
+    json: &str,
 ) -> Result<()> {
+    use rvtol_report::Kind;
+    let value = parsed(json);
+    let curves = if kind == Kind::Run {
+        page_curves(scenario_path, scenario)?
+    } else {
+        Vec::new()
+    };
     let record = rvtol_report::Record {
         scenario: scenario.name.clone(),
         description: Some(scenario.description.clone()).filter(|d| !d.is_empty()),
@@ -142,8 +163,14 @@ fn write_html(
         command: Some(command_line()),
         version: env!("CARGO_PKG_VERSION").to_string(),
     };
-    let page = rvtol_report::render(&rvtol_report::Report { record, ..reports })
-        .map_err(|err| BadInput(format!("{}: {err}", path.display())))?;
+    let page = rvtol_report::render(&rvtol_report::Report {
+        record,
+        run: (kind == Kind::Run).then_some(&value),
+        sensitivity: (kind == Kind::Sensitivity).then_some(&value),
+        allocation: (kind == Kind::Allocation).then_some(&value),
+        curves: &curves,
+    })
+    .map_err(|err| BadInput(format!("{}: {err}", path.display())))?;
     write_report(path, &page)
 }
 
@@ -198,23 +225,12 @@ pub fn run(
         write_report(path, &rvtol_engine::report::sample_csv(&scenario, &table))?;
     }
     if let Some(html) = to.html {
-        let curves: Vec<(String, Vec<rvtol_models::Curve>)> = nominal_curves(&scenario)
-            .map_err(|err| bad_scenario(scenario_path, err))?
-            .into_iter()
-            .map(|(model, curves)| (model.to_string(), curves))
-            .collect();
-        let value = parsed(&json);
         write_html(
             html,
             scenario_path,
             &scenario,
-            rvtol_report::Report {
-                record: Default::default(),
-                run: Some(&value),
-                sensitivity: None,
-                allocation: None,
-                curves: &curves,
-            },
+            rvtol_report::Kind::Run,
+            &json,
         )?;
     }
     if !execution.quiet && std::io::stderr().is_terminal() {
@@ -393,18 +409,12 @@ pub fn sensitivity(
     let json = report.to_json();
     emit(to.json, || json.clone(), || report.to_text())?;
     if let Some(html) = to.html {
-        let value = parsed(&json);
         write_html(
             html,
             path,
             &scenario,
-            rvtol_report::Report {
-                record: Default::default(),
-                run: None,
-                sensitivity: Some(&value),
-                allocation: None,
-                curves: &[],
-            },
+            rvtol_report::Kind::Sensitivity,
+            &json,
         )?;
     }
     let lost: Vec<String> = report
@@ -620,19 +630,7 @@ pub fn allocate(
     let json = report.to_json();
     emit(to.json, || json.clone(), || report.to_text())?;
     if let Some(html) = to.html {
-        let value = parsed(&json);
-        write_html(
-            html,
-            path,
-            &scenario,
-            rvtol_report::Report {
-                record: Default::default(),
-                run: None,
-                sensitivity: None,
-                allocation: Some(&value),
-                curves: &[],
-            },
-        )?;
+        write_html(html, path, &scenario, rvtol_report::Kind::Allocation, &json)?;
     }
     match allocation.status() {
         "met" => Ok(()),
@@ -735,11 +733,7 @@ pub fn report(
             .into());
         }
         description = Some(scenario.description.clone()).filter(|d| !d.is_empty());
-        curves = nominal_curves(&scenario)
-            .map_err(|err| bad_scenario(path, err))?
-            .into_iter()
-            .map(|(model, curves)| (model.to_string(), curves))
-            .collect();
+        curves = page_curves(path, &scenario)?;
     }
     let get = |kind: Kind| found.iter().find(|(k, _, _)| *k == kind).map(|(_, v, _)| v);
     let record = rvtol_report::Record {
@@ -767,6 +761,85 @@ pub fn report(
     ))
 }
 
+/// A CSV file of numbers with a header: its columns as (name, unit) from `name [unit]`,
+/// and its rows with their line numbers.
+struct CsvTable<'a> {
+    path: &'a Path,
+    columns: Vec<(String, Option<String>)>,
+    rows: Vec<(u64, csv::StringRecord)>,
+}
+
+impl CsvTable<'_> {
+    /// "FILE: line N", for messages.
+    fn at(&self, line: u64) -> String {
+        format!("{}: line {line}", self.path.display())
+    }
+
+    /// Cell `i` of `record` (on `line`) as a finite number, or one line saying why not.
+    fn number(&self, line: u64, record: &csv::StringRecord, i: usize) -> Result<f64> {
+        let cell = record.get(i).unwrap_or("");
+        match cell.parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(v),
+            _ => Err(BadInput(format!(
+                "{}, column '{}': not a finite number: '{cell}'",
+                self.at(line),
+                self.columns[i].0
+            ))
+            .into()),
+        }
+    }
+
+    fn names(&self) -> Vec<&str> {
+        self.columns.iter().map(|(n, _)| n.as_str()).collect()
+    }
+}
+
+/// Reads a CSV file of numbers with a header (no column twice).
+fn read_csv(path: &Path) -> Result<CsvTable<'_>> {
+    let text = read_text(path)?;
+    let at = |line: u64| format!("{}: line {line}", path.display());
+    let mut reader = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .from_reader(text.as_bytes());
+    let columns: Vec<(String, Option<String>)> = reader
+        .headers()
+        .map_err(|err| BadInput(format!("{}: {err}", at(1))))?
+        .iter()
+        .map(|heading| match heading.rsplit_once(" [") {
+            Some((name, unit)) if unit.ends_with(']') => (
+                name.to_string(),
+                Some(unit.trim_end_matches(']').to_string()),
+            ),
+            _ => (heading.to_string(), None),
+        })
+        .collect();
+    if let Some((i, _)) = columns
+        .iter()
+        .enumerate()
+        .find(|(i, (n, _))| columns[..*i].iter().any(|(m, _)| m == n))
+    {
+        return Err(BadInput(format!(
+            "{}: column '{}' appears twice",
+            at(1),
+            columns[i].0
+        ))
+        .into());
+    }
+    let mut rows = Vec::new();
+    for record in reader.records() {
+        let record = record.map_err(|err| {
+            let line = err.position().map_or(0, |p| p.line());
+            BadInput(format!("{}: {err}", at(line)))
+        })?;
+        rows.push((record.position().map_or(0, |p| p.line()), record));
+    }
+    Ok(CsvTable {
+        path,
+        columns,
+        rows,
+    })
+}
+
 /// `rvtol evaluate`: the models on the rows of a CSV.
 pub fn evaluate(
     scenario_path: &Path,
@@ -775,26 +848,8 @@ pub fn evaluate(
     execution: &Execution,
 ) -> Result<()> {
     let scenario = load(scenario_path)?;
-    let text = read_text(inputs_path)?;
-    let at = |line: u64| format!("{}: line {line}", inputs_path.display());
-    let mut reader = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .from_reader(text.as_bytes());
-    let header: Vec<String> = reader
-        .headers()
-        .map_err(|err| BadInput(format!("{}: {err}", at(1))))?
-        .iter()
-        .map(str::to_string)
-        .collect();
-    // "name [unit]" or "name".
-    let name_of = |heading: &str| {
-        heading
-            .rsplit_once(" [")
-            .filter(|(_, unit)| unit.ends_with(']'))
-            .map_or(heading, |(name, _)| name)
-            .to_string()
-    };
-    let names: Vec<String> = header.iter().map(|h| name_of(h)).collect();
+    let table = read_csv(inputs_path)?;
+    let names = table.names();
     let known_other =
         |name: &str| name == "sample" || scenario.outputs.iter().any(|o| o.name == name);
     // Where each input column is in the file.
@@ -809,7 +864,7 @@ pub fn evaluate(
     if !missing.is_empty() {
         return Err(BadInput(format!(
             "{}: no column for the input{} {} (the header names every input column of the scenario, as `rvtol run --samples-out` writes it)",
-            at(1),
+            table.at(1),
             if missing.len() > 1 { "s" } else { "" },
             missing.join(", ")
         ))
@@ -821,59 +876,32 @@ pub fn evaluate(
     {
         return Err(BadInput(format!(
             "{}: column '{unknown}' is neither an input nor an output of the scenario",
-            at(1)
+            table.at(1)
         ))
         .into());
     }
-    if let Some(dup) = names
-        .iter()
-        .enumerate()
-        .find(|(i, n)| names[..*i].contains(n))
-    {
-        return Err(BadInput(format!("{}: column '{}' appears twice", at(1), dup.1)).into());
-    }
     let n_inputs = scenario.columns.len();
-    let mut values = Vec::new();
-    for record in reader.records() {
-        let record = record.map_err(|err| {
-            let line = err.position().map_or(0, |p| p.line());
-            BadInput(format!("{}: {err}", at(line)))
-        })?;
-        let line = record.position().map_or(0, |p| p.line());
-        for (c, &i) in position.iter().enumerate() {
-            let cell = record.get(i).unwrap_or("");
-            let value: f64 = cell.parse().map_err(|_| {
-                BadInput(format!(
-                    "{}, column '{}': not a number: '{cell}'",
-                    at(line),
-                    scenario.columns[c].name
-                ))
-            })?;
-            if !value.is_finite() {
-                return Err(BadInput(format!(
-                    "{}, column '{}': not a finite number: '{cell}'",
-                    at(line),
-                    scenario.columns[c].name
-                ))
-                .into());
-            }
-            values.push(value);
-        }
-        if values.len() as u64 > rvtol_engine::run::MAX_SAMPLE_TABLE_VALUES {
-            return Err(BadInput(format!(
-                "{}: more than {} rows of {n_inputs} inputs; split the file",
-                at(line),
-                rvtol_engine::run::MAX_SAMPLE_TABLE_VALUES / n_inputs.max(1) as u64
-            ))
-            .into());
+    let most = rvtol_engine::run::MAX_SAMPLE_TABLE_VALUES / n_inputs.max(1) as u64;
+    if table.rows.len() as u64 > most {
+        return Err(BadInput(format!(
+            "{}: {} rows, more than the {most} rows of {n_inputs} inputs a table holds; split the file",
+            inputs_path.display(),
+            table.rows.len()
+        ))
+        .into());
+    }
+    let mut values = Vec::with_capacity(table.rows.len() * n_inputs);
+    for (line, record) in &table.rows {
+        for &i in &position {
+            values.push(table.number(*line, record, i)?);
         }
     }
     if values.is_empty() {
         return Err(BadInput(format!("{}: no rows", inputs_path.display())).into());
     }
     let pool = thread_pool(threads(execution.threads)?)?;
-    let table = pool.install(|| rvtol_engine::evaluate::evaluate_rows(&scenario, values));
-    let csv = rvtol_engine::report::sample_csv(&scenario, &table);
+    let rows = pool.install(|| rvtol_engine::evaluate::evaluate_rows(&scenario, values));
+    let csv = rvtol_engine::report::sample_csv(&scenario, &rows);
     match output {
         Some(path) => write_report(path, &csv),
         None => print(&csv),
@@ -883,54 +911,30 @@ pub fn evaluate(
 /// `rvtol fit`: a normal model of measured parts, as a scenario fragment.
 pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()> {
     use rvtol_engine::fit::{fit as fit_normal, fragment, PART_COMPONENTS};
-    let text = read_text(path)?;
-    let at = |line: u64| format!("{}: line {line}", path.display());
-    let mut reader = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .from_reader(text.as_bytes());
-    let header: Vec<String> = reader
-        .headers()
-        .map_err(|err| BadInput(format!("{}: {err}", at(1))))?
-        .iter()
-        .map(str::to_string)
-        .collect();
-    let split = |heading: &str| match heading.rsplit_once(" [") {
-        Some((name, unit)) if unit.ends_with(']') => (
-            name.to_string(),
-            Some(unit.trim_end_matches(']').to_string()),
-        ),
-        _ => (heading.to_string(), None),
-    };
-    let (mut names, mut units): (Vec<String>, Vec<Option<String>>) =
-        header.iter().map(|h| split(h)).unzip();
-    if let Some(dup) = names
-        .iter()
-        .enumerate()
-        .find(|(i, n)| names[..*i].contains(n))
-    {
-        return Err(BadInput(format!("{}: column '{}' appears twice", at(1), dup.1)).into());
-    }
+    let table = read_csv(path)?;
+    let names = table.names();
     // A part's columns in its component order.
     let order: Vec<usize> = match part {
         Some(name) => {
-            if !name
-                .chars()
-                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
-                || name.is_empty()
+            if name.is_empty()
+                || !name
+                    .chars()
+                    .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
             {
                 return Err(BadInput(format!(
                     "--part: '{name}' is not a part name (letters, digits, _ and -)"
                 ))
                 .into());
             }
-            let component = |n: &str| n.strip_prefix(&format!("{name}.")).unwrap_or(n).to_string();
+            let prefix = format!("{name}.");
+            let component = |n: &str| n.strip_prefix(&prefix).unwrap_or(n).to_string();
             if let Some(other) = names
                 .iter()
                 .find(|n| !PART_COMPONENTS.contains(&component(n).as_str()))
             {
                 return Err(BadInput(format!(
                     "{}: column '{other}' is not a component of part {name} ({})",
-                    at(1),
+                    table.at(1),
                     PART_COMPONENTS.join(", ")
                 ))
                 .into());
@@ -942,7 +946,7 @@ pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()>
                     None => {
                         return Err(BadInput(format!(
                             "{}: no column for {name}.{c} (a part needs all six components)",
-                            at(1)
+                            table.at(1)
                         ))
                         .into())
                     }
@@ -952,32 +956,17 @@ pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()>
         }
         None => (0..names.len()).collect(),
     };
-    let mut rows = Vec::new();
-    for record in reader.records() {
-        let record = record.map_err(|err| {
-            let line = err.position().map_or(0, |p| p.line());
-            BadInput(format!("{}: {err}", at(line)))
-        })?;
-        let line = record.position().map_or(0, |p| p.line());
-        let mut row = Vec::with_capacity(order.len());
-        for &i in &order {
-            let cell = record.get(i).unwrap_or("");
-            match cell.parse::<f64>() {
-                Ok(v) if v.is_finite() => row.push(v),
-                _ => {
-                    return Err(BadInput(format!(
-                        "{}, column '{}': not a finite number: '{cell}'",
-                        at(line),
-                        names[i]
-                    ))
-                    .into())
-                }
-            }
-        }
-        rows.push(row);
+    let mut rows = Vec::with_capacity(table.rows.len());
+    for (line, record) in &table.rows {
+        rows.push(
+            order
+                .iter()
+                .map(|&i| table.number(*line, record, i))
+                .collect::<Result<Vec<f64>>>()?,
+        );
     }
-    names = order.iter().map(|&i| names[i].clone()).collect();
-    units = order.iter().map(|&i| units[i].clone()).collect();
+    let names: Vec<String> = order.iter().map(|&i| table.columns[i].0.clone()).collect();
+    let units: Vec<Option<String>> = order.iter().map(|&i| table.columns[i].1.clone()).collect();
     let fitted =
         fit_normal(&names, &rows).map_err(|err| BadInput(format!("{}: {err}", path.display())))?;
     let source = path.file_name().map_or_else(

@@ -218,6 +218,31 @@ struct Plan<'a> {
 }
 
 impl<'a> Plan<'a> {
+    /// The plan of a run of `scenario`; the sketch frames are the identity until the pilot
+    /// chunk sets them.
+    fn new(
+        scenario: &'a Scenario,
+        settings: RunSettings,
+        exact: bool,
+        only_output: Option<usize>,
+    ) -> Plan<'a> {
+        Plan {
+            scenario,
+            settings,
+            exact,
+            limits: scenario.outputs.iter().map(|o| o.spec).collect(),
+            indicator: scenario
+                .outputs
+                .iter()
+                .map(|o| o.kind == OutputKind::Indicator)
+                .collect(),
+            conditions: scenario.outputs.iter().map(|o| o.condition).collect(),
+            sketch_frames: vec![(0.0, 1.0); scenario.outputs.len()],
+            only_output,
+            flagged_conform: scenario.outputs.iter().map(|o| o.flagged_conform).collect(),
+        }
+    }
+
     fn partial(&self) -> Partial<'a> {
         let n_out = self.scenario.outputs.len();
         Partial {
@@ -494,21 +519,7 @@ pub fn sample_table(
             ),
         ));
     }
-    let plan = Plan {
-        scenario,
-        settings,
-        exact: true,
-        limits: scenario.outputs.iter().map(|o| o.spec).collect(),
-        indicator: scenario
-            .outputs
-            .iter()
-            .map(|o| o.kind == OutputKind::Indicator)
-            .collect(),
-        conditions: scenario.outputs.iter().map(|o| o.condition).collect(),
-        sketch_frames: vec![(0.0, 1.0); n_outputs],
-        only_output: None,
-        flagged_conform: scenario.outputs.iter().map(|o| o.flagged_conform).collect(),
-    };
+    let plan = Plan::new(scenario, settings, true, None);
     let n_chunks = settings.samples.div_ceil(CHUNK_SIZE as u64);
     // Per chunk: its input rows and output rows, row-major.
     type Rows = (Vec<f64>, Vec<f64>);
@@ -592,21 +603,7 @@ fn run_keeping(
     };
     let exact =
         settings.samples.saturating_mul(kept_outputs.max(1)) <= settings.exact_percentile_limit;
-    let mut plan = Plan {
-        scenario,
-        settings,
-        exact,
-        limits: scenario.outputs.iter().map(|o| o.spec).collect(),
-        indicator: scenario
-            .outputs
-            .iter()
-            .map(|o| o.kind == OutputKind::Indicator)
-            .collect(),
-        conditions: scenario.outputs.iter().map(|o| o.condition).collect(),
-        sketch_frames: vec![(0.0, 1.0); scenario.outputs.len()],
-        only_output,
-        flagged_conform: scenario.outputs.iter().map(|o| o.flagged_conform).collect(),
-    };
+    let mut plan = Plan::new(scenario, settings, exact, only_output);
     if !exact {
         plan.sketch_frames = plan.pilot_sketch_frames()?;
     }

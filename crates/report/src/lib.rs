@@ -268,28 +268,20 @@ fn thousands(n: u64) -> String {
     out
 }
 
-const PERCENTS: [(&str, f64); 7] = [
-    ("0.135", 0.135),
-    ("2.275", 2.275),
-    ("15.866", 15.866),
-    ("50", 50.0),
-    ("84.134", 84.134),
-    ("97.725", 97.725),
-    ("99.865", 99.865),
-];
-
+/// The report's percentiles, in its order, keyed by the percent as text.
 fn markers(output: &Value) -> Vec<Marker> {
-    let (Some(values), intervals) = (output.get("percentiles"), output.get("percentile_ci95"))
-    else {
+    let (Some(values), intervals) = (
+        output.get("percentiles").and_then(Value::as_object),
+        output.get("percentile_ci95"),
+    ) else {
         return Vec::new();
     };
-    PERCENTS
+    values
         .iter()
-        .filter_map(|&(key, percent)| {
-            let value = values.get(key).and_then(Value::as_f64)?;
+        .filter_map(|(key, value)| {
             Some(Marker {
-                percent,
-                value,
+                percent: key.parse().ok()?,
+                value: value.as_f64()?,
                 interval: pair(intervals.and_then(|i| i.get(key))),
             })
         })
