@@ -178,6 +178,16 @@ fn anderson_darling_passes_normals_and_flags_uniforms_at_their_rates() {
 }
 
 #[test]
+fn anderson_darling_flags_a_large_uniform_sample() {
+    // At n = 60,000 A* is in the thousands, beyond the range of D'Agostino & Stephens'
+    // p-value polynomial (which rises again past A* = 153.5): p must stay at 0.
+    let mut rng = ChaCha8Rng::seed_from_u64(8);
+    let uniform: Vec<f64> = (0..60_000).map(|_| rng.random::<f64>()).collect();
+    let test = anderson_darling(&uniform).unwrap();
+    assert!(test.statistic > 153.0 && test.p_value == 0.0, "{test:?}");
+}
+
+#[test]
 fn mardia_flags_a_uniform_cloud_and_passes_a_normal_one() {
     let sigma = truth();
     let fitted = fit(&names(), &draw(&sigma, 500, 5)).unwrap();
