@@ -262,3 +262,29 @@ fn report_composes_run_sensitivity_and_allocation_into_one_page() {
     assert!(String::from_utf8_lossy(&output.stderr).contains("not a JSON report"));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[cfg(unix)]
+#[test]
+fn a_page_path_that_is_not_utf8_is_recorded_lossily_not_a_panic() {
+    use std::os::unix::ffi::OsStrExt;
+    let dir = temp_dir("utf8");
+    let mut name = b"page-".to_vec();
+    name.extend_from_slice(&[0xff, b'.', b'h', b't', b'm', b'l']);
+    let path = dir.join(std::ffi::OsStr::from_bytes(&name));
+    let output = common::run_rvtol(&[
+        std::ffi::OsStr::new("run"),
+        std::ffi::OsStr::new(&scenario("ishigami.json")),
+        std::ffi::OsStr::new("--samples"),
+        std::ffi::OsStr::new("100"),
+        std::ffi::OsStr::new("--html"),
+        path.as_os_str(),
+        std::ffi::OsStr::new("--quiet"),
+    ]);
+    ok(&output);
+    let page = std::fs::read_to_string(&path).unwrap();
+    assert!(
+        page.contains("page-\u{fffd}.html"),
+        "the command line, lossily"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -114,10 +114,15 @@ pub struct Destinations<'a> {
 /// The command line as typed (arguments with spaces or quotes quoted), for the page's
 /// record.
 fn command_line() -> String {
-    std::env::args()
+    // args_os: an argument that is not UTF-8 (a path) is shown lossily, not a panic.
+    std::env::args_os()
         .enumerate()
         .map(|(i, a)| {
-            let a = if i == 0 { "rvtol".to_string() } else { a };
+            let a = if i == 0 {
+                "rvtol".to_string()
+            } else {
+                a.to_string_lossy().into_owned()
+            };
             if a.is_empty() || a.contains([' ', '"', '\'', '<', '>', '|', '&']) {
                 format!("'{}'", a.replace('\'', "'\\''"))
             } else {

@@ -466,8 +466,9 @@ fn usage_line(err: &clap::Error) -> String {
         .collect::<Vec<_>>()
         .join(" ");
     let message = message.strip_prefix("error: ").unwrap_or(&message);
-    let subcommand = std::env::args()
+    let subcommand = std::env::args_os()
         .nth(1)
+        .map(|a| a.to_string_lossy().into_owned())
         .filter(|a| Cli::command_names().contains(&a.as_str()));
     let help = match subcommand {
         Some(name) => format!("rvtol {name} --help"),
