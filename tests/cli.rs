@@ -4,15 +4,7 @@
 
 mod common;
 
-use common::{run_rvtol, workspace_dir};
-
-fn scenario(file: &str) -> String {
-    workspace_dir()
-        .join("scenarios")
-        .join(file)
-        .display()
-        .to_string()
-}
+use common::{run_rvtol, scenario};
 
 fn temp_path(label: &str) -> std::path::PathBuf {
     std::env::temp_dir().join(format!("rvtol-cli-{label}-{}.json", std::process::id()))

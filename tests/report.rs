@@ -8,16 +8,8 @@
 
 mod common;
 
-use common::{run_rvtol, workspace_dir};
+use common::{run_rvtol, scenario, workspace_dir};
 use serde_json::Value;
-
-fn scenario(file: &str) -> String {
-    workspace_dir()
-        .join("scenarios")
-        .join(file)
-        .display()
-        .to_string()
-}
 
 fn temp_dir(label: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("rvtol-report-{label}-{}", std::process::id()));

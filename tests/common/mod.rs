@@ -16,6 +16,15 @@ pub fn workspace_dir() -> PathBuf {
         .to_path_buf()
 }
 
+/// A shipped scenario's path as a command-line argument.
+pub fn scenario(file: &str) -> String {
+    workspace_dir()
+        .join("scenarios")
+        .join(file)
+        .display()
+        .to_string()
+}
+
 /// Path of the `rvtol` binary, built once per test process.
 ///
 /// Binaries of another package are not exposed through `CARGO_BIN_EXE_*`, so the first

@@ -198,16 +198,8 @@ pub fn run(
         exact_percentile_limit,
     };
     if to.samples.is_some() {
-        let columns = (scenario.input_space.n_columns() + scenario.outputs.len()) as u64;
-        let most = rvtol_engine::run::MAX_SAMPLE_TABLE_VALUES / columns.max(1);
-        if settings.samples > most {
-            return Err(BadInput(format!(
-                "--samples-out: at most {most} samples of this scenario ({columns} columns, {} values), asked {}; run fewer samples",
-                rvtol_engine::run::MAX_SAMPLE_TABLE_VALUES,
-                settings.samples
-            ))
-            .into());
-        }
+        rvtol_engine::run::check_table_rows(&scenario, settings.samples)
+            .map_err(|message| BadInput(format!("--samples-out: {message}; run fewer samples")))?;
     }
     let threads = threads(execution.threads)?;
     check_memory(memory::run(&scenario, &settings, threads), execution, "run")?;
@@ -886,15 +878,12 @@ pub fn evaluate(
         .into());
     }
     let n_inputs = scenario.columns.len();
-    let most = rvtol_engine::run::MAX_SAMPLE_TABLE_VALUES / n_inputs.max(1) as u64;
-    if table.rows.len() as u64 > most {
-        return Err(BadInput(format!(
-            "{}: {} rows, more than the {most} rows of {n_inputs} inputs a table holds; split the file",
-            inputs_path.display(),
-            table.rows.len()
+    rvtol_engine::run::check_table_rows(&scenario, table.rows.len() as u64).map_err(|message| {
+        BadInput(format!(
+            "{}: {message}; split the file",
+            inputs_path.display()
         ))
-        .into());
-    }
+    })?;
     let mut values = Vec::with_capacity(table.rows.len() * n_inputs);
     for (line, record) in &table.rows {
         for &i in &position {

@@ -32,6 +32,7 @@ use serde::{Deserialize, Serialize};
 use statrs::distribution::{ContinuousCDF, Normal};
 
 use crate::allocation::spec::{Target, TargetFigure};
+use crate::report::escape_markup;
 use crate::run::{
     check_non_finite, run, Distribution, RunSettings, DEFAULT_EXACT_PERCENTILE_LIMIT,
 };
@@ -876,14 +877,6 @@ pub fn check_with(
     })
 }
 
-fn xml_escape(text: &str) -> String {
-    text.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
-        .replace('\'', "&apos;")
-}
-
 impl CheckReport {
     /// One line per figure that moved (empty when all passed).
     pub fn moved_lines(&self) -> Vec<String> {
@@ -988,7 +981,7 @@ impl CheckReport {
         let mut xml = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
         xml.push_str(&format!(
             "<testsuites name=\"rvtol check\" tests=\"{tests}\" failures=\"{failures}\">\n  <testsuite name=\"{}\" tests=\"{tests}\" failures=\"{failures}\">\n",
-            xml_escape(&self.scenario),
+            escape_markup(&self.scenario),
         ));
         let lines = self.moved_lines();
         let mut moved = lines.iter();
@@ -997,16 +990,16 @@ impl CheckReport {
             if c.passed {
                 xml.push_str(&format!(
                     "    <testcase classname=\"{}\" name=\"{}\"/>\n",
-                    xml_escape(&self.scenario),
-                    xml_escape(&name)
+                    escape_markup(&self.scenario),
+                    escape_markup(&name)
                 ));
             } else {
                 let message = moved.next().cloned().unwrap_or_default();
                 xml.push_str(&format!(
                     "    <testcase classname=\"{}\" name=\"{}\">\n      <failure message=\"{}\"/>\n    </testcase>\n",
-                    xml_escape(&self.scenario),
-                    xml_escape(&name),
-                    xml_escape(&message)
+                    escape_markup(&self.scenario),
+                    escape_markup(&name),
+                    escape_markup(&message)
                 ));
             }
         }
@@ -1015,15 +1008,15 @@ impl CheckReport {
             if r.passed {
                 xml.push_str(&format!(
                     "    <testcase classname=\"{}\" name=\"{}\"/>\n",
-                    xml_escape(&self.scenario),
-                    xml_escape(&name)
+                    escape_markup(&self.scenario),
+                    escape_markup(&name)
                 ));
             } else {
                 xml.push_str(&format!(
                     "    <testcase classname=\"{}\" name=\"{}\">\n      <failure message=\"{}\"/>\n    </testcase>\n",
-                    xml_escape(&self.scenario),
-                    xml_escape(&name),
-                    xml_escape(&line)
+                    escape_markup(&self.scenario),
+                    escape_markup(&name),
+                    escape_markup(&line)
                 ));
             }
         }

@@ -904,6 +904,16 @@ pub fn format_sig(x: f64) -> String {
     format!("{x:.decimals$}")
 }
 
+/// Text with `&`, `<`, `>`, `"` and `'` escaped for XML and HTML (the JUnit report of
+/// `check`, the HTML page).
+pub fn escape_markup(text: &str) -> String {
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+        .replace('\'', "&apos;")
+}
+
 /// 10000000 → "10,000,000".
 pub fn group_thousands(n: u64) -> String {
     let digits = n.to_string();

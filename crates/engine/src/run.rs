@@ -493,6 +493,19 @@ pub struct SampleTable {
 /// Most values (rows × (inputs + outputs)) a [`SampleTable`] holds: 160 MB of numbers.
 pub const MAX_SAMPLE_TABLE_VALUES: u64 = 20_000_000;
 
+/// Whether a [`SampleTable`] of `rows` rows of `scenario` (its inputs and outputs) stays
+/// within [`MAX_SAMPLE_TABLE_VALUES`]; the error says how many rows fit.
+pub fn check_table_rows(scenario: &Scenario, rows: u64) -> Result<(), String> {
+    let columns = (scenario.input_space.n_columns() + scenario.outputs.len()).max(1) as u64;
+    let most = MAX_SAMPLE_TABLE_VALUES / columns;
+    if rows > most {
+        return Err(format!(
+            "at most {most} rows of this scenario ({columns} columns, {MAX_SAMPLE_TABLE_VALUES} values), asked {rows}"
+        ));
+    }
+    Ok(())
+}
+
 /// Draws and evaluates every sample of the run `settings` describes, keeping each row
 /// ([`SampleTable`]); at most [`MAX_SAMPLE_TABLE_VALUES`] values. Uses the current rayon
 /// thread pool; the chunks' rows are joined in chunk order.
@@ -503,22 +516,10 @@ pub fn sample_table(
     if settings.samples == 0 {
         return Err(ScenarioError::new("samples", "must be at least 1"));
     }
+    check_table_rows(scenario, settings.samples)
+        .map_err(|message| ScenarioError::new("samples", message))?;
     let n_inputs = scenario.input_space.n_columns();
     let n_outputs = scenario.outputs.len();
-    let values = settings
-        .samples
-        .saturating_mul((n_inputs + n_outputs) as u64);
-    if values > MAX_SAMPLE_TABLE_VALUES {
-        return Err(ScenarioError::new(
-            "samples",
-            format!(
-                "{} samples × {} columns is {values} values, more than the {MAX_SAMPLE_TABLE_VALUES} a sample table holds; write at most {} samples",
-                settings.samples,
-                n_inputs + n_outputs,
-                MAX_SAMPLE_TABLE_VALUES / (n_inputs + n_outputs) as u64
-            ),
-        ));
-    }
     let plan = Plan::new(scenario, settings, true, None);
     let n_chunks = settings.samples.div_ceil(CHUNK_SIZE as u64);
     // Per chunk: its input rows and output rows, row-major.

@@ -288,16 +288,6 @@ impl<const K: usize> OrderDft<K> {
         }
     }
 
-    /// Curve length N.
-    pub fn len(&self) -> usize {
-        self.n
-    }
-
-    /// Always false: a plan has at least 16 points.
-    pub fn is_empty(&self) -> bool {
-        false
-    }
-
     /// X_k of each order, as (re, im), from the curve `x` (N samples).
     pub fn bins(&self, x: &[f64]) -> [Complex; K] {
         let n = self.n;

@@ -417,6 +417,9 @@ struct Search {
     head: Vec<f64>,
     /// The curve of the row, arcsec.
     curve: Vec<f64>,
+    /// The FFT's real and imaginary columns (document 002's reading).
+    fft_re: Vec<f64>,
+    fft_im: Vec<f64>,
     /// The physical reading's work state.
     two: TwoDiscScratch,
 }
@@ -920,7 +923,7 @@ impl TransmissionError {
         }
         let var = ((squares[0] + squares[1]) + (squares[2] + squares[3])) / n;
         // The split transform has the interleaved one's bits and vectorises.
-        let (re, im) = (&mut search.two.fft_re, &mut search.two.fft_im);
+        let (re, im) = (&mut search.fft_re, &mut search.fft_im);
         re.resize(self.points / 2, 0.0);
         im.resize(self.points / 2, 0.0);
         self.fft.transform_split(&curve, re, im);

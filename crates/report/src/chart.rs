@@ -7,6 +7,8 @@
 //! Every function checks its ranges before drawing, so a chart never carries a NaN or an
 //! infinite coordinate: non-finite points are left out, and a degenerate range is widened.
 
+use plotters::chart::MeshStyle;
+use plotters::coord::ranged1d::ValueFormatter;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -134,6 +136,45 @@ fn anchored(size: u32, h: HPos, v: VPos) -> TextStyle<'static> {
     text(size).pos(Pos::new(h, v))
 }
 
+/// The mesh of a chart in the page's style (light grid at the major ticks only, 12 px
+/// labels, 13 px axis descriptions), for the caller to add its labels and draw.
+fn mesh<'a, 'b, DB, X, Y>(
+    chart: &'b mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
+) -> MeshStyle<'a, 'b, X, Y, DB>
+where
+    DB: DrawingBackend,
+    X: Ranged + ValueFormatter<<X as Ranged>::ValueType>,
+    Y: Ranged + ValueFormatter<<Y as Ranged>::ValueType>,
+{
+    let mut style = chart.configure_mesh();
+    style
+        .light_line_style(TRANSPARENT)
+        .bold_line_style(GRID)
+        .label_style(text(12))
+        .axis_desc_style(text(13));
+    style
+}
+
+/// The legend of a chart in the page's style, at `position`, labels of `size` px.
+fn legend<'a, DB, CT>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+    size: u32,
+) -> Result<(), ChartError>
+where
+    DB: DrawingBackend + 'a,
+    CT: CoordTranslate,
+{
+    chart
+        .configure_series_labels()
+        .position(position)
+        .background_style(WHITE.mix(0.9))
+        .border_style(GRID)
+        .label_font(text(size))
+        .draw()?;
+    Ok(())
+}
+
 /// A new SVG drawing of `height` pixels into `out`, white.
 fn canvas(out: &mut String, height: u32) -> Result<DrawingArea<SVGBackend<'_>, Shift>, ChartError> {
     let root = SVGBackend::with_string(out, (WIDTH, height)).into_drawing_area();
@@ -175,19 +216,14 @@ pub fn histogram(
             .x_label_area_size(44)
             .y_label_area_size(62)
             .build_cartesian_2d(x0..x1, 0.0..top)?;
-        chart
-            .configure_mesh()
+        mesh(&mut chart)
             .disable_x_mesh()
-            .light_line_style(TRANSPARENT)
-            .bold_line_style(GRID)
             .x_desc(x_label)
             .y_desc("samples per bin")
             .x_labels(8)
             .y_labels(6)
             .x_label_formatter(&|v| tick(*v))
             .y_label_formatter(&|v| tick(*v))
-            .label_style(text(12))
-            .axis_desc_style(text(13))
             .draw()?;
         // Interval bands first, under the bars.
         for marker in markers {
@@ -393,18 +429,13 @@ pub fn probability_plot(
             .x_label_area_size(44)
             .y_label_area_size(70)
             .build_cartesian_2d(x0..x1, z0..z1)?;
-        chart
-            .configure_mesh()
+        mesh(&mut chart)
             .disable_y_mesh()
-            .light_line_style(TRANSPARENT)
-            .bold_line_style(GRID)
             .y_labels(0)
             .x_labels(8)
             .x_desc(x_label)
             .y_desc("cumulative probability (normal scale)")
             .x_label_formatter(&|v| tick(*v))
-            .label_style(text(12))
-            .axis_desc_style(text(13))
             .draw()?;
         probability_grid(&root, &mut chart, (x0, x1), (z0, z1))?;
         for (i, line) in lines.iter().enumerate() {
@@ -500,13 +531,7 @@ pub fn probability_plot(
                 ))?;
             }
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
-            .background_style(WHITE.mix(0.9))
-            .border_style(GRID)
-            .label_font(text(12))
-            .draw()?;
+        legend(&mut chart, SeriesLabelPosition::LowerRight, 12)?;
         root.present()?;
     }
     Ok(out)
@@ -566,17 +591,12 @@ pub fn horizontal_bars(title: &str, x_label: &str, series: &[&str], rows: &[BarR
             .x_label_area_size(44)
             .y_label_area_size(name_width.min(WIDTH / 2))
             .build_cartesian_2d(x0..x1, -legend_rows..n)?;
-        chart
-            .configure_mesh()
+        mesh(&mut chart)
             .disable_y_mesh()
-            .light_line_style(TRANSPARENT)
-            .bold_line_style(GRID)
             .y_labels(0)
             .x_labels(8)
             .x_desc(x_label)
             .x_label_formatter(&|v| tick(*v))
-            .label_style(text(12))
-            .axis_desc_style(text(13))
             .draw()?;
         let k = series.len().max(1) as f64;
         let thickness = 0.8 / k;
@@ -629,13 +649,7 @@ pub fn horizontal_bars(title: &str, x_label: &str, series: &[&str], rows: &[BarR
             ))?;
         }
         if series.len() > 1 {
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::LowerRight)
-                .background_style(WHITE.mix(0.9))
-                .border_style(GRID)
-                .label_font(text(12))
-                .draw()?;
+            legend(&mut chart, SeriesLabelPosition::LowerRight, 12)?;
         }
         root.present()?;
     }
@@ -702,8 +716,8 @@ pub fn curve(curve: &Curve) -> Drawn {
     let y0 = if log_x { 0.0f64.max(y0).min(y_lo) } else { y0 };
     // Room above the data for the legend, one line per series (one series has none: the
     // page's caption names it), and for the labels of a spectrum's peaks.
-    let legend = curve.series.len() > 1;
-    let room = if legend {
+    let with_legend = curve.series.len() > 1;
+    let room = if with_legend {
         0.07 * curve.series.len() as f64
     } else {
         0.0
@@ -730,16 +744,11 @@ pub fn curve(curve: &Curve) -> Drawn {
                 (0.8, 10.0)
             };
             let mut chart = builder.build_cartesian_2d((x0..x1).log_scale(), y0..y1)?;
-            chart
-                .configure_mesh()
-                .light_line_style(TRANSPARENT)
-                .bold_line_style(GRID)
+            mesh(&mut chart)
                 .x_desc(curve.x_label.as_str())
                 .y_desc(curve.y_label.as_str())
                 .x_label_formatter(&|v| tick(*v))
                 .y_label_formatter(&y_tick)
-                .label_style(text(12))
-                .axis_desc_style(text(13))
                 .draw()?;
             for (i, points) in series.iter().enumerate() {
                 let colour = colour_of(i);
@@ -772,14 +781,8 @@ pub fn curve(curve: &Curve) -> Drawn {
                     )))?;
                 }
             }
-            if legend {
-                chart
-                    .configure_series_labels()
-                    .position(SeriesLabelPosition::UpperRight)
-                    .background_style(WHITE.mix(0.9))
-                    .border_style(GRID)
-                    .label_font(text(12))
-                    .draw()?;
+            if with_legend {
+                legend(&mut chart, SeriesLabelPosition::UpperRight, 12)?;
             }
         } else {
             let (x0, x1) = if x_lo.is_finite() && x_hi > x_lo {
@@ -788,17 +791,12 @@ pub fn curve(curve: &Curve) -> Drawn {
                 padded(x_lo, x_hi, 0.05)
             };
             let mut chart = builder.build_cartesian_2d(x0..x1, y0..y1)?;
-            chart
-                .configure_mesh()
-                .light_line_style(TRANSPARENT)
-                .bold_line_style(GRID)
+            mesh(&mut chart)
                 .x_desc(curve.x_label.as_str())
                 .y_desc(curve.y_label.as_str())
                 .x_labels(10)
                 .x_label_formatter(&|v| tick(*v))
                 .y_label_formatter(&y_tick)
-                .label_style(text(12))
-                .axis_desc_style(text(13))
                 .draw()?;
             if y0 < 0.0 && y1 > 0.0 {
                 chart.draw_series(LineSeries::new(
@@ -844,14 +842,8 @@ pub fn curve(curve: &Curve) -> Drawn {
                         });
                 }
             }
-            if legend {
-                chart
-                    .configure_series_labels()
-                    .position(SeriesLabelPosition::UpperRight)
-                    .background_style(WHITE.mix(0.9))
-                    .border_style(GRID)
-                    .label_font(text(11))
-                    .draw()?;
+            if with_legend {
+                legend(&mut chart, SeriesLabelPosition::UpperRight, 11)?;
             }
         }
         root.present()?;

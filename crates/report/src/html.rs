@@ -1,37 +1,13 @@
 //! The page's HTML: escaping, number formatting, tables and the page frame with its
 //! style sheet. Pure string building; the same input gives the same bytes.
 
-/// Text with `&`, `<`, `>`, `"` and `'` escaped.
-pub fn escape(text: &str) -> String {
-    let mut out = String::with_capacity(text.len());
-    for c in text.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&#39;"),
-            _ => out.push(c),
-        }
-    }
-    out
-}
+pub use rvtol_engine::report::escape_markup as escape;
 
-/// A figure as the text report writes it: 5 significant digits, "n/a" when absent or
-/// not finite.
+/// A figure as the text report writes it ([`rvtol_engine::report::format_sig`]: 5
+/// significant digits), "n/a" when absent or not finite.
 pub fn number(value: Option<f64>) -> String {
     match value {
-        Some(v) if v.is_finite() => {
-            if v == 0.0 {
-                return "0".into();
-            }
-            let magnitude = v.abs().log10().floor() as i32;
-            if !(-5..9).contains(&magnitude) {
-                return format!("{v:.4e}");
-            }
-            let decimals = (4 - magnitude).max(0) as usize;
-            format!("{v:.decimals$}")
-        }
+        Some(v) if v.is_finite() => rvtol_engine::report::format_sig(v),
         _ => "n/a".into(),
     }
 }

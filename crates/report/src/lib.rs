@@ -19,6 +19,8 @@ use serde_json::Value;
 
 use chart::{BarRow, Cumulative, Limits, Marker};
 use html::{escape, figure, interval, number, table};
+use rvtol_engine::allocation::spec::TargetFigure;
+use rvtol_engine::report::group_thousands as thousands;
 
 /// What the page is a record of.
 #[derive(Debug, Clone, Default)]
@@ -119,6 +121,25 @@ fn pair(value: Option<&Value>) -> (Option<f64>, Option<f64>) {
         Some(a) if a.len() == 2 => (a[0].as_f64(), a[1].as_f64()),
         _ => (None, None),
     }
+}
+
+/// A two-number interval with both ends.
+fn closed(value: Option<&Value>) -> Option<(f64, f64)> {
+    match pair(value) {
+        (Some(a), Some(b)) => Some((a, b)),
+        _ => None,
+    }
+}
+
+/// Sorts report entries by the number under `key`, largest first (missing or non-finite
+/// last).
+fn sort_descending(entries: &mut [&Value], key: &str) {
+    let of = |v: &Value| {
+        f(v, key)
+            .filter(|t| t.is_finite())
+            .unwrap_or(f64::NEG_INFINITY)
+    };
+    entries.sort_by(|a, b| of(b).total_cmp(&of(a)));
 }
 
 fn array<'v>(value: &'v Value, key: &str, what: &str) -> Result<&'v Vec<Value>, ReportError> {
@@ -252,19 +273,6 @@ fn record_section(report: &Report) -> String {
     let mut out = String::from("<section id=\"record\">\n<h2>Record</h2>\n");
     out.push_str(&table(&["", ""], &rows, &[]).replacen("<table>", "<table class=\"meta\">", 1));
     out.push_str("</section>\n");
-    out
-}
-
-/// 1234567 → "1,234,567".
-fn thousands(n: u64) -> String {
-    let digits = n.to_string();
-    let mut out = String::new();
-    for (i, c) in digits.chars().enumerate() {
-        if i > 0 && (digits.len() - i).is_multiple_of(3) {
-            out.push(',');
-        }
-        out.push(c);
-    }
     out
 }
 
@@ -558,23 +566,13 @@ fn sensitivity_section(report: &Value) -> Result<String, ReportError> {
             .and_then(Value::as_array)
             .map(|a| a.iter().collect())
             .unwrap_or_default();
-        indices.sort_by(|a, b| {
-            let key = |v: &Value| {
-                f(v, "total")
-                    .filter(|t| t.is_finite())
-                    .unwrap_or(f64::NEG_INFINITY)
-            };
-            key(b).total_cmp(&key(a))
-        });
+        sort_descending(&mut indices, "total");
         out.push_str("<div class=\"pair\">\n");
         if !indices.is_empty() {
             let rows: Vec<BarRow> = indices
                 .iter()
                 .map(|v| {
-                    let ci = |key: &str| match pair(v.get(key)) {
-                        (Some(a), Some(b)) => Some((a, b)),
-                        _ => None,
-                    };
+                    let ci = |key: &str| closed(v.get(key));
                     BarRow {
                         name: s(v, "input").unwrap_or("?").to_string(),
                         values: vec![
@@ -601,25 +599,12 @@ fn sensitivity_section(report: &Value) -> Result<String, ReportError> {
         }
         if let Some(effects) = output.get("shapley").and_then(Value::as_array) {
             let mut effects: Vec<&Value> = effects.iter().collect();
-            effects.sort_by(|a, b| {
-                let key = |v: &Value| {
-                    f(v, "effect")
-                        .filter(|t| t.is_finite())
-                        .unwrap_or(f64::NEG_INFINITY)
-                };
-                key(b).total_cmp(&key(a))
-            });
+            sort_descending(&mut effects, "effect");
             let rows: Vec<BarRow> = effects
                 .iter()
                 .map(|v| BarRow {
                     name: s(v, "input").unwrap_or("?").to_string(),
-                    values: vec![(
-                        f(v, "effect").unwrap_or(f64::NAN),
-                        match pair(v.get("ci")) {
-                            (Some(a), Some(b)) => Some((a, b)),
-                            _ => None,
-                        },
-                    )],
+                    values: vec![(f(v, "effect").unwrap_or(f64::NAN), closed(v.get("ci")))],
                 })
                 .collect();
             let svg = chart::horizontal_bars(
@@ -761,16 +746,16 @@ fn allocation_section(report: &Value) -> Result<String, ReportError> {
         .iter()
         .filter_map(|k| distribution(k))
         .collect();
-    let target_value = target
-        .split_whitespace()
-        .last()
-        .and_then(|v| v.parse::<f64>().ok());
-    // "p99.865 <= 1": the percentile's level and its limit.
-    let percentile_target = target
-        .trim_start()
-        .strip_prefix('p')
-        .and_then(|rest| rest.split_whitespace().next())
-        .and_then(|p| p.parse::<f64>().ok());
+    // A target on a value of the output (a percentile, the mean) is a line on the plot;
+    // one on a spread or an index is not.
+    let target_line = match rvtol_engine::allocation::spec::Target::parse(target) {
+        Ok(parsed) => match parsed.figure {
+            TargetFigure::Percentile(p) => Some((parsed.value, Some(p))),
+            TargetFigure::Mean => Some((parsed.value, None)),
+            _ => None,
+        },
+        Err(_) => None,
+    };
     if !lines.is_empty() {
         let label = if unit.is_empty() {
             output.to_string()
@@ -783,13 +768,11 @@ fn allocation_section(report: &Value) -> Result<String, ReportError> {
             &lines,
             &[],
             Limits::default(),
-            target_value
-                .filter(|_| percentile_target.is_some())
-                .map(|value| chart::Target {
-                    value,
-                    percent: percentile_target,
-                    label: format!("target {target}"),
-                }),
+            target_line.map(|(value, percent)| chart::Target {
+                value,
+                percent,
+                label: format!("target {target}"),
+            }),
         )?;
         out.push_str(&figure(
             &svg,

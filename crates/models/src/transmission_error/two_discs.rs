@@ -1266,9 +1266,6 @@ fn fill_heads_pair(
 /// Per-thread work state of the physical reading.
 #[derive(Debug, Default)]
 pub(super) struct TwoDiscScratch {
-    /// The FFT's columns (document 002's literal reading).
-    pub fft_re: Vec<f64>,
-    pub fft_im: Vec<f64>,
     /// Pin errors in lane order (see `physical_curve`).
     pub lane_radial: Vec<[f64; LANES]>,
     pub lane_tangential: Vec<[f64; LANES]>,
