@@ -24,7 +24,7 @@ use rvtol_engine::{
 };
 
 use crate::limits::{memory_budget, thread_pool, threads};
-use crate::output::{note, print, write_report};
+use crate::output::{note, print, write_bytes, write_report};
 use crate::{BadInput, Execution, Failed};
 
 fn bad_scenario(path: &Path, err: ScenarioError) -> anyhow::Error {
@@ -988,4 +988,215 @@ pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()>
         Some(out) => write_report(out, &text),
         None => print(&text),
     }
+}
+
+/// This build's identity in shard files: the version and the SHA-256 of the executable.
+/// Shards and their merge must come from one binary: another build may draw or evaluate
+/// differently in the last bits, and the merged report would not be the run's.
+fn build_identity() -> Result<String> {
+    use sha2::{Digest, Sha256};
+    let exe = std::env::current_exe()
+        .map_err(|err| BadInput(format!("cannot find this executable to identify it: {err}")))?;
+    let bytes = std::fs::read(&exe)
+        .map_err(|err| BadInput(format!("{}: cannot read: {err}", exe.display())))?;
+    let digest = Sha256::digest(&bytes);
+    let hex: String = digest[..8].iter().map(|b| format!("{b:02x}")).collect();
+    Ok(format!("rvtol {} sha256:{hex}", env!("CARGO_PKG_VERSION")))
+}
+
+/// `run --shard K/N --partial FILE`: computes shard K of N of the run and writes its
+/// partial result.
+pub fn run_shard(
+    scenario_path: &Path,
+    settings: (Option<u64>, Option<u64>, u64),
+    (shard, shards): (u64, u64),
+    partial_path: &Path,
+    execution: &Execution,
+) -> Result<()> {
+    let (scenario, text) = read(scenario_path)?;
+    let (samples, seed, exact_percentile_limit) = settings;
+    let settings = RunSettings {
+        samples: samples.unwrap_or(scenario.samples),
+        seed: seed.unwrap_or(scenario.seed),
+        exact_percentile_limit,
+    };
+    let build = build_identity()?;
+    let chunks = rvtol_engine::shard_chunks(settings.samples, shard, shards);
+    let threads = threads(execution.threads)?;
+    check_memory(memory::run(&scenario, &settings, threads), execution, "run")?;
+    let pool = thread_pool(threads)?;
+    let chunk_samples = |c: u64| (c * rvtol_engine::run::CHUNK_SIZE as u64).min(settings.samples);
+    let shard_samples = chunk_samples(chunks.end) - chunk_samples(chunks.start);
+    let bar = progress_bar(shard_samples, execution.quiet);
+    let partial = pool
+        .install(|| rvtol_engine::run_chunks(&scenario, settings, chunks.clone(), &|n| bar.inc(n)))
+        .map_err(|err| bad_scenario(scenario_path, err))?;
+    bar.finish_and_clear();
+    let header = rvtol_engine::shard::ShardHeader {
+        rvtol_version: env!("CARGO_PKG_VERSION").to_string(),
+        build,
+        scenario_fallback_name: fallback_name(scenario_path),
+        scenario_file: text,
+        samples: settings.samples,
+        seed: settings.seed,
+        exact_percentile_limit,
+        shard,
+        shards,
+        chunks: [chunks.start, chunks.end],
+    };
+    write_bytes(
+        partial_path,
+        &rvtol_engine::shard::encode(&header, &partial),
+    )?;
+    print(&format!(
+        "{}: shard {shard}/{shards} of {} ({} of {} samples, seed {}) written to {}\n",
+        scenario_path.display(),
+        scenario.name,
+        rvtol_engine::report::group_thousands(shard_samples),
+        rvtol_engine::report::group_thousands(settings.samples),
+        settings.seed,
+        partial_path.display()
+    ))
+}
+
+/// What `rvtol merge` makes of the shards besides the run's report.
+pub struct MergeArgs {
+    pub partials: Vec<std::path::PathBuf>,
+    pub missing: bool,
+    pub baseline: Option<std::path::PathBuf>,
+    pub check: Option<std::path::PathBuf>,
+    pub junit: Option<std::path::PathBuf>,
+    pub options: gate::CheckOptions,
+}
+
+/// `rvtol merge`: checks the shard files for coverage and identity and folds them into the
+/// run's report (or a baseline, or a check against one).
+pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Result<()> {
+    use rvtol_engine::shard;
+    let build = build_identity()?;
+    let mut files = Vec::with_capacity(args.partials.len());
+    for path in &args.partials {
+        let bytes = std::fs::read(path)
+            .map_err(|err| BadInput(format!("{}: cannot read: {err}", path.display())))?;
+        let file =
+            shard::decode(&bytes).map_err(|err| BadInput(format!("{}: {err}", path.display())))?;
+        files.push((path.display().to_string(), file));
+    }
+    let assembly = shard::assemble(files, &build).map_err(BadInput)?;
+    let header = assembly.header;
+    if args.missing {
+        return if assembly.missing.is_empty() {
+            Ok(())
+        } else {
+            print(&format!("{}\n", shard::index_list(&assembly.missing)))
+        };
+    }
+    if !assembly.missing.is_empty() {
+        let (noun, verb) = if assembly.missing.len() == 1 {
+            ("shard", "has")
+        } else {
+            ("shards", "have")
+        };
+        return Err(BadInput(format!(
+            "{noun} {} of {} {verb} no file: run them (rvtol run SCENARIO --shard K/{} --partial FILE) and merge again; merge --missing lists them",
+            shard::index_list(&assembly.missing),
+            header.shards,
+            header.shards
+        ))
+        .into());
+    }
+    let first = &args.partials[0];
+    let scenario = Scenario::from_json(&header.scenario_file, &header.scenario_fallback_name)
+        .map_err(|err| BadInput(format!("{}: its scenario: {err}", first.display())))?;
+    let settings = header.settings();
+    let partials = assembly.shards.into_iter().map(|f| f.partial).collect();
+    let pool = thread_pool(threads(execution.threads)?)?;
+    let result = rvtol_engine::merge(&scenario, settings, partials)
+        .map_err(|err| bad_scenario(first, err))?;
+    if let Some(path) = &args.baseline {
+        if settings.samples < 2 {
+            return Err(BadInput("a baseline needs at least 2 samples".into()).into());
+        }
+        let baseline = gate::baseline_of(
+            &scenario,
+            &header.scenario_file,
+            settings,
+            result,
+            execution.max_non_finite,
+        )
+        .map_err(|err| bad_scenario(first, err))?;
+        write_report(path, &baseline.to_json())?;
+        return print(&format!(
+            "{} shards: {} figures of {} ({} samples, seed {}) written to {}\n",
+            header.shards,
+            baseline.figures.len(),
+            baseline.scenario,
+            settings.samples,
+            settings.seed,
+            path.display()
+        ));
+    }
+    if let Some(baseline_path) = &args.check {
+        let baseline_text = std::fs::read_to_string(baseline_path)
+            .map_err(|err| BadInput(format!("{}: cannot read: {err}", baseline_path.display())))?;
+        let recorded = gate::Baseline::from_json(&baseline_text)
+            .map_err(|err| bad_scenario(baseline_path, err))?;
+        if (recorded.samples, recorded.exact_percentile_limit)
+            != (settings.samples, settings.exact_percentile_limit)
+        {
+            return Err(BadInput(format!(
+                "{}: a baseline of {} samples (exact percentiles up to {} values), the shards ran {} ({}): run the shards with --samples {} --exact-percentile-limit {}",
+                baseline_path.display(),
+                recorded.samples,
+                recorded.exact_percentile_limit,
+                settings.samples,
+                settings.exact_percentile_limit,
+                recorded.samples,
+                recorded.exact_percentile_limit
+            ))
+            .into());
+        }
+        let result = std::sync::Mutex::new(Some(result));
+        let report = pool
+            .install(|| {
+                gate::check_result(
+                    &scenario,
+                    &header.scenario_file,
+                    &recorded,
+                    settings.seed,
+                    execution.max_non_finite,
+                    &args.options,
+                    // The settings are the shards' (checked above): the check's run is
+                    // the merged one.
+                    &|_| {
+                        result
+                            .lock()
+                            .ok()
+                            .and_then(|mut r| r.take())
+                            .ok_or_else(|| ScenarioError::new("(merge)", "one run per check"))
+                    },
+                )
+            })
+            .map_err(|err| bad_scenario(baseline_path, err))?;
+        if let Some(junit) = &args.junit {
+            write_report(junit, &report.to_junit())?;
+        }
+        emit(to.json, || report.to_json(), || report.to_text())?;
+        return if report.passed {
+            Ok(())
+        } else {
+            Err(
+                Failed("figures moved beyond their baseline bands or requirements violated".into())
+                    .into(),
+            )
+        };
+    }
+    let failure = non_finite_failure(first, &scenario, &result, execution);
+    let report = pool.install(|| RunReport::new(&scenario, result));
+    let json = report.to_json();
+    emit(to.json, || json.clone(), || report.to_text())?;
+    if let Some(html) = to.html {
+        write_html(html, first, &scenario, rvtol_report::Kind::Run, &json)?;
+    }
+    failure
 }

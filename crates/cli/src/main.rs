@@ -18,6 +18,11 @@ use rvtol_engine::DEFAULT_EXACT_PERCENTILE_LIMIT;
 
 use crate::limits::{parse_count, parse_share, parse_size};
 
+/// `K/N` of `--shard`.
+fn parse_shard_arg(text: &str) -> Result<(u64, u64), String> {
+    rvtol_engine::shard::parse_shard(text)
+}
+
 /// Monte Carlo tolerance and deviation statistics for RV reducers.
 #[derive(Debug, Parser)]
 #[command(name = "rvtol", version, about, long_about = None)]
@@ -73,6 +78,53 @@ enum Command {
         /// a bounded-memory sketch beyond it.
         #[arg(long, value_name = "VALUES", default_value_t = DEFAULT_EXACT_PERCENTILE_LIMIT, value_parser = parse_count, allow_hyphen_values = true)]
         exact_percentile_limit: u64,
+        /// Compute only shard K of N (0 <= K < N, e.g. a job array's task index) and write
+        /// its partial result to --partial instead of a report; `rvtol merge` folds the N
+        /// partials into the run's report, byte for byte this command's without --shard.
+        #[arg(long, value_name = "K/N", value_parser = parse_shard_arg, requires = "partial", conflicts_with_all = ["json", "html", "samples_out"])]
+        shard: Option<(u64, u64)>,
+        /// The shard's partial result file (with --shard).
+        #[arg(long, value_name = "FILE", requires = "shard")]
+        partial: Option<PathBuf>,
+        #[command(flatten)]
+        execution: Execution,
+    },
+    /// Fold the partial results of a sharded run (`run --shard K/N --partial FILE`) into
+    /// the run's report, byte for byte that of `rvtol run` with the same seed and samples;
+    /// or into a baseline, or a check against one.
+    Merge {
+        /// The shards' partial result files, in any order (a shard may appear twice when
+        /// both files are identical, as after a rerun).
+        #[arg(required = true)]
+        partials: Vec<PathBuf>,
+        /// Print the indices of the shards that have no file as a job-array list (`1,4-6`,
+        /// the form of Slurm's --array) and exit; nothing when none is missing.
+        #[arg(long, conflicts_with_all = ["json", "html", "baseline", "check"])]
+        missing: bool,
+        /// Write the JSON report to PATH ("-" for stdout instead of the table).
+        #[arg(long, value_name = "PATH")]
+        json: Option<PathBuf>,
+        /// Write an HTML report to PATH: one self-contained page with the plots.
+        #[arg(long, value_name = "PATH", conflicts_with_all = ["baseline", "check"])]
+        html: Option<PathBuf>,
+        /// Write the baseline of the merged run to FILE (what `rvtol baseline` writes for
+        /// the same samples and seed) instead of the report.
+        #[arg(long, value_name = "FILE", conflicts_with_all = ["check", "json"])]
+        baseline: Option<PathBuf>,
+        /// Compare the merged run with a baseline as `rvtol check` does (run the shards
+        /// with the baseline's samples and exact-percentile limit): exit 1 when a figure
+        /// moved.
+        #[arg(long, value_name = "BASELINE")]
+        check: Option<PathBuf>,
+        /// With --check: write a JUnit XML report to PATH.
+        #[arg(long, value_name = "PATH", requires = "check")]
+        junit: Option<PathBuf>,
+        /// With --check: fail a figure only when it gets worse (as `check --one-sided`).
+        #[arg(long, requires = "check")]
+        one_sided: bool,
+        /// With --check: an absolute requirement (as `check --require`). Repeatable.
+        #[arg(long = "require", value_name = "REQUIREMENT", requires = "check")]
+        requirements: Vec<String>,
         #[command(flatten)]
         execution: Execution,
     },
@@ -312,11 +364,28 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             scenario,
             samples,
             seed,
+            exact_percentile_limit,
+            shard: Some(shard),
+            partial: Some(partial),
+            execution,
+            ..
+        } => run_shard(
+            &scenario,
+            (samples, seed, exact_percentile_limit),
+            shard,
+            &partial,
+            &execution,
+        ),
+        Command::Run {
+            scenario,
+            samples,
+            seed,
             json,
             html,
             samples_out,
             exact_percentile_limit,
             execution,
+            ..
         } => run(
             &scenario,
             samples,
@@ -327,6 +396,36 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
                 samples: samples_out.as_deref(),
             },
             exact_percentile_limit,
+            &execution,
+        ),
+        Command::Merge {
+            partials,
+            missing,
+            json,
+            html,
+            baseline,
+            check,
+            junit,
+            one_sided,
+            requirements,
+            execution,
+        } => merge(
+            MergeArgs {
+                partials,
+                missing,
+                baseline,
+                check,
+                junit,
+                options: rvtol_engine::gate::CheckOptions {
+                    one_sided,
+                    requirements,
+                },
+            },
+            Destinations {
+                json: json.as_deref(),
+                html: html.as_deref(),
+                samples: None,
+            },
             &execution,
         ),
         Command::Nominal { scenario, json } => nominal(&scenario, json.as_deref()),

@@ -30,6 +30,11 @@ const MAX_LINKS: usize = 40;
 
 /// Writes `contents` to `path` as the module documentation describes.
 pub fn write_report(path: &Path, contents: &str) -> Result<()> {
+    write_bytes(path, contents.as_bytes())
+}
+
+/// Writes `contents` to `path` as [`write_report`] does (a binary file: a shard's partial).
+pub fn write_bytes(path: &Path, contents: &[u8]) -> Result<()> {
     let target = resolve_links(path)?;
     match fs::metadata(&target) {
         Ok(metadata) => {
@@ -87,9 +92,9 @@ fn resolve_links(path: &Path) -> Result<PathBuf> {
 }
 
 /// Writes into an existing device or FIFO without creating, replacing or syncing it.
-fn write_through(path: &Path, contents: &str) -> io::Result<()> {
+fn write_through(path: &Path, contents: &[u8]) -> io::Result<()> {
     let mut file = OpenOptions::new().write(true).open(path)?;
-    file.write_all(contents.as_bytes())?;
+    file.write_all(contents)?;
     file.flush()
 }
 
@@ -115,7 +120,7 @@ fn temporary_prefix(name: &OsString) -> String {
 /// the new file gets `permissions` when given (those of the file it replaces).
 fn replace_atomically(
     path: &Path,
-    contents: &str,
+    contents: &[u8],
     permissions: Option<fs::Permissions>,
 ) -> Result<()> {
     let (directory, name) = split(path)?;
@@ -130,7 +135,7 @@ fn replace_atomically(
         if let Some(permissions) = permissions {
             file.set_permissions(permissions)?;
         }
-        file.write_all(contents.as_bytes())?;
+        file.write_all(contents)?;
         file.sync_all()?;
         fs::rename(&temporary, path)?;
         // Make the rename itself durable; a directory that cannot be synced is no error.

@@ -34,7 +34,7 @@ use statrs::distribution::{ContinuousCDF, Normal};
 use crate::allocation::spec::{Target, TargetFigure};
 use crate::report::escape_markup;
 use crate::run::{
-    check_non_finite, run, Distribution, RunSettings, DEFAULT_EXACT_PERCENTILE_LIMIT,
+    check_non_finite, run, Distribution, RunResult, RunSettings, DEFAULT_EXACT_PERCENTILE_LIMIT,
 };
 use crate::scenario::{OutputInfo, Scenario, ScenarioError};
 use crate::stats::{
@@ -309,7 +309,22 @@ pub fn measure_with_capability(
     max_non_finite: f64,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<(Vec<Figure>, Vec<Figure>), ScenarioError> {
-    let result = run(scenario, settings, progress)?;
+    figures_of(
+        scenario,
+        run(scenario, settings, progress)?,
+        z,
+        max_non_finite,
+    )
+}
+
+/// The gated figures and capability indices of [`measure_with_capability`] from a run's
+/// result (a run, or the merge of its shards).
+pub fn figures_of(
+    scenario: &Scenario,
+    result: RunResult,
+    z: f64,
+    max_non_finite: f64,
+) -> Result<(Vec<Figure>, Vec<Figure>), ScenarioError> {
     check_non_finite(scenario, &result, max_non_finite)?;
     let samples = result.samples;
     let two_sample = std::f64::consts::SQRT_2 * z;
@@ -477,8 +492,25 @@ pub fn baseline(
     max_non_finite: f64,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Baseline, ScenarioError> {
+    baseline_of(
+        scenario,
+        scenario_text,
+        settings,
+        run(scenario, settings, progress)?,
+        max_non_finite,
+    )
+}
+
+/// The baseline of [`baseline`] from the run's result (a run, or the merge of its shards).
+pub fn baseline_of(
+    scenario: &Scenario,
+    scenario_text: &str,
+    settings: RunSettings,
+    result: RunResult,
+    max_non_finite: f64,
+) -> Result<Baseline, ScenarioError> {
     let z = band_z(gated_figure_count(scenario));
-    let figures = measure(scenario, settings, z, max_non_finite, progress)?;
+    let figures = figures_of(scenario, result, z, max_non_finite)?.0;
     let RunSettings {
         samples,
         seed,
@@ -762,6 +794,28 @@ pub fn check_with(
     options: &CheckOptions,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<CheckReport, ScenarioError> {
+    check_result(
+        scenario,
+        scenario_text,
+        baseline,
+        seed,
+        max_non_finite,
+        options,
+        &|settings| run(scenario, settings, progress),
+    )
+}
+
+/// [`check_with`] on the result `result_of` gives for the run's settings (the baseline's
+/// samples and percentile limit, the seed `seed`): a run, or the merge of its shards.
+pub fn check_result(
+    scenario: &Scenario,
+    scenario_text: &str,
+    baseline: &Baseline,
+    seed: u64,
+    max_non_finite: f64,
+    options: &CheckOptions,
+    result_of: &dyn Fn(RunSettings) -> Result<RunResult, ScenarioError>,
+) -> Result<CheckReport, ScenarioError> {
     baseline.matches(scenario)?;
     let current: serde_json::Value = serde_json::from_str(scenario_text)
         .map_err(|err| ScenarioError::new("JSON syntax", err.to_string()))?;
@@ -788,8 +842,7 @@ pub fn check_with(
         seed,
         exact_percentile_limit: baseline.exact_percentile_limit,
     };
-    let (figures, capability) =
-        measure_with_capability(scenario, settings, z, max_non_finite, progress)?;
+    let (figures, capability) = figures_of(scenario, result_of(settings)?, z, max_non_finite)?;
     let comparisons: Vec<Comparison> = baseline
         .figures
         .iter()

@@ -18,11 +18,12 @@ pub mod screening;
 pub mod sensitivity;
 pub mod sensitivity_report;
 pub mod shapley;
+pub mod shard;
 pub mod stats;
 
 pub use report::{NominalReport, RunReport};
 pub use run::{
-    nominal, nominal_curves, run, sample_table, RunResult, RunSettings, SampleTable,
-    DEFAULT_EXACT_PERCENTILE_LIMIT,
+    merge, nominal, nominal_curves, run, run_chunks, sample_table, shard_chunks, RunPartial,
+    RunResult, RunSettings, SampleTable, DEFAULT_EXACT_PERCENTILE_LIMIT,
 };
 pub use scenario::{Scenario, ScenarioError};

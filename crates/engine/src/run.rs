@@ -11,6 +11,11 @@
 //!   multiset whose order the result does not depend on (the values kept for exact
 //!   percentiles).
 //! - Chunks run in waves of [`WAVE_CHUNKS`] so memory stays bounded for any sample count.
+//! - A run is the merge of partials ([`RunPartial`]: the statistics of a contiguous range
+//!   of chunks, their moments still per chunk): [`run`] merges its waves as they finish,
+//!   [`merge`] the partials of shards computed anywhere ([`run_chunks`] on the ranges of
+//!   [`shard_chunks`]); both fold through the same code in chunk order, so a sharded run
+//!   has the single run's bits for any shard count.
 //!
 //! Per chunk, block of [`BLOCK_ROWS`] rows after block: draw the inputs as a column-major
 //! block, hand each model its input columns (constants pre-filled once) and evaluate it
@@ -18,6 +23,8 @@
 //! Non-finite outputs are counted per output (with the first such sample) and kept out of
 //! the statistics; an output's qualifying indicator excludes samples or flags them
 //! non-conforming ([`OutputAccumulator`]).
+
+use std::ops::Range;
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -187,8 +194,8 @@ pub struct RunResult {
     pub outputs: Vec<OutputAccumulator>,
 }
 
-/// Per-thread scratch buffers and partial results.
-struct Partial<'a> {
+/// One worker's scratch buffers and the statistics of the chunks it ran.
+struct Worker<'a> {
     /// One column-major block of sampled inputs.
     columns: Vec<f64>,
     sampler: SamplerScratch,
@@ -243,9 +250,103 @@ impl<'a> Plan<'a> {
         }
     }
 
-    fn partial(&self) -> Partial<'a> {
+    /// The plan of a run (or of a shard of it): exact percentiles or a sketch as the run's
+    /// settings decide, the sketch's frame from the pilot chunk.
+    fn for_run(
+        scenario: &'a Scenario,
+        settings: RunSettings,
+        only_output: Option<usize>,
+    ) -> Result<Plan<'a>, ScenarioError> {
+        if settings.samples == 0 {
+            return Err(ScenarioError::new("samples", "must be at least 1"));
+        }
+        let kept_outputs = if only_output.is_some() {
+            1
+        } else {
+            scenario.outputs.len() as u64
+        };
+        let exact =
+            settings.samples.saturating_mul(kept_outputs.max(1)) <= settings.exact_percentile_limit;
+        let mut plan = Plan::new(scenario, settings, exact, only_output);
+        if !exact {
+            plan.sketch_frames = plan.pilot_sketch_frames()?;
+        }
+        Ok(plan)
+    }
+
+    /// The statistics of no chunk, starting at chunk `start`.
+    fn empty_partial(&self, start: u64) -> RunPartial {
+        RunPartial {
+            chunks: start..start,
+            percentile_method: if self.exact {
+                PercentileMethod::Exact
+            } else {
+                PercentileMethod::Sketch {
+                    relative_accuracy: SKETCH_RELATIVE_ACCURACY,
+                }
+            },
+            constraint_counts: self.scenario.input_space.new_constraint_counts(),
+            chunk_moments: Vec::new(),
+            outputs: (0..self.scenario.outputs.len())
+                .map(|o| OutputAccumulator::new(self.new_distribution(o)))
+                .collect(),
+        }
+    }
+
+    /// Runs the chunks of one wave in parallel and gathers them into one partial.
+    fn run_wave(
+        &self,
+        chunks: Range<u64>,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Result<RunPartial, ScenarioError> {
+        // About four splits per thread, from the chunks this wave really has (a short run
+        // with an expensive model must still reach every thread).
+        let min_chunks_per_split = ((chunks.end - chunks.start) as usize
+            / (4 * rayon::current_num_threads().max(1)))
+        .max(1);
+        let workers: Vec<Worker> = (chunks.start as usize..chunks.end as usize)
+            .into_par_iter()
+            // A few splits per thread: each split allocates its scratch buffers and
+            // statistics once. Grouping does not change any result (see the module
+            // comment).
+            .with_min_len(min_chunks_per_split)
+            .fold(
+                || self.worker(),
+                |mut worker, chunk| {
+                    let chunk = chunk as u64;
+                    self.run_chunk(&mut worker, chunk);
+                    progress(self.chunk_len(chunk) as u64);
+                    worker
+                },
+            )
+            .collect();
+        if let Some((_, err)) = workers
+            .iter()
+            .filter_map(|w| w.error.as_ref())
+            .min_by_key(|(chunk, _)| *chunk)
+        {
+            return Err(err.clone());
+        }
+        let mut partial = self.empty_partial(chunks.start);
+        partial.chunks = chunks;
+        for worker in workers {
+            absorb_counts(
+                &mut partial.outputs,
+                &mut partial.constraint_counts,
+                worker.outputs,
+                &worker.constraint_counts,
+            )?;
+            partial.chunk_moments.extend(worker.chunk_moments);
+        }
+        partial
+            .chunk_moments
+            .sort_unstable_by_key(|(chunk, _)| *chunk);
+        Ok(partial)
+    }
+
+    fn worker(&self) -> Worker<'a> {
         let n_out = self.scenario.outputs.len();
-        Partial {
+        Worker {
             columns: vec![0.0; BLOCK_ROWS * self.scenario.input_space.n_columns()],
             sampler: SamplerScratch::default(),
             evaluator: ChunkEvaluator::new(self.scenario),
@@ -281,17 +382,17 @@ impl<'a> Plan<'a> {
         (self.settings.samples - start).min(CHUNK_SIZE as u64) as usize
     }
 
-    /// Draws chunk `chunk` and evaluates the models into `partial.output_columns`;
+    /// Draws chunk `chunk` and evaluates the models into `worker.output_columns`;
     /// returns the number of samples, or records the error.
-    fn evaluate_chunk(&self, partial: &mut Partial, chunk: u64) -> Option<usize> {
-        self.evaluate_chunk_keeping(partial, chunk, None)
+    fn evaluate_chunk(&self, worker: &mut Worker, chunk: u64) -> Option<usize> {
+        self.evaluate_chunk_keeping(worker, chunk, None)
     }
 
     /// [`Plan::evaluate_chunk`], appending the drawn input rows (row-major) to `inputs`
     /// when given.
     fn evaluate_chunk_keeping(
         &self,
-        partial: &mut Partial,
+        worker: &mut Worker,
         chunk: u64,
         mut inputs: Option<&mut Vec<f64>>,
     ) -> Option<usize> {
@@ -302,14 +403,14 @@ impl<'a> Plan<'a> {
         rng.set_stream(chunk);
         for first in (0..m).step_by(BLOCK_ROWS) {
             let block = (m - first).min(BLOCK_ROWS);
-            let columns = &mut partial.columns[..block * n_columns];
+            let columns = &mut worker.columns[..block * n_columns];
             if let Err(err) = space.sample_columns_with(
                 &mut rng,
                 columns,
-                &mut partial.constraint_counts,
-                &mut partial.sampler,
+                &mut worker.constraint_counts,
+                &mut worker.sampler,
             ) {
-                partial.error = Some((chunk, err.into()));
+                worker.error = Some((chunk, err.into()));
                 return None;
             }
             if let Some(rows) = inputs.as_deref_mut() {
@@ -317,7 +418,7 @@ impl<'a> Plan<'a> {
                     rows.extend((0..n_columns).map(|c| columns[c * block + r]));
                 }
             }
-            partial.evaluator.evaluate_columns_at(columns, block, first);
+            worker.evaluator.evaluate_columns_at(columns, block, first);
         }
         Some(m)
     }
@@ -325,13 +426,13 @@ impl<'a> Plan<'a> {
     /// Centre and scale of each output's sketch: mean and standard deviation of the finite
     /// values of chunk 0, which every run draws identically whatever its thread count.
     fn pilot_sketch_frames(&self) -> Result<Vec<(f64, f64)>, ScenarioError> {
-        let mut partial = self.partial();
-        if self.evaluate_chunk(&mut partial, 0).is_none() {
-            let (_, err) = partial.error.expect("evaluate_chunk records its error");
+        let mut worker = self.worker();
+        if self.evaluate_chunk(&mut worker, 0).is_none() {
+            let (_, err) = worker.error.expect("evaluate_chunk records its error");
             return Err(err);
         }
         let m = self.chunk_len(0);
-        Ok(partial
+        Ok(worker
             .evaluator
             .output_columns
             .iter()
@@ -356,19 +457,19 @@ impl<'a> Plan<'a> {
             .collect())
     }
 
-    fn run_chunk(&self, partial: &mut Partial, chunk: u64) {
-        if partial.error.is_some() {
+    fn run_chunk(&self, worker: &mut Worker, chunk: u64) {
+        if worker.error.is_some() {
             return;
         }
-        let Some(m) = self.evaluate_chunk(partial, chunk) else {
+        let Some(m) = self.evaluate_chunk(worker, chunk) else {
             return;
         };
         let first_sample = chunk * CHUNK_SIZE as u64;
-        let columns = &partial.evaluator.output_columns;
+        let columns = &worker.evaluator.output_columns;
         let mut moments = Vec::with_capacity(columns.len());
         for (o, column) in columns.iter().enumerate() {
             let values = &column[..m];
-            let acc = &mut partial.outputs[o];
+            let acc = &mut worker.outputs[o];
             if self.indicator[o] {
                 // Events only: the moments follow from the counts at the end.
                 let finite = values.iter().filter(|v| v.is_finite()).count();
@@ -384,17 +485,17 @@ impl<'a> Plan<'a> {
             let kept: &[f64] = match flags {
                 Some((flags, ConditionEffect::Excluded)) => {
                     // Flagged samples have no value; any other non-finite one is lost data.
-                    partial.finite.clear();
+                    worker.finite.clear();
                     let mut excluded = 0;
                     for (&v, &flag) in values.iter().zip(flags) {
                         if is_set(flag) {
                             excluded += 1;
                         } else if v.is_finite() {
-                            partial.finite.push(v);
+                            worker.finite.push(v);
                         }
                     }
                     acc.excluded += excluded;
-                    let lost = m - excluded as usize - partial.finite.len();
+                    let lost = m - excluded as usize - worker.finite.len();
                     if lost > 0 {
                         let unflagged_non_finite =
                             values
@@ -403,17 +504,17 @@ impl<'a> Plan<'a> {
                                 .map(|(&v, &flag)| if is_set(flag) { 0.0 } else { v });
                         note_first_non_finite(acc, unflagged_non_finite, lost, first_sample);
                     }
-                    &partial.finite
+                    &worker.finite
                 }
                 _ => {
                     let finite = values.iter().filter(|v| v.is_finite()).count();
                     if finite < m {
                         note_non_finite(acc, values, m - finite, first_sample);
-                        partial.finite.clear();
-                        partial
+                        worker.finite.clear();
+                        worker
                             .finite
                             .extend(values.iter().copied().filter(|v| v.is_finite()));
-                        &partial.finite
+                        &worker.finite
                     } else {
                         values
                     }
@@ -469,7 +570,7 @@ impl<'a> Plan<'a> {
                 Distribution::Indicator | Distribution::Dropped => {}
             }
         }
-        partial.chunk_moments.push((chunk, moments));
+        worker.chunk_moments.push((chunk, moments));
     }
 }
 
@@ -521,23 +622,23 @@ pub fn sample_table(
     let n_inputs = scenario.input_space.n_columns();
     let n_outputs = scenario.outputs.len();
     let plan = Plan::new(scenario, settings, true, None);
-    let n_chunks = settings.samples.div_ceil(CHUNK_SIZE as u64);
+    let n_chunks = chunk_count(settings.samples);
     // Per chunk: its input rows and output rows, row-major.
     type Rows = (Vec<f64>, Vec<f64>);
     let chunks: Vec<Result<Rows, ScenarioError>> = (0..n_chunks)
         .into_par_iter()
         .map_init(
-            || plan.partial(),
-            |partial, chunk| {
+            || plan.worker(),
+            |worker, chunk| {
                 let mut inputs = Vec::with_capacity(plan.chunk_len(chunk) * n_inputs);
-                let Some(m) = plan.evaluate_chunk_keeping(partial, chunk, Some(&mut inputs)) else {
-                    let (_, err) = partial
+                let Some(m) = plan.evaluate_chunk_keeping(worker, chunk, Some(&mut inputs)) else {
+                    let (_, err) = worker
                         .error
                         .take()
                         .expect("evaluate_chunk records its error");
                     return Err(err);
                 };
-                let columns = &partial.evaluator.output_columns;
+                let columns = &worker.evaluator.output_columns;
                 let mut outputs = Vec::with_capacity(m * n_outputs);
                 for r in 0..m {
                     outputs.extend(columns.iter().map(|column| column[r]));
@@ -594,112 +695,278 @@ fn run_keeping(
     only_output: Option<usize>,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<RunResult, ScenarioError> {
-    if settings.samples == 0 {
-        return Err(ScenarioError::new("samples", "must be at least 1"));
+    let plan = Plan::for_run(scenario, settings, only_output)?;
+    let mut merger = RunMerger::new(scenario, settings);
+    for wave in waves(0..chunk_count(settings.samples)) {
+        merger.add(plan.run_wave(wave, progress)?)?;
     }
-    let kept_outputs = if only_output.is_some() {
-        1
-    } else {
-        scenario.outputs.len() as u64
-    };
-    let exact =
-        settings.samples.saturating_mul(kept_outputs.max(1)) <= settings.exact_percentile_limit;
-    let mut plan = Plan::new(scenario, settings, exact, only_output);
-    if !exact {
-        plan.sketch_frames = plan.pilot_sketch_frames()?;
-    }
-    let n_chunks = settings.samples.div_ceil(CHUNK_SIZE as u64);
-    let mut result = RunResult {
-        samples: settings.samples,
-        seed: settings.seed,
-        percentile_method: if exact {
-            PercentileMethod::Exact
-        } else {
-            PercentileMethod::Sketch {
-                relative_accuracy: SKETCH_RELATIVE_ACCURACY,
-            }
-        },
-        constraint_counts: scenario.input_space.new_constraint_counts(),
-        outputs: (0..scenario.outputs.len())
-            .map(|o| OutputAccumulator::new(plan.new_distribution(o)))
-            .collect(),
-    };
-    if exact {
-        for output in &mut result.outputs {
-            if let Distribution::Values(values) = &mut output.distribution {
-                values.reserve_exact(settings.samples as usize);
-            }
-        }
-    }
-    let mut wave_start = 0;
-    while wave_start < n_chunks {
-        let wave_end = (wave_start + WAVE_CHUNKS).min(n_chunks);
-        // About four splits per thread, from the chunks this wave really has (a short run
-        // with an expensive model must still reach every thread).
-        let min_chunks_per_split =
-            ((wave_end - wave_start) as usize / (4 * rayon::current_num_threads().max(1))).max(1);
-        let partials: Vec<Partial> = (wave_start as usize..wave_end as usize)
-            .into_par_iter()
-            // A few splits per thread: each split allocates its scratch buffers and
-            // partial statistics once. Grouping does not change any result (see the
-            // module comment).
-            .with_min_len(min_chunks_per_split)
-            .fold(
-                || plan.partial(),
-                |mut partial, chunk| {
-                    let chunk = chunk as u64;
-                    plan.run_chunk(&mut partial, chunk);
-                    progress(plan.chunk_len(chunk) as u64);
-                    partial
-                },
-            )
-            .collect();
-        merge_wave(&mut result, partials)?;
-        wave_start = wave_end;
-    }
-    for (output, info) in result.outputs.iter_mut().zip(&scenario.outputs) {
-        if info.kind == OutputKind::Indicator {
-            let n = settings.samples - output.non_finite;
-            output.moments = indicator_moments(output.nonzero, n);
-        }
-    }
-    Ok(result)
+    merger.finish()
 }
 
-fn merge_wave(result: &mut RunResult, partials: Vec<Partial>) -> Result<(), ScenarioError> {
-    if let Some((_, err)) = partials
-        .iter()
-        .filter_map(|p| p.error.as_ref())
-        .min_by_key(|(chunk, _)| *chunk)
-    {
-        return Err(err.clone());
+/// Number of chunks of a run of `samples` samples.
+pub fn chunk_count(samples: u64) -> u64 {
+    samples.div_ceil(CHUNK_SIZE as u64)
+}
+
+/// The chunks shard `shard` of `shards` computes: the `shard`-th of `shards` contiguous
+/// ranges as equal as whole chunks allow (empty when there are more shards than chunks).
+pub fn shard_chunks(samples: u64, shard: u64, shards: u64) -> Range<u64> {
+    let n = chunk_count(samples) as u128;
+    let at = |k: u64| (k as u128 * n / shards.max(1) as u128) as u64;
+    at(shard.min(shards))..at((shard + 1).min(shards))
+}
+
+/// Consecutive ranges of at most [`WAVE_CHUNKS`] chunks covering `chunks`.
+fn waves(chunks: Range<u64>) -> impl Iterator<Item = Range<u64>> {
+    (chunks.start..chunks.end)
+        .step_by(WAVE_CHUNKS as usize)
+        .map(move |start| start..(start + WAVE_CHUNKS).min(chunks.end))
+}
+
+/// The statistics of a contiguous range of a run's chunks: what one shard of a run
+/// computes ([`run_chunks`]) and [`merge`] folds into the run's result.
+///
+/// The moments stay per chunk (folding them per shard would change the last bits of the
+/// merged moments); everything else is an integer count or a multiset of values or sketch
+/// buckets, which merge exactly in any order.
+#[derive(Debug, Clone)]
+pub struct RunPartial {
+    /// The chunks covered.
+    pub chunks: Range<u64>,
+    /// Percentile method of the run (decided from the run's settings, not the range).
+    pub percentile_method: PercentileMethod,
+    /// Constraint rejection tally of these chunks.
+    pub constraint_counts: ConstraintCounts,
+    /// Each chunk's moments of every output, in chunk order.
+    pub chunk_moments: Vec<(u64, Vec<Moments>)>,
+    /// Counts and distribution of each output over these chunks; their `moments` are
+    /// empty (see `chunk_moments`).
+    pub outputs: Vec<OutputAccumulator>,
+}
+
+impl RunPartial {
+    /// Adds the statistics of the chunks that directly follow.
+    fn append(&mut self, next: RunPartial) -> Result<(), ScenarioError> {
+        if next.chunks.start != self.chunks.end {
+            return Err(ScenarioError::new(
+                "(run)",
+                format!(
+                    "chunks {}..{} do not follow chunks {}..{}",
+                    next.chunks.start, next.chunks.end, self.chunks.start, self.chunks.end
+                ),
+            ));
+        }
+        absorb_counts(
+            &mut self.outputs,
+            &mut self.constraint_counts,
+            next.outputs,
+            &next.constraint_counts,
+        )?;
+        self.chunk_moments.extend(next.chunk_moments);
+        self.chunks.end = next.chunks.end;
+        Ok(())
     }
-    let mut chunk_moments: Vec<(u64, Vec<Moments>)> = Vec::new();
+}
+
+/// Runs the chunks `chunks` of the run `settings` describes (a shard of it): the same
+/// draws and statistics as those chunks have in [`run`], whatever the thread count. Uses
+/// the current rayon thread pool. A run with a quantile sketch evaluates chunk 0 first (the
+/// sketch's frame) whatever the range.
+pub fn run_chunks(
+    scenario: &Scenario,
+    settings: RunSettings,
+    chunks: Range<u64>,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<RunPartial, ScenarioError> {
+    let n_chunks = chunk_count(settings.samples);
+    if chunks.start > chunks.end || chunks.end > n_chunks {
+        return Err(ScenarioError::new(
+            "(run)",
+            format!(
+                "chunks {}..{} are not within the run's {n_chunks} chunks",
+                chunks.start, chunks.end
+            ),
+        ));
+    }
+    let plan = Plan::for_run(scenario, settings, None)?;
+    let mut partial = plan.empty_partial(chunks.start);
+    for wave in waves(chunks) {
+        partial.append(plan.run_wave(wave, progress)?)?;
+    }
+    Ok(partial)
+}
+
+/// The result of the run `settings` describes, from partials that cover its chunks
+/// exactly once (in any order): bit for bit the result of [`run`], since the moments are
+/// folded in chunk order as the run folds them and every other statistic merges exactly.
+pub fn merge(
+    scenario: &Scenario,
+    settings: RunSettings,
+    mut partials: Vec<RunPartial>,
+) -> Result<RunResult, ScenarioError> {
+    partials.sort_by_key(|p| (p.chunks.start, p.chunks.end));
+    let mut merger = RunMerger::new(scenario, settings);
     for partial in partials {
-        result.constraint_counts.add(&partial.constraint_counts);
-        chunk_moments.extend(partial.chunk_moments);
-        for (output, part) in result.outputs.iter_mut().zip(partial.outputs) {
-            output.add_counts(&part);
-            match (&mut output.distribution, part.distribution) {
-                (Distribution::Values(all), Distribution::Values(part)) => {
-                    all.extend_from_slice(&part)
-                }
-                (Distribution::Indicator, Distribution::Indicator)
-                | (Distribution::Dropped, Distribution::Dropped) => {}
-                (
-                    Distribution::Sketch { sketch: all, .. },
-                    Distribution::Sketch { sketch: part, .. },
-                ) => all
-                    .merge(&part)
-                    .map_err(|err| ScenarioError::new("(run)", err.to_string()))?,
-                _ => unreachable!("one percentile method per run"),
-            }
+        merger.add(partial)?;
+    }
+    merger.finish()
+}
+
+/// Folds partials into a run's result in chunk order.
+struct RunMerger<'a> {
+    scenario: &'a Scenario,
+    settings: RunSettings,
+    result: Option<RunResult>,
+    next_chunk: u64,
+}
+
+impl<'a> RunMerger<'a> {
+    fn new(scenario: &'a Scenario, settings: RunSettings) -> RunMerger<'a> {
+        RunMerger {
+            scenario,
+            settings,
+            result: None,
+            next_chunk: 0,
         }
     }
-    chunk_moments.sort_unstable_by_key(|(chunk, _)| *chunk);
-    for (_, moments) in chunk_moments {
-        for (output, m) in result.outputs.iter_mut().zip(&moments) {
-            output.moments.merge(m);
+
+    /// Adds the partial of the chunks that follow those added so far.
+    fn add(&mut self, partial: RunPartial) -> Result<(), ScenarioError> {
+        let broken = |message: String| Err(ScenarioError::new("(merge)", message));
+        if partial.chunks.start != self.next_chunk {
+            return broken(if partial.chunks.start < self.next_chunk {
+                format!(
+                    "chunks {}..{} overlap chunks already merged (up to {})",
+                    partial.chunks.start, partial.chunks.end, self.next_chunk
+                )
+            } else {
+                format!(
+                    "chunks {}..{} are missing",
+                    self.next_chunk, partial.chunks.start
+                )
+            });
+        }
+        if partial.outputs.len() != self.scenario.outputs.len() {
+            return broken(format!(
+                "a partial has {} outputs, the scenario {}",
+                partial.outputs.len(),
+                self.scenario.outputs.len()
+            ));
+        }
+        let expected: Vec<u64> = partial.chunks.clone().collect();
+        let has: Vec<u64> = partial.chunk_moments.iter().map(|(c, _)| *c).collect();
+        let widths_match = partial
+            .chunk_moments
+            .iter()
+            .all(|(_, m)| m.len() == self.scenario.outputs.len());
+        if expected != has || !widths_match {
+            return broken(format!(
+                "the moments of chunks {}..{} are incomplete",
+                partial.chunks.start, partial.chunks.end
+            ));
+        }
+        self.next_chunk = partial.chunks.end;
+        let RunPartial {
+            percentile_method,
+            constraint_counts,
+            chunk_moments,
+            outputs,
+            ..
+        } = partial;
+        let result = match &mut self.result {
+            None => {
+                let mut outputs = outputs;
+                for output in &mut outputs {
+                    if let Distribution::Values(values) = &mut output.distribution {
+                        values.reserve_exact(self.settings.samples as usize - values.len());
+                    }
+                }
+                self.result.insert(RunResult {
+                    samples: self.settings.samples,
+                    seed: self.settings.seed,
+                    percentile_method,
+                    constraint_counts,
+                    outputs,
+                })
+            }
+            Some(result) => {
+                if result.percentile_method != percentile_method {
+                    return broken("the partials' percentile methods differ".into());
+                }
+                absorb_counts(
+                    &mut result.outputs,
+                    &mut result.constraint_counts,
+                    outputs,
+                    &constraint_counts,
+                )?;
+                result
+            }
+        };
+        for (_, moments) in chunk_moments {
+            for (output, m) in result.outputs.iter_mut().zip(&moments) {
+                output.moments.merge(m);
+            }
+        }
+        Ok(())
+    }
+
+    fn finish(self) -> Result<RunResult, ScenarioError> {
+        let n_chunks = chunk_count(self.settings.samples);
+        let Some(mut result) = self.result.filter(|_| self.next_chunk == n_chunks) else {
+            return Err(ScenarioError::new(
+                "(merge)",
+                format!(
+                    "chunks {}..{n_chunks} are missing",
+                    self.next_chunk.min(n_chunks)
+                ),
+            ));
+        };
+        for (output, info) in result.outputs.iter_mut().zip(&self.scenario.outputs) {
+            if info.kind == OutputKind::Indicator {
+                let n = self.settings.samples - output.non_finite;
+                output.moments = indicator_moments(output.nonzero, n);
+            }
+        }
+        Ok(result)
+    }
+}
+
+/// Adds `other`'s counts and distributions (not its moments) to `outputs`.
+fn absorb_counts(
+    outputs: &mut [OutputAccumulator],
+    constraint_counts: &mut ConstraintCounts,
+    other: Vec<OutputAccumulator>,
+    other_constraint_counts: &ConstraintCounts,
+) -> Result<(), ScenarioError> {
+    let mismatch = || ScenarioError::new("(merge)", "the partials' output statistics differ");
+    if outputs.len() != other.len() {
+        return Err(mismatch());
+    }
+    constraint_counts.add(other_constraint_counts);
+    for (output, part) in outputs.iter_mut().zip(other) {
+        output.add_counts(&part);
+        match (&mut output.distribution, part.distribution) {
+            (Distribution::Values(all), Distribution::Values(part)) => all.extend_from_slice(&part),
+            (Distribution::Indicator, Distribution::Indicator)
+            | (Distribution::Dropped, Distribution::Dropped) => {}
+            (
+                Distribution::Sketch {
+                    sketch: all,
+                    center,
+                    scale,
+                },
+                Distribution::Sketch {
+                    sketch: part,
+                    center: part_center,
+                    scale: part_scale,
+                },
+            ) if center.to_bits() == part_center.to_bits()
+                && scale.to_bits() == part_scale.to_bits() =>
+            {
+                all.merge(&part)
+                    .map_err(|err| ScenarioError::new("(merge)", err.to_string()))?
+            }
+            _ => return Err(mismatch()),
         }
     }
     Ok(())

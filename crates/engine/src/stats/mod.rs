@@ -27,4 +27,4 @@ pub use exact::{
 };
 pub use histogram::Histogram;
 pub use moments::{proportion_standard_error, Moments};
-pub use quantile_sketch::{QuantileSketch, SketchMismatch, StandardisedSketch};
+pub use quantile_sketch::{QuantileSketch, SketchMismatch, SketchParts, StandardisedSketch};

@@ -193,6 +193,20 @@ impl PartialEq for Store {
     }
 }
 
+/// A [`QuantileSketch`]'s counts as plain numbers: what a shard's partial result stores.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SketchParts {
+    /// Relative accuracy alpha.
+    pub relative_accuracy: f64,
+    /// Values counted as zero.
+    pub zero_count: u64,
+    /// Non-empty buckets of positive values as (index, count), increasing index.
+    pub positive: Vec<(i64, u64)>,
+    /// Non-empty buckets of negative values (by magnitude) as (index, count), increasing
+    /// index.
+    pub negative: Vec<(i64, u64)>,
+}
+
 /// Mergeable quantile sketch with relative accuracy `alpha` (see the module
 /// documentation for the index mapping and the guarantees).
 ///
@@ -419,6 +433,57 @@ impl QuantileSketch {
             .map(|(lo, hi, _)| bucket_representative(lo, hi))
     }
 
+    /// The sketch's counts as plain numbers, for storing it ([`SketchParts`]).
+    pub fn to_parts(&self) -> SketchParts {
+        SketchParts {
+            relative_accuracy: self.relative_accuracy,
+            zero_count: self.zero_count,
+            positive: self.positive.non_zero().collect(),
+            negative: self.negative.non_zero().collect(),
+        }
+    }
+
+    /// The sketch whose counts `parts` holds ([`QuantileSketch::to_parts`]): equal to the
+    /// sketch they were taken from. Fails on a relative accuracy outside the accepted
+    /// range, indices not increasing or outside the mapping's range, or zero counts.
+    pub fn from_parts(parts: &SketchParts) -> Result<QuantileSketch, String> {
+        let alpha = parts.relative_accuracy;
+        if !(MIN_RELATIVE_ACCURACY..=MAX_RELATIVE_ACCURACY).contains(&alpha) {
+            return Err(format!("relative accuracy {alpha} out of range"));
+        }
+        let mut sketch = QuantileSketch::new(alpha);
+        if sketch.relative_accuracy.to_bits() != alpha.to_bits() {
+            return Err(format!("relative accuracy {alpha} out of range"));
+        }
+        let (lowest, highest) = (sketch.lowest_index, sketch.highest_index);
+        let mut count = parts.zero_count;
+        for (buckets, store) in [
+            (&parts.positive, &mut sketch.positive),
+            (&parts.negative, &mut sketch.negative),
+        ] {
+            let (Some(&(first, _)), Some(&(last, _))) = (buckets.first(), buckets.last()) else {
+                continue;
+            };
+            let increasing = buckets.windows(2).all(|pair| pair[0].0 < pair[1].0);
+            if !increasing || first < lowest || last > highest {
+                return Err("bucket indices not increasing within the mapping's range".into());
+            }
+            if buckets.iter().any(|&(_, n)| n == 0) {
+                return Err("a stored bucket is empty".into());
+            }
+            store.grow_to_include(first, last, lowest, highest);
+            for &(index, n) in buckets {
+                store.counts[(index - store.offset) as usize] = n;
+                count = count
+                    .checked_add(n)
+                    .ok_or_else(|| "bucket counts overflow".to_string())?;
+            }
+        }
+        sketch.zero_count = parts.zero_count;
+        sketch.count = count;
+        Ok(sketch)
+    }
+
     /// Non-empty buckets as `(lo, hi, count)` in increasing value order:
     /// negative buckets first (lo and hi negative, lo < hi), then the zero
     /// bucket as `(0.0, 0.0, count)` if non-empty, then positive buckets.
@@ -440,6 +505,37 @@ impl QuantileSketch {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn parts_rebuild_the_same_sketch() {
+        let mut rng = XorShift(0x5eed);
+        let mut sketch = QuantileSketch::new(1e-3);
+        for _ in 0..10_000 {
+            sketch.insert(rng.wide_value());
+        }
+        sketch.insert(0.0);
+        sketch.insert(f64::INFINITY);
+        let parts = sketch.to_parts();
+        let rebuilt = QuantileSketch::from_parts(&parts).unwrap();
+        assert_eq!(rebuilt, sketch);
+        assert_eq!(rebuilt.count(), sketch.count());
+        for q in [0.0, 0.00135, 0.5, 0.99865, 1.0] {
+            assert_eq!(rebuilt.quantile(q), sketch.quantile(q));
+        }
+        // Damaged parts are refused, not trusted.
+        let mut unordered = parts.clone();
+        unordered.positive.reverse();
+        assert!(QuantileSketch::from_parts(&unordered).is_err());
+        let mut outside = parts.clone();
+        outside.negative.push((i64::MAX, 1));
+        assert!(QuantileSketch::from_parts(&outside).is_err());
+        let mut empty_bucket = parts.clone();
+        empty_bucket.positive[0].1 = 0;
+        assert!(QuantileSketch::from_parts(&empty_bucket).is_err());
+        let mut accuracy = parts;
+        accuracy.relative_accuracy = 0.7;
+        assert!(QuantileSketch::from_parts(&accuracy).is_err());
+    }
 
     /// xorshift64* (Vigna 2016), for test data only.
     struct XorShift(u64);

@@ -1,0 +1,356 @@
+//! Sharded runs (`run --shard K/N --partial`, `merge`): the merge of the shards is the run,
+//! byte for byte, for every shipped scenario, both percentile paths, any shard count
+//! (including shards with no chunk) and any order of the partials; and every file a merge
+//! must refuse is refused with one line and exit 2.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use common::{run_rvtol, scenario};
+use rand::seq::SliceRandom;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use rvtol_engine::report::RunReport;
+use rvtol_engine::run::{shard_chunks, CHUNK_SIZE};
+use rvtol_engine::shard::{decode, encode, ShardHeader};
+use rvtol_engine::{merge, run, run_chunks, RunSettings, Scenario};
+use rvtol_tests::scenario_path;
+
+/// Shard counts of the acceptance: one, a few, more than the chunks (empty shards).
+const SHARD_COUNTS: [u64; 5] = [1, 2, 3, 7, 64];
+
+/// Every shipped scenario.
+fn shipped() -> Vec<String> {
+    let mut files: Vec<String> = std::fs::read_dir(scenario_path(""))
+        .unwrap()
+        .map(|entry| entry.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|name| name.ends_with(".json"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 14, "{files:?}");
+    files
+}
+
+fn report(scenario: &Scenario, result: rvtol_engine::RunResult) -> String {
+    RunReport::new(scenario, result).to_json()
+}
+
+/// The report merged from `shards` shards, each partial written to bytes and read back
+/// (the file format is part of the path), merged in a shuffled order.
+fn sharded_report(
+    scenario: &Scenario,
+    settings: RunSettings,
+    shards: u64,
+    order_seed: u64,
+) -> String {
+    // The shards side by side, as on a cluster (each evaluates the pilot chunk alone).
+    let mut partials: Vec<_> = (0..shards)
+        .into_par_iter()
+        .map(|k| {
+            let chunks = shard_chunks(settings.samples, k, shards);
+            let partial = run_chunks(scenario, settings, chunks.clone(), &|_| {}).unwrap();
+            let header = ShardHeader {
+                rvtol_version: "test".into(),
+                build: "test".into(),
+                scenario_fallback_name: "test".into(),
+                scenario_file: String::new(),
+                samples: settings.samples,
+                seed: settings.seed,
+                exact_percentile_limit: settings.exact_percentile_limit,
+                shard: k,
+                shards,
+                chunks: [chunks.start, chunks.end],
+            };
+            let file = decode(&encode(&header, &partial)).unwrap();
+            assert_eq!(file.header, header);
+            file.partial
+        })
+        .collect();
+    partials.shuffle(&mut ChaCha8Rng::seed_from_u64(order_seed));
+    report(scenario, merge(scenario, settings, partials).unwrap())
+}
+
+#[test]
+fn every_shipped_scenario_merges_to_the_run_bit_for_bit() {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    // Three full chunks and a partial one: 64 shards leave most of them empty.
+    let samples = 3 * CHUNK_SIZE as u64 + 1234;
+    for file in shipped() {
+        let scenario = Scenario::load(&scenario_path(&file)).unwrap();
+        // Exact percentiles, then the sketch (a limit of 0 values forces it).
+        for exact_percentile_limit in [u64::MAX, 0] {
+            let settings = RunSettings {
+                samples,
+                seed: 7,
+                exact_percentile_limit,
+            };
+            let single =
+                pool.install(|| report(&scenario, run(&scenario, settings, &|_| {}).unwrap()));
+            for shards in SHARD_COUNTS {
+                let merged = pool.install(|| sharded_report(&scenario, settings, shards, shards));
+                assert!(
+                    merged == single,
+                    "{file}: {shards} shards, exact limit {exact_percentile_limit}: the merged report differs from the run's"
+                );
+            }
+        }
+    }
+}
+
+/// A merge of partials that do not cover the run, or overlap, is an error (the engine's own
+/// check, under the CLI's file checks).
+#[test]
+fn merge_refuses_gaps_and_overlaps() {
+    let scenario = Scenario::load(&scenario_path("rv20e-hysteresis.json")).unwrap();
+    let settings = RunSettings {
+        samples: 5 * CHUNK_SIZE as u64,
+        seed: 3,
+        exact_percentile_limit: u64::MAX,
+    };
+    let part = |a: u64, b: u64| run_chunks(&scenario, settings, a..b, &|_| {}).unwrap();
+    let gap = merge(&scenario, settings, vec![part(0, 2), part(3, 5)]).unwrap_err();
+    assert!(gap.to_string().contains("chunks 2..3 are missing"), "{gap}");
+    let overlap = merge(&scenario, settings, vec![part(0, 3), part(2, 5)]).unwrap_err();
+    assert!(overlap.to_string().contains("overlap"), "{overlap}");
+    let short = merge(&scenario, settings, vec![part(0, 4)]).unwrap_err();
+    assert!(
+        short.to_string().contains("chunks 4..5 are missing"),
+        "{short}"
+    );
+    assert!(run_chunks(&scenario, settings, 4..6, &|_| {}).is_err());
+}
+
+/// A directory of its own for one test's files, removed when dropped.
+struct Dir(PathBuf);
+
+impl Dir {
+    fn new(label: &str) -> Dir {
+        let dir = std::env::temp_dir().join(format!("rvtol-shard-{label}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        Dir(dir)
+    }
+    fn file(&self, name: &str) -> String {
+        self.0.join(name).display().to_string()
+    }
+}
+
+impl Drop for Dir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn ok(args: &[&str]) -> String {
+    let out = run_rvtol(args);
+    assert!(
+        out.status.success(),
+        "rvtol {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
+
+/// Runs `rvtol args`, expects exit 2 with one line on stderr containing `needle`.
+fn refused(args: &[&str], needle: &str) {
+    let out = run_rvtol(args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "rvtol {args:?}: {stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+    assert!(stderr.contains(needle), "expected {needle:?} in: {stderr}");
+}
+
+/// Writes shard `k` of `n` of `file` to `out`, with extra arguments.
+fn shard(file: &str, k: u64, n: u64, out: &str, extra: &[&str]) {
+    let shard = format!("{k}/{n}");
+    let mut args = vec!["run", file, "--shard", &shard, "--partial", out, "-q"];
+    args.extend_from_slice(extra);
+    ok(&args);
+}
+
+#[test]
+fn cli_merge_is_the_run_and_the_baseline() {
+    let dir = Dir::new("cli");
+    let file = scenario("rv20e-hysteresis.json");
+    for (label, extra) in [
+        ("exact", vec!["--samples", "30000"]),
+        (
+            "sketch",
+            vec!["--samples", "30000", "--exact-percentile-limit", "1000"],
+        ),
+    ] {
+        let full = dir.file(&format!("{label}-full.json"));
+        let mut args = vec!["run", &file, "--json", &full, "-q"];
+        args.extend_from_slice(&extra);
+        ok(&args);
+        let parts: Vec<String> = (0..3)
+            .map(|k| dir.file(&format!("{label}-{k}.part")))
+            .collect();
+        for (k, part) in parts.iter().enumerate() {
+            shard(&file, k as u64, 3, part, &extra);
+        }
+        let merged = dir.file(&format!("{label}-merged.json"));
+        ok(&["merge", &parts[2], &parts[0], &parts[1], "--json", &merged]);
+        assert_eq!(
+            std::fs::read(&full).unwrap(),
+            std::fs::read(&merged).unwrap(),
+            "{label}"
+        );
+        // A rerun shard given twice is accepted.
+        let again = dir.file(&format!("{label}-again.json"));
+        ok(&[
+            "merge", &parts[0], &parts[1], &parts[1], &parts[2], "--json", &again,
+        ]);
+        assert_eq!(
+            std::fs::read(&full).unwrap(),
+            std::fs::read(&again).unwrap()
+        );
+    }
+    // The baseline from the shards is the baseline of the run; a check of the shards
+    // against it passes.
+    let parts: Vec<String> = (0..3)
+        .map(|k| dir.file(&format!("exact-{k}.part")))
+        .collect();
+    let direct = dir.file("baseline-direct.json");
+    ok(&["baseline", &file, "--samples", "30000", "-o", &direct, "-q"]);
+    let merged = dir.file("baseline-merged.json");
+    ok(&[
+        "merge",
+        &parts[0],
+        &parts[1],
+        &parts[2],
+        "--baseline",
+        &merged,
+    ]);
+    assert_eq!(
+        std::fs::read(&direct).unwrap(),
+        std::fs::read(&merged).unwrap()
+    );
+    let report = ok(&["merge", &parts[0], &parts[1], &parts[2], "--check", &direct]);
+    assert!(report.contains("within their baseline bands"), "{report}");
+}
+
+/// Rewrites a shard file with `change` applied to its decoded header and partial (the
+/// checksum recomputed: a file another build or another run could have written).
+fn rewritten(
+    from: &str,
+    to: &str,
+    change: impl FnOnce(&mut ShardHeader, &mut rvtol_engine::RunPartial),
+) {
+    let mut file = decode(&std::fs::read(from).unwrap()).unwrap();
+    change(&mut file.header, &mut file.partial);
+    std::fs::write(to, encode(&file.header, &file.partial)).unwrap();
+}
+
+#[test]
+fn cli_merge_refuses_what_is_not_one_whole_run() {
+    let dir = Dir::new("refusals");
+    let file = scenario("rv20e-hysteresis.json");
+    let samples = ["--samples", "20000"];
+    let p: Vec<String> = (0..4).map(|k| dir.file(&format!("{k}.part"))).collect();
+    for (k, part) in p.iter().enumerate() {
+        shard(&file, k as u64, 4, part, &samples);
+    }
+    // A gap, and --missing listing it in job-array form.
+    refused(&["merge", &p[0], &p[3]], "shards 1,2 of 4 have no file");
+    assert_eq!(ok(&["merge", "--missing", &p[0], &p[3]]), "1,2\n");
+    assert_eq!(ok(&["merge", "--missing", &p[0], &p[1], &p[2], &p[3]]), "");
+    // A conflicting duplicate.
+    let conflict = dir.file("conflict.part");
+    rewritten(&p[1], &conflict, |_, partial| {
+        partial.outputs[0].below_lower += 1
+    });
+    refused(
+        &["merge", &p[0], &p[1], &conflict, &p[2], &p[3]],
+        "shard 1/4 is also in",
+    );
+    // Another scenario, other settings, another shard count, another build.
+    let foreign = dir.file("foreign.part");
+    shard(&scenario("rv20e-torsion.json"), 1, 4, &foreign, &samples);
+    refused(&["merge", &p[0], &foreign], "the scenario differs");
+    let seed = dir.file("seed.part");
+    shard(&file, 1, 4, &seed, &["--samples", "20000", "--seed", "99"]);
+    refused(
+        &["merge", &p[0], &seed],
+        "samples, seed or exact-percentile limit",
+    );
+    let count = dir.file("count.part");
+    shard(&file, 1, 3, &count, &samples);
+    refused(&["merge", &p[0], &count], "the shard count (3 against 4)");
+    let build = dir.file("build.part");
+    rewritten(&p[1], &build, |header, _| {
+        header.build = "rvtol 0.0.1 sha256:0".into()
+    });
+    refused(
+        &["merge", &p[0], &build, &p[2], &p[3]],
+        "computed by another build of rvtol",
+    );
+    // A chunk range that is not the shard's.
+    let range = dir.file("range.part");
+    rewritten(&p[1], &range, |header, _| header.shard = 2);
+    refused(
+        &["merge", &p[0], &range],
+        "does not cover the chunks that shard computes",
+    );
+    // Damaged files: truncated, a flipped byte, not a shard file at all, unreadable.
+    let bytes = std::fs::read(&p[1]).unwrap();
+    let truncated = dir.file("truncated.part");
+    std::fs::write(&truncated, &bytes[..bytes.len() / 2]).unwrap();
+    refused(&["merge", &p[0], &truncated], "damaged");
+    let flipped = dir.file("flipped.part");
+    let mut altered = bytes.clone();
+    let middle = altered.len() / 2;
+    altered[middle] ^= 1;
+    std::fs::write(&flipped, &altered).unwrap();
+    refused(
+        &["merge", &p[0], &flipped],
+        "damaged: its checksum does not match",
+    );
+    refused(
+        &["merge", &scenario("rv20e-hysteresis.json")],
+        "not a shard file of rvtol",
+    );
+    refused(&["merge", &dir.file("absent.part")], "cannot read");
+    // The whole set still merges.
+    ok(&[
+        "merge",
+        &p[3],
+        &p[2],
+        &p[1],
+        &p[0],
+        "--json",
+        &dir.file("whole.json"),
+    ]);
+    // Usage: --shard needs --partial and excludes the reports; K < N.
+    refused(&["run", &file, "--shard", "1/4"], "--partial");
+    refused(
+        &[
+            "run",
+            &file,
+            "--shard",
+            "4/4",
+            "--partial",
+            &dir.file("x.part"),
+        ],
+        "0 <= K < N",
+    );
+    refused(
+        &[
+            "run",
+            &file,
+            "--shard",
+            "0/4",
+            "--partial",
+            &dir.file("x.part"),
+            "--json",
+            "-",
+        ],
+        "cannot be used with",
+    );
+    assert!(!Path::new(&dir.file("x.part")).exists());
+}
