@@ -5,6 +5,7 @@
 
 mod common;
 
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use common::{run_rvtol, scenario};
@@ -13,8 +14,13 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use rvtol_engine::report::RunReport;
+use rvtol_engine::run::shard_range;
 use rvtol_engine::run::{shard_chunks, CHUNK_SIZE};
-use rvtol_engine::shard::{decode, encode, ShardHeader};
+use rvtol_engine::sensitivity::{merge_sobol, sobol_chunks, sobol_indices, SensitivitySettings};
+use rvtol_engine::shapley::{
+    merge_shapley, shapley_effects, shapley_partial, shapley_permutations, ShapleySettings,
+};
+use rvtol_engine::shard::{decode, encode, ShapleyShard, ShardCommand, ShardContent, ShardHeader};
 use rvtol_engine::{merge, run, run_chunks, RunSettings, Scenario};
 use rvtol_tests::scenario_path;
 
@@ -51,25 +57,46 @@ fn sharded_report(
         .map(|k| {
             let chunks = shard_chunks(settings.samples, k, shards);
             let partial = run_chunks(scenario, settings, chunks.clone(), &|_| {}).unwrap();
-            let header = ShardHeader {
-                rvtol_version: "test".into(),
-                build: "test".into(),
-                scenario_fallback_name: "test".into(),
-                scenario_file: String::new(),
-                samples: settings.samples,
-                seed: settings.seed,
-                exact_percentile_limit: settings.exact_percentile_limit,
-                shard: k,
+            let header = test_header(
+                ShardCommand::Run {
+                    samples: settings.samples,
+                    seed: settings.seed,
+                    exact_percentile_limit: settings.exact_percentile_limit,
+                },
+                k,
                 shards,
-                chunks: [chunks.start, chunks.end],
-            };
-            let file = decode(&encode(&header, &partial)).unwrap();
-            assert_eq!(file.header, header);
-            file.partial
+                chunks.clone(),
+            );
+            match round_trip(&header, ShardContent::Run(partial)) {
+                ShardContent::Run(partial) => partial,
+                ShardContent::Sensitivity { .. } => unreachable!(),
+            }
         })
         .collect();
     partials.shuffle(&mut ChaCha8Rng::seed_from_u64(order_seed));
     report(scenario, merge(scenario, settings, partials).unwrap())
+}
+
+/// A header for in-process partials (the CLI's build and scenario checks are tested
+/// through the binary below).
+fn test_header(command: ShardCommand, shard: u64, shards: u64, chunks: Range<u64>) -> ShardHeader {
+    ShardHeader {
+        rvtol_version: "test".into(),
+        build: "test".into(),
+        scenario_fallback_name: "test".into(),
+        scenario_file: String::new(),
+        command,
+        shard,
+        shards,
+        chunks: [chunks.start, chunks.end],
+    }
+}
+
+/// The content as a shard file carries it: written to bytes and read back.
+fn round_trip(header: &ShardHeader, content: ShardContent) -> ShardContent {
+    let file = decode(&encode(header, &content)).unwrap();
+    assert_eq!(&file.header, header);
+    file.content
 }
 
 #[test]
@@ -99,6 +126,144 @@ fn every_shipped_scenario_merges_to_the_run_bit_for_bit() {
                 );
             }
         }
+    }
+}
+
+/// Sobol' indices (row and block bootstrap) and Shapley effects merged from 1, 2, 3, 7 and
+/// 64 shards in shuffled order are those of one process, bit for bit.
+#[test]
+fn sensitivity_merges_to_the_analysis_bit_for_bit() {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    // Two full chunks and a partial one.
+    let samples = 2 * CHUNK_SIZE as u64 + 1808;
+    for file in [
+        "ishigami.json",
+        "sobol-g.json",
+        "rv20e-hysteresis.json",
+        "linear-stack-correlated.json",
+        "shapley-linear-gaussian.json",
+    ] {
+        let scenario = Scenario::load(&scenario_path(file)).unwrap();
+        // The row bootstrap, then the block bootstrap (a limit of 0 values forces it).
+        for row_bootstrap_limit in [u64::MAX, 0] {
+            let settings = SensitivitySettings {
+                base_samples: samples,
+                seed: 11,
+                bootstrap: 200,
+                confidence: 0.95,
+                row_bootstrap_limit,
+            };
+            let single = pool
+                .install(|| format!("{:?}", sobol_indices(&scenario, settings, &|_| {}).unwrap()));
+            for shards in SHARD_COUNTS {
+                let mut partials: Vec<_> = pool.install(|| {
+                    (0..shards)
+                        .into_par_iter()
+                        .map(|k| {
+                            let chunks = shard_chunks(samples, k, shards);
+                            let sobol =
+                                sobol_chunks(&scenario, settings, chunks.clone(), &|_| {}).unwrap();
+                            let header = test_header(
+                                ShardCommand::Sensitivity {
+                                    samples,
+                                    seed: 11,
+                                    bootstrap: 200,
+                                    row_bootstrap_limit,
+                                    shapley: None,
+                                },
+                                k,
+                                shards,
+                                chunks,
+                            );
+                            match round_trip(
+                                &header,
+                                ShardContent::Sensitivity {
+                                    sobol,
+                                    shapley: None,
+                                },
+                            ) {
+                                ShardContent::Sensitivity { sobol, .. } => sobol,
+                                ShardContent::Run(_) => unreachable!(),
+                            }
+                        })
+                        .collect()
+                });
+                partials.shuffle(&mut ChaCha8Rng::seed_from_u64(shards));
+                let merged = pool.install(|| {
+                    format!("{:?}", merge_sobol(&scenario, settings, partials).unwrap())
+                });
+                assert!(
+                    merged == single,
+                    "{file}: {shards} shards, row limit {row_bootstrap_limit}: the merged indices differ"
+                );
+            }
+        }
+    }
+    // Shapley effects: 120 permutations of the five-player Gaussian scenario.
+    let scenario = Scenario::load(&scenario_path("shapley-linear-gaussian.json")).unwrap();
+    let settings = ShapleySettings {
+        permutations: 120,
+        outer: 64,
+        inner: 3,
+        seed: 5,
+    };
+    let single = pool.install(|| format!("{:?}", shapley_effects(&scenario, settings).unwrap()));
+    let total = shapley_permutations(&scenario, settings).unwrap();
+    for shards in SHARD_COUNTS.into_iter().chain([total + 3]) {
+        let mut partials: Vec<_> = pool.install(|| {
+            (0..shards)
+                .into_par_iter()
+                .map(|k| {
+                    let range = shard_range(total, k, shards);
+                    let partial = shapley_partial(&scenario, settings, range.clone()).unwrap();
+                    let header = test_header(
+                        ShardCommand::Sensitivity {
+                            samples: 2,
+                            seed: 5,
+                            bootstrap: 2,
+                            row_bootstrap_limit: 0,
+                            shapley: Some(ShapleyShard {
+                                budget: 120,
+                                outer: 64,
+                                permutations: total,
+                                range: [range.start, range.end],
+                            }),
+                        },
+                        k,
+                        shards,
+                        0..0,
+                    );
+                    let sobol = rvtol_engine::sensitivity::SobolPartial {
+                        chunks: 0..0,
+                        values: rvtol_engine::sensitivity::SobolChunks::Rows(Vec::new()),
+                    };
+                    match round_trip(
+                        &header,
+                        ShardContent::Sensitivity {
+                            sobol,
+                            shapley: Some(partial),
+                        },
+                    ) {
+                        ShardContent::Sensitivity { shapley, .. } => shapley.unwrap(),
+                        ShardContent::Run(_) => unreachable!(),
+                    }
+                })
+                .collect()
+        });
+        partials.shuffle(&mut ChaCha8Rng::seed_from_u64(shards));
+        let merged = pool.install(|| {
+            format!(
+                "{:?}",
+                merge_shapley(&scenario, settings, partials).unwrap()
+            )
+        });
+        assert!(
+            merged == single,
+            "{shards} shards: the merged Shapley effects differ"
+        );
     }
 }
 
@@ -237,14 +402,10 @@ fn cli_merge_is_the_run_and_the_baseline() {
 
 /// Rewrites a shard file with `change` applied to its decoded header and partial (the
 /// checksum recomputed: a file another build or another run could have written).
-fn rewritten(
-    from: &str,
-    to: &str,
-    change: impl FnOnce(&mut ShardHeader, &mut rvtol_engine::RunPartial),
-) {
+fn rewritten(from: &str, to: &str, change: impl FnOnce(&mut ShardHeader, &mut ShardContent)) {
     let mut file = decode(&std::fs::read(from).unwrap()).unwrap();
-    change(&mut file.header, &mut file.partial);
-    std::fs::write(to, encode(&file.header, &file.partial)).unwrap();
+    change(&mut file.header, &mut file.content);
+    std::fs::write(to, encode(&file.header, &file.content)).unwrap();
 }
 
 #[test]
@@ -262,8 +423,10 @@ fn cli_merge_refuses_what_is_not_one_whole_run() {
     assert_eq!(ok(&["merge", "--missing", &p[0], &p[1], &p[2], &p[3]]), "");
     // A conflicting duplicate.
     let conflict = dir.file("conflict.part");
-    rewritten(&p[1], &conflict, |_, partial| {
-        partial.outputs[0].below_lower += 1
+    rewritten(&p[1], &conflict, |_, content| {
+        if let ShardContent::Run(partial) = content {
+            partial.outputs[0].below_lower += 1;
+        }
     });
     refused(
         &["merge", &p[0], &p[1], &conflict, &p[2], &p[3]],
@@ -272,16 +435,13 @@ fn cli_merge_refuses_what_is_not_one_whole_run() {
     // Another scenario, other settings, another shard count, another build.
     let foreign = dir.file("foreign.part");
     shard(&scenario("rv20e-torsion.json"), 1, 4, &foreign, &samples);
-    refused(&["merge", &p[0], &foreign], "the scenario differs");
+    refused(&["merge", &p[0], &foreign], "the scenario differs from");
     let seed = dir.file("seed.part");
     shard(&file, 1, 4, &seed, &["--samples", "20000", "--seed", "99"]);
-    refused(
-        &["merge", &p[0], &seed],
-        "samples, seed or exact-percentile limit",
-    );
+    refused(&["merge", &p[0], &seed], "the settings differ from");
     let count = dir.file("count.part");
     shard(&file, 1, 3, &count, &samples);
-    refused(&["merge", &p[0], &count], "the shard count (3 against 4)");
+    refused(&["merge", &p[0], &count], "the shard count differs from");
     let build = dir.file("build.part");
     rewritten(&p[1], &build, |header, _| {
         header.build = "rvtol 0.0.1 sha256:0".into()
@@ -295,7 +455,7 @@ fn cli_merge_refuses_what_is_not_one_whole_run() {
     rewritten(&p[1], &range, |header, _| header.shard = 2);
     refused(
         &["merge", &p[0], &range],
-        "does not cover the chunks that shard computes",
+        "does not cover what that shard computes",
     );
     // Damaged files: truncated, a flipped byte, not a shard file at all, unreadable.
     let bytes = std::fs::read(&p[1]).unwrap();
@@ -353,4 +513,86 @@ fn cli_merge_refuses_what_is_not_one_whole_run() {
         "cannot be used with",
     );
     assert!(!Path::new(&dir.file("x.part")).exists());
+}
+
+#[test]
+fn cli_sensitivity_merge_is_the_analysis() {
+    let dir = Dir::new("sensitivity");
+    let file = scenario("shapley-linear-gaussian.json");
+    let options = [
+        "--samples",
+        "12000",
+        "--bootstrap",
+        "100",
+        "--shapley",
+        "--permutations",
+        "120",
+        "--outer",
+        "64",
+    ];
+    let full = dir.file("full.json");
+    let mut args = vec!["sensitivity", &file, "--json", &full, "-q"];
+    args.extend_from_slice(&options);
+    ok(&args);
+    let parts: Vec<String> = (0..4).map(|k| dir.file(&format!("{k}.part"))).collect();
+    for (k, part) in parts.iter().enumerate() {
+        let shard = format!("{k}/4");
+        let mut args = vec![
+            "sensitivity",
+            &file,
+            "--shard",
+            &shard,
+            "--partial",
+            part,
+            "-q",
+        ];
+        args.extend_from_slice(&options);
+        ok(&args);
+    }
+    let merged = dir.file("merged.json");
+    ok(&[
+        "merge", &parts[3], &parts[1], &parts[0], &parts[2], "--json", &merged,
+    ]);
+    assert_eq!(
+        std::fs::read(&full).unwrap(),
+        std::fs::read(&merged).unwrap()
+    );
+    // A run's shard does not belong with them; a baseline needs a run's shards.
+    let run_part = dir.file("run.part");
+    shard(&file, 1, 4, &run_part, &["--samples", "12000"]);
+    refused(&["merge", &parts[0], &run_part], "the command differs from");
+    refused(
+        &[
+            "merge",
+            &parts[0],
+            &parts[1],
+            &parts[2],
+            &parts[3],
+            "--baseline",
+            &dir.file("b.json"),
+        ],
+        "take the shards of a run",
+    );
+    // Other Shapley settings are another analysis.
+    let other = dir.file("other.part");
+    let mut args = vec![
+        "sensitivity",
+        &file,
+        "--shard",
+        "1/4",
+        "--partial",
+        &other,
+        "-q",
+    ];
+    args.extend_from_slice(&options[..7]);
+    args.extend_from_slice(&["--outer", "32"]);
+    ok(&args);
+    refused(
+        &["merge", &parts[0], &other],
+        "Shapley permutations 120 outer 32 against",
+    );
+    refused(
+        &["merge", &parts[0], &parts[2], &parts[3]],
+        "shard 1 of 4 has no file: run them (rvtol sensitivity",
+    );
 }

@@ -344,6 +344,37 @@ pub fn sensitivity(
     execution: &Execution,
 ) -> Result<()> {
     let scenario = load(path)?;
+    let settings = sensitivity_settings(&scenario, &args)?;
+    let threads = threads(execution.threads)?;
+    check_memory(
+        memory::sensitivity(&scenario, &settings, threads),
+        execution,
+        "sensitivity",
+    )?;
+    let pool = thread_pool(threads)?;
+    let bar = progress_bar(args.samples, execution.quiet);
+    let outputs = pool
+        .install(|| sobol_indices(&scenario, settings, &|n| bar.inc(n)))
+        .map_err(|err| bad_scenario(path, err))?;
+    bar.finish_and_clear();
+    let shapley = if args.shapley {
+        Some(
+            pool.install(|| shapley_effects(&scenario, shapley_settings(&args, settings.seed)))
+                .map_err(|err| bad_scenario(path, err))?,
+        )
+    } else {
+        None
+    };
+    finish_sensitivity(
+        path, &scenario, settings, outputs, shapley, to, execution, &pool,
+    )
+}
+
+/// The analysis' settings from the command line, checked.
+fn sensitivity_settings(
+    scenario: &Scenario,
+    args: &SensitivityArgs,
+) -> Result<SensitivitySettings> {
     if args.samples < 2 {
         return Err(BadInput("--samples: sensitivity needs at least 2 base samples".into()).into());
     }
@@ -357,67 +388,62 @@ pub fn sensitivity(
         ))
         .into());
     }
-    let settings = SensitivitySettings {
+    Ok(SensitivitySettings {
         base_samples: args.samples,
         seed: args.seed.unwrap_or(scenario.seed),
         bootstrap: args.bootstrap as usize,
         confidence: 0.95,
         row_bootstrap_limit: args.row_bootstrap_limit,
-    };
-    let threads = threads(execution.threads)?;
-    check_memory(
-        memory::sensitivity(&scenario, &settings, threads),
-        execution,
-        "sensitivity",
-    )?;
-    let pool = thread_pool(threads)?;
-    let bar = progress_bar(args.samples, execution.quiet);
-    let outputs = pool
-        .install(|| sobol_indices(&scenario, settings, &|n| bar.inc(n)))
-        .map_err(|err| bad_scenario(path, err))?;
-    bar.finish_and_clear();
+    })
+}
+
+fn shapley_settings(args: &SensitivityArgs, seed: u64) -> ShapleySettings {
+    ShapleySettings {
+        permutations: args.permutations as usize,
+        outer: args.outer as usize,
+        inner: 3,
+        seed,
+    }
+}
+
+/// The screening, the report and its files, and the check of the rows lost to non-finite
+/// values: what `sensitivity` and the merge of its shards share.
+#[allow(clippy::too_many_arguments)]
+fn finish_sensitivity(
+    path: &Path,
+    scenario: &Scenario,
+    settings: SensitivitySettings,
+    outputs: Vec<rvtol_engine::sensitivity::OutputSensitivity>,
+    shapley: Option<Vec<(String, Vec<rvtol_engine::shapley::ShapleyEffect>)>>,
+    to: Destinations<'_>,
+    execution: &Execution,
+    pool: &rayon::ThreadPool,
+) -> Result<()> {
     let screening = pool
         .install(|| {
             screening(
-                &scenario,
-                &shapley_players(&scenario),
-                args.samples.min(65_536),
+                scenario,
+                &shapley_players(scenario),
+                settings.base_samples.min(65_536),
                 settings.seed,
             )
         })
         .map_err(|err| bad_scenario(path, err))?;
-    let mut report = SensitivityReport::new(&scenario, settings, outputs).with_screening(screening);
-    if args.shapley {
-        let effects = pool
-            .install(|| {
-                shapley_effects(
-                    &scenario,
-                    ShapleySettings {
-                        permutations: args.permutations as usize,
-                        outer: args.outer as usize,
-                        inner: 3,
-                        seed: settings.seed,
-                    },
-                )
-            })
-            .map_err(|err| bad_scenario(path, err))?;
+    let mut report = SensitivityReport::new(scenario, settings, outputs).with_screening(screening);
+    if let Some(effects) = shapley {
         report = report.with_shapley(effects);
     }
     let json = report.to_json();
     emit(to.json, || json.clone(), || report.to_text())?;
     if let Some(html) = to.html {
-        write_html(
-            html,
-            path,
-            &scenario,
-            rvtol_report::Kind::Sensitivity,
-            &json,
-        )?;
+        write_html(html, path, scenario, rvtol_report::Kind::Sensitivity, &json)?;
     }
     let lost: Vec<String> = report
         .outputs
         .iter()
-        .filter(|o| o.non_finite_rows as f64 > execution.max_non_finite * args.samples as f64)
+        .filter(|o| {
+            o.non_finite_rows as f64 > execution.max_non_finite * settings.base_samples as f64
+        })
         .map(|o| format!("{} ({} rows)", o.name, o.non_finite_rows))
         .collect();
     if lost.is_empty() {
@@ -431,6 +457,94 @@ pub fn sensitivity(
         ))
         .into())
     }
+}
+
+/// `sensitivity --shard K/N --partial FILE`: the model values of shard K of N of the
+/// matrices and, with `--shapley`, of its share of the permutations.
+pub fn sensitivity_shard(
+    path: &Path,
+    args: SensitivityArgs,
+    (shard, shards): (u64, u64),
+    partial_path: &Path,
+    execution: &Execution,
+) -> Result<()> {
+    use rvtol_engine::shard::{ShapleyShard, ShardCommand, ShardContent, ShardHeader};
+    let (scenario, text) = read(path)?;
+    let settings = sensitivity_settings(&scenario, &args)?;
+    let build = build_identity()?;
+    let threads = threads(execution.threads)?;
+    check_memory(
+        memory::sensitivity(&scenario, &settings, threads),
+        execution,
+        "sensitivity",
+    )?;
+    let pool = thread_pool(threads)?;
+    let chunks = rvtol_engine::shard_chunks(settings.base_samples, shard, shards);
+    let chunk_samples =
+        |c: u64| (c * rvtol_engine::run::CHUNK_SIZE as u64).min(settings.base_samples);
+    let bar = progress_bar(
+        chunk_samples(chunks.end) - chunk_samples(chunks.start),
+        execution.quiet,
+    );
+    let sobol = pool
+        .install(|| {
+            rvtol_engine::sensitivity::sobol_chunks(&scenario, settings, chunks.clone(), &|n| {
+                bar.inc(n)
+            })
+        })
+        .map_err(|err| bad_scenario(path, err))?;
+    bar.finish_and_clear();
+    let (shapley, shapley_shard) = if args.shapley {
+        let shapley_settings = shapley_settings(&args, settings.seed);
+        let total = rvtol_engine::shapley::shapley_permutations(&scenario, shapley_settings)
+            .map_err(|err| bad_scenario(path, err))?;
+        let range = rvtol_engine::run::shard_range(total, shard, shards);
+        let partial = pool
+            .install(|| {
+                rvtol_engine::shapley::shapley_partial(&scenario, shapley_settings, range.clone())
+            })
+            .map_err(|err| bad_scenario(path, err))?;
+        (
+            Some(partial),
+            Some(ShapleyShard {
+                budget: args.permutations,
+                outer: args.outer,
+                permutations: total,
+                range: [range.start, range.end],
+            }),
+        )
+    } else {
+        (None, None)
+    };
+    let header = ShardHeader {
+        rvtol_version: env!("CARGO_PKG_VERSION").to_string(),
+        build,
+        scenario_fallback_name: fallback_name(path),
+        scenario_file: text,
+        command: ShardCommand::Sensitivity {
+            samples: settings.base_samples,
+            seed: settings.seed,
+            bootstrap: args.bootstrap,
+            row_bootstrap_limit: args.row_bootstrap_limit,
+            shapley: shapley_shard,
+        },
+        shard,
+        shards,
+        chunks: [chunks.start, chunks.end],
+    };
+    write_bytes(
+        partial_path,
+        &rvtol_engine::shard::encode(&header, &ShardContent::Sensitivity { sobol, shapley }),
+    )?;
+    print(&format!(
+        "{}: sensitivity shard {shard}/{shards} of {} ({} of {} base samples, seed {}) written to {}\n",
+        path.display(),
+        scenario.name,
+        rvtol_engine::report::group_thousands(chunk_samples(chunks.end) - chunk_samples(chunks.start)),
+        rvtol_engine::report::group_thousands(settings.base_samples),
+        settings.seed,
+        partial_path.display()
+    ))
 }
 
 pub fn baseline(
@@ -1037,16 +1151,18 @@ pub fn run_shard(
         build,
         scenario_fallback_name: fallback_name(scenario_path),
         scenario_file: text,
-        samples: settings.samples,
-        seed: settings.seed,
-        exact_percentile_limit,
+        command: rvtol_engine::shard::ShardCommand::Run {
+            samples: settings.samples,
+            seed: settings.seed,
+            exact_percentile_limit,
+        },
         shard,
         shards,
         chunks: [chunks.start, chunks.end],
     };
     write_bytes(
         partial_path,
-        &rvtol_engine::shard::encode(&header, &partial),
+        &rvtol_engine::shard::encode(&header, &rvtol_engine::shard::ShardContent::Run(partial)),
     )?;
     print(&format!(
         "{}: shard {shard}/{shards} of {} ({} of {} samples, seed {}) written to {}\n",
@@ -1098,9 +1214,10 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
             ("shards", "have")
         };
         return Err(BadInput(format!(
-            "{noun} {} of {} {verb} no file: run them (rvtol run SCENARIO --shard K/{} --partial FILE) and merge again; merge --missing lists them",
+            "{noun} {} of {} {verb} no file: run them (rvtol {} SCENARIO --shard K/{} --partial FILE) and merge again; merge --missing lists them",
             shard::index_list(&assembly.missing),
             header.shards,
+            header.command.name(),
             header.shards
         ))
         .into());
@@ -1108,9 +1225,81 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
     let first = &args.partials[0];
     let scenario = Scenario::from_json(&header.scenario_file, &header.scenario_fallback_name)
         .map_err(|err| BadInput(format!("{}: its scenario: {err}", first.display())))?;
-    let settings = header.settings();
-    let partials = assembly.shards.into_iter().map(|f| f.partial).collect();
     let pool = thread_pool(threads(execution.threads)?)?;
+    let settings = match header.command {
+        shard::ShardCommand::Run {
+            samples,
+            seed,
+            exact_percentile_limit,
+        } => RunSettings {
+            samples,
+            seed,
+            exact_percentile_limit,
+        },
+        shard::ShardCommand::Sensitivity {
+            samples,
+            seed,
+            bootstrap,
+            row_bootstrap_limit,
+            shapley,
+        } => {
+            if args.baseline.is_some() || args.check.is_some() {
+                return Err(BadInput(
+                    "--baseline and --check take the shards of a run; these are of a sensitivity analysis".into(),
+                )
+                .into());
+            }
+            let sensitivity_args = SensitivityArgs {
+                samples,
+                seed: Some(seed),
+                bootstrap,
+                row_bootstrap_limit,
+                shapley: shapley.is_some(),
+                permutations: shapley.as_ref().map_or(0, |s| s.budget),
+                outer: shapley.as_ref().map_or(0, |s| s.outer),
+            };
+            let settings = sensitivity_settings(&scenario, &sensitivity_args)?;
+            let (mut sobol, mut permutations) = (Vec::new(), Vec::new());
+            for file in assembly.shards {
+                if let shard::ShardContent::Sensitivity {
+                    sobol: s,
+                    shapley: p,
+                } = file.content
+                {
+                    sobol.push(s);
+                    permutations.extend(p);
+                }
+            }
+            let outputs = pool
+                .install(|| rvtol_engine::sensitivity::merge_sobol(&scenario, settings, sobol))
+                .map_err(|err| bad_scenario(first, err))?;
+            let effects = if sensitivity_args.shapley {
+                Some(
+                    pool.install(|| {
+                        rvtol_engine::shapley::merge_shapley(
+                            &scenario,
+                            shapley_settings(&sensitivity_args, seed),
+                            permutations,
+                        )
+                    })
+                    .map_err(|err| bad_scenario(first, err))?,
+                )
+            } else {
+                None
+            };
+            return finish_sensitivity(
+                first, &scenario, settings, outputs, effects, to, execution, &pool,
+            );
+        }
+    };
+    let partials = assembly
+        .shards
+        .into_iter()
+        .filter_map(|f| match f.content {
+            shard::ShardContent::Run(partial) => Some(partial),
+            shard::ShardContent::Sensitivity { .. } => None,
+        })
+        .collect();
     let result = rvtol_engine::merge(&scenario, settings, partials)
         .map_err(|err| bad_scenario(first, err))?;
     if let Some(path) = &args.baseline {

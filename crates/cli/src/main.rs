@@ -89,9 +89,9 @@ enum Command {
         #[command(flatten)]
         execution: Execution,
     },
-    /// Fold the partial results of a sharded run (`run --shard K/N --partial FILE`) into
-    /// the run's report, byte for byte that of `rvtol run` with the same seed and samples;
-    /// or into a baseline, or a check against one.
+    /// Fold the partial results of a sharded run or sensitivity analysis (`run` or
+    /// `sensitivity` with `--shard K/N --partial FILE`) into its report, byte for byte that
+    /// of the command without --shard; a run's also into a baseline, or a check against one.
     Merge {
         /// The shards' partial result files, in any order (a shard may appear twice when
         /// both files are identical, as after a rerun).
@@ -163,6 +163,15 @@ enum Command {
         /// Shapley: outer draws per conditional-variance estimate.
         #[arg(long, default_value_t = 256, value_parser = parse_count, allow_hyphen_values = true)]
         outer: u64,
+        /// Compute only shard K of N (0 <= K < N) of the analysis' model evaluations (its
+        /// share of the base samples and of the Shapley permutations) and write them to
+        /// --partial instead of a report; `rvtol merge` folds the N partials into the
+        /// report, byte for byte this command's without --shard.
+        #[arg(long, value_name = "K/N", value_parser = parse_shard_arg, requires = "partial", conflicts_with_all = ["json", "html"])]
+        shard: Option<(u64, u64)>,
+        /// The shard's partial result file (with --shard).
+        #[arg(long, value_name = "FILE", requires = "shard")]
+        partial: Option<PathBuf>,
         /// Write the JSON report to PATH ("-" for stdout instead of the table).
         #[arg(long, value_name = "PATH")]
         json: Option<PathBuf>,
@@ -441,9 +450,38 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             shapley,
             permutations,
             outer,
+            shard: Some(shard),
+            partial: Some(partial),
+            execution,
+            ..
+        } => sensitivity_shard(
+            &scenario,
+            SensitivityArgs {
+                samples,
+                seed,
+                bootstrap,
+                row_bootstrap_limit,
+                shapley,
+                permutations,
+                outer,
+            },
+            shard,
+            &partial,
+            &execution,
+        ),
+        Command::Sensitivity {
+            scenario,
+            samples,
+            seed,
+            bootstrap,
+            row_bootstrap_limit,
+            shapley,
+            permutations,
+            outer,
             json,
             html,
             execution,
+            ..
         } => sensitivity(
             &scenario,
             SensitivityArgs {

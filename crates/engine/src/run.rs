@@ -711,8 +711,13 @@ pub fn chunk_count(samples: u64) -> u64 {
 /// The chunks shard `shard` of `shards` computes: the `shard`-th of `shards` contiguous
 /// ranges as equal as whole chunks allow (empty when there are more shards than chunks).
 pub fn shard_chunks(samples: u64, shard: u64, shards: u64) -> Range<u64> {
-    let n = chunk_count(samples) as u128;
-    let at = |k: u64| (k as u128 * n / shards.max(1) as u128) as u64;
+    shard_range(chunk_count(samples), shard, shards)
+}
+
+/// The `shard`-th of `shards` contiguous ranges of `0..total`, as equal as whole items
+/// allow (chunks of a run, permutations of a Shapley estimate).
+pub fn shard_range(total: u64, shard: u64, shards: u64) -> Range<u64> {
+    let at = |k: u64| (k as u128 * total as u128 / shards.max(1) as u128) as u64;
     at(shard.min(shards))..at((shard + 1).min(shards))
 }
 

@@ -24,7 +24,12 @@
 //!
 //! Reproducibility: chunk k of A and B draws from `ChaCha8Rng::seed_from_u64(seed)` with
 //! streams 2k and 2k + 1; chunks are collected in order and every sum runs sequentially,
-//! so the result does not depend on the thread count.
+//! so the result does not depend on the thread count. The analysis is the merge of
+//! partials of chunk ranges ([`sobol_chunks`], [`merge_sobol`]): a shard computes the
+//! model values of its chunks, the merge the indices and the bootstrap, so the result does
+//! not depend on the shard count either.
+
+use std::ops::Range;
 
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -190,9 +195,13 @@ pub fn independent_groups(scenario: &Scenario) -> Vec<InputGroup> {
     groups
 }
 
-/// Model values of one chunk: `values[output][variant][row]`, variant 0 = A, 1 = B,
-/// 2 + g = A_B^(g), 2 + G + g = B_A^(g).
-type ChunkValues = Vec<Vec<Vec<f64>>>;
+/// Model values of one chunk: `values[output][variant][row]` over the continuous outputs,
+/// variant 0 = A, 1 = B, 2 + g = A_B^(g), 2 + G + g = B_A^(g).
+pub type ChunkValues = Vec<Vec<Vec<f64>>>;
+
+/// Per continuous output: the estimator's sums over each block of a chunk, and the chunk's
+/// rows left out because a value was not finite.
+pub type ChunkBlocks = Vec<(Vec<BlockSums>, u64)>;
 
 fn evaluate_chunk(
     scenario: &Scenario,
@@ -279,14 +288,17 @@ fn indices(
 /// The estimator's sums over a set of rows, for one output: enough to give the indices
 /// ([`BlockSums::indices`]) and to be added block by block.
 #[derive(Debug, Clone, PartialEq)]
-struct BlockSums {
-    rows: u64,
-    sum: f64,
-    sum_squares: f64,
+pub struct BlockSums {
+    /// Rows summed.
+    pub rows: u64,
+    /// Σ f(A) + f(B).
+    pub sum: f64,
+    /// Σ f(A)² + f(B)².
+    pub sum_squares: f64,
     /// Σ f(B)·(f(A_B) − f(A)) + f(A)·(f(B_A) − f(B)) per group.
-    first: Vec<f64>,
+    pub first: Vec<f64>,
     /// Σ (f(A) − f(A_B))² + (f(B) − f(B_A))² per group.
-    total: Vec<f64>,
+    pub total: Vec<f64>,
 }
 
 impl BlockSums {
@@ -352,66 +364,262 @@ impl BlockSums {
     }
 }
 
-/// The block bootstrap ([`BootstrapMethod::Blocks`]): per chunk, per output, the sums of
-/// each block of `block_rows` rows; then the indices from the totals and the intervals from
-/// resampled blocks.
-fn sobol_indices_by_blocks(
+/// The model values a range of chunks contributes to the indices.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SobolChunks {
+    /// Every value of each chunk (the row bootstrap).
+    Rows(Vec<ChunkValues>),
+    /// The block sums of each chunk (the block bootstrap), the values centred on `centres`
+    /// (per continuous output: the mean of f(A), f(B) over chunk 0).
+    Blocks {
+        /// Centre per continuous output.
+        centres: Vec<f64>,
+        /// Per chunk, per continuous output, the sums of its blocks.
+        chunks: Vec<ChunkBlocks>,
+    },
+}
+
+/// What a range of chunks of A and B contributes to the Sobol' indices: the part of the
+/// analysis a shard computes ([`sobol_chunks`]) and [`merge_sobol`] finishes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SobolPartial {
+    /// The chunks covered.
+    pub chunks: Range<u64>,
+    /// Their values or block sums.
+    pub values: SobolChunks,
+}
+
+/// The checked settings of one analysis.
+struct SobolPlan {
+    groups: Vec<InputGroup>,
+    continuous: Vec<usize>,
+    method: BootstrapMethod,
+}
+
+fn sobol_plan(
     scenario: &Scenario,
-    groups: &[InputGroup],
-    continuous: &[usize],
     settings: SensitivitySettings,
-    block_rows: u64,
+) -> Result<SobolPlan, ScenarioError> {
+    if settings.base_samples < 2 {
+        return Err(ScenarioError::new(
+            "samples",
+            "sensitivity needs at least 2 base samples",
+        ));
+    }
+    if settings.bootstrap < 2 {
+        return Err(ScenarioError::new(
+            "bootstrap",
+            "needs at least 2 resamples",
+        ));
+    }
+    let groups = independent_groups(scenario);
+    if groups.is_empty() {
+        return Err(ScenarioError::new(
+            "parts/variables",
+            "the scenario has no random input",
+        ));
+    }
+    Ok(SobolPlan {
+        groups,
+        continuous: scenario.continuous_outputs(),
+        method: settings.bootstrap_method(scenario),
+    })
+}
+
+/// Evaluates chunks `chunks` of A, B and the mixed matrices (a shard of the analysis):
+/// the values [`sobol_indices`] computes for them, whatever the thread count. `progress`
+/// receives base samples done.
+pub fn sobol_chunks(
+    scenario: &Scenario,
+    settings: SensitivitySettings,
+    chunks: Range<u64>,
     progress: &(dyn Fn(u64) + Sync),
-) -> Result<Vec<OutputSensitivity>, ScenarioError> {
-    let n_groups = groups.len();
-    // Centres from chunk 0, which every run draws identically.
-    let pilot = evaluate_chunk(scenario, groups, continuous, settings, 0)?;
-    let centres: Vec<f64> = pilot
-        .iter()
-        .map(|f| {
-            let finite: Vec<f64> = f[0]
-                .iter()
-                .chain(&f[1])
-                .copied()
-                .filter(|v| v.is_finite())
-                .collect();
-            if finite.is_empty() {
-                0.0
-            } else {
-                crate::stats::Moments::from_slice(&finite).mean
-            }
-        })
-        .collect();
-    drop(pilot);
+) -> Result<SobolPartial, ScenarioError> {
+    let plan = sobol_plan(scenario, settings)?;
     let n_chunks = settings.base_samples.div_ceil(CHUNK_SIZE as u64);
-    // blocks[chunk][output] = the sums of the chunk's blocks, and its non-finite rows.
-    type ChunkBlocks = Vec<(Vec<BlockSums>, u64)>;
-    let chunks: Vec<ChunkBlocks> = (0..n_chunks)
-        .into_par_iter()
-        .map(|chunk| {
-            let values = evaluate_chunk(scenario, groups, continuous, settings, chunk)?;
-            progress(CHUNK_SIZE as u64);
-            Ok(values
-                .iter()
-                .zip(&centres)
-                .map(|(f, &centre)| {
-                    let m = f[0].len();
-                    let mut dropped = 0;
-                    let blocks = (0..m)
-                        .step_by(block_rows as usize)
-                        .map(|first| {
-                            let mut sums = BlockSums::new(n_groups);
-                            for r in first..(first + block_rows as usize).min(m) {
-                                dropped += u64::from(!sums.add_row(f, r, centre));
-                            }
-                            sums
-                        })
-                        .collect();
-                    (blocks, dropped)
+    if chunks.start > chunks.end || chunks.end > n_chunks {
+        return Err(ScenarioError::new(
+            "(sensitivity)",
+            format!(
+                "chunks {}..{} are not within the analysis' {n_chunks} chunks",
+                chunks.start, chunks.end
+            ),
+        ));
+    }
+    let (groups, continuous) = (&plan.groups, &plan.continuous);
+    let chunk_samples =
+        |chunk: u64| (settings.base_samples - chunk * CHUNK_SIZE as u64).min(CHUNK_SIZE as u64);
+    let values = match plan.method {
+        BootstrapMethod::Rows => SobolChunks::Rows(
+            (chunks.start..chunks.end)
+                .into_par_iter()
+                .map(|chunk| {
+                    let values = evaluate_chunk(scenario, groups, continuous, settings, chunk);
+                    progress(chunk_samples(chunk));
+                    values
                 })
-                .collect())
-        })
-        .collect::<Result<_, ScenarioError>>()?;
+                .collect::<Result<_, _>>()?,
+        ),
+        BootstrapMethod::Blocks { rows: block_rows } => {
+            let n_groups = groups.len();
+            // Centres from chunk 0, which every run draws identically.
+            let pilot = evaluate_chunk(scenario, groups, continuous, settings, 0)?;
+            let centres: Vec<f64> = pilot
+                .iter()
+                .map(|f| {
+                    let finite: Vec<f64> = f[0]
+                        .iter()
+                        .chain(&f[1])
+                        .copied()
+                        .filter(|v| v.is_finite())
+                        .collect();
+                    if finite.is_empty() {
+                        0.0
+                    } else {
+                        crate::stats::Moments::from_slice(&finite).mean
+                    }
+                })
+                .collect();
+            drop(pilot);
+            let blocks = (chunks.start..chunks.end)
+                .into_par_iter()
+                .map(|chunk| {
+                    let values = evaluate_chunk(scenario, groups, continuous, settings, chunk)?;
+                    progress(chunk_samples(chunk));
+                    Ok(values
+                        .iter()
+                        .zip(&centres)
+                        .map(|(f, &centre)| {
+                            let m = f[0].len();
+                            let mut dropped = 0;
+                            let blocks = (0..m)
+                                .step_by(block_rows as usize)
+                                .map(|first| {
+                                    let mut sums = BlockSums::new(n_groups);
+                                    for r in first..(first + block_rows as usize).min(m) {
+                                        dropped += u64::from(!sums.add_row(f, r, centre));
+                                    }
+                                    sums
+                                })
+                                .collect();
+                            (blocks, dropped)
+                        })
+                        .collect())
+                })
+                .collect::<Result<_, ScenarioError>>()?;
+            SobolChunks::Blocks {
+                centres,
+                chunks: blocks,
+            }
+        }
+    };
+    Ok(SobolPartial { chunks, values })
+}
+
+/// The indices from partials that cover the analysis' chunks exactly once (in any order):
+/// bit for bit those of [`sobol_indices`], which merges its own single partial here.
+pub fn merge_sobol(
+    scenario: &Scenario,
+    settings: SensitivitySettings,
+    mut partials: Vec<SobolPartial>,
+) -> Result<Vec<OutputSensitivity>, ScenarioError> {
+    let plan = sobol_plan(scenario, settings)?;
+    let broken = |message: String| Err(ScenarioError::new("(merge)", message));
+    partials.sort_by_key(|p| (p.chunks.start, p.chunks.end));
+    let n_chunks = settings.base_samples.div_ceil(CHUNK_SIZE as u64);
+    let mut next = 0;
+    for partial in &partials {
+        if partial.chunks.start != next {
+            return broken(format!(
+                "chunks {}..{} {}",
+                next.min(partial.chunks.start),
+                next.max(partial.chunks.start),
+                if partial.chunks.start < next {
+                    "are in two partials"
+                } else {
+                    "are missing"
+                }
+            ));
+        }
+        next = partial.chunks.end;
+    }
+    if next != n_chunks {
+        return broken(format!("chunks {next}..{n_chunks} are missing"));
+    }
+    let n_outputs = plan.continuous.len();
+    let n_variants = 2 * plan.groups.len() + 2;
+    match plan.method {
+        BootstrapMethod::Rows => {
+            let mut chunks = Vec::with_capacity(n_chunks as usize);
+            for partial in partials {
+                let width = partial.chunks.end - partial.chunks.start;
+                let rows_of = |chunk: u64| {
+                    (settings.base_samples - chunk * CHUNK_SIZE as u64).min(CHUNK_SIZE as u64)
+                        as usize
+                };
+                match partial.values {
+                    SobolChunks::Rows(values)
+                        if values.len() as u64 == width
+                            && values.iter().zip(partial.chunks.clone()).all(|(c, chunk)| {
+                                c.len() == n_outputs
+                                    && c.iter().all(|o| {
+                                        o.len() == n_variants
+                                            && o.iter().all(|v| v.len() == rows_of(chunk))
+                                    })
+                            }) =>
+                    {
+                        chunks.extend(values)
+                    }
+                    _ => return broken("a partial's values do not fit the analysis".into()),
+                }
+            }
+            Ok(indices_from_rows(scenario, &plan, settings, &chunks)?)
+        }
+        BootstrapMethod::Blocks { .. } => {
+            let mut centres_seen: Option<Vec<f64>> = None;
+            let mut chunks = Vec::with_capacity(n_chunks as usize);
+            for partial in partials {
+                let width = partial.chunks.end - partial.chunks.start;
+                match partial.values {
+                    SobolChunks::Blocks {
+                        centres,
+                        chunks: blocks,
+                    } if blocks.len() as u64 == width
+                        && centres.len() == n_outputs
+                        && blocks.iter().all(|c| c.len() == n_outputs) =>
+                    {
+                        let same = |a: &[f64], b: &[f64]| {
+                            a.iter()
+                                .map(|x| x.to_bits())
+                                .eq(b.iter().map(|x| x.to_bits()))
+                        };
+                        match &centres_seen {
+                            Some(seen) if !same(seen, &centres) => {
+                                return broken("the partials' block centres differ".into())
+                            }
+                            Some(_) => {}
+                            None => centres_seen = Some(centres),
+                        }
+                        chunks.extend(blocks);
+                    }
+                    _ => return broken("a partial's block sums do not fit the analysis".into()),
+                }
+            }
+            Ok(indices_from_blocks(scenario, &plan, settings, &chunks)?)
+        }
+    }
+}
+
+/// The block bootstrap ([`BootstrapMethod::Blocks`]): the indices from the totals of every
+/// chunk's block sums and the intervals from resampled blocks.
+fn indices_from_blocks(
+    scenario: &Scenario,
+    plan: &SobolPlan,
+    settings: SensitivitySettings,
+    chunks: &[ChunkBlocks],
+) -> Result<Vec<OutputSensitivity>, ScenarioError> {
+    let (groups, continuous) = (&plan.groups, &plan.continuous);
+    let n_groups = groups.len();
     let mut results = Vec::with_capacity(continuous.len());
     for (slot, &o) in continuous.iter().enumerate() {
         let blocks: Vec<&BlockSums> = chunks
@@ -422,6 +630,12 @@ fn sobol_indices_by_blocks(
         let non_finite_rows: u64 = chunks.iter().map(|chunk| chunk[slot].1).sum();
         let mut all = BlockSums::new(n_groups);
         for block in &blocks {
+            if block.first.len() != n_groups || block.total.len() != n_groups {
+                return Err(ScenarioError::new(
+                    "(merge)",
+                    "a partial's block sums do not fit the analysis",
+                ));
+            }
             all.add(block);
         }
         if all.rows < 2 || blocks.len() < 2 {
@@ -514,45 +728,27 @@ pub fn sobol_indices(
     settings: SensitivitySettings,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Vec<OutputSensitivity>, ScenarioError> {
-    if settings.base_samples < 2 {
-        return Err(ScenarioError::new(
-            "samples",
-            "sensitivity needs at least 2 base samples",
-        ));
-    }
-    if settings.bootstrap < 2 {
-        return Err(ScenarioError::new(
-            "bootstrap",
-            "needs at least 2 resamples",
-        ));
-    }
-    let groups = independent_groups(scenario);
-    if groups.is_empty() {
-        return Err(ScenarioError::new(
-            "parts/variables",
-            "the scenario has no random input",
-        ));
-    }
-    let continuous = scenario.continuous_outputs();
-    if let BootstrapMethod::Blocks { rows } = settings.bootstrap_method(scenario) {
-        return sobol_indices_by_blocks(scenario, &groups, &continuous, settings, rows, progress);
-    }
+    sobol_plan(scenario, settings)?;
     let n_chunks = settings.base_samples.div_ceil(CHUNK_SIZE as u64);
-    let chunks: Vec<ChunkValues> = (0..n_chunks as usize)
-        .into_par_iter()
-        .map(|chunk| {
-            let values = evaluate_chunk(scenario, &groups, &continuous, settings, chunk as u64);
-            progress(CHUNK_SIZE as u64);
-            values
-        })
-        .collect::<Result<_, _>>()?;
+    let partial = sobol_chunks(scenario, settings, 0..n_chunks, progress)?;
+    merge_sobol(scenario, settings, vec![partial])
+}
+
+/// The row bootstrap ([`BootstrapMethod::Rows`]) over every chunk's values, in chunk order.
+fn indices_from_rows(
+    scenario: &Scenario,
+    plan: &SobolPlan,
+    settings: SensitivitySettings,
+    chunks: &[ChunkValues],
+) -> Result<Vec<OutputSensitivity>, ScenarioError> {
+    let (groups, continuous) = (&plan.groups, &plan.continuous);
     let n_variants = 2 * groups.len() + 2;
     let mut results = Vec::with_capacity(continuous.len());
     for (slot, &o) in continuous.iter().enumerate() {
         // Concatenate the chunks in order: f[variant][row].
         let mut f: Vec<Vec<f64>> =
             vec![Vec::with_capacity(settings.base_samples as usize); n_variants];
-        for chunk in &chunks {
+        for chunk in chunks {
             for (variant, values) in chunk[slot].iter().enumerate() {
                 f[variant].extend_from_slice(values);
             }
@@ -599,7 +795,7 @@ pub fn sobol_indices(
         results.push(output_sensitivity(
             scenario,
             o,
-            &groups,
+            groups,
             settings,
             variance,
             non_finite_rows,

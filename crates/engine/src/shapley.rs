@@ -18,6 +18,10 @@
 //!
 //! Reproducibility: permutation p draws from stream 2⁶¹ + p of the seed, the variance run
 //! from stream 2⁶¹ − 1; results are collected in permutation order and summed sequentially.
+//! The estimate is the merge of partials of permutation ranges ([`shapley_partial`],
+//! [`merge_shapley`]), so a sharded estimate is the single one bit for bit.
+
+use std::ops::Range;
 
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
@@ -84,12 +88,33 @@ pub fn players(scenario: &Scenario) -> Vec<InputGroup> {
         .collect()
 }
 
-/// Shapley effects of every continuous output: `result[output] = (name, effects)`, effects in
-/// the order of [`players`].
-pub fn shapley_effects(
+/// What a range of permutations contributes to the Shapley effects: the part of the
+/// estimate a shard computes ([`shapley_partial`]) and [`merge_shapley`] finishes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShapleyPartial {
+    /// The permutations covered.
+    pub permutations: Range<u64>,
+    /// Var Y per continuous output, from the plain run (the partial that starts at
+    /// permutation 0 has it).
+    pub variance: Option<Vec<f64>>,
+    /// Per permutation: its order of the players, and the cost c(J) after each of its
+    /// first d − 1 players, per continuous output (the last one's is Var Y).
+    pub steps: Vec<(Vec<u64>, Vec<Vec<f64>>)>,
+}
+
+/// The checked settings of one estimate.
+struct ShapleyPlan {
+    players: Vec<InputGroup>,
+    continuous: Vec<usize>,
+    /// d! when all orders are used.
+    exact: Option<usize>,
+    permutations: usize,
+}
+
+fn shapley_plan(
     scenario: &Scenario,
     settings: ShapleySettings,
-) -> Result<Vec<(String, Vec<ShapleyEffect>)>, ScenarioError> {
+) -> Result<ShapleyPlan, ScenarioError> {
     if settings.inner < 2 || settings.outer < 1 || settings.permutations < 1 {
         return Err(ScenarioError::new(
             "shapley",
@@ -110,12 +135,63 @@ pub fn shapley_effects(
             "the scenario has no random input",
         ));
     }
-    let continuous = scenario.continuous_outputs();
+    // All d! orders, each repeated as often as the budget allows, when d! fits in it.
+    let exact = factorial(d).filter(|&f| f <= settings.permutations);
+    let permutations = match exact {
+        Some(f) => f * (settings.permutations / f),
+        None => settings.permutations,
+    };
+    Ok(ShapleyPlan {
+        players,
+        continuous: scenario.continuous_outputs(),
+        exact,
+        permutations,
+    })
+}
+
+/// Number of permutations the estimate runs (all d! orders repeated, or the budget).
+pub fn shapley_permutations(
+    scenario: &Scenario,
+    settings: ShapleySettings,
+) -> Result<u64, ScenarioError> {
+    Ok(shapley_plan(scenario, settings)?.permutations as u64)
+}
+
+/// Shapley effects of every continuous output: `result[output] = (name, effects)`, effects in
+/// the order of [`players`].
+pub fn shapley_effects(
+    scenario: &Scenario,
+    settings: ShapleySettings,
+) -> Result<Vec<(String, Vec<ShapleyEffect>)>, ScenarioError> {
+    let n = shapley_permutations(scenario, settings)?;
+    let partial = shapley_partial(scenario, settings, 0..n)?;
+    merge_shapley(scenario, settings, vec![partial])
+}
+
+/// Runs permutations `permutations` of the estimate (a shard of it), and the variance run
+/// when the range starts at permutation 0.
+pub fn shapley_partial(
+    scenario: &Scenario,
+    settings: ShapleySettings,
+    permutations: Range<u64>,
+) -> Result<ShapleyPartial, ScenarioError> {
+    let plan = shapley_plan(scenario, settings)?;
+    if permutations.start > permutations.end || permutations.end > plan.permutations as u64 {
+        return Err(ScenarioError::new(
+            "shapley",
+            format!(
+                "permutations {}..{} are not within the estimate's {}",
+                permutations.start, permutations.end, plan.permutations
+            ),
+        ));
+    }
+    let (players, continuous) = (&plan.players, &plan.continuous);
+    let d = players.len();
     let space = &scenario.input_space;
     let n_columns = space.n_columns();
 
     // Var Y from a plain run.
-    let variance: Vec<f64> = {
+    let variance = if permutations.start == 0 {
         let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
         rng.set_stream(SHAPLEY_STREAM_BASE - 1);
         let mut counts = space.new_constraint_counts();
@@ -131,23 +207,19 @@ pub fn shapley_effects(
                 ));
             }
         }
-        moments.iter().map(|m| m.variance()).collect()
+        Some(moments.iter().map(|m| m.variance()).collect())
+    } else {
+        None
     };
 
-    // All d! orders, each repeated as often as the budget allows, when d! fits in it.
-    let exact = factorial(d).filter(|&f| f <= settings.permutations);
-    let n_permutations = match exact {
-        Some(f) => f * (settings.permutations / f),
-        None => settings.permutations,
-    };
-    // Marginal contributions per permutation: [permutation][output][player].
-    let contributions: Vec<Vec<Vec<f64>>> = (0..n_permutations)
+    // The cost after each of the first d − 1 players of each permutation.
+    let steps = (permutations.start..permutations.end)
         .into_par_iter()
-        .map(|p| -> Result<Vec<Vec<f64>>, ScenarioError> {
+        .map(|p| -> Result<(Vec<u64>, Vec<Vec<f64>>), ScenarioError> {
             let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
-            rng.set_stream(SHAPLEY_STREAM_BASE + p as u64);
-            let order = match exact {
-                Some(f) => nth_permutation(d, p % f),
+            rng.set_stream(SHAPLEY_STREAM_BASE + p);
+            let order = match plan.exact {
+                Some(f) => nth_permutation(d, p as usize % f),
                 None => {
                     let mut order: Vec<usize> = (0..d).collect();
                     order.shuffle(&mut rng);
@@ -158,26 +230,23 @@ pub fn shapley_effects(
             let mut counts = space.new_constraint_counts();
             let mut outer_rows = vec![0.0; settings.outer * n_columns];
             let mut rows = vec![0.0; settings.outer * settings.inner * n_columns];
-            let mut delta = vec![vec![0.0; d]; continuous.len()];
-            let mut previous = vec![0.0; continuous.len()];
             let mut free: Vec<usize> = Vec::new();
             let mut z = Vec::new();
-            for (k, &player) in order.iter().enumerate() {
-                let cost: Vec<f64> = if k + 1 == d {
-                    variance.clone()
-                } else {
-                    free.extend(&players[player].columns);
-                    let sampler: ConditionalSampler = space.conditional_sampler(&free)?;
-                    space.sample_rows(&mut rng, &mut outer_rows, &mut counts)?;
-                    for (outer, base) in outer_rows.chunks_exact(n_columns).enumerate() {
-                        for inner in 0..settings.inner {
-                            let start = (outer * settings.inner + inner) * n_columns;
-                            let row = &mut rows[start..start + n_columns];
-                            row.copy_from_slice(base);
-                            sampler.sample(&mut rng, row, &mut z);
-                        }
+            let mut costs = Vec::with_capacity(d.saturating_sub(1));
+            for &player in &order[..d - 1] {
+                free.extend(&players[player].columns);
+                let sampler: ConditionalSampler = space.conditional_sampler(&free)?;
+                space.sample_rows(&mut rng, &mut outer_rows, &mut counts)?;
+                for (outer, base) in outer_rows.chunks_exact(n_columns).enumerate() {
+                    for inner in 0..settings.inner {
+                        let start = (outer * settings.inner + inner) * n_columns;
+                        let row = &mut rows[start..start + n_columns];
+                        row.copy_from_slice(base);
+                        sampler.sample(&mut rng, row, &mut z);
                     }
-                    evaluator.evaluate(&rows, settings.outer * settings.inner);
+                }
+                evaluator.evaluate(&rows, settings.outer * settings.inner);
+                costs.push(
                     continuous
                         .iter()
                         .map(|&o| {
@@ -192,18 +261,88 @@ pub fn shapley_effects(
                                 .sum();
                             total / settings.outer as f64
                         })
-                        .collect()
-                };
-                for slot in 0..continuous.len() {
-                    delta[slot][player] = cost[slot] - previous[slot];
-                }
-                previous = cost;
+                        .collect(),
+                );
             }
-            Ok(delta)
+            Ok((order.iter().map(|&j| j as u64).collect(), costs))
         })
         .collect::<Result<_, _>>()?;
+    Ok(ShapleyPartial {
+        permutations,
+        variance,
+        steps,
+    })
+}
 
-    let m = n_permutations as f64;
+/// The effects from partials that cover the estimate's permutations exactly once (in any
+/// order): bit for bit those of [`shapley_effects`], which merges its own single partial.
+pub fn merge_shapley(
+    scenario: &Scenario,
+    settings: ShapleySettings,
+    mut partials: Vec<ShapleyPartial>,
+) -> Result<Vec<(String, Vec<ShapleyEffect>)>, ScenarioError> {
+    let plan = shapley_plan(scenario, settings)?;
+    let broken = |message: String| Err(ScenarioError::new("(merge)", message));
+    partials.sort_by_key(|p| (p.permutations.start, p.permutations.end));
+    let (players, continuous) = (&plan.players, &plan.continuous);
+    let d = players.len();
+    let mut next = 0;
+    for partial in &partials {
+        if partial.permutations.start != next {
+            return broken(format!(
+                "Shapley permutations {}..{} are missing or in two partials",
+                next.min(partial.permutations.start),
+                next.max(partial.permutations.start)
+            ));
+        }
+        let fits = partial.steps.len() as u64 == partial.permutations.end - next
+            && partial.steps.iter().all(|(order, costs)| {
+                let mut seen = vec![false; d];
+                order.len() == d
+                    && order.iter().all(|&j| {
+                        (j as usize) < d && !std::mem::replace(&mut seen[j as usize], true)
+                    })
+                    && costs.len() == d - 1
+                    && costs.iter().all(|c| c.len() == continuous.len())
+            });
+        if !fits {
+            return broken("a partial's Shapley permutations do not fit the estimate".into());
+        }
+        next = partial.permutations.end;
+    }
+    if next != plan.permutations as u64 {
+        return broken(format!(
+            "Shapley permutations {next}..{} are missing",
+            plan.permutations
+        ));
+    }
+    let Some(variance) = partials
+        .first()
+        .and_then(|p| p.variance.clone())
+        .filter(|v| v.len() == continuous.len())
+    else {
+        return broken("the Shapley variance run is missing".into());
+    };
+
+    // Marginal contributions per permutation: [permutation][output][player].
+    let contributions: Vec<Vec<Vec<f64>>> = partials
+        .iter()
+        .flat_map(|p| &p.steps)
+        .map(|(order, costs)| {
+            let mut delta = vec![vec![0.0; d]; continuous.len()];
+            let mut previous = vec![0.0; continuous.len()];
+            for (k, &player) in order.iter().enumerate() {
+                let cost = if k + 1 == d { &variance } else { &costs[k] };
+                for slot in 0..continuous.len() {
+                    delta[slot][player as usize] = cost[slot] - previous[slot];
+                }
+                previous.clone_from(cost);
+            }
+            delta
+        })
+        .collect();
+
+    let m = plan.permutations as f64;
     Ok(continuous
         .iter()
         .enumerate()

@@ -1,11 +1,14 @@
-//! Shards of a run and their files: what `rvtol run --shard K/N --partial FILE` writes and
-//! `rvtol merge` reads.
+//! Shards of a run or a sensitivity analysis and their files: what `rvtol run` and
+//! `rvtol sensitivity` write with `--shard K/N --partial FILE`, and `rvtol merge` reads.
 //!
-//! A shard computes the chunks [`crate::run::shard_chunks`] gives it ([`crate::run_chunks`])
-//! and stores the [`RunPartial`] with everything the merge must check: the scenario file's
-//! text, the run's settings, K and N, the chunk range and the build that computed it.
-//! [`assemble`] checks a set of shard files for coverage and identity; [`crate::merge`]
-//! folds their partials into the run's result, bit for bit the single-process one.
+//! A shard of a run computes the chunks [`crate::run::shard_chunks`] gives it
+//! ([`crate::run_chunks`]) and stores the [`RunPartial`]; a shard of a sensitivity analysis
+//! the same chunks of its matrices ([`crate::sensitivity::sobol_chunks`]) and, with
+//! Shapley effects, its range of permutations ([`crate::shapley::shapley_partial`]). The
+//! file holds everything the merge must check: the scenario file's text, the command's
+//! settings, K and N, the ranges and the build that computed it. [`assemble`] checks a set
+//! of shard files for coverage and identity; the merges fold their partials in order, bit
+//! for bit the single-process result.
 //!
 //! # File layout (format 1)
 //!
@@ -13,17 +16,25 @@
 //! the JSON header ([`ShardHeader`]), then the binary payload, then the SHA-256 of every
 //! byte before it (32 bytes). Numbers in the payload are little-endian u64, i64 or the bits
 //! of an f64 (exact: a float written as decimal text would not always read back to its
-//! bits). Payload: the percentile method (u8: 0 exact, 1 sketch), the constraint groups'
-//! (candidates, accepted), then per output its counts, its distribution (u8 tag: 0 values,
-//! 1 sketch with its frame, 2 indicator, 3 dropped) and then per chunk its index and every
-//! output's moments (n, mean, m2, m3, m4, min, max).
+//! bits); a list is its length then its items. Payload of a run: the percentile method (u8:
+//! 0 exact, 1 sketch and its accuracy), the constraint groups' (candidates, accepted), then
+//! per output its counts, its distribution (u8 tag: 0 values, 1 sketch with its frame, 2
+//! indicator, 3 dropped) and then per chunk its index and every output's moments (n, mean,
+//! m2, m3, m4, min, max). Of a sensitivity analysis: the Sobol' values (u8 tag: 0 every
+//! value per chunk, output and matrix; 1 the centres, then per chunk and output the rows
+//! left out and the block sums), then u8 1 and the Shapley partial (the variance run when
+//! it has it, and per permutation its order and costs) or u8 0.
 
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
+use std::ops::Range;
+
 use crate::run::{
-    shard_chunks, Distribution, OutputAccumulator, PercentileMethod, RunPartial, RunSettings,
+    shard_chunks, shard_range, Distribution, OutputAccumulator, PercentileMethod, RunPartial,
 };
+use crate::sensitivity::{BlockSums, SobolChunks, SobolPartial};
+use crate::shapley::ShapleyPartial;
 use crate::stats::{Moments, QuantileSketch, SketchParts};
 use rvtol_deviation::ConstraintCounts;
 
@@ -32,7 +43,7 @@ pub const MAGIC: &[u8] = b"rvtol-partial\n";
 /// Layout version written and read.
 pub const FORMAT: u32 = 1;
 
-/// What a shard file says about the run it belongs to.
+/// What a shard file says about the run or analysis it belongs to.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ShardHeader {
@@ -45,12 +56,8 @@ pub struct ShardHeader {
     pub scenario_fallback_name: String,
     /// The scenario file's text, byte for byte.
     pub scenario_file: String,
-    /// Samples of the whole run.
-    pub samples: u64,
-    /// Seed of the run.
-    pub seed: u64,
-    /// Exact percentiles up to this many values (decides the percentile method).
-    pub exact_percentile_limit: u64,
+    /// The command and its settings.
+    pub command: ShardCommand,
     /// This shard's index K (0-based).
     pub shard: u64,
     /// Number of shards N.
@@ -59,15 +66,92 @@ pub struct ShardHeader {
     pub chunks: [u64; 2],
 }
 
-impl ShardHeader {
-    /// The run's settings.
-    pub fn settings(&self) -> RunSettings {
-        RunSettings {
-            samples: self.samples,
-            seed: self.seed,
-            exact_percentile_limit: self.exact_percentile_limit,
+/// The sharded command and the settings every shard of it must share.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ShardCommand {
+    /// `rvtol run`.
+    Run {
+        /// Samples of the whole run.
+        samples: u64,
+        /// Seed.
+        seed: u64,
+        /// Exact percentiles up to this many values (decides the percentile method).
+        exact_percentile_limit: u64,
+    },
+    /// `rvtol sensitivity`.
+    Sensitivity {
+        /// Base samples N.
+        samples: u64,
+        /// Seed.
+        seed: u64,
+        /// Bootstrap resamples.
+        bootstrap: u64,
+        /// Most model values kept for the row bootstrap.
+        row_bootstrap_limit: u64,
+        /// With Shapley effects: their settings and this shard's permutations.
+        shapley: Option<ShapleyShard>,
+    },
+}
+
+/// The Shapley part of a sensitivity shard.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ShapleyShard {
+    /// Permutation budget (`--permutations`).
+    pub budget: u64,
+    /// Outer draws (`--outer`).
+    pub outer: u64,
+    /// Permutations the estimate runs in all.
+    pub permutations: u64,
+    /// This shard's permutations, [first, end).
+    pub range: [u64; 2],
+}
+
+impl ShardCommand {
+    /// The settings all shards share (the command without this shard's ranges).
+    fn shared(&self) -> ShardCommand {
+        let mut shared = self.clone();
+        if let ShardCommand::Sensitivity {
+            shapley: Some(shapley),
+            ..
+        } = &mut shared
+        {
+            shapley.range = [0, 0];
+        }
+        shared
+    }
+
+    /// Base samples or samples: what the chunks divide.
+    pub fn samples(&self) -> u64 {
+        match self {
+            ShardCommand::Run { samples, .. } | ShardCommand::Sensitivity { samples, .. } => {
+                *samples
+            }
         }
     }
+
+    /// The command's name on the command line.
+    pub fn name(&self) -> &'static str {
+        match self {
+            ShardCommand::Run { .. } => "run",
+            ShardCommand::Sensitivity { .. } => "sensitivity",
+        }
+    }
+}
+
+/// A shard's statistics.
+#[derive(Debug, Clone)]
+pub enum ShardContent {
+    /// Of a run.
+    Run(RunPartial),
+    /// Of a sensitivity analysis.
+    Sensitivity {
+        /// The Sobol' matrices' values of its chunks.
+        sobol: SobolPartial,
+        /// Its Shapley permutations, when the analysis has them.
+        shapley: Option<ShapleyPartial>,
+    },
 }
 
 /// A decoded shard file.
@@ -76,7 +160,7 @@ pub struct ShardFile {
     /// Its header.
     pub header: ShardHeader,
     /// Its statistics.
-    pub partial: RunPartial,
+    pub content: ShardContent,
     /// The SHA-256 the file ends with (equal for byte-identical files).
     pub digest: [u8; 32],
 }
@@ -116,13 +200,36 @@ pub fn index_list(indices: &[u64]) -> String {
 }
 
 /// The bytes of a shard file.
-pub fn encode(header: &ShardHeader, partial: &RunPartial) -> Vec<u8> {
+pub fn encode(header: &ShardHeader, content: &ShardContent) -> Vec<u8> {
     let mut out = Writer(Vec::new());
     out.0.extend_from_slice(MAGIC);
     out.0.extend_from_slice(&FORMAT.to_le_bytes());
     let header = serde_json::to_vec(header).expect("the header serialises");
     out.u64(header.len() as u64);
     out.0.extend_from_slice(&header);
+    match content {
+        ShardContent::Run(partial) => {
+            out.u8(0);
+            write_run(&mut out, partial);
+        }
+        ShardContent::Sensitivity { sobol, shapley } => {
+            out.u8(1);
+            write_sobol(&mut out, sobol);
+            match shapley {
+                None => out.u8(0),
+                Some(shapley) => {
+                    out.u8(1);
+                    write_shapley(&mut out, shapley);
+                }
+            }
+        }
+    }
+    let digest: [u8; 32] = Sha256::digest(&out.0).into();
+    out.0.extend_from_slice(&digest);
+    out.0
+}
+
+fn write_run(out: &mut Writer, partial: &RunPartial) {
     match partial.percentile_method {
         PercentileMethod::Exact => out.u8(0),
         PercentileMethod::Sketch { relative_accuracy } => {
@@ -152,10 +259,7 @@ pub fn encode(header: &ShardHeader, partial: &RunPartial) -> Vec<u8> {
         match &output.distribution {
             Distribution::Values(values) => {
                 out.u8(0);
-                out.u64(values.len() as u64);
-                for &v in values {
-                    out.f64(v);
-                }
+                out.f64s(values);
             }
             Distribution::Sketch {
                 sketch,
@@ -191,15 +295,73 @@ pub fn encode(header: &ShardHeader, partial: &RunPartial) -> Vec<u8> {
             }
         }
     }
-    let digest: [u8; 32] = Sha256::digest(&out.0).into();
-    out.0.extend_from_slice(&digest);
-    out.0
+}
+
+fn write_sobol(out: &mut Writer, sobol: &SobolPartial) {
+    match &sobol.values {
+        SobolChunks::Rows(chunks) => {
+            out.u8(0);
+            out.u64(chunks.len() as u64);
+            for chunk in chunks {
+                out.u64(chunk.len() as u64);
+                for output in chunk {
+                    out.u64(output.len() as u64);
+                    for variant in output {
+                        out.f64s(variant);
+                    }
+                }
+            }
+        }
+        SobolChunks::Blocks { centres, chunks } => {
+            out.u8(1);
+            out.f64s(centres);
+            out.u64(chunks.len() as u64);
+            for chunk in chunks {
+                out.u64(chunk.len() as u64);
+                for (blocks, dropped) in chunk {
+                    out.u64(*dropped);
+                    out.u64(blocks.len() as u64);
+                    for block in blocks {
+                        out.u64(block.rows);
+                        out.f64(block.sum);
+                        out.f64(block.sum_squares);
+                        out.f64s(&block.first);
+                        out.f64s(&block.total);
+                    }
+                }
+            }
+        }
+    }
+}
+
+fn write_shapley(out: &mut Writer, shapley: &ShapleyPartial) {
+    match &shapley.variance {
+        None => out.u8(0),
+        Some(variance) => {
+            out.u8(1);
+            out.f64s(variance);
+        }
+    }
+    out.u64(shapley.steps.len() as u64);
+    for (order, costs) in &shapley.steps {
+        out.u64(order.len() as u64);
+        for &player in order {
+            out.u64(player);
+        }
+        out.u64(costs.len() as u64);
+        for cost in costs {
+            out.f64s(cost);
+        }
+    }
 }
 
 /// Reads a shard file; the error says in a few words what is wrong with it.
 pub fn decode(bytes: &[u8]) -> Result<ShardFile, String> {
     if !bytes.starts_with(MAGIC) {
-        return Err("not a shard file of rvtol (run --shard K/N --partial writes them)".into());
+        return Err(
+            "not a shard file of rvtol (run and sensitivity write them with --shard K/N --partial)"
+                .into(),
+        );
     }
     if bytes.len() < MAGIC.len() + 4 + 32 {
         return Err("damaged: truncated".into());
@@ -220,10 +382,47 @@ pub fn decode(bytes: &[u8]) -> Result<ShardFile, String> {
     let mut input = Reader {
         bytes: &body[MAGIC.len() + 4..],
     };
-    let damaged = |what: &str| format!("damaged: {what}");
-    let header_len = input.u64()? as usize;
+    let header_len = input.count(1)?;
     let header: ShardHeader = serde_json::from_slice(input.take(header_len)?)
         .map_err(|err| damaged(&format!("header: {err}")))?;
+    let [first, end] = header.chunks;
+    let content = match input.u8()? {
+        0 => ShardContent::Run(read_run(&mut input, first..end)?),
+        1 => {
+            let sobol = read_sobol(&mut input, first..end)?;
+            let shapley = match input.u8()? {
+                0 => None,
+                1 => {
+                    let range = match &header.command {
+                        ShardCommand::Sensitivity {
+                            shapley: Some(shapley),
+                            ..
+                        } => shapley.range,
+                        _ => return Err(damaged("Shapley permutations without their settings")),
+                    };
+                    Some(read_shapley(&mut input, range[0]..range[1])?)
+                }
+                tag => return Err(damaged(&format!("Shapley tag {tag}"))),
+            };
+            ShardContent::Sensitivity { sobol, shapley }
+        }
+        tag => return Err(damaged(&format!("content {tag}"))),
+    };
+    if !input.bytes.is_empty() {
+        return Err(damaged("bytes after the statistics"));
+    }
+    Ok(ShardFile {
+        header,
+        content,
+        digest,
+    })
+}
+
+fn damaged(what: &str) -> String {
+    format!("damaged: {what}")
+}
+
+fn read_run(input: &mut Reader, chunks: Range<u64>) -> Result<RunPartial, String> {
     let percentile_method = match input.u8()? {
         0 => PercentileMethod::Exact,
         1 => PercentileMethod::Sketch {
@@ -245,10 +444,7 @@ pub fn decode(bytes: &[u8]) -> Result<ShardFile, String> {
             *count = input.u64()?;
         }
         let distribution = match input.u8()? {
-            0 => {
-                let n = input.count(8)?;
-                Distribution::Values((0..n).map(|_| input.f64()).collect::<Result<_, _>>()?)
-            }
+            0 => Distribution::Values(input.f64s()?),
             1 => {
                 let (center, scale) = (input.f64()?, input.f64()?);
                 let relative_accuracy = input.f64()?;
@@ -312,27 +508,100 @@ pub fn decode(bytes: &[u8]) -> Result<ShardFile, String> {
             .collect::<Result<_, String>>()?;
         chunk_moments.push((chunk, moments));
     }
-    if !input.bytes.is_empty() {
-        return Err(damaged("bytes after the statistics"));
-    }
-    let [first, end] = header.chunks;
-    Ok(ShardFile {
-        partial: RunPartial {
-            chunks: first..end,
-            percentile_method,
-            constraint_counts,
-            chunk_moments,
-            outputs,
-        },
-        header,
-        digest,
+    Ok(RunPartial {
+        chunks,
+        percentile_method,
+        constraint_counts,
+        chunk_moments,
+        outputs,
     })
 }
 
-/// A set of shard files of one run, checked.
+fn read_sobol(input: &mut Reader, chunks: Range<u64>) -> Result<SobolPartial, String> {
+    let values = match input.u8()? {
+        0 => {
+            let n = input.count(8)?;
+            let mut all = Vec::with_capacity(n);
+            for _ in 0..n {
+                let outputs = input.count(8)?;
+                let mut chunk = Vec::with_capacity(outputs);
+                for _ in 0..outputs {
+                    let variants = input.count(8)?;
+                    chunk.push(
+                        (0..variants)
+                            .map(|_| input.f64s())
+                            .collect::<Result<_, _>>()?,
+                    );
+                }
+                all.push(chunk);
+            }
+            SobolChunks::Rows(all)
+        }
+        1 => {
+            let centres = input.f64s()?;
+            let n = input.count(8)?;
+            let mut all = Vec::with_capacity(n);
+            for _ in 0..n {
+                let outputs = input.count(16)?;
+                let mut chunk = Vec::with_capacity(outputs);
+                for _ in 0..outputs {
+                    let dropped = input.u64()?;
+                    let n_blocks = input.count(40)?;
+                    let blocks = (0..n_blocks)
+                        .map(|_| {
+                            Ok(BlockSums {
+                                rows: input.u64()?,
+                                sum: input.f64()?,
+                                sum_squares: input.f64()?,
+                                first: input.f64s()?,
+                                total: input.f64s()?,
+                            })
+                        })
+                        .collect::<Result<_, String>>()?;
+                    chunk.push((blocks, dropped));
+                }
+                all.push(chunk);
+            }
+            SobolChunks::Blocks {
+                centres,
+                chunks: all,
+            }
+        }
+        tag => return Err(damaged(&format!("Sobol' values {tag}"))),
+    };
+    Ok(SobolPartial { chunks, values })
+}
+
+fn read_shapley(input: &mut Reader, permutations: Range<u64>) -> Result<ShapleyPartial, String> {
+    let variance = match input.u8()? {
+        0 => None,
+        1 => Some(input.f64s()?),
+        tag => return Err(damaged(&format!("Shapley variance {tag}"))),
+    };
+    let n = input.count(16)?;
+    let mut steps = Vec::with_capacity(n);
+    for _ in 0..n {
+        let players = input.count(8)?;
+        let order = (0..players)
+            .map(|_| input.u64())
+            .collect::<Result<_, _>>()?;
+        let n_costs = input.count(8)?;
+        let costs = (0..n_costs)
+            .map(|_| input.f64s())
+            .collect::<Result<_, _>>()?;
+        steps.push((order, costs));
+    }
+    Ok(ShapleyPartial {
+        permutations,
+        variance,
+        steps,
+    })
+}
+
+/// A set of shard files of one run or analysis, checked.
 #[derive(Debug)]
 pub struct Assembly {
-    /// The run's header (that of the first file).
+    /// The header of the first file (the shared settings).
     pub header: ShardHeader,
     /// One file per shard present, by shard index.
     pub shards: Vec<ShardFile>,
@@ -340,10 +609,10 @@ pub struct Assembly {
     pub missing: Vec<u64>,
 }
 
-/// Checks shard files (each with the name to quote) for one run computed by the build
-/// `build`: every file of the same scenario text, settings, shard count and build; its
-/// chunk range the one its index gets; a shard given twice only as identical files (a
-/// rerun shard). The error is one line naming the file.
+/// Checks shard files (each with the name to quote) for one run or analysis computed by
+/// the build `build`: every file of the same scenario text, command, settings, shard count
+/// and build; its ranges those its index gets; a shard given twice only as identical files
+/// (a rerun shard). The error is one line naming the file.
 pub fn assemble(files: Vec<(String, ShardFile)>, build: &str) -> Result<Assembly, String> {
     let mut files = files.into_iter();
     let Some((first_name, first)) = files.next() else {
@@ -353,9 +622,9 @@ pub fn assemble(files: Vec<(String, ShardFile)>, build: &str) -> Result<Assembly
     let mut slots: Vec<Option<(String, ShardFile)>> = Vec::new();
     for (name, file) in std::iter::once((first_name.clone(), first)).chain(files) {
         let h = &file.header;
-        let differs = |what: &str| {
+        let differs = |what: &str, details: String| {
             Err(format!(
-                "{name}: {what} differs from {first_name}'s: the files belong to different runs"
+                "{name}: {what} from {first_name}'s ({details}): the files belong to different runs"
             ))
         };
         if h.build != build {
@@ -367,32 +636,33 @@ pub fn assemble(files: Vec<(String, ShardFile)>, build: &str) -> Result<Assembly
         if h.scenario_file != run.scenario_file
             || h.scenario_fallback_name != run.scenario_fallback_name
         {
-            return differs("the scenario");
+            return differs("the scenario differs", "another scenario file".into());
         }
-        if h.settings() != run.settings() {
-            return differs(&format!(
-                "samples, seed or exact-percentile limit ({}, {}, {} against {}, {}, {})",
-                h.samples,
-                h.seed,
-                h.exact_percentile_limit,
-                run.samples,
-                run.seed,
-                run.exact_percentile_limit
-            ));
+        if h.command.name() != run.command.name() {
+            return differs(
+                "the command differs",
+                format!("{} against {}", h.command.name(), run.command.name()),
+            );
+        }
+        if h.command.shared() != run.command.shared() {
+            return differs(
+                "the settings differ",
+                format!(
+                    "{} against {}",
+                    settings_text(&h.command),
+                    settings_text(&run.command)
+                ),
+            );
         }
         if h.shards != run.shards {
-            return differs(&format!(
-                "the shard count ({} against {})",
-                h.shards, run.shards
-            ));
+            return differs(
+                "the shard count differs",
+                format!("{} against {}", h.shards, run.shards),
+            );
         }
-        let expected = shard_chunks(h.samples, h.shard, h.shards);
-        if h.shard >= h.shards
-            || h.chunks != [expected.start, expected.end]
-            || file.partial.chunks != expected
-        {
+        if h.shard >= h.shards || !covers_its_ranges(&file) {
             return Err(format!(
-                "{name}: damaged: shard {}/{} does not cover the chunks that shard computes",
+                "{name}: damaged: shard {}/{} does not cover what that shard computes",
                 h.shard, h.shards
             ));
         }
@@ -424,6 +694,63 @@ pub fn assemble(files: Vec<(String, ShardFile)>, build: &str) -> Result<Assembly
     })
 }
 
+/// The settings of a command as the refusal quotes them.
+fn settings_text(command: &ShardCommand) -> String {
+    match command {
+        ShardCommand::Run {
+            samples,
+            seed,
+            exact_percentile_limit,
+        } => format!(
+            "samples {samples}, seed {seed}, exact percentile limit {exact_percentile_limit}"
+        ),
+        ShardCommand::Sensitivity {
+            samples,
+            seed,
+            bootstrap,
+            row_bootstrap_limit,
+            shapley,
+        } => format!(
+            "samples {samples}, seed {seed}, bootstrap {bootstrap}, row bootstrap limit {row_bootstrap_limit}, {}",
+            shapley.as_ref().map_or("no Shapley".to_string(), |s| format!(
+                "Shapley permutations {} outer {}",
+                s.budget, s.outer
+            ))
+        ),
+    }
+}
+
+/// Whether the file's ranges and content are those its shard index gets.
+fn covers_its_ranges(file: &ShardFile) -> bool {
+    let h = &file.header;
+    let chunks = shard_chunks(h.command.samples(), h.shard, h.shards);
+    if h.chunks != [chunks.start, chunks.end] {
+        return false;
+    }
+    match (&file.content, &h.command) {
+        (ShardContent::Run(partial), ShardCommand::Run { .. }) => partial.chunks == chunks,
+        (
+            ShardContent::Sensitivity { sobol, shapley },
+            ShardCommand::Sensitivity {
+                shapley: settings, ..
+            },
+        ) => {
+            sobol.chunks == chunks
+                && match (shapley, settings) {
+                    (None, None) => true,
+                    (Some(partial), Some(settings)) => {
+                        let range = shard_range(settings.permutations, h.shard, h.shards);
+                        settings.range == [range.start, range.end]
+                            && partial.permutations == range
+                            && partial.variance.is_some() == (h.shard == 0)
+                    }
+                    _ => false,
+                }
+        }
+        _ => false,
+    }
+}
+
 struct Writer(Vec<u8>);
 
 impl Writer {
@@ -435,6 +762,12 @@ impl Writer {
     }
     fn f64(&mut self, v: f64) {
         self.u64(v.to_bits());
+    }
+    fn f64s(&mut self, values: &[f64]) {
+        self.u64(values.len() as u64);
+        for &v in values {
+            self.f64(v);
+        }
     }
 }
 
@@ -461,6 +794,10 @@ impl<'a> Reader<'a> {
     }
     fn f64(&mut self) -> Result<f64, String> {
         Ok(f64::from_bits(self.u64()?))
+    }
+    fn f64s(&mut self) -> Result<Vec<f64>, String> {
+        let n = self.count(8)?;
+        (0..n).map(|_| self.f64()).collect()
     }
     /// A count of items of at least `item_bytes` bytes each, checked against the bytes
     /// left (a damaged count must not allocate).
