@@ -14,10 +14,9 @@ use rvtol_engine::allocation::{
 };
 use rvtol_engine::memory::{self, MemoryNeed};
 use rvtol_engine::run::check_non_finite;
-use rvtol_engine::screening::screening;
 use rvtol_engine::sensitivity::{sobol_indices, SensitivitySettings};
 use rvtol_engine::sensitivity_report::SensitivityReport;
-use rvtol_engine::shapley::{players as shapley_players, shapley_effects, ShapleySettings};
+use rvtol_engine::shapley::{shapley_effects, ShapleySettings};
 use rvtol_engine::{
     gate, nominal_curves, run as run_scenario, NominalReport, RunReport, RunSettings, Scenario,
     ScenarioError,
@@ -419,20 +418,9 @@ fn finish_sensitivity(
     execution: &Execution,
     pool: &rayon::ThreadPool,
 ) -> Result<()> {
-    let screening = pool
-        .install(|| {
-            screening(
-                scenario,
-                &shapley_players(scenario),
-                settings.base_samples.min(65_536),
-                settings.seed,
-            )
-        })
+    let report = pool
+        .install(|| SensitivityReport::complete(scenario, settings, outputs, shapley))
         .map_err(|err| bad_scenario(path, err))?;
-    let mut report = SensitivityReport::new(scenario, settings, outputs).with_screening(screening);
-    if let Some(effects) = shapley {
-        report = report.with_shapley(effects);
-    }
     let json = report.to_json();
     emit(to.json, || json.clone(), || report.to_text())?;
     if let Some(html) = to.html {
@@ -1225,7 +1213,15 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
     let first = &args.partials[0];
     let scenario = Scenario::from_json(&header.scenario_file, &header.scenario_fallback_name)
         .map_err(|err| BadInput(format!("{}: its scenario: {err}", first.display())))?;
-    let pool = thread_pool(threads(execution.threads)?)?;
+    let threads = threads(execution.threads)?;
+    let pool = thread_pool(threads)?;
+    // What the page's record names as the source: the shard files.
+    let source = std::path::PathBuf::from(format!(
+        "{} shard files of {} ({}, ...)",
+        header.shards,
+        header.command.name(),
+        first.display()
+    ));
     let settings = match header.command {
         shard::ShardCommand::Run {
             samples,
@@ -1288,7 +1284,7 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
                 None
             };
             return finish_sensitivity(
-                first, &scenario, settings, outputs, effects, to, execution, &pool,
+                &source, &scenario, settings, outputs, effects, to, execution, &pool,
             );
         }
     };
@@ -1300,6 +1296,11 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
             shard::ShardContent::Sensitivity { .. } => None,
         })
         .collect();
+    check_memory(
+        memory::run(&scenario, &settings, threads),
+        execution,
+        "merge",
+    )?;
     let result = rvtol_engine::merge(&scenario, settings, partials)
         .map_err(|err| bad_scenario(first, err))?;
     if let Some(path) = &args.baseline {
@@ -1385,7 +1386,7 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
     let json = report.to_json();
     emit(to.json, || json.clone(), || report.to_text())?;
     if let Some(html) = to.html {
-        write_html(html, first, &scenario, rvtol_report::Kind::Run, &json)?;
+        write_html(html, &source, &scenario, rvtol_report::Kind::Run, &json)?;
     }
     failure
 }

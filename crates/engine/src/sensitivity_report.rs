@@ -10,6 +10,9 @@ use crate::report::format_sig;
 use crate::scenario::Scenario;
 use crate::sensitivity::{BootstrapMethod, OutputSensitivity, SensitivitySettings};
 
+/// Most rows of the linearised screening that completes a sensitivity report.
+pub const SCREENING_ROWS: u64 = 65_536;
+
 /// One input group's indices.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct IndexReport {
@@ -163,6 +166,29 @@ impl SensitivityReport {
                 })
                 .collect(),
         }
+    }
+
+    /// The whole report of `rvtol sensitivity` from the Sobol' indices and, when asked,
+    /// the Shapley effects: the linearised screening (at most 65,536 rows, seeded with the
+    /// analysis' seed) is computed here. The command line, its merge of shards and the
+    /// Python package all build their report with this, so they agree bit for bit.
+    pub fn complete(
+        scenario: &Scenario,
+        settings: SensitivitySettings,
+        outputs: Vec<OutputSensitivity>,
+        shapley: Option<Vec<(String, Vec<crate::shapley::ShapleyEffect>)>>,
+    ) -> Result<SensitivityReport, crate::ScenarioError> {
+        let screening = crate::screening::screening(
+            scenario,
+            &crate::shapley::players(scenario),
+            settings.base_samples.min(SCREENING_ROWS),
+            settings.seed,
+        )?;
+        let report = SensitivityReport::new(scenario, settings, outputs).with_screening(screening);
+        Ok(match shapley {
+            Some(effects) => report.with_shapley(effects),
+            None => report,
+        })
     }
 
     /// Adds the screening figures.

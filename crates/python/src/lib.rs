@@ -1,0 +1,400 @@
+//! rvtol from Python: the module `rvtol`, built with maturin (crates/python/pyproject.toml).
+//!
+//! A thin layer over rvtol-engine: every function computes exactly what the command of the
+//! same name computes (the same engine calls, the same JSON report, so the same bits for
+//! the same seed) and hands the report over as a Python dict (the JSON parsed by Python's
+//! `json`), arrays as numpy arrays. The work runs with the interpreter's lock released, on
+//! a rayon pool of `threads` threads (default: all cores). Errors are `ValueError` with the
+//! command line's one-line message (the JSON path of the scenario value).
+
+use numpy::{PyArray2, PyReadonlyArray2, ToPyArray};
+use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+use rvtol_engine::allocation::report::AllocationReport;
+use rvtol_engine::allocation::spec::{CostKind, Target};
+use rvtol_engine::allocation::{allocate as run_allocation, default_samples, AllocationSettings};
+use rvtol_engine::sensitivity::{sobol_indices, SensitivitySettings};
+use rvtol_engine::sensitivity_report::SensitivityReport;
+use rvtol_engine::shapley::{shapley_effects, ShapleySettings};
+use rvtol_engine::{RunReport, RunSettings, DEFAULT_EXACT_PERCENTILE_LIMIT};
+
+/// A validated scenario: `Scenario(path)` reads a scenario file, `Scenario(dict)` takes
+/// the scenario as a dict (as the JSON file would hold it).
+#[pyclass(module = "rvtol", frozen)]
+struct Scenario {
+    inner: rvtol_engine::Scenario,
+    /// The scenario's JSON text (the allocation reads it).
+    text: String,
+}
+
+fn value_error(message: impl std::fmt::Display) -> PyErr {
+    PyValueError::new_err(message.to_string())
+}
+
+/// The scenario's JSON text and its fallback name, from a path or a dict.
+fn scenario_text(source: &Bound<'_, PyAny>) -> PyResult<(String, String)> {
+    if let Ok(path) = source.extract::<std::path::PathBuf>() {
+        let text = std::fs::read_to_string(&path)
+            .map_err(|err| value_error(format!("{}: cannot read: {err}", path.display())))?;
+        let name = path
+            .file_stem()
+            .map_or("scenario".to_string(), |s| s.to_string_lossy().into_owned());
+        return Ok((text, name));
+    }
+    if source.is_instance_of::<PyDict>() {
+        let json = source.py().import("json")?;
+        let text: String = json.call_method1("dumps", (source,))?.extract()?;
+        return Ok((text, "scenario".to_string()));
+    }
+    Err(PyTypeError::new_err(
+        "a scenario is a path (str or os.PathLike) or a dict",
+    ))
+}
+
+/// A rayon pool of `threads` threads (all cores when None).
+fn pool(threads: Option<usize>) -> PyResult<rayon::ThreadPool> {
+    if threads == Some(0) {
+        return Err(value_error("threads: must be at least 1"));
+    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or(0))
+        .build()
+        .map_err(|err| value_error(format!("threads: {err}")))
+}
+
+/// A JSON document as a Python object.
+fn parsed<'py>(py: Python<'py>, json: &str) -> PyResult<Bound<'py, PyAny>> {
+    py.import("json")?.call_method1("loads", (json,))
+}
+
+#[pymethods]
+impl Scenario {
+    #[new]
+    fn new(source: &Bound<'_, PyAny>) -> PyResult<Scenario> {
+        let (text, name) = scenario_text(source)?;
+        let inner = rvtol_engine::Scenario::from_json(&text, &name).map_err(value_error)?;
+        Ok(Scenario { inner, text })
+    }
+
+    /// The scenario's name.
+    #[getter]
+    fn name(&self) -> String {
+        self.inner.name.clone()
+    }
+
+    /// The input columns, in the order `evaluate` and the samples use: a variable, or a
+    /// part's `part.du` … `part.dgamma`.
+    #[getter]
+    fn inputs(&self) -> Vec<String> {
+        self.inner.columns.iter().map(|c| c.name.clone()).collect()
+    }
+
+    /// The outputs, in order.
+    #[getter]
+    fn outputs(&self) -> Vec<String> {
+        self.inner.outputs.iter().map(|o| o.name.clone()).collect()
+    }
+
+    /// Every output on given input rows (a 2-D float array, one column per input in the
+    /// order of `inputs`): a 2-D array with one column per output.
+    #[pyo3(signature = (inputs, threads = None))]
+    fn evaluate<'py>(
+        &self,
+        py: Python<'py>,
+        inputs: PyReadonlyArray2<'py, f64>,
+        threads: Option<usize>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        evaluate_rows(py, &self.inner, inputs, threads)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "rvtol.Scenario({:?}: {} inputs, {} outputs)",
+            self.inner.name,
+            self.inner.columns.len(),
+            self.inner.outputs.len()
+        )
+    }
+}
+
+fn evaluate_rows<'py>(
+    py: Python<'py>,
+    scenario: &rvtol_engine::Scenario,
+    inputs: PyReadonlyArray2<'py, f64>,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let array = inputs.as_array();
+    let (rows, columns) = array.dim();
+    let n_inputs = scenario.input_space.n_columns();
+    if columns != n_inputs {
+        return Err(value_error(format!(
+            "inputs: {columns} columns, the scenario has {n_inputs} inputs ({})",
+            scenario
+                .columns
+                .iter()
+                .map(|c| c.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )));
+    }
+    rvtol_engine::run::check_table_rows(scenario, rows as u64)
+        .map_err(|message| value_error(format!("inputs: {message}")))?;
+    let values: Vec<f64> = array.iter().copied().collect();
+    let pool = pool(threads)?;
+    let table =
+        py.detach(|| pool.install(|| rvtol_engine::evaluate::evaluate_rows(scenario, values)));
+    let outputs = numpy::ndarray::Array2::from_shape_vec((rows, table.n_outputs), table.outputs)
+        .map_err(value_error)?;
+    Ok(outputs.to_pyarray(py))
+}
+
+/// Evaluates the model `model` with the parameters `params` (a dict; the others at the
+/// example design's values, as `rvtol init` writes them) on given input rows: a 2-D float
+/// array with one column per model input in the order `rvtol models` lists them. Returns a
+/// 2-D array with one column per model output. Rows run in parallel on `threads` threads.
+#[pyfunction]
+#[pyo3(signature = (model, params, inputs, threads = None))]
+fn evaluate<'py>(
+    py: Python<'py>,
+    model: &str,
+    params: Option<&Bound<'py, PyDict>>,
+    inputs: PyReadonlyArray2<'py, f64>,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let skeleton = rvtol_engine::scenario::skeleton::skeleton(model).map_err(value_error)?;
+    let mut document: serde_json::Value = serde_json::from_str(&skeleton).map_err(value_error)?;
+    if let Some(params) = params {
+        let json = py.import("json")?;
+        let text: String = json.call_method1("dumps", (params,))?.extract()?;
+        let given: serde_json::Map<String, serde_json::Value> =
+            serde_json::from_str(&text).map_err(value_error)?;
+        let slot = &mut document["models"][0]["params"];
+        for (key, value) in given {
+            slot[key] = value;
+        }
+    }
+    let scenario =
+        rvtol_engine::Scenario::from_json(&document.to_string(), model).map_err(value_error)?;
+    evaluate_rows(py, &scenario, inputs, threads)
+}
+
+/// Runs the Monte Carlo simulation (as `rvtol run`): returns the JSON report as a dict,
+/// and with `samples_out=True` also a dict of the samples: `inputs` and `outputs` (2-D
+/// arrays, one row per sample), `input_names`, `output_names`. `samples` and `seed`
+/// default to the scenario's. A run whose share of non-finite values exceeds
+/// `max_non_finite` raises after nothing is returned.
+#[pyfunction]
+#[pyo3(signature = (scenario, samples = None, seed = None, *, samples_out = false,
+    exact_percentile_limit = DEFAULT_EXACT_PERCENTILE_LIMIT, max_non_finite = 0.0, threads = None))]
+#[allow(clippy::too_many_arguments)]
+fn run<'py>(
+    py: Python<'py>,
+    scenario: &Scenario,
+    samples: Option<u64>,
+    seed: Option<u64>,
+    samples_out: bool,
+    exact_percentile_limit: u64,
+    max_non_finite: f64,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let s = &scenario.inner;
+    let settings = RunSettings {
+        samples: samples.unwrap_or(s.samples),
+        seed: seed.unwrap_or(s.seed),
+        exact_percentile_limit,
+    };
+    if samples_out {
+        rvtol_engine::run::check_table_rows(s, settings.samples)
+            .map_err(|message| value_error(format!("samples_out: {message}; run fewer samples")))?;
+    }
+    let pool = pool(threads)?;
+    let (json, table) = py
+        .detach(|| {
+            pool.install(|| -> Result<_, rvtol_engine::ScenarioError> {
+                let result = rvtol_engine::run(s, settings, &|_| {})?;
+                rvtol_engine::run::check_non_finite(s, &result, max_non_finite)?;
+                let json = RunReport::new(s, result).to_json();
+                let table = if samples_out {
+                    Some(rvtol_engine::sample_table(s, settings)?)
+                } else {
+                    None
+                };
+                Ok((json, table))
+            })
+        })
+        .map_err(value_error)?;
+    let report = parsed(py, &json)?;
+    let Some(table) = table else {
+        return Ok(report);
+    };
+    let array = |values: Vec<f64>, width: usize| {
+        numpy::ndarray::Array2::from_shape_vec((table.rows, width), values)
+            .map(|a| a.to_pyarray(py))
+            .map_err(value_error)
+    };
+    let out = PyDict::new(py);
+    out.set_item("inputs", array(table.inputs, table.n_inputs)?)?;
+    out.set_item("outputs", array(table.outputs, table.n_outputs)?)?;
+    out.set_item(
+        "input_names",
+        PyList::new(py, s.columns.iter().map(|c| c.name.clone()))?,
+    )?;
+    out.set_item(
+        "output_names",
+        PyList::new(py, s.outputs.iter().map(|o| o.name.clone()))?,
+    )?;
+    Ok((report, out).into_pyobject(py)?.into_any())
+}
+
+/// Sobol' first-order and total indices with bootstrap intervals, the linearised
+/// screening and, with `shapley=True`, Shapley effects (as `rvtol sensitivity`): the JSON
+/// report as a dict.
+#[pyfunction]
+#[pyo3(signature = (scenario, samples = 65_536, seed = None, *, bootstrap = 500,
+    row_bootstrap_limit = rvtol_engine::sensitivity::DEFAULT_ROW_BOOTSTRAP_LIMIT,
+    shapley = false, permutations = 600, outer = 256, threads = None))]
+#[allow(clippy::too_many_arguments)]
+fn sensitivity<'py>(
+    py: Python<'py>,
+    scenario: &Scenario,
+    samples: u64,
+    seed: Option<u64>,
+    bootstrap: usize,
+    row_bootstrap_limit: u64,
+    shapley: bool,
+    permutations: usize,
+    outer: usize,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let s = &scenario.inner;
+    let settings = SensitivitySettings {
+        base_samples: samples,
+        seed: seed.unwrap_or(s.seed),
+        bootstrap,
+        confidence: 0.95,
+        row_bootstrap_limit,
+    };
+    let pool = pool(threads)?;
+    let json = py
+        .detach(|| {
+            pool.install(|| -> Result<String, rvtol_engine::ScenarioError> {
+                let outputs = sobol_indices(s, settings, &|_| {})?;
+                let effects = if shapley {
+                    Some(shapley_effects(
+                        s,
+                        ShapleySettings {
+                            permutations,
+                            outer,
+                            inner: 3,
+                            seed: settings.seed,
+                        },
+                    )?)
+                } else {
+                    None
+                };
+                Ok(SensitivityReport::complete(s, settings, outputs, effects)?.to_json())
+            })
+        })
+        .map_err(value_error)?;
+    parsed(py, &json)
+}
+
+/// The cheapest tolerances within the scenario's `allocation` bounds that meet `target` on
+/// `output` (as `rvtol allocate`), verified by an independent run: the JSON report as a
+/// dict (its `status` says met, not verified or infeasible).
+#[pyfunction]
+#[pyo3(signature = (scenario, output, target, *, cost = None, samples = None, seed = None,
+    verify_seed = None, threads = None))]
+#[allow(clippy::too_many_arguments)]
+fn allocate<'py>(
+    py: Python<'py>,
+    scenario: &Scenario,
+    output: &str,
+    target: &str,
+    cost: Option<&str>,
+    samples: Option<u64>,
+    seed: Option<u64>,
+    verify_seed: Option<u64>,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let s = &scenario.inner;
+    let target = Target::parse(target).map_err(|err| value_error(format!("target: {err}")))?;
+    let cost = cost
+        .map(|name| {
+            CostKind::parse(name).ok_or_else(|| {
+                value_error(format!(
+                    "cost: unknown cost model {name:?}; use reciprocal, exponential or table"
+                ))
+            })
+        })
+        .transpose()?;
+    let seed = seed.unwrap_or(s.seed);
+    let settings = AllocationSettings {
+        samples: samples.unwrap_or_else(|| default_samples(&target)),
+        seed,
+        verification_seed: verify_seed.unwrap_or(seed.wrapping_add(1)),
+        cost,
+    };
+    let pool = pool(threads)?;
+    let text = &scenario.text;
+    let json = py
+        .detach(|| {
+            pool.install(|| {
+                run_allocation(s, text, output, target, settings, &|_| {})
+                    .map(|allocation| AllocationReport::new(&allocation).to_json())
+            })
+        })
+        .map_err(value_error)?;
+    parsed(py, &json)
+}
+
+/// The models: a list of dicts with `name`, `summary`, `inputs` and `outputs` (each a list of
+/// (name, unit)).
+#[pyfunction]
+fn models(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
+    let list = PyList::empty(py);
+    for entry in rvtol_models::all() {
+        let model = (entry.build)(&(entry.example_params)()).map_err(value_error)?;
+        let item = PyDict::new(py);
+        item.set_item("name", entry.name)?;
+        item.set_item("summary", entry.summary)?;
+        let pairs = |ports: Vec<(String, String)>| PyList::new(py, ports);
+        item.set_item(
+            "inputs",
+            pairs(
+                model
+                    .inputs()
+                    .iter()
+                    .map(|i| (i.name.clone(), i.unit.clone()))
+                    .collect(),
+            )?,
+        )?;
+        item.set_item(
+            "outputs",
+            pairs(
+                model
+                    .outputs()
+                    .iter()
+                    .map(|o| (o.name.clone(), o.unit.clone()))
+                    .collect(),
+            )?,
+        )?;
+        list.append(item)?;
+    }
+    Ok(list)
+}
+
+/// rvtol: Monte Carlo tolerance and deviation statistics for RV reducers.
+#[pymodule]
+fn rvtol(module: &Bound<'_, PyModule>) -> PyResult<()> {
+    module.add_class::<Scenario>()?;
+    module.add_function(wrap_pyfunction!(run, module)?)?;
+    module.add_function(wrap_pyfunction!(evaluate, module)?)?;
+    module.add_function(wrap_pyfunction!(sensitivity, module)?)?;
+    module.add_function(wrap_pyfunction!(allocate, module)?)?;
+    module.add_function(wrap_pyfunction!(models, module)?)?;
+    module.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

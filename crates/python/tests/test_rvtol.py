@@ -1,0 +1,169 @@
+"""Tests of the Python package `rvtol` against the command line: the same engine calls must
+give the same reports bit for bit (the JSON parsed the same), the same samples and the same
+outputs; errors are ValueError with the command line's message. The peers' example
+(SALib, OpenTURNS) agrees with rvtol's own indices within their Monte Carlo error.
+
+RVTOL_CLI names the rvtol binary (default: target/release/rvtol of the repository)."""
+
+import csv
+import json
+import os
+import pathlib
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import rvtol
+
+ROOT = pathlib.Path(__file__).resolve().parents[3]
+CLI = os.environ.get("RVTOL_CLI", str(ROOT / "target" / "release" / "rvtol"))
+EXAMPLES = ROOT / "crates" / "python" / "examples"
+
+
+def scenario_path(name):
+    return str(ROOT / "scenarios" / name)
+
+
+def cli(*args):
+    """Runs the rvtol binary; returns its standard output."""
+    done = subprocess.run([CLI, *args], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    return done.stdout
+
+
+def cli_json(tmp_path, *args):
+    out = tmp_path / "report.json"
+    cli(*args, "--json", str(out))
+    return json.loads(out.read_text())
+
+
+@pytest.mark.parametrize("name", ["rv20e-hysteresis.json", "rv80e-contact.json", "rv20e-torsion.json"])
+def test_run_is_the_command_line_report(tmp_path, name):
+    expected = cli_json(tmp_path, "run", scenario_path(name), "--samples", "20000", "--seed", "7")
+    report = rvtol.run(rvtol.Scenario(scenario_path(name)), samples=20000, seed=7)
+    assert report == expected
+
+
+def test_run_defaults_and_a_dict_scenario(tmp_path):
+    path = scenario_path("linear-stack-correlated.json")
+    expected = cli_json(tmp_path, "run", path)
+    assert rvtol.run(rvtol.Scenario(path)) == expected
+    # The same scenario given as a dict: only the name (the file's stem) may differ.
+    document = json.loads(pathlib.Path(path).read_text())
+    report = rvtol.run(rvtol.Scenario(document))
+    assert report["outputs"] == expected["outputs"]
+
+
+def test_samples_are_the_command_line_rows_and_the_reports_values(tmp_path):
+    path = scenario_path("rv20e-hysteresis.json")
+    table = tmp_path / "samples.csv"
+    cli("run", path, "--samples", "5000", "--samples-out", str(table), "--json", str(tmp_path / "r.json"))
+    report, samples = rvtol.run(rvtol.Scenario(path), samples=5000, samples_out=True)
+    with table.open() as f:
+        rows = list(csv.reader(f))
+    header, values = rows[0], np.array(rows[1:], dtype=float)
+    n_in = len(samples["input_names"])
+    assert [h.split(" [")[0] for h in header[1 : 1 + n_in]] == samples["input_names"]
+    assert np.array_equal(values[:, 1 : 1 + n_in], samples["inputs"])
+    assert np.array_equal(values[:, 1 + n_in :], samples["outputs"])
+    # The report's P50 is numpy's linear (type 7) median of the same values.
+    lost_motion = samples["outputs"][:, samples["output_names"].index("hysteresis_arcmin")]
+    assert report["outputs"][0]["percentiles"]["50"] == np.percentile(lost_motion, 50)
+
+
+def test_thread_count_does_not_change_the_report():
+    scenario = rvtol.Scenario(scenario_path("rv40e-elastic.json"))
+    one = rvtol.run(scenario, samples=10000, threads=1)
+    assert rvtol.run(scenario, samples=10000, threads=2) == one
+
+
+def test_evaluate_is_the_command_line_evaluate(tmp_path):
+    # rvtol init writes the model's skeleton; its rows through `rvtol evaluate`.
+    skeleton = tmp_path / "ishigami.json"
+    cli("init", "ishigami", "-o", str(skeleton))
+    rows = np.random.default_rng(3).uniform(-np.pi, np.pi, size=(1000, 3))
+    inputs = tmp_path / "rows.csv"
+    names = rvtol.Scenario(str(skeleton)).inputs
+    with inputs.open("w", newline="") as f:
+        writer = csv.writer(f)
+        writer.writerow(names)
+        writer.writerows([[repr(float(v)) for v in row] for row in rows])
+    out = tmp_path / "out.csv"
+    cli("evaluate", str(skeleton), "--inputs", str(inputs), "-o", str(out))
+    with out.open() as f:
+        expected = np.array(list(csv.reader(f))[1:], dtype=float)[:, -1]
+    params = json.loads(skeleton.read_text())["models"][0]["params"]
+    y = rvtol.evaluate("ishigami", params, rows)
+    assert y.shape == (1000, 1)
+    assert np.array_equal(y[:, 0], expected)
+    # The closed form a·sin²(x2) + sin(x1)(1 + b·x3⁴), a = 7, b = 0.1.
+    x1, x2, x3 = rows.T
+    assert np.allclose(y[:, 0], np.sin(x1) * (1 + 0.1 * x3**4) + 7 * np.sin(x2) ** 2, rtol=1e-12)
+    assert np.array_equal(rvtol.Scenario(str(skeleton)).evaluate(rows), y)
+
+
+def test_sensitivity_is_the_command_line_report(tmp_path):
+    path = scenario_path("shapley-linear-gaussian.json")
+    args = ["--samples", "8192", "--bootstrap", "100", "--shapley", "--permutations", "120", "--outer", "64"]
+    expected = cli_json(tmp_path, "sensitivity", path, *args)
+    report = rvtol.sensitivity(
+        rvtol.Scenario(path), samples=8192, bootstrap=100, shapley=True, permutations=120, outer=64
+    )
+    assert report == expected
+
+
+def test_allocate_is_the_command_line_report(tmp_path):
+    path = scenario_path("allocation-linear.json")
+    out = tmp_path / "allocation.json"
+    cli("allocate", path, "--output", "gap_mm", "--target", "sd <= 0.015", "--samples", "50000", "--json", str(out))
+    report = rvtol.allocate(rvtol.Scenario(path), "gap_mm", "sd <= 0.015", samples=50000)
+    assert report == json.loads(out.read_text())
+    assert report["status"] == "met"
+
+
+def test_errors_are_value_errors_with_the_command_line_message():
+    with pytest.raises(ValueError, match=r"models\[0\]\.model: unknown model \"nope\""):
+        rvtol.Scenario({"name": "x", "variables": [], "models": [{"model": "nope"}]})
+    with pytest.raises(ValueError, match="cannot read"):
+        rvtol.Scenario(str(ROOT / "no-such-scenario.json"))
+    with pytest.raises(TypeError):
+        rvtol.Scenario(42)
+    scenario = rvtol.Scenario(scenario_path("rv20e-hysteresis.json"))
+    with pytest.raises(ValueError, match="inputs: 4 columns, the scenario has 15 inputs"):
+        scenario.evaluate(np.zeros((2, 4)))
+    with pytest.raises(ValueError, match="no model \"nope\""):
+        rvtol.evaluate("nope", None, np.zeros((1, 3)))
+    with pytest.raises(ValueError, match="target"):
+        rvtol.allocate(rvtol.Scenario(scenario_path("allocation-linear.json")), "gap_mm", "sd <<< 1")
+    with pytest.raises(ValueError, match="threads"):
+        rvtol.run(scenario, samples=10, threads=0)
+
+
+def test_peers_on_rvtol_models_agree_with_rvtol():
+    """SALib and OpenTURNS, each evaluating rvtol's model through rvtol.evaluate, give the
+    total indices rvtol itself gives on the same problem, within 4 standard errors of the
+    difference (each side's from its own 95 % interval: half-width / 1.96)."""
+    salib = pytest.importorskip("SALib")
+    ot = pytest.importorskip("openturns")
+    del salib, ot
+    sys.path.insert(0, str(EXAMPLES))
+    import openturns_rv20e
+    import rv20e_problem
+    import salib_rv20e
+
+    n = 2**14
+    ours = rvtol.sensitivity(rvtol.Scenario(rv20e_problem.rvtol_scenario()), samples=n, bootstrap=500)
+    ours = {g["input"]: g for g in ours["outputs"][0]["indices"]}
+    theirs_salib = salib_rv20e.indices(n)
+    theirs_ot = openturns_rv20e.indices(n)
+    for name in rv20e_problem.NAMES:
+        low, high = ours[name]["total_ci"]
+        se_ours = (high - low) / (2 * 1.96)
+        _, _, st, st_conf = theirs_salib[name]
+        se_salib = st_conf / 1.96
+        assert abs(st - ours[name]["total"]) <= 4 * np.hypot(se_ours, se_salib), name
+        _, st_ot, (ot_low, ot_high) = theirs_ot[name]
+        se_ot = (ot_high - ot_low) / (2 * 1.96)
+        assert abs(st_ot - ours[name]["total"]) <= 4 * np.hypot(se_ours, se_ot), name
