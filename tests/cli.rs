@@ -498,6 +498,63 @@ fn samples_out_writes_the_runs_own_rows_with_the_same_bytes_for_any_thread_count
 }
 
 #[test]
+fn samples_out_parquet_holds_the_csv_values_with_the_same_bytes_for_any_thread_count() {
+    use parquet::file::reader::{FileReader, SerializedFileReader};
+    use parquet::record::RowAccessor;
+    let dir = std::env::temp_dir().join(format!("rvtol-parquet-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let write = |threads: &str, file: &str| {
+        let path = dir.join(file);
+        let output = run_rvtol(&[
+            "run",
+            &scenario("rv20e-hysteresis.json"),
+            "--samples",
+            "5000",
+            "--threads",
+            threads,
+            "--samples-out",
+            path.to_str().unwrap(),
+            "--quiet",
+        ]);
+        assert_eq!(
+            output.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        std::fs::read(path).unwrap()
+    };
+    let one = write("1", "one.parquet");
+    assert!(one == write("2", "two.parquet") && one == write("4", "four.parquet"));
+    let csv = String::from_utf8(write("1", "rows.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    let reader =
+        SerializedFileReader::new(std::fs::File::open(dir.join("one.parquet")).unwrap()).unwrap();
+    let schema = reader.metadata().file_metadata().schema_descr();
+    let names: Vec<&str> = schema.columns().iter().map(|c| c.name()).collect();
+    assert_eq!(names, header, "the CSV's headings");
+    let mut n = 0;
+    for (r, row) in reader.get_row_iter(None).unwrap().enumerate() {
+        let row = row.unwrap();
+        assert_eq!(row.get_long(0).unwrap(), r as i64);
+        for (j, expected) in rows[r].iter().enumerate().skip(1) {
+            assert_eq!(
+                row.get_double(j).unwrap().to_bits(),
+                expected.to_bits(),
+                "row {r} column {j}"
+            );
+        }
+        n += 1;
+    }
+    assert_eq!(n, 5000);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
 fn evaluate_on_the_rows_of_samples_out_gives_the_same_file_back() {
     // `evaluate` recomputes the outputs from the written inputs: numbers written in their
     // shortest exact form read back to the same bits, and a row's outputs depend on that

@@ -14,7 +14,7 @@ use rvtol_engine::allocation::{
 };
 use rvtol_engine::memory::{self, MemoryNeed};
 use rvtol_engine::run::check_non_finite;
-use rvtol_engine::sensitivity::{sobol_indices, SensitivitySettings};
+use rvtol_engine::sensitivity::{sobol_indices, SensitivitySettings, DEFAULT_ROW_BOOTSTRAP_LIMIT};
 use rvtol_engine::sensitivity_report::SensitivityReport;
 use rvtol_engine::shapley::{shapley_effects, ShapleySettings};
 use rvtol_engine::{
@@ -22,7 +22,7 @@ use rvtol_engine::{
     ScenarioError,
 };
 
-use crate::limits::{memory_budget, thread_pool, threads};
+use crate::limits::{memory_budget, parse_count, thread_pool, threads};
 use crate::output::{note, print, write_bytes, write_report};
 use crate::{BadInput, Execution, Failed};
 
@@ -88,6 +88,18 @@ fn check_memory(need: MemoryNeed, execution: &Execution, command: &str) -> Resul
     let (budget, source) = memory_budget(execution.max_memory);
     need.check(budget, &source)
         .map_err(|message| BadInput(format!("{command}: {message}")).into())
+}
+
+/// The thread pool of a Monte Carlo command, once its memory need at that thread count
+/// (`need`) fits the budget.
+fn pool_for(
+    execution: &Execution,
+    command: &str,
+    need: impl FnOnce(usize) -> MemoryNeed,
+) -> Result<rayon::ThreadPool> {
+    let threads = threads(execution.threads)?;
+    check_memory(need(threads), execution, command)?;
+    thread_pool(threads)
 }
 
 /// The report first, then the failure of a run that lost more samples than allowed.
@@ -200,9 +212,9 @@ pub fn run(
         rvtol_engine::run::check_table_rows(&scenario, settings.samples)
             .map_err(|message| BadInput(format!("--samples-out: {message}; run fewer samples")))?;
     }
-    let threads = threads(execution.threads)?;
-    check_memory(memory::run(&scenario, &settings, threads), execution, "run")?;
-    let pool = thread_pool(threads)?;
+    let pool = pool_for(execution, "run", |threads| {
+        memory::run(&scenario, &settings, threads)
+    })?;
     let bar = progress_bar(settings.samples, execution.quiet);
     let started = std::time::Instant::now();
     let result = pool
@@ -218,7 +230,7 @@ pub fn run(
         let table = pool
             .install(|| rvtol_engine::sample_table(&scenario, settings))
             .map_err(|err| bad_scenario(scenario_path, err))?;
-        write_report(path, &rvtol_engine::report::sample_csv(&scenario, &table))?;
+        write_sample_table(path, &scenario, &table)?;
     }
     if let Some(html) = to.html {
         write_html(
@@ -322,14 +334,32 @@ pub fn validate(scenario_path: &Path) -> Result<()> {
     }
 }
 
-/// The options of `rvtol sensitivity` beyond the common ones.
+/// The analysis options of `rvtol sensitivity` (its command line's, and what a merge reads
+/// back from the shards).
+#[derive(Debug, Clone, clap::Args)]
 pub struct SensitivityArgs {
+    /// Base samples N; the models are evaluated N·(2·groups + 2) times.
+    #[arg(long, default_value_t = 65_536, value_parser = parse_count, allow_hyphen_values = true)]
     pub samples: u64,
+    /// Seed of the random streams (default: the scenario's `seed`, else 1).
+    #[arg(long, allow_hyphen_values = true)]
     pub seed: Option<u64>,
+    /// Bootstrap resamples for the 95 % intervals.
+    #[arg(long, default_value_t = 500, value_parser = parse_count, allow_hyphen_values = true)]
     pub bootstrap: u64,
+    /// Most model values kept for the row bootstrap; beyond, the intervals come from a
+    /// bootstrap of blocks of rows (bounded memory).
+    #[arg(long, value_name = "VALUES", default_value_t = DEFAULT_ROW_BOOTSTRAP_LIMIT, value_parser = parse_count, allow_hyphen_values = true)]
     pub row_bootstrap_limit: u64,
+    /// Also estimate Shapley effects per source (exact for correlated inputs; needs
+    /// parts without the Eq. 11 constraint).
+    #[arg(long)]
     pub shapley: bool,
+    /// Shapley: permutation budget (all orders when d! fits, repeated).
+    #[arg(long, default_value_t = 600, value_parser = parse_count, allow_hyphen_values = true)]
     pub permutations: u64,
+    /// Shapley: outer draws per conditional-variance estimate.
+    #[arg(long, default_value_t = 256, value_parser = parse_count, allow_hyphen_values = true)]
     pub outer: u64,
 }
 
@@ -344,13 +374,9 @@ pub fn sensitivity(
 ) -> Result<()> {
     let scenario = load(path)?;
     let settings = sensitivity_settings(&scenario, &args)?;
-    let threads = threads(execution.threads)?;
-    check_memory(
-        memory::sensitivity(&scenario, &settings, threads),
-        execution,
-        "sensitivity",
-    )?;
-    let pool = thread_pool(threads)?;
+    let pool = pool_for(execution, "sensitivity", |threads| {
+        memory::sensitivity(&scenario, &settings, threads)
+    })?;
     let bar = progress_bar(args.samples, execution.quiet);
     let outputs = pool
         .install(|| sobol_indices(&scenario, settings, &|n| bar.inc(n)))
@@ -460,13 +486,9 @@ pub fn sensitivity_shard(
     let (scenario, text) = read(path)?;
     let settings = sensitivity_settings(&scenario, &args)?;
     let build = build_identity()?;
-    let threads = threads(execution.threads)?;
-    check_memory(
-        memory::sensitivity(&scenario, &settings, threads),
-        execution,
-        "sensitivity",
-    )?;
-    let pool = thread_pool(threads)?;
+    let pool = pool_for(execution, "sensitivity", |threads| {
+        memory::sensitivity(&scenario, &settings, threads)
+    })?;
     let chunks = rvtol_engine::shard_chunks(settings.base_samples, shard, shards);
     let chunk_samples =
         |c: u64| (c * rvtol_engine::run::CHUNK_SIZE as u64).min(settings.base_samples);
@@ -552,13 +574,9 @@ pub fn baseline(
     if settings.samples < 2 {
         return Err(BadInput("--samples: a baseline needs at least 2 samples".into()).into());
     }
-    let threads = threads(execution.threads)?;
-    check_memory(
-        memory::run(&scenario, &settings, threads),
-        execution,
-        "baseline",
-    )?;
-    let pool = thread_pool(threads)?;
+    let pool = pool_for(execution, "baseline", |threads| {
+        memory::run(&scenario, &settings, threads)
+    })?;
     let bar = progress_bar(settings.samples, execution.quiet);
     let baseline = pool
         .install(|| {
@@ -616,13 +634,9 @@ pub fn check(
         seed,
         exact_percentile_limit: recorded.exact_percentile_limit,
     };
-    let threads = threads(execution.threads)?;
-    check_memory(
-        memory::run(&scenario, &settings, threads),
-        execution,
-        "check",
-    )?;
-    let pool = thread_pool(threads)?;
+    let pool = pool_for(execution, "check", |threads| {
+        memory::run(&scenario, &settings, threads)
+    })?;
     let bar = progress_bar(recorded.samples, execution.quiet);
     let report = pool
         .install(|| {
@@ -693,13 +707,9 @@ pub fn allocate(
         verification_seed: args.verify_seed.unwrap_or(seed.wrapping_add(1)),
         cost,
     };
-    let threads = threads(execution.threads)?;
-    check_memory(
-        memory::allocation(&scenario, settings.samples, threads),
-        execution,
-        "allocate",
-    )?;
-    let pool = thread_pool(threads)?;
+    let pool = pool_for(execution, "allocate", |threads| {
+        memory::allocation(&scenario, settings.samples, threads)
+    })?;
     let spinner = if execution.quiet || !std::io::stderr().is_terminal() {
         ProgressBar::hidden()
     } else {
@@ -997,10 +1007,27 @@ pub fn evaluate(
     }
     let pool = thread_pool(threads(execution.threads)?)?;
     let rows = pool.install(|| rvtol_engine::evaluate::evaluate_rows(&scenario, values));
-    let csv = rvtol_engine::report::sample_csv(&scenario, &rows);
     match output {
-        Some(path) => write_report(path, &csv),
-        None => print(&csv),
+        Some(path) => write_sample_table(path, &scenario, &rows),
+        None => print(&rvtol_engine::report::sample_csv(&scenario, &rows)),
+    }
+}
+
+/// Writes a sample table to `path`: Parquet when its name ends in `.parquet`, else CSV.
+fn write_sample_table(
+    path: &Path,
+    scenario: &Scenario,
+    table: &rvtol_engine::SampleTable,
+) -> Result<()> {
+    let parquet = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("parquet"));
+    if parquet {
+        let bytes = rvtol_engine::report::sample_parquet(scenario, table)
+            .map_err(|err| BadInput(format!("{}: {err}", path.display())))?;
+        write_bytes(path, &bytes)
+    } else {
+        write_report(path, &rvtol_engine::report::sample_csv(scenario, table))
     }
 }
 
@@ -1124,9 +1151,9 @@ pub fn run_shard(
     };
     let build = build_identity()?;
     let chunks = rvtol_engine::shard_chunks(settings.samples, shard, shards);
-    let threads = threads(execution.threads)?;
-    check_memory(memory::run(&scenario, &settings, threads), execution, "run")?;
-    let pool = thread_pool(threads)?;
+    let pool = pool_for(execution, "run", |threads| {
+        memory::run(&scenario, &settings, threads)
+    })?;
     let chunk_samples = |c: u64| (c * rvtol_engine::run::CHUNK_SIZE as u64).min(settings.samples);
     let shard_samples = chunk_samples(chunks.end) - chunk_samples(chunks.start);
     let bar = progress_bar(shard_samples, execution.quiet);

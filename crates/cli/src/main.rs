@@ -12,8 +12,8 @@ mod output;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+use crate::commands::SensitivityArgs;
 use clap::{Args, Parser, Subcommand};
-use rvtol_engine::sensitivity::DEFAULT_ROW_BOOTSTRAP_LIMIT;
 use rvtol_engine::DEFAULT_EXACT_PERCENTILE_LIMIT;
 
 use crate::limits::{parse_count, parse_share, parse_size};
@@ -70,8 +70,9 @@ enum Command {
         /// Write an HTML report to PATH: one self-contained page with the plots.
         #[arg(long, value_name = "PATH")]
         html: Option<PathBuf>,
-        /// Write every sample to PATH as CSV, one row per sample: its index, the drawn
-        /// inputs and the outputs (the run's own values; same seed, same bytes).
+        /// Write every sample to PATH, one row per sample: its index, the drawn inputs and
+        /// the outputs (the run's own values; same seed, same bytes); Parquet when PATH
+        /// ends in .parquet, else CSV.
         #[arg(long, value_name = "PATH")]
         samples_out: Option<PathBuf>,
         /// Exact percentiles while samples × outputs stays at or below this many values;
@@ -140,29 +141,8 @@ enum Command {
     Sensitivity {
         /// Scenario file (JSON).
         scenario: PathBuf,
-        /// Base samples N; the models are evaluated N·(2·groups + 2) times.
-        #[arg(long, default_value_t = 65_536, value_parser = parse_count, allow_hyphen_values = true)]
-        samples: u64,
-        /// Seed of the random streams (default: the scenario's `seed`, else 1).
-        #[arg(long, allow_hyphen_values = true)]
-        seed: Option<u64>,
-        /// Bootstrap resamples for the 95 % intervals.
-        #[arg(long, default_value_t = 500, value_parser = parse_count, allow_hyphen_values = true)]
-        bootstrap: u64,
-        /// Most model values kept for the row bootstrap; beyond, the intervals come from a
-        /// bootstrap of blocks of rows (bounded memory).
-        #[arg(long, value_name = "VALUES", default_value_t = DEFAULT_ROW_BOOTSTRAP_LIMIT, value_parser = parse_count, allow_hyphen_values = true)]
-        row_bootstrap_limit: u64,
-        /// Also estimate Shapley effects per source (exact for correlated inputs; needs
-        /// parts without the Eq. 11 constraint).
-        #[arg(long)]
-        shapley: bool,
-        /// Shapley: permutation budget (all orders when d! fits, repeated).
-        #[arg(long, default_value_t = 600, value_parser = parse_count, allow_hyphen_values = true)]
-        permutations: u64,
-        /// Shapley: outer draws per conditional-variance estimate.
-        #[arg(long, default_value_t = 256, value_parser = parse_count, allow_hyphen_values = true)]
-        outer: u64,
+        #[command(flatten)]
+        options: SensitivityArgs,
         /// Compute only shard K of N (0 <= K < N) of the analysis' model evaluations (its
         /// share of the base samples and of the Shapley permutations) and write them to
         /// --partial instead of a report; `rvtol merge` folds the N partials into the
@@ -305,7 +285,8 @@ enum Command {
         /// output columns are allowed).
         #[arg(long, value_name = "CSV")]
         inputs: PathBuf,
-        /// Write the rows with their outputs to PATH instead of standard output.
+        /// Write the rows with their outputs to PATH instead of standard output (Parquet
+        /// when PATH ends in .parquet, else CSV).
         #[arg(short = 'o', long = "output", value_name = "PATH")]
         output: Option<PathBuf>,
         #[command(flatten)]
@@ -443,56 +424,22 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Command::Init { model, output } => init(&model, output.as_deref()),
         Command::Sensitivity {
             scenario,
-            samples,
-            seed,
-            bootstrap,
-            row_bootstrap_limit,
-            shapley,
-            permutations,
-            outer,
+            options,
             shard: Some(shard),
             partial: Some(partial),
             execution,
             ..
-        } => sensitivity_shard(
-            &scenario,
-            SensitivityArgs {
-                samples,
-                seed,
-                bootstrap,
-                row_bootstrap_limit,
-                shapley,
-                permutations,
-                outer,
-            },
-            shard,
-            &partial,
-            &execution,
-        ),
+        } => sensitivity_shard(&scenario, options, shard, &partial, &execution),
         Command::Sensitivity {
             scenario,
-            samples,
-            seed,
-            bootstrap,
-            row_bootstrap_limit,
-            shapley,
-            permutations,
-            outer,
+            options,
             json,
             html,
             execution,
             ..
         } => sensitivity(
             &scenario,
-            SensitivityArgs {
-                samples,
-                seed,
-                bootstrap,
-                row_bootstrap_limit,
-                shapley,
-                permutations,
-                outer,
-            },
+            options,
             Destinations {
                 json: json.as_deref(),
                 html: html.as_deref(),

@@ -73,6 +73,24 @@ def test_samples_are_the_command_line_rows_and_the_reports_values(tmp_path):
     assert report["outputs"][0]["percentiles"]["50"] == np.percentile(lost_motion, 50)
 
 
+def test_samples_out_files_read_back_in_pandas_with_the_runs_values(tmp_path):
+    """`run --samples-out` as CSV and as Parquet, read by pandas (pyarrow for Parquet): the
+    same values as the run's own samples, whose statistics are the report's."""
+    pandas = pytest.importorskip("pandas")
+    pytest.importorskip("pyarrow")
+    path = scenario_path("rv40e-elastic.json")
+    csv_file, parquet_file = tmp_path / "s.csv", tmp_path / "s.parquet"
+    cli("run", path, "--samples", "3000", "--samples-out", str(csv_file), "--quiet")
+    cli("run", path, "--samples", "3000", "--samples-out", str(parquet_file), "--quiet")
+    report, samples = rvtol.run(rvtol.Scenario(path), samples=3000, samples_out=True)
+    expected = np.hstack([samples["inputs"], samples["outputs"]])
+    for frame in (pandas.read_csv(csv_file), pandas.read_parquet(parquet_file)):
+        assert list(frame["sample"]) == list(range(3000))
+        assert np.array_equal(frame.to_numpy()[:, 1:], expected)
+    median = np.percentile(samples["outputs"][:, 0], 50)
+    assert report["outputs"][0]["percentiles"]["50"] == median
+
+
 def test_thread_count_does_not_change_the_report():
     scenario = rvtol.Scenario(scenario_path("rv40e-elastic.json"))
     one = rvtol.run(scenario, samples=10000, threads=1)
@@ -167,3 +185,21 @@ def test_peers_on_rvtol_models_agree_with_rvtol():
         _, st_ot, (ot_low, ot_high) = theirs_ot[name]
         se_ot = (ot_high - ot_low) / (2 * 1.96)
         assert abs(st_ot - ours[name]["total"]) <= 4 * np.hypot(se_ours, se_ot), name
+
+
+def test_readme_example_runs_and_prints_what_it_says(capsys, monkeypatch):
+    """README.md's Python block, executed from the repository root: every `print` line's
+    comment is what it prints."""
+    readme = (ROOT / "README.md").read_text()
+    section = readme[readme.index("## rvtol from Python") :]
+    start = section.index("```python\n") + len("```python\n")
+    block = section[start : section.index("```", start)]
+    monkeypatch.chdir(ROOT)
+    exec(compile(block, "README.md", "exec"), {})
+    printed = capsys.readouterr().out.splitlines()
+    expected = [
+        line.split("#", 1)[1].strip()
+        for line in block.splitlines()
+        if line.startswith("print(")
+    ]
+    assert printed == expected
