@@ -5,7 +5,7 @@
 
 use rvtol_engine::report::RunReport;
 use rvtol_engine::run::{PercentileMethod, SKETCH_RELATIVE_ACCURACY};
-use rvtol_engine::{nominal, run, RunSettings, Scenario};
+use rvtol_engine::{nominal, run, RunSettings, Scenario, DEFAULT_EXACT_PERCENTILE_LIMIT};
 use rvtol_tests::{scenario_path, SIGMA_BOUND};
 use statrs::distribution::{ContinuousCDF, Normal};
 
@@ -232,3 +232,118 @@ fn golden_values_pin_the_random_stream() {
 }
 
 const GOLDEN: &str = "0.367167897651 0.216661525931 2.100229557574 14861";
+
+/// A copy of a shipped scenario with every variable's numbers multiplied by `factor` and
+/// written in `unit`.
+fn rewritten_in(file: &str, unit: &str, factor: f64) -> String {
+    let mut document: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(scenario_path(file)).unwrap()).unwrap();
+    for variable in document["variables"].as_array_mut().unwrap() {
+        variable["unit"] = unit.into();
+        for (_, parameters) in variable["distribution"].as_object_mut().unwrap() {
+            for key in ["lower", "upper", "mean", "sd", "mean_shift", "mode"] {
+                if let Some(value) = parameters.get(key).and_then(|v| v.as_f64()) {
+                    parameters[key] = (value * factor).into();
+                }
+            }
+        }
+    }
+    document.to_string()
+}
+
+#[test]
+fn variables_in_other_units_are_converted_to_the_models_units_at_load_time() {
+    // RV-20E tolerances in µm and the Ishigami inputs in degrees give the figures of the
+    // shipped files (mm, rad) to rounding: the draws differ by the last bits of the
+    // converted parameters (x·10⁻³ against the decimal the file gives).
+    let settings = RunSettings {
+        samples: 20_000,
+        seed: 5,
+        exact_percentile_limit: DEFAULT_EXACT_PERCENTILE_LIMIT,
+    };
+    for (file, unit, factor, canonical) in [
+        ("rv20e-hysteresis.json", "µm", 1000.0, "mm"),
+        ("ishigami.json", "deg", 180.0 / std::f64::consts::PI, "rad"),
+    ] {
+        let shipped = load(file);
+        let converted =
+            Scenario::from_json(&rewritten_in(file, unit, factor), "converted").unwrap();
+        let variables: Vec<_> = converted
+            .columns
+            .iter()
+            .filter(|c| !c.name.contains('.'))
+            .collect();
+        assert!(
+            variables
+                .iter()
+                .all(|c| c.unit.as_deref() == Some(canonical)),
+            "{file}"
+        );
+        let a = run(&shipped, settings, &|_| {}).unwrap();
+        let b = run(&converted, settings, &|_| {}).unwrap();
+        for (x, y) in a.outputs.iter().zip(&b.outputs) {
+            let scale = x.moments.sd().max(x.moments.mean.abs()).max(1e-300);
+            assert!(
+                (x.moments.mean - y.moments.mean).abs() <= 1e-12 * scale,
+                "{file}"
+            );
+            assert!(
+                (x.moments.sd() - y.moments.sd()).abs() <= 1e-12 * scale,
+                "{file}"
+            );
+        }
+    }
+}
+
+#[test]
+fn unit_conversion_follows_the_bound_input_and_names_the_unit_in_errors() {
+    let skeleton = rvtol_engine::scenario::skeleton::skeleton("linear_stack").unwrap();
+    let mut stack: serde_json::Value = serde_json::from_str(&skeleton).unwrap();
+    // linear_stack takes any unit: a variable in µm stays in µm (its numbers mean what the
+    // user wrote).
+    stack["variables"][0]["unit"] = "µm".into();
+    stack["variables"][0]["distribution"] = serde_json::json!({"normal": {"mean": 5.0, "sd": 2.0}});
+    let scenario = Scenario::from_json(&stack.to_string(), "stack").unwrap();
+    assert_eq!(scenario.columns[0].unit.as_deref(), Some("µm"));
+    assert_eq!(scenario.input_space.mean_row()[0], 5.0);
+    // A distribution error names the unit its values are in.
+    stack["variables"][0]["distribution"] =
+        serde_json::json!({"normal": {"mean": 5.0, "sd": -2.0}});
+    let err = Scenario::from_json(&stack.to_string(), "stack")
+        .err()
+        .unwrap();
+    assert!(err.to_string().contains("(values in µm)"), "{err}");
+    // Converted for an input in mm but also fed to an input of any unit: refused.
+    let mut mixed: serde_json::Value =
+        serde_json::from_str(&rewritten_in("rv20e-hysteresis.json", "µm", 1000.0)).unwrap();
+    let mut second = stack["models"][0].clone();
+    second["inputs"]["x1"] = "pin_radius_error".into();
+    mixed["models"].as_array_mut().unwrap().push(second);
+    mixed["variables"]
+        .as_array_mut()
+        .unwrap()
+        .push(serde_json::json!({"name": "x2", "unit": "any", "distribution": {"normal": {"mean": 0.0, "sd": 0.0}}}));
+    let err = Scenario::from_json(&mixed.to_string(), "mixed")
+        .err()
+        .unwrap();
+    assert!(
+        err.to_string().contains(
+            "would be converted to mm for the inputs that want mm but not for models[1].inputs.x1"
+        ),
+        "{err}"
+    );
+    // Another kind of unit is still refused at the binding.
+    let mut wrong: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(scenario_path("rv20e-hysteresis.json")).unwrap(),
+    )
+    .unwrap();
+    wrong["variables"][0]["unit"] = "arcsec".into();
+    let err = Scenario::from_json(&wrong.to_string(), "wrong")
+        .err()
+        .unwrap();
+    assert!(
+        err.to_string()
+            .contains("is in arcsec but the input wants mm"),
+        "{err}"
+    );
+}

@@ -141,6 +141,59 @@ fn standard_normal_quantile(p: f64) -> f64 {
 }
 
 impl ScalarDistribution {
+    /// The law of f·X for a positive factor f (a change of unit, µm to mm: f = 1e-3):
+    /// every location and spread scales by f, a capability stays, a lognormal's μ moves by
+    /// ln f.
+    pub fn scaled(self, f: f64) -> ScalarDistribution {
+        use ScalarDistribution::*;
+        match self {
+            Normal { mean, sd } => Normal {
+                mean: mean * f,
+                sd: sd * f,
+            },
+            ToleranceBand {
+                lower,
+                upper,
+                cp,
+                mean_shift,
+            } => ToleranceBand {
+                lower: lower * f,
+                upper: upper * f,
+                cp,
+                mean_shift: mean_shift * f,
+            },
+            Uniform { lower, upper } => Uniform {
+                lower: lower * f,
+                upper: upper * f,
+            },
+            Triangular { lower, mode, upper } => Triangular {
+                lower: lower * f,
+                mode: mode * f,
+                upper: upper * f,
+            },
+            TruncatedNormal {
+                mean,
+                sd,
+                lower,
+                upper,
+            } => TruncatedNormal {
+                mean: mean * f,
+                sd: sd * f,
+                lower: lower * f,
+                upper: upper * f,
+            },
+            FoldedNormal { mean, sd } => FoldedNormal {
+                mean: mean * f,
+                sd: sd * f,
+            },
+            Rayleigh { sigma } => Rayleigh { sigma: sigma * f },
+            Lognormal { mu, sigma } => Lognormal {
+                mu: mu + f.ln(),
+                sigma,
+            },
+        }
+    }
+
     /// Checks the parameters; `path` is the JSON path of the distribution object.
     pub fn validate(&self, path: &str) -> Result<(), DeviationError> {
         let field = |name: &str| format!("{path}.{name}");
@@ -437,6 +490,53 @@ impl ScalarDistribution {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn scaling_a_law_scales_its_mean_and_spread() {
+        // f·X has mean f·E[X] and variance f²·Var[X], for every law (a change of unit).
+        let f = 1e-3;
+        for law in [
+            ScalarDistribution::Normal { mean: 5.0, sd: 2.0 },
+            ScalarDistribution::ToleranceBand {
+                lower: -4.0,
+                upper: 6.0,
+                cp: 1.33,
+                mean_shift: 0.5,
+            },
+            ScalarDistribution::Uniform {
+                lower: -3.0,
+                upper: 7.0,
+            },
+            ScalarDistribution::Triangular {
+                lower: -1.0,
+                mode: 0.5,
+                upper: 4.0,
+            },
+            ScalarDistribution::TruncatedNormal {
+                mean: 1.0,
+                sd: 2.0,
+                lower: -1.0,
+                upper: 4.0,
+            },
+            ScalarDistribution::FoldedNormal { mean: 1.0, sd: 3.0 },
+            ScalarDistribution::Rayleigh { sigma: 4.0 },
+            ScalarDistribution::Lognormal {
+                mu: 1.5,
+                sigma: 0.2,
+            },
+        ] {
+            let scaled = law.scaled(f);
+            assert!(
+                (scaled.mean() - f * law.mean()).abs() <= 1e-14 * (f * law.mean()).abs().max(f),
+                "{law:?}"
+            );
+            assert!(
+                (scaled.variance() - f * f * law.variance()).abs()
+                    <= 1e-13 * f * f * law.variance(),
+                "{law:?}"
+            );
+        }
+    }
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 

@@ -313,6 +313,65 @@ fn model_params(
 /// `None` when something the scenario needs could not be built. Elements that failed to
 /// parse or to compile are left out, and what refers to them (a correlation with a broken
 /// variable, a binding to a broken part) is not reported again.
+/// Per variable name, the units of the model inputs it is bound to, each with the binding's
+/// JSON path. Models that do not build are left out here: the binding pass reports them.
+fn bound_input_units(file: &ScenarioFile) -> BTreeMap<String, Vec<(String, String)>> {
+    let mut units: BTreeMap<String, Vec<(String, String)>> = BTreeMap::new();
+    for (i, model_file) in &file.models {
+        let Some(entry) = rvtol_models::find(&model_file.model) else {
+            continue;
+        };
+        let Ok(params) = model_params("", &model_file.params) else {
+            continue;
+        };
+        let Ok(model) = (entry.build)(&params) else {
+            continue;
+        };
+        for input in model.inputs() {
+            if let Some(serde_json::Value::String(name)) = model_file.inputs.get(&input.name) {
+                units.entry(name.clone()).or_default().push((
+                    input.unit.clone(),
+                    format!("models[{i}].inputs.{}", input.name),
+                ));
+            }
+        }
+    }
+    units
+}
+
+/// The factor and unit a variable written in `unit` is converted to at load time
+/// ([`super::units`]): when every input it is bound to wants one unit of the same kind,
+/// other than its own. An error when it feeds both such an input and one of any unit.
+fn variable_conversion(
+    path: &str,
+    unit: &str,
+    bound: Option<&Vec<(String, String)>>,
+) -> Result<Option<(f64, String)>, ScenarioError> {
+    let Some(bound) = bound else {
+        return Ok(None);
+    };
+    let targets: BTreeSet<&str> = bound
+        .iter()
+        .map(|(u, _)| u.as_str())
+        .filter(|u| *u != "any")
+        .collect();
+    let [target] = targets.into_iter().collect::<Vec<_>>()[..] else {
+        return Ok(None);
+    };
+    let Some(factor) = super::units::conversion(unit, target) else {
+        return Ok(None);
+    };
+    if let Some((_, any_path)) = bound.iter().find(|(u, _)| u == "any") {
+        return Err(ScenarioError::new(
+            format!("{path}.unit"),
+            format!(
+                "a variable in {unit} would be converted to {target} for the inputs that want {target} but not for {any_path}, which takes any unit: write it in {target}"
+            ),
+        ));
+    }
+    Ok(Some((factor, target.to_string())))
+}
+
 pub(super) fn compile(
     file: ScenarioFile,
     fallback_name: &str,
@@ -384,16 +443,40 @@ pub(super) fn compile(
             ));
         }
     }
+    let bound_units = bound_input_units(&file);
     for (i, variable) in &file.variables {
         let path = format!("variables[{i}]");
+        // Checked in the unit the file gives, which the messages name.
+        let in_unit = |err: ScenarioError| match &variable.unit {
+            Some(unit) if !unit.is_empty() && !err.path.ends_with(".cp") => ScenarioError {
+                message: format!("{} (values in {unit})", err.message),
+                ..err
+            },
+            _ => err,
+        };
         let checked = check_name(&format!("{path}.name"), &variable.name)
-            .and_then(|()| distribution(&format!("{path}.distribution"), &variable.distribution))
+            .and_then(|()| {
+                distribution(&format!("{path}.distribution"), &variable.distribution)
+                    .map_err(in_unit)
+            })
             .and_then(|(dist, kind)| {
                 dist.validate(&format!("{path}.distribution.{kind}"))
                     .map(|()| dist)
-                    .map_err(ScenarioError::from)
+                    .map_err(|err| in_unit(ScenarioError::from(err)))
+            })
+            .and_then(|dist| {
+                let conversion = match &variable.unit {
+                    Some(unit) => {
+                        variable_conversion(&path, unit, bound_units.get(&variable.name))?
+                    }
+                    None => None,
+                };
+                Ok(match conversion {
+                    Some((factor, unit)) => (dist.scaled(factor), Some(unit)),
+                    None => (dist, variable.unit.clone()),
+                })
             });
-        let dist = match checked {
+        let (dist, unit) = match checked {
             Ok(dist) => dist,
             Err(err) => {
                 report(Err(err));
@@ -410,7 +493,7 @@ pub(super) fn compile(
             &format!("{path}.name"),
             variable.name.clone(),
             column,
-            variable.unit.clone(),
+            unit,
             &mut columns,
         ));
     }

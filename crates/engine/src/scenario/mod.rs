@@ -12,6 +12,7 @@
 mod compile;
 mod file;
 pub mod skeleton;
+pub mod units;
 
 use std::path::Path;
 
