@@ -421,11 +421,11 @@ fn init_writes_a_valid_runnable_skeleton_for_every_model() {
 fn samples_out_writes_the_runs_own_rows_with_the_same_bytes_for_any_thread_count() {
     // The CSV's outputs are the values the run's statistics are made of: the exact
     // type-7 median of a column equals the report's P50 bit for bit, and the mean agrees
-    // to rounding; the file is byte-identical for 1 and 2 threads.
+    // to rounding; the file is byte-identical for 1, 2 and 4 threads.
     let dir = std::env::temp_dir().join(format!("rvtol-samples-out-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let mut files = Vec::new();
-    for threads in ["1", "2"] {
+    for threads in ["1", "2", "4"] {
         let csv = dir.join(format!("samples-{threads}.csv"));
         let json = dir.join(format!("report-{threads}.json"));
         let output = run_rvtol(&[
@@ -449,7 +449,10 @@ fn samples_out_writes_the_runs_own_rows_with_the_same_bytes_for_any_thread_count
         );
         files.push((std::fs::read(&csv).unwrap(), json));
     }
-    assert!(files[0].0 == files[1].0, "same seed, same bytes");
+    assert!(
+        files[0].0 == files[1].0 && files[0].0 == files[2].0,
+        "same seed, same bytes"
+    );
     let text = String::from_utf8(files[0].0.clone()).unwrap();
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
