@@ -409,6 +409,51 @@ fn init_writes_a_valid_runnable_skeleton_for_every_model() {
             String::from_utf8_lossy(&out.stderr)
         );
     }
+    // A design's parameters in place of the example's: the transmission error with an
+    // input per pin and per tooth space, whose families the skeleton writes as arrays.
+    let path = dir.join("te-pins.json");
+    let out = run_rvtol(&[
+        "init",
+        "transmission_error",
+        "--param",
+        "pin_position_errors=1",
+        "--param",
+        "tooth_profile_errors=1",
+        "-o",
+        path.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(0));
+    let scenario: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let inputs = scenario["models"][0]["inputs"].as_object().unwrap();
+    assert_eq!(inputs["pin_radial_error_mm_*"], "pin_radial_error_mm");
+    assert_eq!(
+        inputs["tooth_profile_error_mm_2_*"],
+        "tooth_profile_error_mm_2"
+    );
+    let counts: Vec<u64> = scenario["variables"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|v| v["count"].as_u64())
+        .collect();
+    assert_eq!(counts, [40, 40, 39, 39]);
+    let out = run_rvtol(&["validate", path.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("(194 input columns"));
+    for (bad, message) in [
+        (
+            "pin_position_errors",
+            "--param pin_position_errors: expected KEY=VALUE",
+        ),
+        ("no_such=1", "params.no_such: unknown parameter"),
+    ] {
+        let out = run_rvtol(&["init", "transmission_error", "--param", bad]);
+        assert_eq!(out.status.code(), Some(2));
+        let stderr = String::from_utf8(out.stderr).unwrap();
+        assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+        assert!(stderr.contains(message), "{stderr}");
+    }
     let out = run_rvtol(&["init", "no_such_model"]);
     assert_eq!(out.status.code(), Some(2));
     let stderr = String::from_utf8(out.stderr).unwrap();

@@ -17,6 +17,7 @@ use rvtol_engine::run::check_non_finite;
 use rvtol_engine::sensitivity::{sobol_indices, SensitivitySettings, DEFAULT_ROW_BOOTSTRAP_LIMIT};
 use rvtol_engine::sensitivity_report::SensitivityReport;
 use rvtol_engine::shapley::{shapley_effects, ShapleySettings};
+use rvtol_engine::table::CsvTable;
 use rvtol_engine::{
     gate, nominal_curves, run as run_scenario, NominalReport, RunReport, RunSettings, Scenario,
     ScenarioError,
@@ -43,8 +44,18 @@ fn fallback_name(path: &Path) -> String {
         .unwrap_or_else(|| "scenario".to_string())
 }
 
-fn read(path: &Path) -> Result<(Scenario, String)> {
+/// A scenario file's text, with the numbers of the data files it refers to written in.
+fn read_scenario_text(path: &Path) -> Result<String> {
     let text = read_text(path)?;
+    let folder = rvtol_engine::scenario::scenario_folder(path);
+    match rvtol_engine::scenario::data::inline_data_files(&text, &folder) {
+        Ok(inlined) => Ok(inlined.into_owned()),
+        Err(err) => Err(bad_scenario(path, err)),
+    }
+}
+
+fn read(path: &Path) -> Result<(Scenario, String)> {
+    let text = read_scenario_text(path)?;
     let scenario =
         Scenario::from_json(&text, &fallback_name(path)).map_err(|err| bad_scenario(path, err))?;
     Ok((scenario, text))
@@ -292,8 +303,19 @@ pub fn curve(scenario_path: &Path, out_dir: &Path) -> Result<()> {
     print(&lines)
 }
 
-pub fn init(model: &str, output: Option<&Path>) -> Result<()> {
-    let text = rvtol_engine::scenario::skeleton::skeleton(model).map_err(BadInput)?;
+pub fn init(model: &str, params: &[String], output: Option<&Path>) -> Result<()> {
+    let mut given = serde_json::Map::new();
+    for param in params {
+        let Some((key, value)) = param.split_once('=') else {
+            return Err(BadInput(format!("--param {param}: expected KEY=VALUE")).into());
+        };
+        let value = match value.trim().parse::<f64>() {
+            Ok(x) if x.is_finite() => serde_json::json!(x),
+            _ => serde_json::json!(value),
+        };
+        given.insert(key.trim().to_string(), value);
+    }
+    let text = rvtol_engine::scenario::skeleton::skeleton_with(model, &given).map_err(BadInput)?;
     match output {
         Some(path) => write_report(path, &text),
         None => print(&text),
@@ -301,7 +323,7 @@ pub fn init(model: &str, output: Option<&Path>) -> Result<()> {
 }
 
 pub fn validate(scenario_path: &Path) -> Result<()> {
-    let text = read_text(scenario_path)?;
+    let text = read_scenario_text(scenario_path)?;
     match Scenario::from_json_all_problems(&text, &fallback_name(scenario_path)) {
         Ok(scenario) => {
             let count =
@@ -870,83 +892,9 @@ pub fn report(
     ))
 }
 
-/// A CSV file of numbers with a header: its columns as (name, unit) from `name [unit]`,
-/// and its rows with their line numbers.
-struct CsvTable<'a> {
-    path: &'a Path,
-    columns: Vec<(String, Option<String>)>,
-    rows: Vec<(u64, csv::StringRecord)>,
-}
-
-impl CsvTable<'_> {
-    /// "FILE: line N", for messages.
-    fn at(&self, line: u64) -> String {
-        format!("{}: line {line}", self.path.display())
-    }
-
-    /// Cell `i` of `record` (on `line`) as a finite number, or one line saying why not.
-    fn number(&self, line: u64, record: &csv::StringRecord, i: usize) -> Result<f64> {
-        let cell = record.get(i).unwrap_or("");
-        match cell.parse::<f64>() {
-            Ok(v) if v.is_finite() => Ok(v),
-            _ => Err(BadInput(format!(
-                "{}, column '{}': not a finite number: '{cell}'",
-                self.at(line),
-                self.columns[i].0
-            ))
-            .into()),
-        }
-    }
-
-    fn names(&self) -> Vec<&str> {
-        self.columns.iter().map(|(n, _)| n.as_str()).collect()
-    }
-}
-
-/// Reads a CSV file of numbers with a header (no column twice).
+/// Reads a CSV table of numbers (the engine's [`CsvTable`]); its error is one line.
 fn read_csv(path: &Path) -> Result<CsvTable<'_>> {
-    let text = read_text(path)?;
-    let at = |line: u64| format!("{}: line {line}", path.display());
-    let mut reader = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .from_reader(text.as_bytes());
-    let columns: Vec<(String, Option<String>)> = reader
-        .headers()
-        .map_err(|err| BadInput(format!("{}: {err}", at(1))))?
-        .iter()
-        .map(|heading| match heading.rsplit_once(" [") {
-            Some((name, unit)) if unit.ends_with(']') => (
-                name.to_string(),
-                Some(unit.trim_end_matches(']').to_string()),
-            ),
-            _ => (heading.to_string(), None),
-        })
-        .collect();
-    if let Some((i, _)) = columns
-        .iter()
-        .enumerate()
-        .find(|(i, (n, _))| columns[..*i].iter().any(|(m, _)| m == n))
-    {
-        return Err(BadInput(format!(
-            "{}: column '{}' appears twice",
-            at(1),
-            columns[i].0
-        ))
-        .into());
-    }
-    let mut rows = Vec::new();
-    for record in reader.records() {
-        let record = record.map_err(|err| {
-            let line = err.position().map_or(0, |p| p.line());
-            BadInput(format!("{}: {err}", at(line)))
-        })?;
-        rows.push((record.position().map_or(0, |p| p.line()), record));
-    }
-    Ok(CsvTable {
-        path,
-        columns,
-        rows,
-    })
+    CsvTable::read(path).map_err(|message| BadInput(message).into())
 }
 
 /// `rvtol evaluate`: the models on the rows of a CSV.
@@ -999,7 +947,7 @@ pub fn evaluate(
     let mut values = Vec::with_capacity(table.rows.len() * n_inputs);
     for (line, record) in &table.rows {
         for &i in &position {
-            values.push(table.number(*line, record, i)?);
+            values.push(table.number(*line, record, i).map_err(BadInput)?);
         }
     }
     if values.is_empty() {
@@ -1084,7 +1032,11 @@ pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()>
         rows.push(
             order
                 .iter()
-                .map(|&i| table.number(*line, record, i))
+                .map(|&i| {
+                    table
+                        .number(*line, record, i)
+                        .map_err(|message| BadInput(message).into())
+                })
                 .collect::<Result<Vec<f64>>>()?,
         );
     }

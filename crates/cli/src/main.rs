@@ -217,6 +217,11 @@ enum Command {
     Init {
         /// Model name (`rvtol models`).
         model: String,
+        /// A parameter of the design, KEY=VALUE (a number or a text), in place of the
+        /// example's; the inputs follow (e.g. `--param pin_position_errors=1` gives the
+        /// transmission error an input per pin). Repeatable.
+        #[arg(long = "param", value_name = "KEY=VALUE")]
+        params: Vec<String>,
         /// Write the scenario to PATH instead of standard output.
         #[arg(short = 'o', long = "output", value_name = "PATH")]
         output: Option<PathBuf>,
@@ -421,7 +426,11 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Command::Nominal { scenario, json } => nominal(&scenario, json.as_deref()),
         Command::Curve { scenario, out_dir } => curve(&scenario, &out_dir),
         Command::Validate { scenario } => validate(&scenario),
-        Command::Init { model, output } => init(&model, output.as_deref()),
+        Command::Init {
+            model,
+            params,
+            output,
+        } => init(&model, &params, output.as_deref()),
         Command::Sensitivity {
             scenario,
             options,

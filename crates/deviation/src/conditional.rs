@@ -110,7 +110,7 @@ impl InputSpace {
                 .independent_columns()
                 .iter()
                 .filter(|(c, _)| free_columns.contains(c))
-                .copied()
+                .cloned()
                 .collect(),
         })
     }

@@ -10,7 +10,8 @@
 //!   (001 Eq. 2–4), given directly, as standard deviations plus a correlation matrix, or
 //!   derived from a tolerance band (001 Eq. 9, 10, 12; [`PartSpec::from_tolerance_band`]),
 //!   optionally restricted by the constraint of 001 Eq. 11 ([`TiltConstraint`]);
-//! - scalar error parameters follow a [`ScalarDistribution`];
+//! - scalar error parameters follow a [`ScalarDistribution`], measured values an
+//!   [`EmpiricalLaw`] (resampled, optionally smoothed);
 //! - all normal components of a scenario form one multivariate normal, drawn by
 //!   [`InputSpace`] from a pivoted Cholesky factor ([`pivoted_cholesky`]) so that positive
 //!   semi-definite covariances work and zero-variance components are exactly their mean;
@@ -23,6 +24,7 @@ mod cholesky;
 mod conditional;
 mod constraint;
 mod displacement;
+mod empirical;
 mod error;
 mod input_space;
 mod normal;
@@ -37,6 +39,7 @@ pub use cholesky::{
 pub use conditional::ConditionalSampler;
 pub use constraint::TiltConstraint;
 pub use displacement::point_displacement;
+pub use empirical::{EmpiricalLaw, MIN_EMPIRICAL_VALUES};
 pub use error::DeviationError;
 pub use input_space::{ConstraintCounts, InputSpace, InputSpaceBuilder, SamplerScratch};
 pub use normal::{Ziggurat, ZigguratScratch};

@@ -20,6 +20,9 @@
 //!   eccentricity itself.
 //! - `Lognormal { mu, sigma }`: exp(μ + σ·Z). Mean e^(μ + σ²/2), variance
 //!   (e^(σ²) − 1)·e^(2μ + σ²); drawn as exp(μ + σ·z).
+//! - `Empirical(law)`: measured values resampled, optionally smoothed with the variance
+//!   kept ([`EmpiricalLaw`]): one uniform by the inverse of the empirical CDF, plus one
+//!   ziggurat normal when smoothed.
 //!
 //! The magnitude laws take their standard normals z from the project's ziggurat, the
 //! normal source of every path (in bulk, column by column, in the run's sampler).
@@ -33,6 +36,7 @@
 //! triangular and truncated normal laws from one uniform of the stream by their inverse
 //! CDF, the magnitude laws from ziggurat normals.
 
+use crate::empirical::EmpiricalLaw;
 use crate::shown::Shown;
 use rand::{Rng, RngExt};
 use statrs::function::erf::{erfc, erfc_inv};
@@ -40,7 +44,7 @@ use statrs::function::erf::{erfc, erfc_inv};
 use crate::error::DeviationError;
 
 /// The distribution of one scalar error parameter.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum ScalarDistribution {
     /// Normal with mean and standard deviation.
     Normal {
@@ -106,6 +110,8 @@ pub enum ScalarDistribution {
         /// σ of the log (≥ 0).
         sigma: f64,
     },
+    /// Measured values, resampled (checked when built: [`EmpiricalLaw::new`]).
+    Empirical(EmpiricalLaw),
 }
 
 /// The 99.865 % quantile of the standard Rayleigh law, √(−2·ln 0.00135) = 3.6353: a
@@ -144,9 +150,9 @@ impl ScalarDistribution {
     /// The law of f·X for a positive factor f (a change of unit, µm to mm: f = 1e-3):
     /// every location and spread scales by f, a capability stays, a lognormal's μ moves by
     /// ln f.
-    pub fn scaled(self, f: f64) -> ScalarDistribution {
+    pub fn scaled(&self, f: f64) -> ScalarDistribution {
         use ScalarDistribution::*;
-        match self {
+        match *self {
             Normal { mean, sd } => Normal {
                 mean: mean * f,
                 sd: sd * f,
@@ -191,6 +197,7 @@ impl ScalarDistribution {
                 mu: mu + f.ln(),
                 sigma,
             },
+            Empirical(ref law) => Empirical(law.scaled(f)),
         }
     }
 
@@ -307,6 +314,8 @@ impl ScalarDistribution {
             ScalarDistribution::Rayleigh { sigma } => {
                 DeviationError::non_negative(&field("sigma"), sigma)?;
             }
+            // Checked when it was built.
+            ScalarDistribution::Empirical(_) => {}
             ScalarDistribution::Lognormal { mu, sigma } => {
                 DeviationError::finite(&field("mu"), mu)?;
                 DeviationError::non_negative(&field("sigma"), sigma)?;
@@ -375,7 +384,8 @@ impl ScalarDistribution {
                 let s2 = sigma * sigma;
                 s2.exp_m1() * (2.0 * mu + s2).exp()
             }
-            other => other.as_normal().map(|(_, sd)| sd * sd).unwrap_or(f64::NAN),
+            ScalarDistribution::Empirical(ref law) => law.variance(),
+            ref other => other.as_normal().map(|(_, sd)| sd * sd).unwrap_or(f64::NAN),
         }
     }
 
@@ -404,7 +414,8 @@ impl ScalarDistribution {
             }
             ScalarDistribution::Rayleigh { sigma } => sigma * (0.5 * std::f64::consts::PI).sqrt(),
             ScalarDistribution::Lognormal { mu, sigma } => (mu + 0.5 * sigma * sigma).exp(),
-            other => other.as_normal().map(|(m, _)| m).unwrap_or(f64::NAN),
+            ScalarDistribution::Empirical(ref law) => law.mean(),
+            ref other => other.as_normal().map(|(m, _)| m).unwrap_or(f64::NAN),
         }
     }
 
@@ -472,6 +483,7 @@ impl ScalarDistribution {
                 };
                 (mean + sd * z).clamp(lower, upper)
             }
+            ScalarDistribution::Empirical(ref law) => law.sample(rng),
             ScalarDistribution::FoldedNormal { .. }
             | ScalarDistribution::Rayleigh { .. }
             | ScalarDistribution::Lognormal { .. } => {
@@ -479,7 +491,7 @@ impl ScalarDistribution {
                 let z = [normal.sample(rng), normal.sample(rng)];
                 self.from_normals(&z[..self.normals_per_draw()])
             }
-            normal => {
+            ref normal => {
                 let (mean, sd) = normal.as_normal().unwrap_or((0.0, 0.0));
                 mean + sd * crate::normal::Ziggurat::get().sample(rng)
             }
@@ -554,7 +566,7 @@ mod tests {
         assert!((sd - 0.02 / 7.98).abs() < 1e-18);
     }
 
-    fn sample_mean_and_variance(d: ScalarDistribution, n: usize) -> (f64, f64) {
+    fn sample_mean_and_variance(d: &ScalarDistribution, n: usize) -> (f64, f64) {
         let mut rng = ChaCha8Rng::seed_from_u64(7);
         let xs: Vec<f64> = (0..n).map(|_| d.sample(&mut rng)).collect();
         let mean = xs.iter().sum::<f64>() / n as f64;
@@ -604,7 +616,7 @@ mod tests {
                 (d.variance() - var).abs() < 1e-12,
                 "{d:?} closed-form variance"
             );
-            let (m, v) = sample_mean_and_variance(d, n);
+            let (m, v) = sample_mean_and_variance(&d, n);
             let se = (var / n as f64).sqrt();
             assert!((m - mean).abs() < 5.0 * se, "{d:?}: mean {m} vs {mean}");
             // Var of the sample variance ≈ (μ4 − σ⁴)/n ≤ 2σ⁴/n·(1 + kurtosis/2); 10 % is

@@ -20,6 +20,7 @@ pub mod sensitivity_report;
 pub mod shapley;
 pub mod shard;
 pub mod stats;
+pub mod table;
 
 pub use report::{NominalReport, RunReport};
 pub use run::{

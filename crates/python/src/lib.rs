@@ -33,19 +33,28 @@ fn value_error(message: impl std::fmt::Display) -> PyErr {
     PyValueError::new_err(message.to_string())
 }
 
-/// The scenario's JSON text and its fallback name, from a path or a dict.
+/// The scenario's JSON text and its fallback name, from a path or a dict, with the
+/// numbers of the data files it refers to written in (paths relative to the file's
+/// folder, or to the working directory for a dict), as the command line reads it.
 fn scenario_text(source: &Bound<'_, PyAny>) -> PyResult<(String, String)> {
+    use rvtol_engine::scenario::{data::inline_data_files, scenario_folder};
     if let Ok(path) = source.extract::<std::path::PathBuf>() {
         let text = std::fs::read_to_string(&path)
             .map_err(|err| value_error(format!("{}: cannot read: {err}", path.display())))?;
         let name = path
             .file_stem()
             .map_or("scenario".to_string(), |s| s.to_string_lossy().into_owned());
+        let text = inline_data_files(&text, &scenario_folder(&path))
+            .map_err(value_error)?
+            .into_owned();
         return Ok((text, name));
     }
     if source.is_instance_of::<PyDict>() {
         let json = source.py().import("json")?;
         let text: String = json.call_method1("dumps", (source,))?.extract()?;
+        let text = inline_data_files(&text, std::path::Path::new("."))
+            .map_err(value_error)?
+            .into_owned();
         return Ok((text, "scenario".to_string()));
     }
     Err(PyTypeError::new_err(
@@ -163,20 +172,18 @@ fn evaluate<'py>(
     inputs: PyReadonlyArray2<'py, f64>,
     threads: Option<usize>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let skeleton = rvtol_engine::scenario::skeleton::skeleton(model).map_err(value_error)?;
-    let mut document: serde_json::Value = serde_json::from_str(&skeleton).map_err(value_error)?;
-    if let Some(params) = params {
-        let json = py.import("json")?;
-        let text: String = json.call_method1("dumps", (params,))?.extract()?;
-        let given: serde_json::Map<String, serde_json::Value> =
-            serde_json::from_str(&text).map_err(value_error)?;
-        let slot = &mut document["models"][0]["params"];
-        for (key, value) in given {
-            slot[key] = value;
+    let given: serde_json::Map<String, serde_json::Value> = match params {
+        Some(params) => {
+            let json = py.import("json")?;
+            let text: String = json.call_method1("dumps", (params,))?.extract()?;
+            serde_json::from_str(&text).map_err(value_error)?
         }
-    }
-    let scenario =
-        rvtol_engine::Scenario::from_json(&document.to_string(), model).map_err(value_error)?;
+        None => serde_json::Map::new(),
+    };
+    // The skeleton of the model with these parameters: its inputs are the model's.
+    let skeleton =
+        rvtol_engine::scenario::skeleton::skeleton_with(model, &given).map_err(value_error)?;
+    let scenario = rvtol_engine::Scenario::from_json(&skeleton, model).map_err(value_error)?;
     evaluate_rows(py, &scenario, inputs, threads)
 }
 

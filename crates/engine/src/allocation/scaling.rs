@@ -153,6 +153,23 @@ fn scale_node(node: &mut Value, kind: ToleranceKind, s: f64) -> Option<()> {
             let (median, upper) = (number(lognormal, "median")?, number(lognormal, "upper")?);
             set(lognormal, "upper", median * (upper / median).powf(s))
         }
+        ToleranceKind::VariableEmpirical => {
+            // Every value moves to m + s·(x − m) about the values' mean m, so the
+            // spread (and a given bandwidth) scales by s and the mean stays.
+            let empirical = node.get_mut("distribution")?.get_mut("empirical")?;
+            let values = empirical.get_mut("values")?.as_array_mut()?;
+            let numbers: Vec<f64> = values.iter().map(Value::as_f64).collect::<Option<_>>()?;
+            let mean = numbers.iter().sum::<f64>() / numbers.len().max(1) as f64;
+            for (entry, x) in values.iter_mut().zip(numbers) {
+                *entry = serde_json::Number::from_f64(mean + s * (x - mean))
+                    .map(Value::Number)
+                    .unwrap_or(Value::Null);
+            }
+            if let Some(h) = number(empirical, "bandwidth") {
+                set(empirical, "bandwidth", s * h)?;
+            }
+            Some(())
+        }
     }
 }
 
@@ -191,7 +208,8 @@ mod tests {
                 { "name": "e", "distribution": { "normal": { "mean": 5, "sd": 0.5 } } },
                 { "name": "f", "distribution": { "uniform": { "lower": 1, "upper": 3 } } },
                 { "name": "g", "distribution": { "triangular": { "lower": 0, "mode": 1, "upper": 4 } } },
-                { "name": "h", "distribution": { "truncated_normal": { "mean": 0, "sd": 1, "lower": -2, "upper": 3 } } }
+                { "name": "h", "distribution": { "truncated_normal": { "mean": 0, "sd": 1, "lower": -2, "upper": 3 } } },
+                { "name": "i", "distribution": { "empirical": { "values": [1, 2, 6], "bandwidth": 0.5 } } }
               ],
               "allocation": {}
             }"#,
@@ -206,8 +224,9 @@ mod tests {
             source("variables[2]", ToleranceKind::VariableUniform),
             source("variables[3]", ToleranceKind::VariableTriangular),
             source("variables[4]", ToleranceKind::VariableTruncatedNormal),
+            source("variables[5]", ToleranceKind::VariableEmpirical),
         ];
-        let scaled = scaled_document(&document, &sources, &[0.5; 8], false).unwrap();
+        let scaled = scaled_document(&document, &sources, &[0.5; 9], false).unwrap();
         assert!(scaled.get("allocation").is_none());
         let parts = &scaled["parts"];
         assert_eq!(parts[0]["tolerance_band"]["delta_tau_mm"], 0.002);
@@ -251,6 +270,10 @@ mod tests {
             ),
             (Some(0.5), Some(-1.0), Some(1.5))
         );
+        // About the values' mean 3: 1, 2, 6 → 2, 2.5, 4.5; the bandwidth halves too.
+        let empirical = &v[5]["distribution"]["empirical"];
+        assert_eq!(empirical["values"], serde_json::json!([2.0, 2.5, 4.5]));
+        assert_eq!(empirical["bandwidth"], 0.25);
         let kept = scaled_document(&document, &sources[..1], &[2.0], true).unwrap();
         assert!(kept.get("allocation").is_some());
         assert_eq!(kept["parts"][0]["tolerance_band"]["delta_tau_mm"], 0.008);

@@ -47,6 +47,9 @@ pub enum ToleranceKind {
     VariableRayleigh,
     /// `variables[i]` with `lognormal`: a factor on the spread of the log.
     VariableLognormal,
+    /// `variables[i]` with `empirical`: a factor on the spread of the values about their
+    /// mean (and on the bandwidth).
+    VariableEmpirical,
 }
 
 impl ToleranceKind {
@@ -60,6 +63,7 @@ impl ToleranceKind {
             }
             ToleranceKind::VariableRayleigh => "upper tolerance",
             ToleranceKind::VariableLognormal => "factor on the log sd",
+            ToleranceKind::VariableEmpirical => "factor on the spread about the mean",
             ToleranceKind::VariableUniform | ToleranceKind::VariableTriangular => "± half-width",
             ToleranceKind::VariableNormal | ToleranceKind::VariableTruncatedNormal => "3σ",
         }

@@ -4,11 +4,14 @@
 use std::collections::{BTreeMap, BTreeSet};
 
 use rvtol_deviation::{
-    InputSpaceBuilder, PartSpec, ScalarDistribution, Shown, SixDof, RAYLEIGH_QUANTILE,
+    EmpiricalLaw, InputSpaceBuilder, PartSpec, ScalarDistribution, Shown, SixDof, RAYLEIGH_QUANTILE,
 };
 use rvtol_models::{ConditionEffect, ModelParams, OutputKind, ParamValue};
+use serde_json::Value;
 
-use super::file::{DistributionFile, PartFile, ScenarioFile, SpecFile, VariableFile};
+use super::file::{
+    DistributionFile, PartFile, ScenarioFile, SpecFile, VariableFile, MAX_ARRAY_MEMBERS,
+};
 use super::{
     Binding, BoundModel, ColumnInfo, InputGroup, OutputInfo, Scenario, ScenarioError,
     DEFAULT_SAMPLES, DEFAULT_SEED,
@@ -54,7 +57,56 @@ fn check_name(path: &str, name: &str) -> Result<(), ScenarioError> {
     }
 }
 
+/// The factors from a part's `units` to the models' mm and rad, per component, and the
+/// phrase its error messages add; (all 1, "") without `units`.
+fn part_units(path: &str, part: &PartFile) -> Result<([f64; 6], String), ScenarioError> {
+    let Some(units) = &part.units else {
+        return Ok(([1.0; 6], String::new()));
+    };
+    if part.tolerance_band.is_some() {
+        return Err(ScenarioError::new(
+            format!("{path}.units"),
+            "a tolerance_band part is given in mm (delta_tau_mm, length_mm); units apply to mean, sd and covariance",
+        ));
+    }
+    let factor =
+        |key: &str, unit: &Option<String>, model_unit: &str, kind: &str| match unit.as_deref() {
+            None => Ok(1.0),
+            Some(u) if u == model_unit => Ok(1.0),
+            Some(u) => super::units::conversion(u, model_unit).ok_or_else(|| {
+                ScenarioError::new(
+                    format!("{path}.units.{key}"),
+                    format!(
+                    "{u:?} is not a unit of {kind} rvtol knows (scenarios/README.md lists them)"
+                ),
+                )
+            }),
+        };
+    let t = factor("translation", &units.translation, "mm", "length")?;
+    let r = factor("rotation", &units.rotation, "rad", "angle")?;
+    let phrase = format!(
+        " (converted from {} and {} to mm and rad)",
+        units.translation.as_deref().unwrap_or("mm"),
+        units.rotation.as_deref().unwrap_or("rad")
+    );
+    Ok(([t, t, t, r, r, r], phrase))
+}
+
 fn part_spec(path: &str, part: &PartFile) -> Result<PartSpec, ScenarioError> {
+    let (factors, phrase) = part_units(path, part)?;
+    part_spec_in_model_units(path, part, &factors).map_err(|err| ScenarioError {
+        message: format!("{}{phrase}", err.message),
+        ..err
+    })
+}
+
+/// The part's spec with `mean`, `sd` and `covariance` multiplied by the unit factors (a
+/// covariance entry by f_i·f_j).
+fn part_spec_in_model_units(
+    path: &str,
+    part: &PartFile,
+    factors: &[f64; 6],
+) -> Result<PartSpec, ScenarioError> {
     let forms = [
         part.covariance.is_some(),
         part.sd.is_some() || part.correlation.is_some(),
@@ -81,18 +133,29 @@ fn part_spec(path: &str, part: &PartFile) -> Result<PartSpec, ScenarioError> {
         )?);
     }
     let mean_path = format!("{path}.mean");
-    let mean = match &part.mean {
+    let mut mean = match &part.mean {
         Some(m) => fixed_array::<6>(&mean_path, m)?,
         None => [0.0; 6],
     };
+    for (x, f) in mean.iter_mut().zip(factors) {
+        *x *= f;
+    }
     if let Some(covariance) = &part.covariance {
-        let covariance = fixed_matrix(&format!("{path}.covariance"), covariance)?;
+        let mut covariance = fixed_matrix(&format!("{path}.covariance"), covariance)?;
+        for (i, row) in covariance.iter_mut().enumerate() {
+            for (j, x) in row.iter_mut().enumerate() {
+                *x *= factors[i] * factors[j];
+            }
+        }
         return Ok(PartSpec::from_covariance(path, mean, covariance)?);
     }
     let sd = part.sd.as_deref().ok_or_else(|| {
         ScenarioError::new(format!("{path}.sd"), "sd is required with correlation")
     })?;
-    let sd = fixed_array::<6>(&format!("{path}.sd"), sd)?;
+    let mut sd = fixed_array::<6>(&format!("{path}.sd"), sd)?;
+    for (x, f) in sd.iter_mut().zip(factors) {
+        *x *= f;
+    }
     let correlation = match &part.correlation {
         Some(c) => fixed_matrix(&format!("{path}.correlation"), c)?,
         None => std::array::from_fn(|i| std::array::from_fn(|j| if i == j { 1.0 } else { 0.0 })),
@@ -137,6 +200,7 @@ fn variable_tolerance(path: &str, variable: &VariableFile) -> ToleranceSource {
         }
         DistributionFile::Rayleigh { upper, .. } => (ToleranceKind::VariableRayleigh, upper),
         DistributionFile::Lognormal { .. } => (ToleranceKind::VariableLognormal, 1.0),
+        DistributionFile::Empirical { .. } => (ToleranceKind::VariableEmpirical, 1.0),
     };
     ToleranceSource {
         name: variable.name.clone(),
@@ -165,6 +229,43 @@ fn distribution(
         }
     };
     Ok(match *d {
+        DistributionFile::Empirical {
+            ref values,
+            ref csv,
+            ref bandwidth,
+            ..
+        } => {
+            let at = format!("{path}.empirical");
+            let Some(values) = values else {
+                return Err(match csv {
+                    Some(_) => ScenarioError::new(
+                        format!("{at}.csv"),
+                        "a data file is read when the scenario is loaded from its file (its path is relative to the scenario's folder); a scenario given as text or a dict needs the numbers in `values`",
+                    ),
+                    None => ScenarioError::new(
+                        &at,
+                        "give the measured numbers in `values`, or a CSV file and its column in `csv` and `column`",
+                    ),
+                });
+            };
+            let bandwidth = match bandwidth {
+                None => 0.0,
+                Some(Value::String(rule)) if rule == "silverman" => {
+                    EmpiricalLaw::silverman_bandwidth(values)
+                }
+                Some(Value::Number(h)) => h.as_f64().unwrap_or(f64::NAN),
+                Some(other) => {
+                    return Err(ScenarioError::new(
+                        format!("{at}.bandwidth"),
+                        format!("expected a number ≥ 0 (in the variable's unit) or \"silverman\", got {other}"),
+                    ))
+                }
+            };
+            (
+                ScalarDistribution::Empirical(EmpiricalLaw::new(&at, values, bandwidth)?),
+                "empirical",
+            )
+        }
         DistributionFile::Normal { mean, sd } => {
             (ScalarDistribution::Normal { mean, sd }, "normal")
         }
@@ -275,7 +376,7 @@ fn distribution(
     })
 }
 
-fn model_params(
+pub(super) fn model_params(
     path: &str,
     map: &serde_json::Map<String, serde_json::Value>,
 ) -> Result<ModelParams, ScenarioError> {
@@ -313,6 +414,66 @@ fn model_params(
 /// `None` when something the scenario needs could not be built. Elements that failed to
 /// parse or to compile are left out, and what refers to them (a correlation with a broken
 /// variable, a binding to a broken part) is not reported again.
+/// A `*` pattern of a model's `inputs` (`"pin_radial_error_mm_*"`) split at its star; `None`
+/// for a plain input name.
+fn pattern(key: &str) -> Option<(&str, &str)> {
+    key.split_once('*')
+}
+
+/// The index an input name gives a pattern's star: the digits between its prefix and
+/// suffix, a positive number written without leading zeros.
+fn pattern_index(prefix: &str, suffix: &str, input: &str) -> Option<u64> {
+    let middle = input.strip_prefix(prefix)?.strip_suffix(suffix)?;
+    let ok = !middle.is_empty()
+        && !middle.starts_with('0')
+        && middle.bytes().all(|b| b.is_ascii_digit());
+    ok.then(|| middle.parse().ok()).flatten()
+}
+
+/// How a model input is bound in the file: the bound value, the binding's JSON path, and
+/// the star's index when a `*` pattern binds it.
+struct InputBinding<'a> {
+    value: &'a serde_json::Value,
+    path: String,
+    index: Option<u64>,
+}
+
+/// The binding of a model input: by its own key, or by the one `*` pattern that matches
+/// it. An input bound twice (its own key and a pattern, or two patterns) is an error
+/// naming both.
+fn input_binding<'a>(
+    path: &str,
+    inputs: &'a serde_json::Map<String, serde_json::Value>,
+    input: &str,
+) -> Result<Option<InputBinding<'a>>, ScenarioError> {
+    let mut found = inputs.get(input).map(|value| InputBinding {
+        value,
+        path: format!("{path}.inputs.{input}"),
+        index: None,
+    });
+    for (key, value) in inputs {
+        let Some((prefix, suffix)) = pattern(key) else {
+            continue;
+        };
+        let Some(index) = pattern_index(prefix, suffix, input) else {
+            continue;
+        };
+        let key_path = format!("{path}.inputs.{key}");
+        if let Some(earlier) = &found {
+            return Err(ScenarioError::new(
+                key_path,
+                format!("binds {input:?}, which {} binds already", earlier.path),
+            ));
+        }
+        found = Some(InputBinding {
+            value,
+            path: key_path,
+            index: Some(index),
+        });
+    }
+    Ok(found)
+}
+
 /// Per variable name, the units of the model inputs it is bound to, each with the binding's
 /// JSON path. Models that do not build are left out here: the binding pass reports them.
 fn bound_input_units(file: &ScenarioFile) -> BTreeMap<String, Vec<(String, String)>> {
@@ -328,11 +489,17 @@ fn bound_input_units(file: &ScenarioFile) -> BTreeMap<String, Vec<(String, Strin
             continue;
         };
         for input in model.inputs() {
-            if let Some(serde_json::Value::String(name)) = model_file.inputs.get(&input.name) {
-                units.entry(name.clone()).or_default().push((
-                    input.unit.clone(),
-                    format!("models[{i}].inputs.{}", input.name),
-                ));
+            let binding = input_binding(&format!("models[{i}]"), &model_file.inputs, &input.name);
+            if let Ok(Some(InputBinding {
+                value: serde_json::Value::String(name),
+                path,
+                ..
+            })) = binding
+            {
+                units
+                    .entry(name.clone())
+                    .or_default()
+                    .push((input.unit.clone(), path));
             }
         }
     }
@@ -370,6 +537,75 @@ fn variable_conversion(
         ));
     }
     Ok(Some((factor, target.to_string())))
+}
+
+/// The member names of a variable array (`name_1` … `name_N` for `count` N), `None` for a
+/// plain variable.
+fn array_members(
+    path: &str,
+    variable: &VariableFile,
+) -> Result<Option<Vec<String>>, ScenarioError> {
+    match variable.count {
+        None => Ok(None),
+        Some(n) if (1..=MAX_ARRAY_MEMBERS).contains(&n) => Ok(Some(
+            (1..=n).map(|k| format!("{}_{k}", variable.name)).collect(),
+        )),
+        Some(n) => Err(ScenarioError::new(
+            format!("{path}.count"),
+            format!("an array has 1 to {MAX_ARRAY_MEMBERS} members, got {n}"),
+        )),
+    }
+}
+
+/// Names with runs of consecutive trailing indices collapsed (`pin_radial_error_mm_1` …
+/// `_40` as `pin_radial_error_mm_{1..40}`), joined with commas: a model's inputs in one
+/// readable line.
+fn indexed_summary(names: &[&str]) -> String {
+    let split = |name: &str| -> Option<(String, u64)> {
+        let (stem, digits) = name.rsplit_once('_')?;
+        let ok = !digits.is_empty() && !digits.starts_with('0');
+        ok.then(|| digits.parse().ok().map(|k| (stem.to_string(), k)))
+            .flatten()
+    };
+    let mut parts: Vec<String> = Vec::new();
+    let mut i = 0;
+    while i < names.len() {
+        let mut j = i;
+        if let Some((stem, first)) = split(names[i]) {
+            while j + 1 < names.len()
+                && split(names[j + 1]) == Some((stem.clone(), first + (j + 1 - i) as u64))
+            {
+                j += 1;
+            }
+            if j - i >= 2 {
+                parts.push(format!("{stem}_{{{first}..{}}}", first + (j - i) as u64));
+                i = j + 1;
+                continue;
+            }
+        }
+        parts.push(names[i].to_string());
+        i += 1;
+    }
+    parts.join(", ")
+}
+
+/// Sorted indices as ranges, `1-38, 40`.
+fn index_ranges(sorted: &[u64]) -> String {
+    let mut parts: Vec<String> = Vec::new();
+    let mut i = 0;
+    while i < sorted.len() {
+        let mut j = i;
+        while j + 1 < sorted.len() && sorted[j + 1] == sorted[j] + 1 {
+            j += 1;
+        }
+        parts.push(if j > i {
+            format!("{}-{}", sorted[i], sorted[j])
+        } else {
+            sorted[i].to_string()
+        });
+        i = j + 1;
+    }
+    parts.join(", ")
 }
 
 pub(super) fn compile(
@@ -444,17 +680,27 @@ pub(super) fn compile(
         }
     }
     let bound_units = bound_input_units(&file);
+    // The variable arrays (`count`): name → member columns, for the `*` bindings.
+    let mut arrays: BTreeMap<String, (String, Vec<usize>)> = BTreeMap::new();
     for (i, variable) in &file.variables {
         let path = format!("variables[{i}]");
         // Checked in the unit the file gives, which the messages name.
         let in_unit = |err: ScenarioError| match &variable.unit {
-            Some(unit) if !unit.is_empty() && !err.path.ends_with(".cp") => ScenarioError {
-                message: format!("{} (values in {unit})", err.message),
-                ..err
-            },
+            Some(unit)
+                if !unit.is_empty()
+                    && !err.path.ends_with(".cp")
+                    && !err.path.ends_with(".empirical") =>
+            {
+                ScenarioError {
+                    message: format!("{} (values in {unit})", err.message),
+                    ..err
+                }
+            }
             _ => err,
         };
+        let members = array_members(&path, variable);
         let checked = check_name(&format!("{path}.name"), &variable.name)
+            .and_then(|()| members.clone().map(|_| ()))
             .and_then(|()| {
                 distribution(&format!("{path}.distribution"), &variable.distribution)
                     .map_err(in_unit)
@@ -465,11 +711,19 @@ pub(super) fn compile(
                     .map_err(|err| in_unit(ScenarioError::from(err)))
             })
             .and_then(|dist| {
+                // The inputs bound to the variable: by its name, or by a member's.
+                let names =
+                    std::iter::once(&variable.name).chain(members.iter().flatten().flatten());
+                let bound: Vec<(String, String)> = names
+                    .filter_map(|name| bound_units.get(name))
+                    .flatten()
+                    .cloned()
+                    .collect();
                 let conversion = match &variable.unit {
-                    Some(unit) => {
-                        variable_conversion(&path, unit, bound_units.get(&variable.name))?
+                    Some(unit) if !bound.is_empty() => {
+                        variable_conversion(&path, unit, Some(&bound))?
                     }
-                    None => None,
+                    _ => None,
                 };
                 Ok(match conversion {
                     Some((factor, unit)) => (dist.scaled(factor), Some(unit)),
@@ -481,21 +735,42 @@ pub(super) fn compile(
             Err(err) => {
                 report(Err(err));
                 broken.insert(variable.name.clone());
+                broken.extend(members.into_iter().flatten().flatten());
                 continue;
             }
         };
-        let column = builder.add_scalar(&path, dist);
+        let names = match members {
+            Ok(Some(members)) => members,
+            _ => vec![variable.name.clone()],
+        };
+        let mut group = Vec::with_capacity(names.len());
+        for name in names {
+            let column = builder.add_scalar(&path, dist.clone());
+            group.push(column);
+            report(add_name(
+                &format!("{path}.name"),
+                name,
+                column,
+                unit.clone(),
+                &mut columns,
+            ));
+        }
+        if variable.count.is_some() {
+            arrays.insert(variable.name.clone(), (path.clone(), group.clone()));
+        }
         sources.push(InputGroup {
             name: variable.name.clone(),
-            columns: vec![column],
+            columns: group,
         });
-        report(add_name(
-            &format!("{path}.name"),
-            variable.name.clone(),
-            column,
-            unit,
-            &mut columns,
-        ));
+    }
+    // An array's name is not a column, but it names its source: no column may take it.
+    for (name, (path, _)) in &arrays {
+        if column_by_name.contains_key(name) {
+            report(Err(ScenarioError::new(
+                format!("{path}.name"),
+                format!("name {name:?} is used twice (by this array and by a variable or part component)"),
+            )));
+        }
     }
     for (i, correlation) in &file.correlations {
         let path = format!("correlations[{i}]");
@@ -572,50 +847,115 @@ pub(super) fn compile(
         };
         let mut bindings = Vec::with_capacity(model.inputs().len());
         let mut bound = true;
+        // Per `*` pattern, the indices of the inputs it binds.
+        let mut pattern_indices: BTreeMap<&str, Vec<u64>> = BTreeMap::new();
+        // Patterns that bind an input bound already (reported once, not checked further).
+        let mut conflicted: BTreeSet<String> = BTreeSet::new();
+        for key in model_file.inputs.keys() {
+            if key.matches('*').count() > 1 {
+                report(Err(ScenarioError::new(
+                    format!("{path}.inputs.{key}"),
+                    "a pattern has one '*', which stands for the index (1, 2, …)",
+                )));
+                bound = false;
+            }
+        }
         for input in model.inputs() {
-            let binding_path = format!("{path}.inputs.{}", input.name);
-            let binding = match model_file.inputs.get(&input.name) {
-                None => Err(ScenarioError::new(
+            let binding = match input_binding(&path, &model_file.inputs, &input.name) {
+                Err(err) => {
+                    conflicted.insert(err.path.clone());
+                    Err(err)
+                }
+                Ok(None) => Err(ScenarioError::new(
                     format!("{path}.inputs"),
                     format!(
                         "model input {:?} ({}) is not bound: give a number or a variable name",
                         input.name, input.unit
                     ),
                 )),
-                Some(serde_json::Value::Number(n)) => {
-                    let v = n.as_f64().unwrap_or(f64::NAN);
-                    if !v.is_finite() {
-                        Err(ScenarioError::new(&binding_path, "must be a finite number"))
-                    } else {
-                        model
-                            .check_constant(bindings.len(), v)
-                            .map(|()| Binding::Constant(v))
-                            .map_err(|reason| ScenarioError::new(&binding_path, reason))
+                Ok(Some(InputBinding {
+                    value,
+                    path: binding_path,
+                    index,
+                })) => {
+                    if let Some(index) = index {
+                        let key = binding_path.rsplit_once(".inputs.").map_or("", |(_, k)| k);
+                        if let Some((key, _)) = model_file.inputs.get_key_value(key) {
+                            pattern_indices.entry(key.as_str()).or_default().push(index);
+                        }
+                    }
+                    match value {
+                        serde_json::Value::Number(n) => {
+                            let v = n.as_f64().unwrap_or(f64::NAN);
+                            if !v.is_finite() {
+                                Err(ScenarioError::new(&binding_path, "must be a finite number"))
+                            } else {
+                                model
+                                    .check_constant(bindings.len(), v)
+                                    .map(|()| Binding::Constant(v))
+                                    .map_err(|reason| ScenarioError::new(&binding_path, reason))
+                            }
+                        }
+                        serde_json::Value::String(name) => {
+                            // A pattern bound to an array takes the member of its index; an
+                            // array's name alone names no single column. `None`: a broken
+                            // variable, reported already.
+                            let column = match (arrays.get(name), index) {
+                                (Some((_, members)), Some(k)) => {
+                                    members.get(k as usize - 1).copied().map(Some).ok_or_else(|| {
+                                        ScenarioError::new(
+                                            &binding_path,
+                                            format!(
+                                                "binds {:?} to member {k} of {name:?}, which has {} members",
+                                                input.name,
+                                                members.len()
+                                            ),
+                                        )
+                                    })
+                                }
+                                (Some((_, members)), None) => Err(ScenarioError::new(
+                                    &binding_path,
+                                    format!(
+                                        "{name:?} is an array of {} members: bind it with a pattern (\"{}_*\": {name:?}) or name one member ({name}_1 …)",
+                                        members.len(),
+                                        input.name
+                                    ),
+                                )),
+                                (None, _) => match column_by_name.get(name) {
+                                    Some(&column) => Ok(Some(column)),
+                                    None if broken.contains(name) => Ok(None),
+                                    None => Err(ScenarioError::new(
+                                        &binding_path,
+                                        format!("no variable or part component named {name:?}"),
+                                    )),
+                                },
+                            };
+                            match column {
+                                Ok(Some(column)) => match &columns[column].unit {
+                                    Some(unit) if input.unit != "any" && unit != &input.unit => {
+                                        Err(ScenarioError::new(
+                                            &binding_path,
+                                            format!(
+                                                "{name:?} is in {unit} but the input wants {}",
+                                                input.unit
+                                            ),
+                                        ))
+                                    }
+                                    _ => Ok(Binding::Column(column)),
+                                },
+                                Ok(None) => {
+                                    bound = false;
+                                    Ok(Binding::Constant(0.0))
+                                }
+                                Err(err) => Err(err),
+                            }
+                        }
+                        other => Err(ScenarioError::new(
+                            &binding_path,
+                            format!("expected a number or a variable name, got {other}"),
+                        )),
                     }
                 }
-                Some(serde_json::Value::String(name)) => match column_by_name.get(name) {
-                    Some(&column) => match &columns[column].unit {
-                        Some(unit) if input.unit != "any" && unit != &input.unit => {
-                            Err(ScenarioError::new(
-                                &binding_path,
-                                format!("{name:?} is in {unit} but the input wants {}", input.unit),
-                            ))
-                        }
-                        _ => Ok(Binding::Column(column)),
-                    },
-                    None if broken.contains(name) => {
-                        bound = false;
-                        Ok(Binding::Constant(0.0))
-                    }
-                    None => Err(ScenarioError::new(
-                        &binding_path,
-                        format!("no variable or part component named {name:?}"),
-                    )),
-                },
-                Some(other) => Err(ScenarioError::new(
-                    &binding_path,
-                    format!("expected a number or a variable name, got {other}"),
-                )),
             };
             match binding {
                 Ok(binding) => bindings.push(binding),
@@ -626,21 +966,68 @@ pub(super) fn compile(
                 }
             }
         }
-        for extra in model_file
-            .inputs
-            .keys()
-            .filter(|k| !model.inputs().iter().any(|input| &input.name == *k))
-        {
-            let known: Vec<&str> = model.inputs().iter().map(|i| i.name.as_str()).collect();
-            report(Err(ScenarioError::new(
-                format!("{path}.inputs.{extra}"),
-                format!(
-                    "{} has no input {extra:?}; its inputs are: {}",
-                    entry.name,
-                    known.join(", ")
-                ),
-            )));
-            bound = false;
+        let known = || {
+            let names: Vec<&str> = model.inputs().iter().map(|i| i.name.as_str()).collect();
+            indexed_summary(&names)
+        };
+        for (key, value) in &model_file.inputs {
+            let key_path = format!("{path}.inputs.{key}");
+            if pattern(key).is_none() {
+                if !model.inputs().iter().any(|input| &input.name == key) {
+                    report(Err(ScenarioError::new(
+                        key_path,
+                        format!(
+                            "{} has no input {key:?}; its inputs are: {}",
+                            entry.name,
+                            known()
+                        ),
+                    )));
+                    bound = false;
+                }
+                continue;
+            }
+            if key.matches('*').count() > 1 {
+                continue;
+            }
+            let indices = pattern_indices
+                .get(key.as_str())
+                .cloned()
+                .unwrap_or_default();
+            if indices.is_empty() {
+                report(Err(ScenarioError::new(
+                    key_path,
+                    format!(
+                        "matches no input of {}; its inputs are: {}",
+                        entry.name,
+                        known()
+                    ),
+                )));
+                bound = false;
+                continue;
+            }
+            // A pattern bound to an array binds every member, once.
+            if conflicted.contains(&key_path) {
+                continue;
+            }
+            if let Some((_, members)) = value.as_str().and_then(|name| arrays.get(name)) {
+                let mut seen = indices.clone();
+                seen.sort_unstable();
+                let all = seen.len() == members.len()
+                    && seen.iter().enumerate().all(|(k, &i)| i == k as u64 + 1);
+                if !all && seen.iter().all(|&i| i as usize <= members.len()) {
+                    let name = value.as_str().unwrap_or_default();
+                    report(Err(ScenarioError::new(
+                        key_path,
+                        format!(
+                            "binds {} inputs (indices {}) but {name:?} has {} members: the array must match the inputs one to one",
+                            seen.len(),
+                            index_ranges(&seen),
+                            members.len()
+                        ),
+                    )));
+                    bound = false;
+                }
+            }
         }
         let first_output = outputs.len();
         for output in model.outputs() {

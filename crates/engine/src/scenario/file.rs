@@ -76,6 +76,21 @@ pub(super) struct PartFile {
     pub(super) correlation: Option<Vec<Vec<f64>>>,
     #[serde(default)]
     pub(super) tolerance_band: Option<ToleranceBandFile>,
+    /// The units `mean`, `sd` and `covariance` are written in (default mm and rad).
+    #[serde(default)]
+    pub(super) units: Option<PartUnitsFile>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct PartUnitsFile {
+    /// Unit of du, dv, dw: a length (`mm`, `µm`, `um`, `m`).
+    #[serde(default)]
+    pub(super) translation: Option<String>,
+    /// Unit of dalpha, dbeta, dgamma: an angle (`rad`, `mrad`, `µrad`, `urad`, `deg`,
+    /// `arcmin`, `arcsec`).
+    #[serde(default)]
+    pub(super) rotation: Option<String>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -97,8 +112,15 @@ pub(super) struct VariableFile {
     #[serde(default)]
     #[allow(dead_code)]
     pub(super) description: Option<String>,
+    /// An array of this many independent members with the one distribution (`name_1` …
+    /// `name_N`, one error source), e.g. a position error of every pin.
+    #[serde(default)]
+    pub(super) count: Option<u64>,
     pub(super) distribution: DistributionFile,
 }
+
+/// Largest number of members of a variable array (`variables[i].count`).
+pub const MAX_ARRAY_MEMBERS: u64 = 100_000;
 
 pub(super) fn default_cp() -> f64 {
     1.0
@@ -155,6 +177,22 @@ pub(super) enum DistributionFile {
         upper: f64,
         #[serde(default = "default_cp")]
         cp: f64,
+    },
+    /// Measured values resampled: given inline (`values`) or read from a CSV column
+    /// (`csv`, `column`) when the scenario is loaded from its file ([`super::data`]).
+    Empirical {
+        #[serde(default)]
+        values: Option<Vec<f64>>,
+        #[serde(default)]
+        csv: Option<String>,
+        /// Where the values came from; read by [`super::data`] from the JSON value.
+        #[serde(default)]
+        #[allow(dead_code)]
+        column: Option<String>,
+        /// A kernel bandwidth (in the variable's unit) or `"silverman"`; none: plain
+        /// resampling.
+        #[serde(default)]
+        bandwidth: Option<Value>,
     },
 }
 

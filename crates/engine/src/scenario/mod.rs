@@ -6,10 +6,12 @@
 //! [`compile`] checks every value once (finite, non-negative, symmetric, positive
 //! semi-definite, every model input bound, known models and outputs, each model's geometry)
 //! and builds the [`Scenario`]. Every problem is a [`ScenarioError`] naming its JSON path;
-//! `rvtol validate` reports them all, the other commands the first. The keys and units are
-//! documented in scenarios/README.md.
+//! `rvtol validate` reports them all, the other commands the first. [`data`] writes the
+//! numbers of the data files a scenario file refers to into its text first. The keys and
+//! units are documented in scenarios/README.md.
 
 mod compile;
+pub mod data;
 mod file;
 pub mod skeleton;
 pub mod units;
@@ -22,7 +24,7 @@ use rvtol_models::{ConditionEffect, ErrorModel, OutputKind};
 use crate::allocation::spec::{AllocatableSource, Lever};
 use crate::stats::SpecLimits;
 
-pub use file::{MAX_COVARIANCE, MAX_DEVIATION, MAX_PARAMETER};
+pub use file::{MAX_ARRAY_MEMBERS, MAX_COVARIANCE, MAX_DEVIATION, MAX_PARAMETER};
 
 /// Samples of a run when neither the scenario nor the command line sets them.
 pub const DEFAULT_SAMPLES: u64 = 1_000_000;
@@ -52,6 +54,14 @@ impl ScenarioError {
 impl From<rvtol_deviation::DeviationError> for ScenarioError {
     fn from(err: rvtol_deviation::DeviationError) -> Self {
         ScenarioError::new(err.path(), err.message())
+    }
+}
+
+/// The folder a scenario file's relative data paths start from.
+pub fn scenario_folder(path: &Path) -> std::path::PathBuf {
+    match path.parent() {
+        Some(parent) if !parent.as_os_str().is_empty() => parent.to_path_buf(),
+        _ => std::path::PathBuf::from("."),
     }
 }
 
@@ -168,10 +178,13 @@ impl Scenario {
     }
 
     /// Reads and validates a scenario file, returning its text too.
+    /// The text is the file's with the numbers of the data files it refers to written in
+    /// ([`data::inline_data_files`]).
     pub fn read(path: &Path) -> Result<(Scenario, String), ScenarioError> {
         let text = std::fs::read_to_string(path).map_err(|err| {
             ScenarioError::new("(file)", format!("cannot read {}: {err}", path.display()))
         })?;
+        let text = data::inline_data_files(&text, &scenario_folder(path))?.into_owned();
         let fallback_name = path
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())

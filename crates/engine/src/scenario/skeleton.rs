@@ -10,6 +10,13 @@ use serde_json::{json, Map, Value};
 /// The skeleton scenario of the model `name` as pretty JSON, or the list of models when
 /// there is none of that name.
 pub fn skeleton(name: &str) -> Result<String, String> {
+    skeleton_with(name, &Map::new())
+}
+
+/// The skeleton of the model `name` with some parameters given (`rvtol init --param`):
+/// they replace the example's values, and the inputs are those of the model so built (a
+/// transmission error with `pin_position_errors` on has an input per pin).
+pub fn skeleton_with(name: &str, given: &Map<String, Value>) -> Result<String, String> {
     let Some(entry) = rvtol_models::find(name) else {
         let names: Vec<&str> = rvtol_models::all().iter().map(|e| e.name).collect();
         return Err(format!(
@@ -17,9 +24,15 @@ pub fn skeleton(name: &str) -> Result<String, String> {
             names.join(", ")
         ));
     };
-    let example = (entry.example_params)();
-    let model = (entry.build)(&example)
-        .map_err(|err| format!("the example of {name} does not build: {err}"))?;
+    let mut example = (entry.example_params)();
+    if !given.is_empty() {
+        let given = super::compile::model_params("params", given).map_err(|err| err.to_string())?;
+        for (key, value) in given.entries() {
+            example.insert(key.to_string(), value.clone());
+        }
+    }
+    let model =
+        (entry.build)(&example).map_err(|err| format!("params.{}: {}", err.key, err.reason))?;
     let to_json = |value: &ParamValue| match value {
         ParamValue::Number(x) => json!(x),
         ParamValue::Text(text) => json!(text),
@@ -45,26 +58,65 @@ pub fn skeleton(name: &str) -> Result<String, String> {
         }
     }
     let inputs = model.inputs();
-    let variables: Vec<Value> = inputs
-        .iter()
-        .map(|input| {
-            let mean = entry
-                .example_inputs
+    let design_value = |input: &str| {
+        entry
+            .example_inputs
+            .iter()
+            .find(|(key, _)| *key == input)
+            .map_or(0.0, |(_, value)| *value)
+    };
+    // A family of indexed inputs (`pin_radial_error_mm_1` … `_40`, one unit, one design
+    // value) is one variable array bound by a `*` pattern.
+    let stem_of = |name: &str| -> Option<(String, u64)> {
+        let (stem, digits) = name.rsplit_once('_')?;
+        let ok = !digits.starts_with('0') && digits.bytes().all(|b| b.is_ascii_digit());
+        ok.then(|| digits.parse().ok().map(|k| (stem.to_string(), k)))
+            .flatten()
+    };
+    let mut variables: Vec<Value> = Vec::new();
+    let mut bindings = Map::new();
+    let mut i = 0;
+    while i < inputs.len() {
+        let input = &inputs[i];
+        if let Some((stem, 1)) = stem_of(&input.name) {
+            let mut n = 1;
+            while i + n < inputs.len()
+                && stem_of(&inputs[i + n].name) == Some((stem.clone(), n as u64 + 1))
+                && inputs[i + n].unit == input.unit
+                && design_value(&inputs[i + n].name) == design_value(&input.name)
+            {
+                n += 1;
+            }
+            let whole = inputs
                 .iter()
-                .find(|(key, _)| *key == input.name)
-                .map_or(0.0, |(_, value)| *value);
-            json!({
-                "name": input.name,
-                "unit": input.unit,
-                "description": input.description,
-                "distribution": { "normal": { "mean": mean, "sd": 0.0 } }
-            })
-        })
-        .collect();
-    let bindings: Map<String, Value> = inputs
-        .iter()
-        .map(|input| (input.name.clone(), json!(input.name)))
-        .collect();
+                .filter(|other| stem_of(&other.name).is_some_and(|(s, _)| s == stem))
+                .count()
+                == n;
+            if n >= 3 && whole {
+                variables.push(json!({
+                    "name": stem,
+                    "unit": input.unit,
+                    "count": n,
+                    "description": format!(
+                        "{}; one member per index, {stem}_1 … {stem}_{n}",
+                        input.description
+                    ),
+                    "distribution": { "normal": { "mean": design_value(&input.name), "sd": 0.0 } }
+                }));
+                bindings.insert(format!("{stem}_*"), json!(stem));
+                i += n;
+                continue;
+            }
+        }
+        variables.push(json!({
+            "name": input.name,
+            "unit": input.unit,
+            "description": input.description,
+            "distribution": { "normal": { "mean": design_value(&input.name), "sd": 0.0 } }
+        }));
+        bindings.insert(input.name.clone(), json!(input.name));
+        i += 1;
+    }
     let outputs: Vec<String> = model
         .outputs()
         .iter()
@@ -77,7 +129,8 @@ pub fn skeleton(name: &str) -> Result<String, String> {
              their defaults); every input is a variable at the example's design value (0 for \
              a deviation) with no spread, to be replaced by the design's tolerances (scenarios/README.md: normal, tolerance_band, uniform, \
              triangular, truncated normal, folded_normal, rayleigh, lognormal, or a 6-DOF \
-             part). Outputs: {}.",
+             part); a family of indexed inputs is one variable array (`count`, bound by a \
+             `*` pattern). Outputs: {}.",
             entry.summary,
             outputs.join(", ")
         ),

@@ -1,0 +1,125 @@
+//! Data files a scenario refers to: the CSV column of an `empirical` distribution
+//! (`{"empirical": {"csv": "pins.csv", "column": "radius_error"}}`), read when the
+//! scenario is loaded from its file, with the path relative to the scenario's folder.
+//!
+//! A column headed `name [unit]` gives the variable its unit when the variable names none;
+//! a variable in another unit is an error (write it in the column's unit: it is converted
+//! at load time like any variable).
+//!
+//! The numbers are written into the scenario text (`values`, next to the `csv` and
+//! `column` that name their source), and that text is the scenario from then on: a shard
+//! carries it, `rvtol merge` and `rvtol allocate`'s scaled copies parse it, and none of
+//! them reads the CSV again or sees a CSV that changed in between. A text without a CSV
+//! reference is returned as it is, byte for byte.
+
+use std::borrow::Cow;
+use std::path::Path;
+
+use serde_json::Value;
+
+use super::file::parse_value;
+use super::ScenarioError;
+use crate::table::CsvTable;
+
+/// The scenario text with every CSV reference of an `empirical` distribution replaced by
+/// the column's numbers; `base` is the folder relative paths start from. An unreadable
+/// file, a missing column or a cell that is not a number is an error at the reference's
+/// JSON path. Empty cells are skipped (columns of different lengths).
+pub fn inline_data_files<'a>(text: &'a str, base: &Path) -> Result<Cow<'a, str>, ScenarioError> {
+    if !text.contains("\"csv\"") {
+        return Ok(Cow::Borrowed(text));
+    }
+    // A text that does not parse is left to the scenario parser, which says where.
+    let Ok(mut document) = parse_value(text) else {
+        return Ok(Cow::Borrowed(text));
+    };
+    let mut changed = false;
+    if let Some(Value::Array(variables)) = document.get_mut("variables") {
+        for (i, variable) in variables.iter_mut().enumerate() {
+            let at = format!("variables[{i}].distribution.empirical");
+            let Some((file, column)) = csv_reference(&at, variable)? else {
+                continue;
+            };
+            let path = base.join(&file);
+            let table = CsvTable::read(&path)
+                .map_err(|message| ScenarioError::new(format!("{at}.csv"), message))?;
+            let values = match table.column(&column) {
+                None => {
+                    return Err(ScenarioError::new(
+                        format!("{at}.column"),
+                        format!(
+                            "{} has no column {column:?} (its columns: {})",
+                            path.display(),
+                            table.names().join(", ")
+                        ),
+                    ))
+                }
+                Some(values) => {
+                    values.map_err(|message| ScenarioError::new(format!("{at}.csv"), message))?
+                }
+            };
+            // The column's unit (`name [unit]`) is the variable's: adopted when the
+            // variable names none, else it must be the same unit.
+            let column_unit = table
+                .columns
+                .iter()
+                .find(|(name, _)| *name == column)
+                .and_then(|(_, unit)| unit.clone());
+            if let Some(column_unit) = column_unit {
+                let same = |a: &str, b: &str| a == b || super::units::conversion(a, b) == Some(1.0);
+                match variable.get("unit").and_then(Value::as_str) {
+                    None => variable["unit"] = Value::from(column_unit),
+                    Some(unit) if same(unit, &column_unit) => {}
+                    Some(unit) => {
+                        return Err(ScenarioError::new(
+                            format!("variables[{i}].unit"),
+                            format!(
+                                "{unit} differs from the unit of the column {column:?} of {}, {column_unit}: write the variable's unit as {column_unit} (it is converted at load time)",
+                                path.display()
+                            ),
+                        ))
+                    }
+                }
+            }
+            variable["distribution"]["empirical"]["values"] = Value::from(values);
+            changed = true;
+        }
+    }
+    if !changed {
+        return Ok(Cow::Borrowed(text));
+    }
+    let mut inlined = serde_json::to_string_pretty(&document).expect("a JSON value serialises");
+    inlined.push('\n');
+    Ok(Cow::Owned(inlined))
+}
+
+/// The (file, column) of a variable's `empirical` distribution that names a CSV file and
+/// has no `values` yet; `None` for every other variable.
+fn csv_reference(at: &str, variable: &Value) -> Result<Option<(String, String)>, ScenarioError> {
+    let Some(empirical) = variable
+        .get("distribution")
+        .and_then(|d| d.get("empirical"))
+        .and_then(Value::as_object)
+    else {
+        return Ok(None);
+    };
+    if empirical.contains_key("values") {
+        return Ok(None);
+    }
+    let Some(csv) = empirical.get("csv") else {
+        return Ok(None);
+    };
+    let Value::String(file) = csv else {
+        return Err(ScenarioError::new(
+            format!("{at}.csv"),
+            format!("expected the path of a CSV file, got {csv}"),
+        ));
+    };
+    let Some(Value::String(column)) = empirical.get("column") else {
+        return Err(ScenarioError::new(
+            format!("{at}.column"),
+            "name the CSV column that holds the measured values",
+        ));
+    };
+    Ok(Some((file.clone(), column.clone())))
+}
