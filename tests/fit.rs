@@ -2,7 +2,8 @@
 //! error at several n, stays positive semi-definite when n < 6 (where the sample matrix is
 //! singular and the shrinkage must carry it), and the fragment loads as a scenario part;
 //! the normality diagnostics pass normal data at their stated false-alarm rate and flag
-//! uniform data.
+//! uniform data. `rvtol fit --part` takes a part's columns out of a wider file and carries
+//! the units of its headings into the part, which then equals the part fitted in mm and rad.
 //!
 //! Sampling error of a covariance entry (normal data): Var(s_ij) = (σ_ii·σ_jj + σ_ij²)/(n −
 //! 1). The fit shrinks the correlations by Ledoit–Wolf's δ towards 0, a bias of δ·|σ_ij|
@@ -11,6 +12,7 @@
 
 mod common;
 
+use common::run_rvtol;
 use nalgebra::DMatrix;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -207,4 +209,94 @@ fn mardia_flags_a_uniform_cloud_and_passes_a_normal_one() {
     // Six independent uniforms (excess kurtosis −1.2 each): E b₂,p = p² + 0.8p = 40.8
     // against p(p + 2) = 48 for a normal, sd √(8·48/500) = 0.88: z ≈ −8.2.
     assert!(kurt.statistic < -5.0 && kurt.p_value < 1e-6, "{kurt:?}");
+}
+
+#[test]
+fn a_part_is_fitted_from_a_wider_file_in_its_headings_units() {
+    // 300 parts drawn in mm and rad, written twice: in mm/rad, and in µm/arcsec with a
+    // serial-number column and another part's column around them. The two fragments give
+    // the same joint normal once loaded (to rounding).
+    let rows = draw(&truth(), 300, 77);
+    let dir = std::env::temp_dir().join(format!("rvtol-fit-units-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let arcsec = 648_000.0 / std::f64::consts::PI;
+    let mut plain = String::from("du,dv,dw,dalpha,dbeta,dgamma\n");
+    let mut wide = String::from(
+        "serial,carrier.du [µm],carrier.dv [µm],carrier.dw [µm],other.du [mm],carrier.dalpha [arcsec],carrier.dbeta [arcsec],carrier.dgamma [arcsec]\n",
+    );
+    for (k, row) in rows.iter().enumerate() {
+        let text: Vec<String> = row.iter().map(|x| x.to_string()).collect();
+        plain.push_str(&format!("{}\n", text.join(",")));
+        wide.push_str(&format!(
+            "{},{},{},{},0.5,{},{},{}\n",
+            1000 + k,
+            row[0] * 1e3,
+            row[1] * 1e3,
+            row[2] * 1e3,
+            row[3] * arcsec,
+            row[4] * arcsec,
+            row[5] * arcsec
+        ));
+    }
+    let fitted = |name: &str, text: &str| -> serde_json::Value {
+        let path = dir.join(name);
+        std::fs::write(&path, text).unwrap();
+        let out = run_rvtol(&["fit", path.to_str().unwrap(), "--part", "carrier"]);
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        if name == "wide.csv" {
+            let stderr = String::from_utf8_lossy(&out.stderr);
+            assert!(
+                stderr.contains("other columns left out: serial, other.du"),
+                "{stderr}"
+            );
+        }
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let a = fitted("plain.csv", &plain);
+    let b = fitted("wide.csv", &wide);
+    assert!(a["parts"][0].get("units").is_none());
+    assert_eq!(
+        b["parts"][0]["units"],
+        serde_json::json!({ "translation": "µm", "rotation": "arcsec" })
+    );
+    let load = |part: &serde_json::Value| {
+        let scenario = serde_json::json!({
+            "parts": part["parts"],
+            "models": [{
+                "model": "linear_stack",
+                "params": { "coefficients": { "a": 1.0 } },
+                "inputs": { "a": "carrier.du" }
+            }]
+        });
+        Scenario::from_json(&scenario.to_string(), "fit").unwrap()
+    };
+    let (_, mean_a, cov_a) = load(&a).input_space.gaussian_specification();
+    let (_, mean_b, cov_b) = load(&b).input_space.gaussian_specification();
+    for i in 0..mean_a.len() {
+        assert!((mean_a[i] - mean_b[i]).abs() <= 1e-9 * cov_a[(i, i)].sqrt().max(1e-300));
+        for j in 0..mean_a.len() {
+            let scale = (cov_a[(i, i)] * cov_a[(j, j)]).sqrt().max(1e-300);
+            assert!(
+                (cov_a[(i, j)] - cov_b[(i, j)]).abs() <= 1e-9 * scale,
+                "{i} {j}"
+            );
+        }
+    }
+    // Translations in two units are refused.
+    let mixed = wide.replacen("carrier.dv [µm]", "carrier.dv [mm]", 1);
+    let path = dir.join("mixed.csv");
+    std::fs::write(&path, mixed).unwrap();
+    let out = run_rvtol(&["fit", path.to_str().unwrap(), "--part", "carrier"]);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        stderr.contains("the translation columns of the part are in different units (µm, mm, µm)"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
 }

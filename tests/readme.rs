@@ -14,8 +14,10 @@
 //! -->
 //! ```
 //!
-//! - `rvtol ARGS` runs the binary (arguments split on blanks, double quotes group);
-//!   `{tmp}` is a temporary directory of the example;
+//! - `rvtol ARGS` runs the binary (arguments split on blanks, double quotes group, single
+//!   quotes group and keep what they hold, double quotes included, for a JSON value);
+//!   `{tmp}` is a temporary directory of the example, and its path followed by `/` is left
+//!   out of the output (a file written there shows as its name);
 //! - `edit SOURCE POINTER VALUE > DEST` copies a scenario with the JSON value at the
 //!   pointer replaced (several `edit`s may chain through the same file);
 //! - `status N` is the exit code the last command must return (default 0), every earlier
@@ -84,9 +86,15 @@ fn split_arguments(line: &str) -> Vec<String> {
     let mut arguments = Vec::new();
     let mut current = String::new();
     let mut quoted = false;
+    let mut literal = false;
     let mut started = false;
     for c in line.chars() {
         match c {
+            '\'' if !quoted => {
+                literal = !literal;
+                started = true;
+            }
+            c if literal => current.push(c),
             '"' => {
                 quoted = !quoted;
                 started = true;
@@ -214,7 +222,9 @@ fn produce(example: &Example, root: &Path) -> String {
             String::from_utf8_lossy(&output.stderr)
         );
         if i == last {
-            let stdout = String::from_utf8(output.stdout).expect("UTF-8 output");
+            let stdout = String::from_utf8(output.stdout)
+                .expect("UTF-8 output")
+                .replace(&format!("{}/", tmp.display()), "");
             shown = match &selection {
                 Some(selection) => select(&stdout, selection, example.line),
                 None => stdout
@@ -284,6 +294,10 @@ fn readme_examples_print_what_the_readme_shows() {
 
 #[test]
 fn argument_splitting_groups_quotes() {
+    assert_eq!(
+        split_arguments(r#"edit a.json /x '{"k": "v w"}' > b"#),
+        ["edit", "a.json", "/x", r#"{"k": "v w"}"#, ">", "b"]
+    );
     assert_eq!(
         split_arguments(r#"allocate s.json --target "p99.865 <= 1.0"  -o x"#),
         [

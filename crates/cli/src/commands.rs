@@ -999,9 +999,29 @@ pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()>
             }
             let prefix = format!("{name}.");
             let component = |n: &str| n.strip_prefix(&prefix).unwrap_or(n).to_string();
+            // A file with columns `NAME.du` … (several parts, a sample file, an export
+            // with serial numbers) gives the part those six; a file of bare `du` … must
+            // hold nothing else.
+            let qualified = names.iter().any(|n| n.starts_with(&prefix));
+            let ignored: Vec<&str> = names
+                .iter()
+                .filter(|n| qualified && !n.starts_with(&prefix))
+                .copied()
+                .collect();
+            if !ignored.is_empty() {
+                let shown = if ignored.len() > 6 {
+                    format!("{}, … ({} in all)", ignored[..5].join(", "), ignored.len())
+                } else {
+                    ignored.join(", ")
+                };
+                note(&format!(
+                    "{}: fitting {name}.du … {name}.dgamma; other columns left out: {shown}",
+                    path.display(),
+                ));
+            }
             if let Some(other) = names
                 .iter()
-                .find(|n| !PART_COMPONENTS.contains(&component(n).as_str()))
+                .find(|n| !ignored.contains(n) && !PART_COMPONENTS.contains(&component(n).as_str()))
             {
                 return Err(BadInput(format!(
                     "{}: column '{other}' is not a component of part {name} ({})",
@@ -1042,6 +1062,24 @@ pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()>
     }
     let names: Vec<String> = order.iter().map(|&i| table.columns[i].0.clone()).collect();
     let units: Vec<Option<String>> = order.iter().map(|&i| table.columns[i].1.clone()).collect();
+    if part.is_some() {
+        // A part's translations share one unit, its rotations one.
+        for (kind, range) in [("translation", 0..3), ("rotation", 3..6)] {
+            let first = &units[range.start];
+            if units[range.clone()].iter().any(|u| u != first) {
+                return Err(BadInput(format!(
+                    "{}: the {kind} columns of the part are in different units ({}); give them one",
+                    table.at(1),
+                    units[range]
+                        .iter()
+                        .map(|u| u.as_deref().unwrap_or("none"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ))
+                .into());
+            }
+        }
+    }
     let fitted =
         fit_normal(&names, &rows).map_err(|err| BadInput(format!("{}: {err}", path.display())))?;
     let source = path.file_name().map_or_else(
@@ -1061,7 +1099,7 @@ pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()>
         .collect();
     if !doubtful.is_empty() {
         note(&format!(
-            "warning: a normal is doubtful for {} (Anderson–Darling p < 0.05): consider another distribution",
+            "warning: a normal is doubtful for {} (Anderson–Darling p < 0.05): consider another distribution, or resampling the measurements (`empirical`, scenarios/README.md)",
             doubtful.join(", ")
         ));
     }

@@ -273,8 +273,9 @@ pub fn summary(fit: &Fit, source: &str) -> String {
     text
 }
 
-/// The scenario fragment: one part (`part` named, the six components in order) or one
-/// normal variable per column with their correlations.
+/// The scenario fragment: one part (`part` named, the six components in order; with
+/// `units` when its columns are headed in other units than mm and rad) or one normal
+/// variable per column with their correlations.
 pub fn fragment(fit: &Fit, part: Option<&str>, units: &[Option<String>], source: &str) -> Value {
     let p = fit.names.len();
     if let Some(name) = part {
@@ -282,14 +283,25 @@ pub fn fragment(fit: &Fit, part: Option<&str>, units: &[Option<String>], source:
         let covariance: Vec<Vec<f64>> = (0..p)
             .map(|i| (0..p).map(|j| fit.cov(i, j)).collect())
             .collect();
-        return json!({
-            "parts": [{
-                "name": name,
-                "description": description,
-                "mean": fit.mean,
-                "covariance": covariance,
-            }]
+        let mut part = json!({
+            "name": name,
+            "description": description,
+            "mean": fit.mean,
+            "covariance": covariance,
         });
+        // Columns headed in other units than mm and rad: the part says so (`units`).
+        let (translation, rotation) = (units.first(), units.get(3));
+        let mut given = serde_json::Map::new();
+        if let Some(Some(unit)) = translation.filter(|u| u.as_deref() != Some("mm")) {
+            given.insert("translation".into(), json!(unit));
+        }
+        if let Some(Some(unit)) = rotation.filter(|u| u.as_deref() != Some("rad")) {
+            given.insert("rotation".into(), json!(unit));
+        }
+        if !given.is_empty() {
+            part["units"] = Value::Object(given);
+        }
+        return json!({ "parts": [part] });
     }
     let joint = match fit.mardia {
         Some((skew, kurt)) => format!(
