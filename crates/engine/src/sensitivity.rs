@@ -20,7 +20,11 @@
 //! (Archer, Saltelli & Sobol' 1997), resample b drawn from its own stream, while the
 //! N·(2G + 2) values per output fit the row-bootstrap limit; beyond it, a bootstrap over
 //! blocks of consecutive rows whose sums alone are kept (bounded memory at any N; see
-//! [`BootstrapMethod`]).
+//! [`BootstrapMethod`]). The row bootstrap never reads rows at random: each row's 2G + 2
+//! estimator terms are stored contiguously, and a resample is the multinomial count of
+//! every row, drawn block by block (conditional binomials split the N picks among blocks
+//! of rows that stay in cache, uniform picks place them within a block) and summed in one
+//! sequential pass per block for all resamples ([`row_resamples`]).
 //!
 //! Reproducibility: chunk k of A and B draws from `ChaCha8Rng::seed_from_u64(seed)` with
 //! streams 2k and 2k + 1; chunks are collected in order and every sum runs sequentially,
@@ -33,6 +37,7 @@ use std::ops::Range;
 
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use rand_distr::{Binomial, Distribution};
 use rayon::prelude::*;
 
 use crate::evaluate::ChunkEvaluator;
@@ -734,6 +739,100 @@ pub fn sobol_indices(
     merge_sobol(scenario, settings, vec![partial])
 }
 
+/// Rows of a cache block of the row bootstrap: the estimator terms of a block (2G + 2
+/// numbers per row) stay in cache while every resample sums its picks among them.
+const BOOTSTRAP_BLOCK_ROWS: usize = 2048;
+
+/// Word offset, in a resample's stream, of the picks within block j: (j + 1)·2^40 (the
+/// block totals take the words from 0; a block draws far fewer than 2^40 words).
+const BLOCK_WORD_STRIDE: u128 = 1 << 40;
+
+/// The row bootstrap's resamples of one output: per resample, the estimator sums
+/// ([`BlockSums`]) over `m` rows drawn with replacement from the finite rows, whose terms
+/// `terms` holds row-major (`k` = 2G + 2 per row: f_A + f_B, f_A² + f_B², the first-order
+/// terms, the total terms; values centred).
+///
+/// A resample is the multinomial count of each row among m uniform picks, drawn without
+/// reading rows at random: resample b's stream (`BOOTSTRAP_STREAM_BASE + b`) first splits
+/// the m picks among the blocks of [`BOOTSTRAP_BLOCK_ROWS`] rows by conditional binomials
+/// (block j gets Bin(picks left, rows of j / rows left)), then places block j's picks
+/// uniformly among its rows from the word offset (j + 1)·[`BLOCK_WORD_STRIDE`]. That is the
+/// multinomial law of the classic bootstrap, exactly. Blocks are taken in order, each held
+/// in cache while every resample adds count × terms over its rows (in parallel over the
+/// resamples); each resample's sum runs in block order, so the result does not depend on
+/// the thread count.
+fn row_resamples(
+    terms: &[f64],
+    k: usize,
+    n_groups: usize,
+    seed: u64,
+    bootstrap: usize,
+) -> Vec<BlockSums> {
+    let m = terms.len() / k;
+    let blocks = m.div_ceil(BOOTSTRAP_BLOCK_ROWS);
+    let stream = |b: usize, block: Option<usize>| {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        rng.set_stream(BOOTSTRAP_STREAM_BASE + b as u64);
+        if let Some(j) = block {
+            rng.set_word_pos((j as u128 + 1) * BLOCK_WORD_STRIDE);
+        }
+        rng
+    };
+    // Per resample: its totals stream, the picks not yet placed, and its sums.
+    let mut states: Vec<(ChaCha8Rng, u64, Vec<f64>)> = (0..bootstrap)
+        .map(|b| (stream(b, None), m as u64, vec![0.0; k]))
+        .collect();
+    let mut rows_left = m as u64;
+    for j in 0..blocks {
+        let start = j * BOOTSTRAP_BLOCK_ROWS;
+        let rows = BOOTSTRAP_BLOCK_ROWS.min(m - start);
+        let block = &terms[start * k..(start + rows) * k];
+        let last = j + 1 == blocks;
+        let share = rows as f64 / rows_left as f64;
+        states.par_iter_mut().enumerate().for_each_init(
+            || vec![0u32; BOOTSTRAP_BLOCK_ROWS],
+            |counts, (b, (totals, picks_left, sums))| {
+                let picks = if last || *picks_left == 0 {
+                    *picks_left
+                } else {
+                    Binomial::new(*picks_left, share)
+                        .expect("0 < share ≤ 1")
+                        .sample(totals)
+                };
+                *picks_left -= picks;
+                if picks == 0 {
+                    return;
+                }
+                let counts = &mut counts[..rows];
+                counts.fill(0);
+                let mut rng = stream(b, Some(j));
+                for _ in 0..picks {
+                    counts[rng.random_range(0..rows)] += 1;
+                }
+                for (&c, row) in counts.iter().zip(block.chunks_exact(k)) {
+                    if c != 0 {
+                        let c = c as f64;
+                        for (s, t) in sums.iter_mut().zip(row) {
+                            *s += c * t;
+                        }
+                    }
+                }
+            },
+        );
+        rows_left -= rows as u64;
+    }
+    states
+        .into_iter()
+        .map(|(_, _, sums)| BlockSums {
+            rows: m as u64,
+            sum: sums[0],
+            sum_squares: sums[1],
+            first: sums[2..2 + n_groups].to_vec(),
+            total: sums[2 + n_groups..].to_vec(),
+        })
+        .collect()
+}
+
 /// The row bootstrap ([`BootstrapMethod::Rows`]) over every chunk's values, in chunk order.
 fn indices_from_rows(
     scenario: &Scenario,
@@ -782,16 +881,31 @@ fn indices_from_rows(
                 .collect();
             crate::stats::Moments::from_slice(&values).variance()
         };
-        let resamples: Vec<(Vec<f64>, Vec<f64>)> = (0..settings.bootstrap)
-            .into_par_iter()
-            .map(|b| {
-                let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
-                rng.set_stream(BOOTSTRAP_STREAM_BASE + b as u64);
-                let count = finite_rows.len();
-                let mut picks = (0..count).map(|_| finite_rows[rng.random_range(0..count)]);
-                indices(&f, &mut picks, groups.len())
-            })
-            .collect();
+        // The estimator's terms of every finite row, row-major: a resample reads them
+        // block by block (row_resamples).
+        let n_groups = groups.len();
+        let k = 2 * n_groups + 2;
+        let mut terms = vec![0.0; finite_rows.len() * k];
+        for (&r, row) in finite_rows.iter().zip(terms.chunks_exact_mut(k)) {
+            let (fa, fb) = (f[0][r], f[1][r]);
+            row[0] = fa + fb;
+            row[1] = fa * fa + fb * fb;
+            for g in 0..n_groups {
+                let fab = f[2 + g][r];
+                let fba = f[2 + n_groups + g][r];
+                row[2 + g] = fb * (fab - fa) + fa * (fba - fb);
+                row[2 + n_groups + g] = (fa - fab) * (fa - fab) + (fb - fba) * (fb - fba);
+            }
+        }
+        drop(f);
+        let resamples: Vec<(Vec<f64>, Vec<f64>)> =
+            row_resamples(&terms, k, n_groups, settings.seed, settings.bootstrap)
+                .into_iter()
+                .map(|sums| {
+                    let (_, first, total) = sums.indices();
+                    (first, total)
+                })
+                .collect();
         results.push(output_sensitivity(
             scenario,
             o,
@@ -804,4 +918,110 @@ fn indices_from_rows(
         ));
     }
     Ok(results)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Rows whose terms reveal a resample's counts: [1, in block 0, in block 1, in block 2,
+    /// is row 0, is the last row] (n_groups = 2).
+    fn counting_terms(m: usize) -> Vec<f64> {
+        let mut terms = vec![0.0; m * 6];
+        for (r, row) in terms.chunks_exact_mut(6).enumerate() {
+            row[0] = 1.0;
+            row[1 + (r / BOOTSTRAP_BLOCK_ROWS).min(2)] = 1.0;
+            row[4] = (r == 0) as u8 as f64;
+            row[5] = (r == m - 1) as u8 as f64;
+        }
+        terms
+    }
+
+    #[test]
+    fn a_resample_is_the_multinomial_count_of_m_picks() {
+        // m = 5000 rows in blocks of 2048, 2048, 904; 4000 resamples. Each resample places
+        // exactly m picks; a block's count is Bin(m, p_j) (mean m·p_j, variance
+        // m·p_j·(1 − p_j)), two blocks' counts correlate as −√(p_i·p_j/((1 − p_i)(1 − p_j)))
+        // (multinomial), and a row's count has mean 1 and variance 1 − 1/m. Means within 5
+        // standard errors; variances within 5·√(2/B) relative (their sampling error at
+        // B resamples, near-normal counts); the correlation within 5/√B.
+        let m = 5000;
+        let b = 4000;
+        let sums = row_resamples(&counting_terms(m), 6, 2, 42, b);
+        assert!(sums.iter().all(|s| s.sum == m as f64 && s.rows == m as u64));
+        let bf = b as f64;
+        let stats = |x: &dyn Fn(&BlockSums) -> f64| {
+            let v: Vec<f64> = sums.iter().map(x).collect();
+            let mean = v.iter().sum::<f64>() / bf;
+            let var = v.iter().map(|y| (y - mean).powi(2)).sum::<f64>() / (bf - 1.0);
+            (v, mean, var)
+        };
+        let p = [2048.0 / 5000.0, 2048.0 / 5000.0, 904.0 / 5000.0];
+        let blocks: Vec<(Vec<f64>, f64, f64)> = (0..3)
+            .map(|j| {
+                stats(&move |s: &BlockSums| match j {
+                    0 => s.sum_squares,
+                    1 => s.first[0],
+                    _ => s.first[1],
+                })
+            })
+            .collect();
+        for (j, (_, mean, var)) in blocks.iter().enumerate() {
+            let expected_var = m as f64 * p[j] * (1.0 - p[j]);
+            assert!(
+                (mean - m as f64 * p[j]).abs() < 5.0 * (expected_var / bf).sqrt(),
+                "block {j}: mean {mean}"
+            );
+            assert!(
+                (var / expected_var - 1.0).abs() < 5.0 * (2.0 / bf).sqrt(),
+                "block {j}: variance {var} against {expected_var}"
+            );
+        }
+        let (v0, m0, s0) = (&blocks[0].0, blocks[0].1, blocks[0].2);
+        let (v1, m1, s1) = (&blocks[1].0, blocks[1].1, blocks[1].2);
+        let cov = v0
+            .iter()
+            .zip(v1)
+            .map(|(x, y)| (x - m0) * (y - m1))
+            .sum::<f64>()
+            / (bf - 1.0);
+        let rho = cov / (s0 * s1).sqrt();
+        let expected = -(p[0] * p[1] / ((1.0 - p[0]) * (1.0 - p[1]))).sqrt();
+        assert!(
+            (rho - expected).abs() < 5.0 / bf.sqrt(),
+            "{rho} against {expected}"
+        );
+        for (name, x) in [
+            (
+                "row 0",
+                &(|s: &BlockSums| s.total[0]) as &dyn Fn(&BlockSums) -> f64,
+            ),
+            ("last row", &|s: &BlockSums| s.total[1]),
+        ] {
+            let (_, mean, var) = stats(x);
+            let expected_var = 1.0 - 1.0 / m as f64;
+            assert!(
+                (mean - 1.0).abs() < 5.0 * (expected_var / bf).sqrt(),
+                "{name}: {mean}"
+            );
+            assert!(
+                (var / expected_var - 1.0).abs() < 5.0 * (2.0 / bf).sqrt() * 1.5,
+                "{name}: variance {var}"
+            );
+        }
+    }
+
+    #[test]
+    fn resamples_do_not_depend_on_the_thread_count() {
+        let terms: Vec<f64> = (0..9000 * 6).map(|i| ((i * 7919) % 1000) as f64).collect();
+        let with = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| row_resamples(&terms, 6, 2, 3, 64))
+        };
+        assert_eq!(with(1), with(2));
+        assert_eq!(with(1), with(3));
+    }
 }
