@@ -287,6 +287,21 @@ fn a_part_is_fitted_from_a_wider_file_in_its_headings_units() {
             );
         }
     }
+    // A misspelt part names the parts the file has.
+    let out = run_rvtol(&[
+        "fit",
+        dir.join("wide.csv").to_str().unwrap(),
+        "--part",
+        "carier",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        stderr.contains(
+            "no columns carier.du … carier.dgamma (the file has the parts carrier, other)"
+        ),
+        "{stderr}"
+    );
     // Translations in two units are refused.
     let mixed = wide.replacen("carrier.dv [µm]", "carrier.dv [mm]", 1);
     let path = dir.join("mixed.csv");

@@ -243,6 +243,72 @@ fn a_report_written_to_a_fifo_goes_through_it() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+#[test]
+fn an_unwritable_destination_is_refused_before_the_run() {
+    // Nothing is computed or printed: the table would come before the samples file.
+    let scenario = workspace_dir().join("scenarios/linear-stack-correlated.json");
+    let dir = scratch("destinations");
+    for (option, path, message) in [
+        (
+            "--samples-out",
+            "/nonexistent-rvtol-dir/x.csv",
+            "its folder /nonexistent-rvtol-dir",
+        ),
+        (
+            "--json",
+            "/nonexistent-rvtol-dir/x.json",
+            "its folder /nonexistent-rvtol-dir",
+        ),
+        ("--html", path_arg(&dir), "it is a directory"),
+    ] {
+        let out = run_rvtol(&[
+            "run",
+            path_arg(&scenario),
+            "--samples",
+            "1000",
+            option,
+            path,
+        ]);
+        let line = one_line(&out, 2);
+        assert!(line.contains(message), "{line}");
+        assert!(out.stdout.is_empty(), "{}", text(&out.stdout));
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[cfg(target_os = "linux")]
+#[test]
+fn dev_stdout_on_a_pipe_takes_the_report_and_the_samples() {
+    // The test harness reads standard output through a pipe: /dev/stdout links to
+    // /proc/self/fd/1, whose link text `pipe:[…]` is no path; the writers go through it.
+    let scenario = workspace_dir().join("scenarios/linear-stack-correlated.json");
+    let out = run_rvtol(&[
+        "run",
+        path_arg(&scenario),
+        "--samples",
+        "3",
+        "--quiet",
+        "--json",
+        "/dev/stdout",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    let json_end = stdout.find("\n}").expect("the JSON report") + 2;
+    let report: Value = serde_json::from_str(&stdout[..json_end]).expect("JSON");
+    assert_eq!(report["samples"], 3);
+    let out = run_rvtol(&[
+        "run",
+        path_arg(&scenario),
+        "--samples",
+        "3",
+        "--quiet",
+        "--samples-out",
+        "/dev/stdout",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert!(text(&out.stdout).lines().any(|l| l.starts_with("sample,")));
+}
+
 #[cfg(unix)]
 #[test]
 fn a_symlink_keeps_pointing_at_its_target_which_keeps_its_permissions() {

@@ -145,7 +145,7 @@ type Mutation = Box<dyn Fn(&mut Value)>;
 
 #[test]
 fn array_mistakes_are_refused_with_their_json_path() {
-    let cases: Vec<(Mutation, &str)> = vec![
+    let mut cases: Vec<(Mutation, &str)> = vec![
         (
             Box::new(|d| d["variables"][0]["count"] = json!(0)),
             "variables[0].count: an array has 1 to 100000 members, got 0",
@@ -175,6 +175,10 @@ fn array_mistakes_are_refused_with_their_json_path() {
             "models[0].inputs.f_*: matches no input of linear_stack; its inputs are: e_{1..3}",
         ),
         (
+            Box::new(|d| d["models"][0]["inputs"] = json!({})),
+            "models[0].inputs: 3 model inputs are not bound: e_{1..3} (any); give each a number or a variable name",
+        ),
+        (
             Box::new(|d| d["models"][0]["inputs"] = json!({ "e_*_*": "e" })),
             "models[0].inputs.e_*_*: a pattern has one '*', which stands for the index (1, 2, …)",
         ),
@@ -201,6 +205,16 @@ fn array_mistakes_are_refused_with_their_json_path() {
             "variables[0].count: invalid type: floating point `2.5`, expected u64",
         ),
     ];
+    cases.push((
+        Box::new(|d| d["correlations"] = json!([{ "between": ["e", "e_1"], "rho": 0.5 }])),
+        "correlations[0].between[0]: \"e\" is an array of 3 members: correlate a member (e_1 …)",
+    ));
+    // A typo in a pattern: its own line first, naming the inputs it left unbound, then one
+    // line for all of them.
+    cases.push((
+        Box::new(|d| d["models"][0]["inputs"] = json!({ "f_*": "e" })),
+        "models[0].inputs.f_*: matches no input of linear_stack; the inputs left unbound are: e_{1..3}",
+    ));
     for (mutate, expected) in cases {
         let mut document = stack(3, true);
         mutate(&mut document);
@@ -350,6 +364,19 @@ fn empirical_values_in_micrometres_are_converted_to_the_models_millimetres() {
     assert_eq!(scenario.columns[column].unit.as_deref(), Some("mm"));
     let (m, _) = moments(&MEASURED);
     assert!((scenario.input_space.mean_row()[column] - m * 1e-3).abs() < 1e-18);
+    // A unit rvtol does not know is named as such.
+    let variable = document["variables"]
+        .as_array_mut()
+        .unwrap()
+        .iter_mut()
+        .find(|v| v["name"] == "pin_radius_error")
+        .unwrap();
+    variable["unit"] = "micron".into();
+    let message = error(&document);
+    assert!(
+        message.contains("\"pin_radius_error\" is in micron, which is not a unit rvtol knows (lengths mm, µm or um, m;"),
+        "{message}"
+    );
 }
 
 /// A folder in the temporary directory, removed when dropped.
@@ -403,12 +430,27 @@ fn a_csv_column_is_read_relative_to_the_scenario_and_written_into_its_text() {
         RunReport::new(&from_file, a).to_json(),
         RunReport::new(&inline, b).to_json()
     );
-    // The text carries the numbers next to their source, and parses without the CSV.
+    // The text carries the numbers with their source in place of the reference, and
+    // parses without the CSV.
     let document: Value = serde_json::from_str(&text).unwrap();
     let empirical = &document["variables"][0]["distribution"]["empirical"];
     assert_eq!(empirical["values"], json!(MEASURED));
-    assert_eq!(empirical["csv"], "data/measured.csv");
+    assert_eq!(
+        empirical["source"],
+        "data/measured.csv, column x: 12 values"
+    );
+    assert!(empirical.get("csv").is_none() && empirical.get("column").is_none());
     assert!(Scenario::from_json(&text, "copy").is_ok());
+    // Windows line ends count the lines as a reader of the file does.
+    dir.write("data/crlf.csv", "x [mm]\r\n1\r\n2\r\nthree\r\n");
+    let mut crlf = reference.clone();
+    crlf["variables"][0]["distribution"]["empirical"]["csv"] = "data/crlf.csv".into();
+    let path = dir.write("crlf.json", &crlf.to_string());
+    let message = load(&path).err().unwrap();
+    assert!(
+        message.contains("line 4, column 'x': not a finite number: 'three'"),
+        "{message}"
+    );
     // A column headed with a unit gives it to a variable without one.
     let mut no_unit = reference.clone();
     no_unit["variables"][0]
@@ -477,7 +519,32 @@ fn empirical_mistakes_are_refused_with_their_json_path() {
             "mm",
             format!("{at}: give the measured numbers in `values`, or a CSV file and its column"),
         ),
+        (
+            json!({ "values": [1.0, 2.0], "csv": "data/measured.csv", "column": "x" }),
+            "mm",
+            format!(
+                "{at}: give the numbers in `values` or a CSV file in `csv` and `column`, not both"
+            ),
+        ),
+        (
+            json!({ "csv": "data/empty.csv", "column": "x" }),
+            "mm",
+            format!("{at}.column: the column \"x\" of "),
+        ),
+        (
+            json!({ "csv": "data/measured.csv", "column": "x", "bandwidth": 0.1 }),
+            "micron",
+            "variables[0].unit: micron differs from the unit of the column \"x\"".to_string(),
+        ),
+        (
+            json!({ "csv": "data/semicolons.csv", "column": "x" }),
+            "mm",
+            "line 1: the columns are separated by ';': rvtol reads comma-separated values"
+                .to_string(),
+        ),
     ];
+    dir.write("data/empty.csv", "x [mm],y\n,1\n,2\n");
+    dir.write("data/semicolons.csv", "x;y\n1;2\n");
     for (k, (empirical, unit, expected)) in cases.into_iter().enumerate() {
         let path = dir.write(
             &format!("case-{k}.json"),

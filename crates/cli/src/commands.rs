@@ -2,6 +2,7 @@
 //! machine ([`crate::limits`]), call the engine, print or write the report
 //! ([`crate::output`]). The engine computes; nothing here does statistics.
 
+use std::collections::BTreeSet;
 use std::io::IsTerminal;
 use std::path::Path;
 
@@ -24,7 +25,7 @@ use rvtol_engine::{
 };
 
 use crate::limits::{memory_budget, parse_count, thread_pool, threads};
-use crate::output::{note, print, write_bytes, write_report};
+use crate::output::{check_destination, note, print, write_bytes, write_report};
 use crate::{BadInput, Execution, Failed};
 
 fn bad_scenario(path: &Path, err: ScenarioError) -> anyhow::Error {
@@ -133,6 +134,16 @@ pub struct Destinations<'a> {
     pub samples: Option<&'a Path>,
 }
 
+impl Destinations<'_> {
+    /// Refuses, before the command's work, a destination that cannot be written.
+    fn check(&self) -> Result<()> {
+        for path in [self.json, self.html, self.samples].into_iter().flatten() {
+            check_destination(path).map_err(|err| BadInput(err.to_string()))?;
+        }
+        Ok(())
+    }
+}
+
 /// The command line as typed (arguments with spaces or quotes quoted), for the page's
 /// record.
 fn command_line() -> String {
@@ -213,6 +224,7 @@ pub fn run(
     exact_percentile_limit: u64,
     execution: &Execution,
 ) -> Result<()> {
+    to.check()?;
     let scenario = load(scenario_path)?;
     let settings = RunSettings {
         samples: samples.unwrap_or(scenario.samples),
@@ -394,6 +406,7 @@ pub fn sensitivity(
     to: Destinations<'_>,
     execution: &Execution,
 ) -> Result<()> {
+    to.check()?;
     let scenario = load(path)?;
     let settings = sensitivity_settings(&scenario, &args)?;
     let pool = pool_for(execution, "sensitivity", |threads| {
@@ -466,6 +479,7 @@ fn finish_sensitivity(
     execution: &Execution,
     pool: &rayon::ThreadPool,
 ) -> Result<()> {
+    to.check()?;
     let report = pool
         .install(|| SensitivityReport::complete(scenario, settings, outputs, shapley))
         .map_err(|err| bad_scenario(path, err))?;
@@ -710,6 +724,7 @@ pub fn allocate(
     write_scenario: Option<&Path>,
     execution: &Execution,
 ) -> Result<()> {
+    to.check()?;
     let (scenario, text) = read(path)?;
     let target = Target::parse(&args.target).map_err(|err| BadInput(format!("--target: {err}")))?;
     let cost = args
@@ -1019,6 +1034,21 @@ pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()>
                     path.display(),
                 ));
             }
+            // Columns of other parts but none of this one: most likely a misspelt name.
+            let parts: BTreeSet<&str> = names
+                .iter()
+                .filter_map(|n| n.split_once('.'))
+                .filter(|(_, c)| PART_COMPONENTS.contains(c))
+                .map(|(p, _)| p)
+                .collect();
+            if !qualified && !parts.is_empty() {
+                return Err(BadInput(format!(
+                    "{}: no columns {name}.du … {name}.dgamma (the file has the parts {})",
+                    table.at(1),
+                    parts.into_iter().collect::<Vec<_>>().join(", ")
+                ))
+                .into());
+            }
             if let Some(other) = names
                 .iter()
                 .find(|n| !ignored.contains(n) && !PART_COMPONENTS.contains(&component(n).as_str()))
@@ -1193,6 +1223,7 @@ pub struct MergeArgs {
 /// `rvtol merge`: checks the shard files for coverage and identity and folds them into the
 /// run's report (or a baseline, or a check against one).
 pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Result<()> {
+    to.check()?;
     use rvtol_engine::shard;
     let build = build_identity()?;
     let mut files = Vec::with_capacity(args.partials.len());

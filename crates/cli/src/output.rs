@@ -35,6 +35,16 @@ pub fn write_report(path: &Path, contents: &str) -> Result<()> {
 
 /// Writes `contents` to `path` as [`write_report`] does (a binary file: a shard's partial).
 pub fn write_bytes(path: &Path, contents: &[u8]) -> Result<()> {
+    // A path that ends on a device or FIFO through the kernel's own link resolution is
+    // written through as it stands: `/dev/stdout` when standard output is a pipe links to
+    // `/proc/self/fd/1`, whose link text (`pipe:[…]`) names no path to follow by hand.
+    if let Ok(metadata) = fs::metadata(path) {
+        let kind = metadata.file_type();
+        if !kind.is_file() && !kind.is_dir() && !is_socket(&kind) {
+            return write_through(path, contents)
+                .with_context(|| format!("cannot write {}", path.display()));
+        }
+    }
     let target = resolve_links(path)?;
     match fs::metadata(&target) {
         Ok(metadata) => {
@@ -54,6 +64,34 @@ pub fn write_bytes(path: &Path, contents: &[u8]) -> Result<()> {
             replace_atomically(&target, contents, None)
         }
         Err(err) => Err(err).with_context(|| format!("cannot write {}", path.display())),
+    }
+}
+
+/// Refuses, before any work, a report path that cannot be written: a directory, or a path
+/// whose folder does not exist (`-`, standard output, always can be).
+pub fn check_destination(path: &Path) -> Result<()> {
+    if path == Path::new("-") {
+        return Ok(());
+    }
+    if let Ok(metadata) = fs::metadata(path) {
+        if metadata.is_dir() {
+            bail!("cannot write {}: it is a directory", path.display());
+        }
+        return Ok(());
+    }
+    let (directory, _) = split(&resolve_links(path)?)?;
+    match fs::metadata(&directory) {
+        Ok(metadata) if metadata.is_dir() => Ok(()),
+        Ok(_) => bail!(
+            "cannot write {}: {} is not a folder",
+            path.display(),
+            directory.display()
+        ),
+        Err(err) => bail!(
+            "cannot write {}: its folder {}: {err}",
+            path.display(),
+            directory.display()
+        ),
     }
 }
 

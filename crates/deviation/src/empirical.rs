@@ -19,7 +19,16 @@ use std::sync::Arc;
 use rand::{Rng, RngExt};
 
 use crate::error::DeviationError;
+use crate::scalar::unit_scale;
 use crate::shown::Shown;
+
+/// Mean and variance (divisor n) of the values.
+fn moments(values: &[f64]) -> (f64, f64) {
+    let n = values.len() as f64;
+    let mean = values.iter().sum::<f64>() / n;
+    let variance = values.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / n;
+    (mean, variance)
+}
 
 /// Fewest values an empirical law takes: one value is a constant, not a distribution.
 pub const MIN_EMPIRICAL_VALUES: usize = 2;
@@ -56,9 +65,7 @@ impl EmpiricalLaw {
         DeviationError::non_negative(&format!("{path}.bandwidth"), bandwidth)?;
         let mut sorted = values.to_vec();
         sorted.sort_by(f64::total_cmp);
-        let n = sorted.len() as f64;
-        let mean = sorted.iter().sum::<f64>() / n;
-        let variance = sorted.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / n;
+        let (mean, variance) = moments(&sorted);
         Ok(EmpiricalLaw {
             sorted: sorted.into(),
             bandwidth,
@@ -111,18 +118,16 @@ impl EmpiricalLaw {
         self.variance
     }
 
-    /// The law of f·X (a change of unit): values and bandwidth times f.
+    /// The law of f·X for a positive factor f (a change of unit): values and bandwidth
+    /// times f ([`unit_scale`]), the moments those of the scaled values.
     pub fn scaled(&self, f: f64) -> EmpiricalLaw {
-        let sorted: Vec<f64> = if f >= 0.0 {
-            self.sorted.iter().map(|x| x * f).collect()
-        } else {
-            self.sorted.iter().rev().map(|x| x * f).collect()
-        };
+        let values: Vec<f64> = self.sorted.iter().map(|&x| unit_scale(x, f)).collect();
+        let (mean, variance) = moments(&values);
         EmpiricalLaw {
-            sorted: sorted.into(),
-            bandwidth: self.bandwidth * f.abs(),
-            mean: self.mean * f,
-            variance: self.variance * f * f,
+            sorted: values.into(),
+            bandwidth: unit_scale(self.bandwidth, f),
+            mean,
+            variance,
         }
     }
 

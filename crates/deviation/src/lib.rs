@@ -44,5 +44,5 @@ pub use error::DeviationError;
 pub use input_space::{ConstraintCounts, InputSpace, InputSpaceBuilder, SamplerScratch};
 pub use normal::{Ziggurat, ZigguratScratch};
 pub use part::{check_covariance, PartSpec, SixDof};
-pub use scalar::{ScalarDistribution, FOLDED_QUANTILE, RAYLEIGH_QUANTILE};
+pub use scalar::{unit_scale, ScalarDistribution, FOLDED_QUANTILE, RAYLEIGH_QUANTILE};
 pub use shown::{human_bytes, Shown};

@@ -146,6 +146,19 @@ fn standard_normal_quantile(p: f64) -> f64 {
     -std::f64::consts::SQRT_2 * erfc_inv(2.0 * p)
 }
 
+/// x·f for a change of unit by the factor f, computed as x / (1/f) when 1/f is a whole
+/// number (µm to mm divides by 1000): a decimal written in the file (−0.72 µm) then lands
+/// on the double nearest its converted decimal (−0.00072 mm), not one a rounding away.
+#[inline]
+pub fn unit_scale(x: f64, f: f64) -> f64 {
+    let inverse = 1.0 / f;
+    if inverse.fract() == 0.0 && inverse.abs() < 9.0e15 {
+        x / inverse
+    } else {
+        x * f
+    }
+}
+
 impl ScalarDistribution {
     /// The law of f·X for a positive factor f (a change of unit, µm to mm: f = 1e-3):
     /// every location and spread scales by f, a capability stays, a lognormal's μ moves by
@@ -154,8 +167,8 @@ impl ScalarDistribution {
         use ScalarDistribution::*;
         match *self {
             Normal { mean, sd } => Normal {
-                mean: mean * f,
-                sd: sd * f,
+                mean: unit_scale(mean, f),
+                sd: unit_scale(sd, f),
             },
             ToleranceBand {
                 lower,
@@ -163,19 +176,19 @@ impl ScalarDistribution {
                 cp,
                 mean_shift,
             } => ToleranceBand {
-                lower: lower * f,
-                upper: upper * f,
+                lower: unit_scale(lower, f),
+                upper: unit_scale(upper, f),
                 cp,
-                mean_shift: mean_shift * f,
+                mean_shift: unit_scale(mean_shift, f),
             },
             Uniform { lower, upper } => Uniform {
-                lower: lower * f,
-                upper: upper * f,
+                lower: unit_scale(lower, f),
+                upper: unit_scale(upper, f),
             },
             Triangular { lower, mode, upper } => Triangular {
-                lower: lower * f,
-                mode: mode * f,
-                upper: upper * f,
+                lower: unit_scale(lower, f),
+                mode: unit_scale(mode, f),
+                upper: unit_scale(upper, f),
             },
             TruncatedNormal {
                 mean,
@@ -183,16 +196,18 @@ impl ScalarDistribution {
                 lower,
                 upper,
             } => TruncatedNormal {
-                mean: mean * f,
-                sd: sd * f,
-                lower: lower * f,
-                upper: upper * f,
+                mean: unit_scale(mean, f),
+                sd: unit_scale(sd, f),
+                lower: unit_scale(lower, f),
+                upper: unit_scale(upper, f),
             },
             FoldedNormal { mean, sd } => FoldedNormal {
-                mean: mean * f,
-                sd: sd * f,
+                mean: unit_scale(mean, f),
+                sd: unit_scale(sd, f),
             },
-            Rayleigh { sigma } => Rayleigh { sigma: sigma * f },
+            Rayleigh { sigma } => Rayleigh {
+                sigma: unit_scale(sigma, f),
+            },
             Lognormal { mu, sigma } => Lognormal {
                 mu: mu + f.ln(),
                 sigma,

@@ -21,6 +21,9 @@ impl<'a> CsvTable<'a> {
     pub fn read(path: &'a Path) -> Result<CsvTable<'a>, String> {
         let text = std::fs::read_to_string(path)
             .map_err(|err| format!("{}: cannot read: {err}", path.display()))?;
+        // Line ends of Windows exports: the reader would count the lines of a CRLF file
+        // one short.
+        let text = text.replace("\r\n", "\n");
         let at = |line: u64| format!("{}: line {line}", path.display());
         let mut reader = csv::ReaderBuilder::new()
             .trim(csv::Trim::All)
@@ -37,6 +40,12 @@ impl<'a> CsvTable<'a> {
                 _ => (heading.to_string(), None),
             })
             .collect();
+        if columns.len() == 1 && columns[0].0.contains(';') {
+            return Err(format!(
+                "{}: the columns are separated by ';': rvtol reads comma-separated values (',' between columns, '.' in decimals)",
+                at(1)
+            ));
+        }
         if let Some((i, _)) = columns
             .iter()
             .enumerate()

@@ -4,7 +4,8 @@
 use std::collections::{BTreeMap, BTreeSet};
 
 use rvtol_deviation::{
-    EmpiricalLaw, InputSpaceBuilder, PartSpec, ScalarDistribution, Shown, SixDof, RAYLEIGH_QUANTILE,
+    unit_scale, EmpiricalLaw, InputSpaceBuilder, PartSpec, ScalarDistribution, Shown, SixDof,
+    RAYLEIGH_QUANTILE,
 };
 use rvtol_models::{ConditionEffect, ModelParams, OutputKind, ParamValue};
 use serde_json::Value;
@@ -137,14 +138,14 @@ fn part_spec_in_model_units(
         Some(m) => fixed_array::<6>(&mean_path, m)?,
         None => [0.0; 6],
     };
-    for (x, f) in mean.iter_mut().zip(factors) {
-        *x *= f;
+    for (x, &f) in mean.iter_mut().zip(factors) {
+        *x = unit_scale(*x, f);
     }
     if let Some(covariance) = &part.covariance {
         let mut covariance = fixed_matrix(&format!("{path}.covariance"), covariance)?;
         for (i, row) in covariance.iter_mut().enumerate() {
             for (j, x) in row.iter_mut().enumerate() {
-                *x *= factors[i] * factors[j];
+                *x = unit_scale(unit_scale(*x, factors[i]), factors[j]);
             }
         }
         return Ok(PartSpec::from_covariance(path, mean, covariance)?);
@@ -153,8 +154,8 @@ fn part_spec_in_model_units(
         ScenarioError::new(format!("{path}.sd"), "sd is required with correlation")
     })?;
     let mut sd = fixed_array::<6>(&format!("{path}.sd"), sd)?;
-    for (x, f) in sd.iter_mut().zip(factors) {
-        *x *= f;
+    for (x, &f) in sd.iter_mut().zip(factors) {
+        *x = unit_scale(*x, f);
     }
     let correlation = match &part.correlation {
         Some(c) => fixed_matrix(&format!("{path}.correlation"), c)?,
@@ -202,12 +203,17 @@ fn variable_tolerance(path: &str, variable: &VariableFile) -> ToleranceSource {
         DistributionFile::Lognormal { .. } => (ToleranceKind::VariableLognormal, 1.0),
         DistributionFile::Empirical { .. } => (ToleranceKind::VariableEmpirical, 1.0),
     };
+    // A factor has no unit.
+    let unit = match kind {
+        ToleranceKind::VariableLognormal | ToleranceKind::VariableEmpirical => String::new(),
+        _ => variable.unit.clone().unwrap_or_default(),
+    };
     ToleranceSource {
         name: variable.name.clone(),
         path: path.to_string(),
         kind,
         current,
-        unit: variable.unit.clone().unwrap_or_default(),
+        unit,
     }
 }
 
@@ -236,6 +242,12 @@ fn distribution(
             ..
         } => {
             let at = format!("{path}.empirical");
+            if values.is_some() && csv.is_some() {
+                return Err(ScenarioError::new(
+                    &at,
+                    "give the numbers in `values` or a CSV file in `csv` and `column`, not both (`source` may name where the values came from)",
+                ));
+            }
             let Some(values) = values else {
                 return Err(match csv {
                     Some(_) => ScenarioError::new(
@@ -781,7 +793,15 @@ pub(super) fn compile(
                 Some(&column) => ends[k] = column,
                 None => {
                     resolved = false;
-                    if !broken.contains(name) {
+                    if let Some((_, members)) = arrays.get(name) {
+                        report(Err(ScenarioError::new(
+                            format!("{path}.between[{k}]"),
+                            format!(
+                                "{name:?} is an array of {} members: correlate a member ({name}_1 …)",
+                                members.len()
+                            ),
+                        )));
+                    } else if !broken.contains(name) {
                         report(Err(ScenarioError::new(
                             format!("{path}.between[{k}]"),
                             format!("no variable or part component named {name:?}"),
@@ -851,6 +871,10 @@ pub(super) fn compile(
         let mut pattern_indices: BTreeMap<&str, Vec<u64>> = BTreeMap::new();
         // Patterns that bind an input bound already (reported once, not checked further).
         let mut conflicted: BTreeSet<String> = BTreeSet::new();
+        // Inputs bound by nothing, and the binding paths reported already (a pattern's
+        // mistake is the same for every input it matches: one line).
+        let mut unbound: Vec<&str> = Vec::new();
+        let mut reported: BTreeSet<String> = BTreeSet::new();
         for key in model_file.inputs.keys() {
             if key.matches('*').count() > 1 {
                 report(Err(ScenarioError::new(
@@ -866,13 +890,11 @@ pub(super) fn compile(
                     conflicted.insert(err.path.clone());
                     Err(err)
                 }
-                Ok(None) => Err(ScenarioError::new(
-                    format!("{path}.inputs"),
-                    format!(
-                        "model input {:?} ({}) is not bound: give a number or a variable name",
-                        input.name, input.unit
-                    ),
-                )),
+                Ok(None) => {
+                    // Reported once for all of them, below.
+                    unbound.push(input.name.as_str());
+                    Ok(Binding::Constant(0.0))
+                }
                 Ok(Some(InputBinding {
                     value,
                     path: binding_path,
@@ -936,7 +958,15 @@ pub(super) fn compile(
                                         Err(ScenarioError::new(
                                             &binding_path,
                                             format!(
-                                                "{name:?} is in {unit} but the input wants {}",
+                                                "{name:?} is in {unit}{} but the input wants {}",
+                                                if super::units::is_known(unit) {
+                                                    String::new()
+                                                } else {
+                                                    format!(
+                                                        ", which is not a unit rvtol knows ({})",
+                                                        super::units::KNOWN
+                                                    )
+                                                },
                                                 input.unit
                                             ),
                                         ))
@@ -960,7 +990,9 @@ pub(super) fn compile(
             match binding {
                 Ok(binding) => bindings.push(binding),
                 Err(err) => {
-                    report(Err(err));
+                    if reported.insert(err.path.clone()) {
+                        report(Err(err));
+                    }
                     bound = false;
                     bindings.push(Binding::Constant(0.0));
                 }
@@ -996,11 +1028,19 @@ pub(super) fn compile(
             if indices.is_empty() {
                 report(Err(ScenarioError::new(
                     key_path,
-                    format!(
-                        "matches no input of {}; its inputs are: {}",
-                        entry.name,
-                        known()
-                    ),
+                    if unbound.is_empty() {
+                        format!(
+                            "matches no input of {}; its inputs are: {}",
+                            entry.name,
+                            known()
+                        )
+                    } else {
+                        format!(
+                            "matches no input of {}; the inputs left unbound are: {}",
+                            entry.name,
+                            indexed_summary(&unbound)
+                        )
+                    },
                 )));
                 bound = false;
                 continue;
@@ -1028,6 +1068,33 @@ pub(super) fn compile(
                     bound = false;
                 }
             }
+        }
+        if !unbound.is_empty() {
+            bound = false;
+            let units: BTreeSet<&str> = model
+                .inputs()
+                .iter()
+                .filter(|i| unbound.contains(&i.name.as_str()))
+                .map(|i| i.unit.as_str())
+                .collect();
+            let units: Vec<&str> = units.into_iter().collect();
+            report(Err(ScenarioError::new(
+                format!("{path}.inputs"),
+                if unbound.len() == 1 {
+                    format!(
+                        "model input {:?} ({}) is not bound: give a number or a variable name",
+                        unbound[0],
+                        units.join(", ")
+                    )
+                } else {
+                    format!(
+                        "{} model inputs are not bound: {} ({}); give each a number or a variable name (a key with one `*` binds a family)",
+                        unbound.len(),
+                        indexed_summary(&unbound),
+                        units.join(", ")
+                    )
+                },
+            )));
         }
         let first_output = outputs.len();
         for output in model.outputs() {

@@ -6,8 +6,8 @@
 //! a variable in another unit is an error (write it in the column's unit: it is converted
 //! at load time like any variable).
 //!
-//! The numbers are written into the scenario text (`values`, next to the `csv` and
-//! `column` that name their source), and that text is the scenario from then on: a shard
+//! The numbers are written into the scenario text (`values`, with `source` naming the file
+//! and column in place of `csv` and `column`), and that text is the scenario from then on: a shard
 //! carries it, `rvtol merge` and `rvtol allocate`'s scaled copies parse it, and none of
 //! them reads the CSV again or sees a CSV that changed in between. A text without a CSV
 //! reference is returned as it is, byte for byte.
@@ -81,7 +81,26 @@ pub fn inline_data_files<'a>(text: &'a str, base: &Path) -> Result<Cow<'a, str>,
                     }
                 }
             }
-            variable["distribution"]["empirical"]["values"] = Value::from(values);
+            if values.is_empty() {
+                return Err(ScenarioError::new(
+                    format!("{at}.column"),
+                    format!(
+                        "the column {column:?} of {} holds no numbers",
+                        path.display()
+                    ),
+                ));
+            }
+            let count = values.len();
+            let empirical = &mut variable["distribution"]["empirical"];
+            if let Some(object) = empirical.as_object_mut() {
+                object.remove("csv");
+                object.remove("column");
+                object.insert(
+                    "source".into(),
+                    Value::from(format!("{file}, column {column}: {count} values")),
+                );
+                object.insert("values".into(), Value::from(values));
+            }
             changed = true;
         }
     }

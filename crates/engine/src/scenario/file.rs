@@ -189,6 +189,10 @@ pub(super) enum DistributionFile {
         #[serde(default)]
         #[allow(dead_code)]
         column: Option<String>,
+        /// Documentation: where `values` came from (written by [`super::data`]).
+        #[serde(default)]
+        #[allow(dead_code)]
+        source: Option<String>,
         /// A kernel bandwidth (in the variable's unit) or `"silverman"`; none: plain
         /// resampling.
         #[serde(default)]

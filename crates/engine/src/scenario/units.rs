@@ -26,6 +26,15 @@ const UNITS: &[(&str, &str, f64)] = &[
     ("arcsec", "angle", PI / 648_000.0),
 ];
 
+/// The known units, for messages.
+pub const KNOWN: &str =
+    "lengths mm, µm or um, m; angles rad, mrad, µrad or urad, deg, arcmin, arcsec";
+
+/// Whether `unit` is one of the units rvtol converts.
+pub fn is_known(unit: &str) -> bool {
+    UNITS.iter().any(|(name, _, _)| *name == unit)
+}
+
 /// The factor f that turns a value in `from` into one in `to` (x_to = f·x_from), when both
 /// are known units of one kind and differ; `None` otherwise.
 pub fn conversion(from: &str, to: &str) -> Option<f64> {
