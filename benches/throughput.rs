@@ -1,7 +1,10 @@
 //! Criterion benchmarks: nanoseconds per sample of each stage of a run on the RV-20E
 //! hysteresis scenario (sampler, model, statistics), the normal generator against
 //! rand_distr's, whole-run throughput, and the time per sample of every physical model on
-//! rows drawn from its shipped scenario.
+//! rows drawn from its shipped scenario, and the random-number floor of an RV-20E row:
+//! exactly the normals the sampler takes from the stream per row, drawn by the same
+//! generator and normal method and used for nothing (the sampler's cost is stated as a
+//! multiple of it).
 //!
 //! Run with `cargo bench -p rvtol-benches`; each figure is per sample (Throughput::Elements).
 
@@ -94,6 +97,66 @@ fn stages(c: &mut Criterion) {
     group.finish();
 }
 
+/// A generator that counts the 32-bit words it hands out.
+struct Counting<R> {
+    inner: R,
+    words: u64,
+}
+
+impl<R: rand::Rng> rand::TryRng for Counting<R> {
+    type Error = std::convert::Infallible;
+
+    fn try_next_u32(&mut self) -> Result<u32, Self::Error> {
+        self.words += 1;
+        Ok(self.inner.next_u32())
+    }
+
+    fn try_next_u64(&mut self) -> Result<u64, Self::Error> {
+        self.words += 2;
+        Ok(self.inner.next_u64())
+    }
+
+    fn try_fill_bytes(&mut self, dst: &mut [u8]) -> Result<(), Self::Error> {
+        self.words += dst.len().div_ceil(4) as u64;
+        self.inner.fill_bytes(dst);
+        Ok(())
+    }
+}
+
+/// The floor of the RV-20E sampler: the words it takes from the stream per row (counted
+/// over 64 blocks; every RV-20E draw is a ziggurat normal, one word each but for the rare
+/// slow path), drawn as that many ziggurat normals in bulk and nothing else. Compare with
+/// `rv20e_stage/sampler` (the same rows, drawn and placed).
+fn floor(c: &mut Criterion) {
+    let scenario = rv20e();
+    let space = &scenario.input_space;
+    let n_columns = space.n_columns();
+    let mut blocks = vec![0.0; 64 * BLOCK_ROWS * n_columns];
+    let mut counts = space.new_constraint_counts();
+    let mut scratch = SamplerScratch::default();
+    let mut counting = Counting {
+        inner: ChaCha8Rng::seed_from_u64(3),
+        words: 0,
+    };
+    for block in blocks.chunks_mut(BLOCK_ROWS * n_columns) {
+        space
+            .sample_columns_with(&mut counting, block, &mut counts, &mut scratch)
+            .unwrap();
+    }
+    let per_row = counting.words as f64 / (64 * BLOCK_ROWS) as f64;
+    let normals = (per_row * ROWS as f64).round() as usize;
+    let mut group = c.benchmark_group("rv20e_floor");
+    group.throughput(Throughput::Elements(ROWS as u64));
+    let mut rng = ChaCha8Rng::seed_from_u64(1);
+    let mut out = vec![0.0; normals];
+    let mut z = ZigguratScratch::default();
+    group.bench_function(format!("normals_{per_row:.2}_per_row"), |b| {
+        let normal = Ziggurat::get();
+        b.iter(|| normal.fill(&mut rng, &mut out, &mut z))
+    });
+    group.finish();
+}
+
 fn whole_run(c: &mut Criterion) {
     let scenario = rv20e();
     let mut group = c.benchmark_group("rv20e_run");
@@ -164,5 +227,5 @@ fn models(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, normals, stages, whole_run, models);
+criterion_group!(benches, normals, stages, floor, whole_run, models);
 criterion_main!(benches);
