@@ -278,11 +278,11 @@ fn a_part_is_fitted_from_a_wider_file_in_its_headings_units() {
     let (_, mean_a, cov_a) = load(&a).input_space.gaussian_specification();
     let (_, mean_b, cov_b) = load(&b).input_space.gaussian_specification();
     for i in 0..mean_a.len() {
-        assert!((mean_a[i] - mean_b[i]).abs() <= 1e-9 * cov_a[(i, i)].sqrt().max(1e-300));
+        assert!((mean_a[i] - mean_b[i]).abs() <= 1e-12 * cov_a[(i, i)].sqrt().max(1e-300));
         for j in 0..mean_a.len() {
             let scale = (cov_a[(i, i)] * cov_a[(j, j)]).sqrt().max(1e-300);
             assert!(
-                (cov_a[(i, j)] - cov_b[(i, j)]).abs() <= 1e-9 * scale,
+                (cov_a[(i, j)] - cov_b[(i, j)]).abs() <= 1e-12 * scale,
                 "{i} {j}"
             );
         }

@@ -247,30 +247,46 @@ fn a_report_written_to_a_fifo_goes_through_it() {
 fn an_unwritable_destination_is_refused_before_the_run() {
     // Nothing is computed or printed: the table would come before the samples file.
     let scenario = workspace_dir().join("scenarios/linear-stack-correlated.json");
+    let scenario = path_arg(&scenario);
     let dir = scratch("destinations");
-    for (option, path, message) in [
+    let missing = "its folder /nonexistent-rvtol-dir";
+    for (args, message) in [
         (
-            "--samples-out",
-            "/nonexistent-rvtol-dir/x.csv",
-            "its folder /nonexistent-rvtol-dir",
+            vec![
+                "run",
+                scenario,
+                "--samples-out",
+                "/nonexistent-rvtol-dir/x.csv",
+            ],
+            missing,
         ),
         (
-            "--json",
-            "/nonexistent-rvtol-dir/x.json",
-            "its folder /nonexistent-rvtol-dir",
+            vec!["run", scenario, "--json", "/nonexistent-rvtol-dir/x.json"],
+            missing,
         ),
-        ("--html", path_arg(&dir), "it is a directory"),
+        (
+            vec!["run", scenario, "--html", path_arg(&dir)],
+            "it is a directory",
+        ),
+        (
+            vec![
+                "run",
+                scenario,
+                "--shard",
+                "0/2",
+                "--partial",
+                "/nonexistent-rvtol-dir/p",
+            ],
+            missing,
+        ),
+        (
+            vec!["baseline", scenario, "-o", "/nonexistent-rvtol-dir/b.json"],
+            missing,
+        ),
     ] {
-        let out = run_rvtol(&[
-            "run",
-            path_arg(&scenario),
-            "--samples",
-            "1000",
-            option,
-            path,
-        ]);
+        let out = run_rvtol(&args);
         let line = one_line(&out, 2);
-        assert!(line.contains(message), "{line}");
+        assert!(line.contains(message), "{args:?}: {line}");
         assert!(out.stdout.is_empty(), "{}", text(&out.stdout));
     }
     let _ = std::fs::remove_dir_all(&dir);

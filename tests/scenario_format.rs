@@ -89,10 +89,7 @@ fn an_array_draws_what_its_members_as_variables_draw() {
     let variance: f64 = (1..=n)
         .map(|k| (k as f64 * 0.5 - 1.0).powi(2) * sigma * sigma)
         .sum();
-    let (_, cov_columns, cov) = {
-        let (columns, mean, cov) = array.input_space.gaussian_specification();
-        (mean, columns, cov)
-    };
+    let (cov_columns, _, cov) = array.input_space.gaussian_specification();
     assert_eq!(cov_columns.len(), n);
     let coefficients: Vec<f64> = (1..=n).map(|k| k as f64 * 0.5 - 1.0).collect();
     let mut from_space = 0.0;
@@ -290,9 +287,11 @@ fn plain_resampling_draws_only_the_measured_values_at_their_moments() {
 
 #[test]
 fn the_smoothed_bootstrap_keeps_the_values_moments_and_leaves_their_support() {
-    // Silverman's bandwidth for the twelve values, with the shrink: mean m and variance s²
-    // of the values, within SIGMA_BOUND standard errors (that of a variance taken as
-    // s²·√(2/n), the normal's, times 1.5 for the heavier tails here).
+    // Silverman's bandwidth h for the twelve values, with the shrink c = √(1 + h²/s²): the
+    // draws' mean and variance are the values' m and s², within SIGMA_BOUND standard errors:
+    // √(s²/n) for the mean, s²·√((κ − 1)/n) for the variance, κ the law's kurtosis,
+    // (μ4 + 6h²s² + 3h⁴)/(c⁴s⁴) with μ4 the values' fourth central moment (the draw is
+    // m + (D + hZ)/c, D the value's deviation, Z an independent standard normal).
     let scenario = scenario(&empirical_stack(
         json!({ "values": MEASURED, "bandwidth": "silverman" }),
         "mm",
@@ -308,9 +307,13 @@ fn the_smoothed_bootstrap_keeps_the_values_moments_and_leaves_their_support() {
         (mean - m).abs() < SIGMA_BOUND * (s2 / n as f64).sqrt(),
         "{mean}"
     );
+    let h = rvtol_deviation::EmpiricalLaw::silverman_bandwidth(&MEASURED);
+    let mu4 = MEASURED.iter().map(|v| (v - m).powi(4)).sum::<f64>() / MEASURED.len() as f64;
+    let c2 = 1.0 + h * h / s2;
+    let kurtosis = (mu4 + 6.0 * h * h * s2 + 3.0 * h.powi(4)) / (c2 * c2 * s2 * s2);
     assert!(
-        (variance - s2).abs() < SIGMA_BOUND * 1.5 * s2 * (2.0 / n as f64).sqrt(),
-        "{variance}"
+        (variance - s2).abs() < SIGMA_BOUND * s2 * ((kurtosis - 1.0) / n as f64).sqrt(),
+        "{variance} (kurtosis {kurtosis})"
     );
     assert!(x.iter().filter(|v| !MEASURED.contains(v)).count() > n as usize / 2);
     assert!(x.iter().any(|v| *v > 3.5) && x.iter().any(|v| *v < -1.0));
@@ -374,7 +377,7 @@ fn empirical_values_in_micrometres_are_converted_to_the_models_millimetres() {
     variable["unit"] = "micron".into();
     let message = error(&document);
     assert!(
-        message.contains("\"pin_radius_error\" is in micron, which is not a unit rvtol knows (lengths mm, µm or um, m;"),
+        message.contains("\"pin_radius_error\" is in micron, which is not a unit rvtol knows (lengths mm, µm, um, m;"),
         "{message}"
     );
 }

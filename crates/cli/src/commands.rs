@@ -137,11 +137,17 @@ pub struct Destinations<'a> {
 impl Destinations<'_> {
     /// Refuses, before the command's work, a destination that cannot be written.
     fn check(&self) -> Result<()> {
-        for path in [self.json, self.html, self.samples].into_iter().flatten() {
-            check_destination(path).map_err(|err| BadInput(err.to_string()))?;
-        }
-        Ok(())
+        writable(&[self.json, self.html, self.samples])
     }
+}
+
+/// Refuses, before a command's work, any given output path that cannot be written
+/// ([`check_destination`]): a missing folder or a directory.
+fn writable(paths: &[Option<&Path>]) -> Result<()> {
+    for path in paths.iter().flatten() {
+        check_destination(path).map_err(|err| BadInput(err.to_string()))?;
+    }
+    Ok(())
 }
 
 /// The command line as typed (arguments with spaces or quotes quoted), for the page's
@@ -518,6 +524,7 @@ pub fn sensitivity_shard(
     partial_path: &Path,
     execution: &Execution,
 ) -> Result<()> {
+    writable(&[Some(partial_path)])?;
     use rvtol_engine::shard::{ShapleyShard, ShardCommand, ShardContent, ShardHeader};
     let (scenario, text) = read(path)?;
     let settings = sensitivity_settings(&scenario, &args)?;
@@ -601,6 +608,7 @@ pub fn baseline(
     exact_percentile_limit: u64,
     execution: &Execution,
 ) -> Result<()> {
+    writable(&[Some(output)])?;
     let (scenario, text) = read(path)?;
     let settings = RunSettings {
         samples: samples.unwrap_or(scenario.samples),
@@ -644,6 +652,7 @@ pub fn check(
     options: &gate::CheckOptions,
     execution: &Execution,
 ) -> Result<()> {
+    writable(&[junit, json])?;
     let (scenario, text) = read(path)?;
     let baseline_text = std::fs::read_to_string(baseline_path)
         .map_err(|err| BadInput(format!("{}: cannot read: {err}", baseline_path.display())))?;
@@ -725,6 +734,7 @@ pub fn allocate(
     execution: &Execution,
 ) -> Result<()> {
     to.check()?;
+    writable(&[write_scenario])?;
     let (scenario, text) = read(path)?;
     let target = Target::parse(&args.target).map_err(|err| BadInput(format!("--target: {err}")))?;
     let cost = args
@@ -919,6 +929,7 @@ pub fn evaluate(
     output: Option<&Path>,
     execution: &Execution,
 ) -> Result<()> {
+    writable(&[output])?;
     let scenario = load(scenario_path)?;
     let table = read_csv(inputs_path)?;
     let names = table.names();
@@ -1162,6 +1173,7 @@ pub fn run_shard(
     partial_path: &Path,
     execution: &Execution,
 ) -> Result<()> {
+    writable(&[Some(partial_path)])?;
     let (scenario, text) = read(scenario_path)?;
     let (samples, seed, exact_percentile_limit) = settings;
     let settings = RunSettings {

@@ -40,6 +40,8 @@ pub struct EmpiricalLaw {
     bandwidth: f64,
     mean: f64,
     variance: f64,
+    /// √(1 + h²/s²), the smoothed draw's shrink divisor (1 without smoothing).
+    shrink: f64,
 }
 
 impl EmpiricalLaw {
@@ -65,13 +67,24 @@ impl EmpiricalLaw {
         DeviationError::non_negative(&format!("{path}.bandwidth"), bandwidth)?;
         let mut sorted = values.to_vec();
         sorted.sort_by(f64::total_cmp);
+        Ok(EmpiricalLaw::from_sorted(sorted, bandwidth))
+    }
+
+    /// The law of checked, sorted values with its moments and shrink divisor.
+    fn from_sorted(sorted: Vec<f64>, bandwidth: f64) -> EmpiricalLaw {
         let (mean, variance) = moments(&sorted);
-        Ok(EmpiricalLaw {
+        let shrink = if variance > 0.0 {
+            (1.0 + bandwidth * bandwidth / variance).sqrt()
+        } else {
+            1.0
+        };
+        EmpiricalLaw {
             sorted: sorted.into(),
             bandwidth,
             mean,
             variance,
-        })
+            shrink,
+        }
     }
 
     /// Silverman's rule-of-thumb bandwidth of `values`, 0.9·min(s, IQR/1.34)·n^(−1/5)
@@ -122,13 +135,7 @@ impl EmpiricalLaw {
     /// times f ([`unit_scale`]), the moments those of the scaled values.
     pub fn scaled(&self, f: f64) -> EmpiricalLaw {
         let values: Vec<f64> = self.sorted.iter().map(|&x| unit_scale(x, f)).collect();
-        let (mean, variance) = moments(&values);
-        EmpiricalLaw {
-            sorted: values.into(),
-            bandwidth: unit_scale(self.bandwidth, f),
-            mean,
-            variance,
-        }
+        EmpiricalLaw::from_sorted(values, unit_scale(self.bandwidth, f))
     }
 
     /// The value of the empirical inverse CDF at u in [0, 1): the ⌊u·n⌋-th smallest.
@@ -146,12 +153,11 @@ impl EmpiricalLaw {
         if self.bandwidth == 0.0 {
             return x;
         }
-        let h2 = self.bandwidth * self.bandwidth;
         if self.variance == 0.0 {
             // All values equal: the shrink leaves the constant.
             return self.mean;
         }
-        self.mean + (x - self.mean + self.bandwidth * z) / (1.0 + h2 / self.variance).sqrt()
+        self.mean + (x - self.mean + self.bandwidth * z) / self.shrink
     }
 
     /// Draws one value: one uniform of the stream, then, when smoothed, one ziggurat

@@ -45,4 +45,4 @@ pub use input_space::{ConstraintCounts, InputSpace, InputSpaceBuilder, SamplerSc
 pub use normal::{Ziggurat, ZigguratScratch};
 pub use part::{check_covariance, PartSpec, SixDof};
 pub use scalar::{unit_scale, ScalarDistribution, FOLDED_QUANTILE, RAYLEIGH_QUANTILE};
-pub use shown::{human_bytes, Shown};
+pub use shown::{human_bytes, index_list, Shown};

@@ -1,5 +1,6 @@
 //! Numbers and sizes as a person writes them, for messages: `1e308` rather than the 309
-//! digits of `{}` on an `f64`, `3.2 GB` rather than a byte count.
+//! digits of `{}` on an `f64`, `3.2 GB` rather than a byte count, `0,2-5,9` rather than
+//! every index.
 
 use std::fmt;
 
@@ -39,9 +40,36 @@ pub fn human_bytes(bytes: f64) -> String {
     }
 }
 
+/// Increasing indices as a person (and Slurm's `--array`) writes them: runs of three or
+/// more joined as `a-b` (`0,2-5,9`). Shard lists and the indices a pattern binds.
+pub fn index_list(indices: &[u64]) -> String {
+    let mut parts = Vec::new();
+    let mut i = 0;
+    while i < indices.len() {
+        let mut j = i;
+        while j + 1 < indices.len() && indices[j + 1] == indices[j] + 1 {
+            j += 1;
+        }
+        if j >= i + 2 {
+            parts.push(format!("{}-{}", indices[i], indices[j]));
+        } else {
+            parts.extend(indices[i..=j].iter().map(u64::to_string));
+        }
+        i = j + 1;
+    }
+    parts.join(",")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn index_lists_join_runs_of_three() {
+        assert_eq!(index_list(&[0, 2, 3, 4, 5, 9]), "0,2-5,9");
+        assert_eq!(index_list(&[1, 2, 7]), "1,2,7");
+        assert_eq!(index_list(&[]), "");
+    }
 
     #[test]
     fn numbers_read_as_written() {

@@ -259,35 +259,21 @@ fn evaluate_chunk(
     Ok(values)
 }
 
-/// First-order and total indices of every group from the rows `rows` of
-/// (f_A, f_B, f_AB^(g)…, f_BA^(g)…).
-fn indices(
-    f: &[Vec<f64>],
-    rows: &mut dyn Iterator<Item = usize>,
-    n_groups: usize,
-) -> (Vec<f64>, Vec<f64>) {
-    let (mut sum, mut sum_squares, mut n) = (0.0, 0.0, 0usize);
-    let mut first = vec![0.0; n_groups];
-    let mut total = vec![0.0; n_groups];
-    for r in rows {
-        let (fa, fb) = (f[0][r], f[1][r]);
-        sum += fa + fb;
-        sum_squares += fa * fa + fb * fb;
-        n += 1;
-        for g in 0..n_groups {
-            let fab = f[2 + g][r];
-            let fba = f[2 + n_groups + g][r];
-            first[g] += fb * (fab - fa) + fa * (fba - fb);
-            total[g] += (fa - fab) * (fa - fab) + (fb - fba) * (fb - fba);
-        }
+/// The estimator's 2G + 2 terms of row `r` of `f[variant][row]`, values less `centre`:
+/// f_A + f_B, f_A² + f_B², then per group f_B·(f_AB − f_A) + f_A·(f_BA − f_B) (first
+/// order) and (f_A − f_AB)² + (f_B − f_BA)² (total). Their sums over rows are
+/// [`BlockSums`].
+fn row_terms(f: &[Vec<f64>], r: usize, centre: f64, out: &mut [f64]) {
+    let n_groups = (f.len() - 2) / 2;
+    let (fa, fb) = (f[0][r] - centre, f[1][r] - centre);
+    out[0] = fa + fb;
+    out[1] = fa * fa + fb * fb;
+    for g in 0..n_groups {
+        let fab = f[2 + g][r] - centre;
+        let fba = f[2 + n_groups + g][r] - centre;
+        out[2 + g] = fb * (fab - fa) + fa * (fba - fb);
+        out[2 + n_groups + g] = (fa - fab) * (fa - fab) + (fb - fba) * (fb - fba);
     }
-    let nf = n as f64;
-    let mean = sum / (2.0 * nf);
-    let variance = (sum_squares / (2.0 * nf) - mean * mean) * (2.0 * nf) / (2.0 * nf - 1.0);
-    (
-        first.iter().map(|s| s / (2.0 * nf) / variance).collect(),
-        total.iter().map(|s| s / (4.0 * nf) / variance).collect(),
-    )
 }
 
 /// The estimator's sums over a set of rows, for one output: enough to give the indices
@@ -329,27 +315,34 @@ impl BlockSums {
         }
     }
 
+    /// Adds one row's terms ([`row_terms`]).
+    fn add_terms(&mut self, terms: &[f64]) {
+        let n_groups = self.first.len();
+        self.rows += 1;
+        self.sum += terms[0];
+        self.sum_squares += terms[1];
+        for (s, t) in self.first.iter_mut().zip(&terms[2..2 + n_groups]) {
+            *s += t;
+        }
+        for (s, t) in self.total.iter_mut().zip(&terms[2 + n_groups..]) {
+            *s += t;
+        }
+    }
+
     /// Adds row `r` of `f[variant][row]` (values centred on `centre`) when all its values
-    /// are finite; returns whether it did.
-    fn add_row(&mut self, f: &[Vec<f64>], r: usize, centre: f64) -> bool {
+    /// are finite; returns whether it did. `terms` is scratch of 2G + 2.
+    fn add_row(&mut self, f: &[Vec<f64>], r: usize, centre: f64, terms: &mut [f64]) -> bool {
         if !f.iter().all(|v| v[r].is_finite()) {
             return false;
         }
-        let n_groups = self.first.len();
-        let (fa, fb) = (f[0][r] - centre, f[1][r] - centre);
-        self.rows += 1;
-        self.sum += fa + fb;
-        self.sum_squares += fa * fa + fb * fb;
-        for g in 0..n_groups {
-            let fab = f[2 + g][r] - centre;
-            let fba = f[2 + n_groups + g][r] - centre;
-            self.first[g] += fb * (fab - fa) + fa * (fba - fb);
-            self.total[g] += (fa - fab) * (fa - fab) + (fb - fba) * (fb - fba);
-        }
+        row_terms(f, r, centre, terms);
+        self.add_terms(terms);
         true
     }
 
-    /// (variance, first-order indices, total indices), as [`indices`] computes them.
+    /// (variance V of the 2·rows values f_A, f_B, first-order indices, total indices):
+    /// V = (Σ(f_A² + f_B²)/2n − mean²)·2n/(2n − 1), S_g = first_g/(2n)/V, ST_g =
+    /// total_g/(4n)/V (module docs).
     fn indices(&self) -> (f64, Vec<f64>, Vec<f64>) {
         let nf = self.rows as f64;
         let mean = self.sum / (2.0 * nf);
@@ -497,12 +490,14 @@ pub fn sobol_chunks(
                         .map(|(f, &centre)| {
                             let m = f[0].len();
                             let mut dropped = 0;
+                            let mut terms = vec![0.0; 2 * n_groups + 2];
                             let blocks = (0..m)
                                 .step_by(block_rows as usize)
                                 .map(|first| {
                                     let mut sums = BlockSums::new(n_groups);
                                     for r in first..(first + block_rows as usize).min(m) {
-                                        dropped += u64::from(!sums.add_row(f, r, centre));
+                                        dropped +=
+                                            u64::from(!sums.add_row(f, r, centre, &mut terms));
                                     }
                                     sums
                                 })
@@ -868,36 +863,25 @@ fn indices_from_rows(
         // spread is small against their value, and lowers the estimators' variance.
         let centre = finite_rows.iter().map(|&r| f[0][r] + f[1][r]).sum::<f64>()
             / (2.0 * finite_rows.len() as f64);
-        for variant in &mut f {
-            for value in variant.iter_mut() {
-                *value -= centre;
-            }
-        }
-        let (first, total) = indices(&f, &mut finite_rows.iter().copied(), groups.len());
         let variance = {
             let values: Vec<f64> = finite_rows
                 .iter()
-                .flat_map(|&r| [f[0][r], f[1][r]])
+                .flat_map(|&r| [f[0][r] - centre, f[1][r] - centre])
                 .collect();
             crate::stats::Moments::from_slice(&values).variance()
         };
-        // The estimator's terms of every finite row, row-major: a resample reads them
-        // block by block (row_resamples).
+        // The estimator's terms of every finite row, row-major: their sums in row order
+        // give the indices, and a resample reads them block by block (row_resamples).
         let n_groups = groups.len();
         let k = 2 * n_groups + 2;
         let mut terms = vec![0.0; finite_rows.len() * k];
+        let mut all = BlockSums::new(n_groups);
         for (&r, row) in finite_rows.iter().zip(terms.chunks_exact_mut(k)) {
-            let (fa, fb) = (f[0][r], f[1][r]);
-            row[0] = fa + fb;
-            row[1] = fa * fa + fb * fb;
-            for g in 0..n_groups {
-                let fab = f[2 + g][r];
-                let fba = f[2 + n_groups + g][r];
-                row[2 + g] = fb * (fab - fa) + fa * (fba - fb);
-                row[2 + n_groups + g] = (fa - fab) * (fa - fab) + (fb - fba) * (fb - fba);
-            }
+            row_terms(&f, r, centre, row);
+            all.add_terms(row);
         }
         drop(f);
+        let (_, first, total) = all.indices();
         let resamples: Vec<(Vec<f64>, Vec<f64>)> =
             row_resamples(&terms, k, n_groups, settings.seed, settings.bootstrap)
                 .into_iter()
@@ -943,8 +927,9 @@ mod tests {
         // exactly m picks; a block's count is Bin(m, p_j) (mean m·p_j, variance
         // m·p_j·(1 − p_j)), two blocks' counts correlate as −√(p_i·p_j/((1 − p_i)(1 − p_j)))
         // (multinomial), and a row's count has mean 1 and variance 1 − 1/m. Means within 5
-        // standard errors; variances within 5·√(2/B) relative (their sampling error at
-        // B resamples, near-normal counts); the correlation within 5/√B.
+        // standard errors; a block count's variance within 5·√(2/B) relative (its sampling
+        // error at B resamples, near-normal counts), a row count's within 5·√((κ − 1)/B)
+        // (κ its binomial kurtosis); the correlation within 5/√B.
         let m = 5000;
         let b = 4000;
         let sums = row_resamples(&counting_terms(m), 6, 2, 42, b);
@@ -1004,8 +989,12 @@ mod tests {
                 (mean - 1.0).abs() < 5.0 * (expected_var / bf).sqrt(),
                 "{name}: {mean}"
             );
+            // A row's count is Bin(m, 1/m), kurtosis 3 + (1 − 6p(1 − p))/(mp(1 − p)) ≈ 4:
+            // the sample variance's relative standard error is √((κ − 1)/B).
+            let p = 1.0 / m as f64;
+            let kurtosis = 3.0 + (1.0 - 6.0 * p * (1.0 - p)) / (m as f64 * p * (1.0 - p));
             assert!(
-                (var / expected_var - 1.0).abs() < 5.0 * (2.0 / bf).sqrt() * 1.5,
+                (var / expected_var - 1.0).abs() < 5.0 * ((kurtosis - 1.0) / bf).sqrt(),
                 "{name}: variance {var}"
             );
         }

@@ -25,6 +25,7 @@
 //! left out and the block sums), then u8 1 and the Shapley partial (the variance run when
 //! it has it, and per permutation its order and costs) or u8 0.
 
+pub use rvtol_deviation::index_list;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
@@ -177,26 +178,6 @@ pub fn parse_shard(text: &str) -> Result<(u64, u64), String> {
         return Err(usage());
     }
     Ok((k, n))
-}
-
-/// Shard indices as a job-array list: increasing, runs of three or more joined as `a-b`
-/// (`0,2-5,9`), the form Slurm's `--array` takes.
-pub fn index_list(indices: &[u64]) -> String {
-    let mut parts = Vec::new();
-    let mut i = 0;
-    while i < indices.len() {
-        let mut j = i;
-        while j + 1 < indices.len() && indices[j + 1] == indices[j] + 1 {
-            j += 1;
-        }
-        if j >= i + 2 {
-            parts.push(format!("{}-{}", indices[i], indices[j]));
-        } else {
-            parts.extend(indices[i..=j].iter().map(u64::to_string));
-        }
-        i = j + 1;
-    }
-    parts.join(",")
 }
 
 /// The bytes of a shard file.
@@ -815,14 +796,11 @@ mod tests {
     use super::*;
 
     #[test]
-    fn shard_lists_and_indices() {
+    fn shard_arguments_parse() {
         assert_eq!(parse_shard("2/4"), Ok((2, 4)));
         assert!(parse_shard("4/4").is_err());
         assert!(parse_shard("1").is_err());
         assert!(parse_shard("-1/4").is_err());
-        assert_eq!(index_list(&[0, 2, 3, 4, 5, 9]), "0,2-5,9");
-        assert_eq!(index_list(&[1, 2, 7]), "1,2,7");
-        assert_eq!(index_list(&[]), "");
     }
 
     #[test]

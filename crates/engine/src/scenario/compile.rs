@@ -4,14 +4,14 @@
 use std::collections::{BTreeMap, BTreeSet};
 
 use rvtol_deviation::{
-    unit_scale, EmpiricalLaw, InputSpaceBuilder, PartSpec, ScalarDistribution, Shown, SixDof,
-    RAYLEIGH_QUANTILE,
+    index_list, unit_scale, EmpiricalLaw, InputSpaceBuilder, PartSpec, ScalarDistribution, Shown,
+    SixDof, RAYLEIGH_QUANTILE,
 };
-use rvtol_models::{ConditionEffect, ModelParams, OutputKind, ParamValue};
+use rvtol_models::{ConditionEffect, ErrorModel, ModelEntry, ModelParams, OutputKind, ParamValue};
 use serde_json::Value;
 
 use super::file::{
-    DistributionFile, PartFile, ScenarioFile, SpecFile, VariableFile, MAX_ARRAY_MEMBERS,
+    DistributionFile, ModelFile, PartFile, ScenarioFile, SpecFile, VariableFile, MAX_ARRAY_MEMBERS,
 };
 use super::{
     Binding, BoundModel, ColumnInfo, InputGroup, OutputInfo, Scenario, ScenarioError,
@@ -78,8 +78,9 @@ fn part_units(path: &str, part: &PartFile) -> Result<([f64; 6], String), Scenari
                 ScenarioError::new(
                     format!("{path}.units.{key}"),
                     format!(
-                    "{u:?} is not a unit of {kind} rvtol knows (scenarios/README.md lists them)"
-                ),
+                        "{u:?} is not a unit of {kind} rvtol knows ({})",
+                        super::units::known()
+                    ),
                 )
             }),
         };
@@ -422,24 +423,31 @@ pub(super) fn model_params(
     Ok(params)
 }
 
-/// Validates the parsed file and builds the scenario, adding every problem to `problems`;
-/// `None` when something the scenario needs could not be built. Elements that failed to
-/// parse or to compile are left out, and what refers to them (a correlation with a broken
-/// variable, a binding to a broken part) is not reported again.
 /// A `*` pattern of a model's `inputs` (`"pin_radial_error_mm_*"`) split at its star; `None`
 /// for a plain input name.
 fn pattern(key: &str) -> Option<(&str, &str)> {
     key.split_once('*')
 }
 
+/// A positive index written without leading zeros (`7`, `40`; not `07`, `0`, `x`): what a
+/// pattern's star and a family's trailing `_N` stand for.
+pub(super) fn positive_index(digits: &str) -> Option<u64> {
+    let ok = !digits.is_empty()
+        && !digits.starts_with('0')
+        && digits.bytes().all(|b| b.is_ascii_digit());
+    ok.then(|| digits.parse().ok()).flatten()
+}
+
+/// A name's stem and trailing index (`pin_radial_error_mm_7` → (`pin_radial_error_mm`, 7)).
+pub(super) fn trailing_index(name: &str) -> Option<(&str, u64)> {
+    let (stem, digits) = name.rsplit_once('_')?;
+    Some((stem, positive_index(digits)?))
+}
+
 /// The index an input name gives a pattern's star: the digits between its prefix and
-/// suffix, a positive number written without leading zeros.
+/// suffix ([`positive_index`]).
 fn pattern_index(prefix: &str, suffix: &str, input: &str) -> Option<u64> {
-    let middle = input.strip_prefix(prefix)?.strip_suffix(suffix)?;
-    let ok = !middle.is_empty()
-        && !middle.starts_with('0')
-        && middle.bytes().all(|b| b.is_ascii_digit());
-    ok.then(|| middle.parse().ok()).flatten()
+    positive_index(input.strip_prefix(prefix)?.strip_suffix(suffix)?)
 }
 
 /// How a model input is bound in the file: the bound value, the binding's JSON path, and
@@ -447,7 +455,8 @@ fn pattern_index(prefix: &str, suffix: &str, input: &str) -> Option<u64> {
 struct InputBinding<'a> {
     value: &'a serde_json::Value,
     path: String,
-    index: Option<u64>,
+    /// The `*` pattern that binds the input and the index its star stands for.
+    pattern: Option<(&'a str, u64)>,
 }
 
 /// The binding of a model input: by its own key, or by the one `*` pattern that matches
@@ -461,7 +470,7 @@ fn input_binding<'a>(
     let mut found = inputs.get(input).map(|value| InputBinding {
         value,
         path: format!("{path}.inputs.{input}"),
-        index: None,
+        pattern: None,
     });
     for (key, value) in inputs {
         let Some((prefix, suffix)) = pattern(key) else {
@@ -480,24 +489,44 @@ fn input_binding<'a>(
         found = Some(InputBinding {
             value,
             path: key_path,
-            index: Some(index),
+            pattern: Some((key.as_str(), index)),
         });
     }
     Ok(found)
 }
 
+/// A model of the file built from its parameters, or the problem (with its JSON path) that
+/// kept it from building. Built once: the units of its inputs serve the variables' unit
+/// conversion, before the model's bindings are checked.
+type BuiltModel = Result<(&'static ModelEntry, Box<dyn ErrorModel>), ScenarioError>;
+
+fn build_model(path: &str, model_file: &ModelFile) -> BuiltModel {
+    let Some(entry) = rvtol_models::find(&model_file.model) else {
+        let known: Vec<&str> = rvtol_models::all().iter().map(|e| e.name).collect();
+        return Err(ScenarioError::new(
+            format!("{path}.model"),
+            format!(
+                "unknown model {:?}; known models: {}",
+                model_file.model,
+                known.join(", ")
+            ),
+        ));
+    };
+    let params = model_params(&format!("{path}.params"), &model_file.params)?;
+    let model = (entry.build)(&params)
+        .map_err(|err| ScenarioError::new(format!("{path}.params.{}", err.key), err.reason))?;
+    Ok((entry, model))
+}
+
 /// Per variable name, the units of the model inputs it is bound to, each with the binding's
 /// JSON path. Models that do not build are left out here: the binding pass reports them.
-fn bound_input_units(file: &ScenarioFile) -> BTreeMap<String, Vec<(String, String)>> {
+fn bound_input_units(
+    file: &ScenarioFile,
+    built: &[BuiltModel],
+) -> BTreeMap<String, Vec<(String, String)>> {
     let mut units: BTreeMap<String, Vec<(String, String)>> = BTreeMap::new();
-    for (i, model_file) in &file.models {
-        let Some(entry) = rvtol_models::find(&model_file.model) else {
-            continue;
-        };
-        let Ok(params) = model_params("", &model_file.params) else {
-            continue;
-        };
-        let Ok(model) = (entry.build)(&params) else {
+    for ((i, model_file), built) in file.models.iter().zip(built) {
+        let Ok((_, model)) = built else {
             continue;
         };
         for input in model.inputs() {
@@ -524,11 +553,8 @@ fn bound_input_units(file: &ScenarioFile) -> BTreeMap<String, Vec<(String, Strin
 fn variable_conversion(
     path: &str,
     unit: &str,
-    bound: Option<&Vec<(String, String)>>,
+    bound: &[(String, String)],
 ) -> Result<Option<(f64, String)>, ScenarioError> {
-    let Some(bound) = bound else {
-        return Ok(None);
-    };
     let targets: BTreeSet<&str> = bound
         .iter()
         .map(|(u, _)| u.as_str())
@@ -573,19 +599,14 @@ fn array_members(
 /// `_40` as `pin_radial_error_mm_{1..40}`), joined with commas: a model's inputs in one
 /// readable line.
 fn indexed_summary(names: &[&str]) -> String {
-    let split = |name: &str| -> Option<(String, u64)> {
-        let (stem, digits) = name.rsplit_once('_')?;
-        let ok = !digits.is_empty() && !digits.starts_with('0');
-        ok.then(|| digits.parse().ok().map(|k| (stem.to_string(), k)))
-            .flatten()
-    };
+    let split = trailing_index;
     let mut parts: Vec<String> = Vec::new();
     let mut i = 0;
     while i < names.len() {
         let mut j = i;
         if let Some((stem, first)) = split(names[i]) {
             while j + 1 < names.len()
-                && split(names[j + 1]) == Some((stem.clone(), first + (j + 1 - i) as u64))
+                && split(names[j + 1]) == Some((stem, first + (j + 1 - i) as u64))
             {
                 j += 1;
             }
@@ -601,25 +622,10 @@ fn indexed_summary(names: &[&str]) -> String {
     parts.join(", ")
 }
 
-/// Sorted indices as ranges, `1-38, 40`.
-fn index_ranges(sorted: &[u64]) -> String {
-    let mut parts: Vec<String> = Vec::new();
-    let mut i = 0;
-    while i < sorted.len() {
-        let mut j = i;
-        while j + 1 < sorted.len() && sorted[j + 1] == sorted[j] + 1 {
-            j += 1;
-        }
-        parts.push(if j > i {
-            format!("{}-{}", sorted[i], sorted[j])
-        } else {
-            sorted[i].to_string()
-        });
-        i = j + 1;
-    }
-    parts.join(", ")
-}
-
+/// Validates the parsed file and builds the scenario, adding every problem to `problems`;
+/// `None` when something the scenario needs could not be built. Elements that failed to
+/// parse or to compile are left out, and what refers to them (a correlation with a broken
+/// variable, a binding to a broken part) is not reported again.
 pub(super) fn compile(
     file: ScenarioFile,
     fallback_name: &str,
@@ -691,7 +697,12 @@ pub(super) fn compile(
             ));
         }
     }
-    let bound_units = bound_input_units(&file);
+    let built_models: Vec<BuiltModel> = file
+        .models
+        .iter()
+        .map(|(i, model_file)| build_model(&format!("models[{i}]"), model_file))
+        .collect();
+    let bound_units = bound_input_units(&file, &built_models);
     // The variable arrays (`count`): name → member columns, for the `*` bindings.
     let mut arrays: BTreeMap<String, (String, Vec<usize>)> = BTreeMap::new();
     for (i, variable) in &file.variables {
@@ -712,7 +723,7 @@ pub(super) fn compile(
         };
         let members = array_members(&path, variable);
         let checked = check_name(&format!("{path}.name"), &variable.name)
-            .and_then(|()| members.clone().map(|_| ()))
+            .and_then(|()| members.as_ref().map(|_| ()).map_err(Clone::clone))
             .and_then(|()| {
                 distribution(&format!("{path}.distribution"), &variable.distribution)
                     .map_err(in_unit)
@@ -732,10 +743,8 @@ pub(super) fn compile(
                     .cloned()
                     .collect();
                 let conversion = match &variable.unit {
-                    Some(unit) if !bound.is_empty() => {
-                        variable_conversion(&path, unit, Some(&bound))?
-                    }
-                    _ => None,
+                    Some(unit) => variable_conversion(&path, unit, &bound)?,
+                    None => None,
                 };
                 Ok(match conversion {
                     Some((factor, unit)) => (dist.scaled(factor), Some(unit)),
@@ -834,34 +843,12 @@ pub(super) fn compile(
     }
     let mut models = Vec::new();
     let mut outputs: Vec<OutputInfo> = Vec::new();
-    for (i, model_file) in &file.models {
+    for ((i, model_file), built) in file.models.iter().zip(built_models) {
         let path = format!("models[{i}]");
-        let Some(entry) = rvtol_models::find(&model_file.model) else {
-            let known: Vec<&str> = rvtol_models::all().iter().map(|e| e.name).collect();
-            report(Err(ScenarioError::new(
-                format!("{path}.model"),
-                format!(
-                    "unknown model {:?}; known models: {}",
-                    model_file.model,
-                    known.join(", ")
-                ),
-            )));
-            continue;
-        };
-        let params = match model_params(&format!("{path}.params"), &model_file.params) {
-            Ok(params) => params,
+        let (entry, model) = match built {
+            Ok(built) => built,
             Err(err) => {
                 report(Err(err));
-                continue;
-            }
-        };
-        let model = match (entry.build)(&params) {
-            Ok(model) => model,
-            Err(err) => {
-                report(Err(ScenarioError::new(
-                    format!("{path}.params.{}", err.key),
-                    err.reason,
-                )));
                 continue;
             }
         };
@@ -898,14 +885,12 @@ pub(super) fn compile(
                 Ok(Some(InputBinding {
                     value,
                     path: binding_path,
-                    index,
+                    pattern,
                 })) => {
-                    if let Some(index) = index {
-                        let key = binding_path.rsplit_once(".inputs.").map_or("", |(_, k)| k);
-                        if let Some((key, _)) = model_file.inputs.get_key_value(key) {
-                            pattern_indices.entry(key.as_str()).or_default().push(index);
-                        }
+                    if let Some((key, index)) = pattern {
+                        pattern_indices.entry(key).or_default().push(index);
                     }
+                    let index = pattern.map(|(_, index)| index);
                     match value {
                         serde_json::Value::Number(n) => {
                             let v = n.as_f64().unwrap_or(f64::NAN);
@@ -964,7 +949,7 @@ pub(super) fn compile(
                                                 } else {
                                                     format!(
                                                         ", which is not a unit rvtol knows ({})",
-                                                        super::units::KNOWN
+                                                        super::units::known()
                                                     )
                                                 },
                                                 input.unit
@@ -1045,10 +1030,11 @@ pub(super) fn compile(
                 bound = false;
                 continue;
             }
-            // A pattern bound to an array binds every member, once.
+            // A pattern that binds an input bound already is reported once, above.
             if conflicted.contains(&key_path) {
                 continue;
             }
+            // A pattern bound to an array binds every member, once.
             if let Some((_, members)) = value.as_str().and_then(|name| arrays.get(name)) {
                 let mut seen = indices.clone();
                 seen.sort_unstable();
@@ -1061,7 +1047,7 @@ pub(super) fn compile(
                         format!(
                             "binds {} inputs (indices {}) but {name:?} has {} members: the array must match the inputs one to one",
                             seen.len(),
-                            index_ranges(&seen),
+                            index_list(&seen),
                             members.len()
                         ),
                     )));

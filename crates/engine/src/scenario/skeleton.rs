@@ -67,12 +67,7 @@ pub fn skeleton_with(name: &str, given: &Map<String, Value>) -> Result<String, S
     };
     // A family of indexed inputs (`pin_radial_error_mm_1` … `_40`, one unit, one design
     // value) is one variable array bound by a `*` pattern.
-    let stem_of = |name: &str| -> Option<(String, u64)> {
-        let (stem, digits) = name.rsplit_once('_')?;
-        let ok = !digits.starts_with('0') && digits.bytes().all(|b| b.is_ascii_digit());
-        ok.then(|| digits.parse().ok().map(|k| (stem.to_string(), k)))
-            .flatten()
-    };
+    let stem_of = super::compile::trailing_index;
     let mut variables: Vec<Value> = Vec::new();
     let mut bindings = Map::new();
     let mut i = 0;
@@ -81,7 +76,7 @@ pub fn skeleton_with(name: &str, given: &Map<String, Value>) -> Result<String, S
         if let Some((stem, 1)) = stem_of(&input.name) {
             let mut n = 1;
             while i + n < inputs.len()
-                && stem_of(&inputs[i + n].name) == Some((stem.clone(), n as u64 + 1))
+                && stem_of(&inputs[i + n].name) == Some((stem, n as u64 + 1))
                 && inputs[i + n].unit == input.unit
                 && design_value(&inputs[i + n].name) == design_value(&input.name)
             {

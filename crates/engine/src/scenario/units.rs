@@ -26,9 +26,21 @@ const UNITS: &[(&str, &str, f64)] = &[
     ("arcsec", "angle", PI / 648_000.0),
 ];
 
-/// The known units, for messages.
-pub const KNOWN: &str =
-    "lengths mm, µm or um, m; angles rad, mrad, µrad or urad, deg, arcmin, arcsec";
+/// The known units, for messages: `lengths mm, µm, um, m; angles rad, …`.
+pub fn known() -> String {
+    ["length", "angle"]
+        .iter()
+        .map(|kind| {
+            let names: Vec<&str> = UNITS
+                .iter()
+                .filter(|(_, k, _)| k == kind)
+                .map(|(name, _, _)| *name)
+                .collect();
+            format!("{kind}s {}", names.join(", "))
+        })
+        .collect::<Vec<_>>()
+        .join("; ")
+}
 
 /// Whether `unit` is one of the units rvtol converts.
 pub fn is_known(unit: &str) -> bool {
@@ -65,5 +77,9 @@ mod tests {
         assert_eq!(conversion("mm", "mm"), None);
         assert_eq!(conversion("µm", "rad"), None);
         assert_eq!(conversion("N", "mm"), None);
+        assert_eq!(
+            known(),
+            "lengths mm, µm, um, m; angles rad, mrad, µrad, urad, deg, arcmin, arcsec"
+        );
     }
 }
