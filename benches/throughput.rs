@@ -167,6 +167,7 @@ fn whole_run(c: &mut Criterion) {
         samples,
         seed: 1,
         exact_percentile_limit: 0,
+        sampling: Default::default(),
     };
     group.bench_function(BenchmarkId::from_parameter(samples), |b| {
         b.iter(|| run(&scenario, settings, &|_| {}).unwrap())

@@ -48,6 +48,7 @@ fn cp_and_cpk_intervals_cover_at_their_nominal_rate() {
             samples: SAMPLES,
             seed,
             exact_percentile_limit: 1_000_000,
+            sampling: Default::default(),
         };
         let report = RunReport::new(&scenario, run(&scenario, settings, &|_| {}).unwrap());
         for (o, output) in report.outputs.iter().enumerate() {

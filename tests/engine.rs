@@ -69,6 +69,7 @@ fn linear_stack_matches_closed_form_with_correlated_inputs() {
         samples: n,
         seed: 3,
         exact_percentile_limit: 8_000_000,
+        sampling: Default::default(),
     };
     let result = run(&scenario, settings, &|_| {}).unwrap();
     let m = &result.outputs[0].moments;
@@ -100,6 +101,7 @@ fn sketch_percentiles_of_a_normal_output_lie_within_their_bound() {
         samples: n,
         seed: 5,
         exact_percentile_limit: 0,
+        sampling: Default::default(),
     };
     let result = run(&scenario, settings, &|_| {}).unwrap();
     assert_eq!(
@@ -139,6 +141,7 @@ fn sketch_resolves_an_output_whose_spread_is_tiny_against_its_value() {
         samples: 200_000,
         seed: 8,
         exact_percentile_limit: 0,
+        sampling: Default::default(),
     };
     let report = RunReport::new(&scenario, run(&scenario, settings, &|_| {}).unwrap());
     let output = report
@@ -196,6 +199,7 @@ fn json_report_is_byte_identical_for_1_2_and_4_threads() {
             samples: 150_000,
             seed: 99,
             exact_percentile_limit,
+            sampling: Default::default(),
         };
         let one = run_with_threads(&scenario, settings, 1);
         assert_eq!(one, run_with_threads(&scenario, settings, 2));
@@ -217,6 +221,7 @@ fn golden_values_pin_the_random_stream() {
         samples: 20_000,
         seed: 1,
         exact_percentile_limit: u64::MAX,
+        sampling: Default::default(),
     };
     let result = run(&scenario, settings, &|_| {}).unwrap();
     let hysteresis = &result.outputs[scenario.output_index("hysteresis_arcmin").unwrap()];
@@ -260,6 +265,7 @@ fn variables_in_other_units_are_converted_to_the_models_units_at_load_time() {
         samples: 20_000,
         seed: 5,
         exact_percentile_limit: DEFAULT_EXACT_PERCENTILE_LIMIT,
+        sampling: Default::default(),
     };
     for (file, unit, factor, canonical) in [
         ("rv20e-hysteresis.json", "µm", 1000.0, "mm"),

@@ -136,6 +136,7 @@ fn fewer_parts_than_components_still_give_a_usable_part() {
             samples: 1000,
             seed: 1,
             exact_percentile_limit: 1_000_000,
+            sampling: Default::default(),
         };
         rvtol_engine::run(&scenario, settings, &|_| {}).unwrap();
     }

@@ -38,6 +38,7 @@ fn settings(seed: u64) -> RunSettings {
         samples: SAMPLES,
         seed,
         exact_percentile_limit: rvtol_engine::DEFAULT_EXACT_PERCENTILE_LIMIT,
+        sampling: Default::default(),
     }
 }
 

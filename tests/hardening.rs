@@ -548,6 +548,7 @@ fn a_baseline_of_a_billion_samples_takes_bounded_memory() {
         samples: 1_000_000_000,
         seed: 1,
         exact_percentile_limit: rvtol_engine::DEFAULT_EXACT_PERCENTILE_LIMIT,
+        sampling: Default::default(),
     };
     let need = rvtol_engine::memory::run(&scenario, &settings, 2);
     assert!(need.bytes < 100e6, "{need:?}");

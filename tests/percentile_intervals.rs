@@ -53,6 +53,7 @@ fn coverage(exact_percentile_limit: u64) -> (Vec<Vec<u64>>, [f64; 2]) {
             samples: SAMPLES,
             seed,
             exact_percentile_limit,
+            sampling: Default::default(),
         };
         let report = RunReport::new(&scenario, run(&scenario, settings, &|_| {}).unwrap());
         for (o, output) in report.outputs.iter().enumerate() {

@@ -19,6 +19,7 @@ fn settings(samples: u64, seed: u64) -> RunSettings {
         samples,
         seed,
         exact_percentile_limit: DEFAULT_EXACT_PERCENTILE_LIMIT,
+        sampling: Default::default(),
     }
 }
 

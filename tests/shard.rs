@@ -53,13 +53,15 @@ fn sharded_reports(scenario: &Scenario, settings: RunSettings, shards: u64) -> V
     let partials: Vec<_> = (0..shards)
         .into_par_iter()
         .map(|k| {
-            let chunks = shard_chunks(settings.samples, k, shards);
+            let chunks = shard_chunks(settings.chunk_count(), k, shards);
             let partial = run_chunks(scenario, settings, chunks.clone(), &|_| {}).unwrap();
             let header = test_header(
                 ShardCommand::Run {
                     samples: settings.samples,
                     seed: settings.seed,
                     exact_percentile_limit: settings.exact_percentile_limit,
+                    sampling: settings.sampling.method.name().to_string(),
+                    replicates: settings.sampling.replicates,
                 },
                 k,
                 shards,
@@ -120,6 +122,7 @@ fn every_shipped_scenario_merges_to_the_run_bit_for_bit() {
                 samples,
                 seed: 7,
                 exact_percentile_limit,
+                sampling: Default::default(),
             };
             let single =
                 pool.install(|| report(&scenario, run(&scenario, settings, &|_| {}).unwrap()));
@@ -169,7 +172,8 @@ fn sensitivity_merges_to_the_analysis_bit_for_bit() {
                     (0..shards)
                         .into_par_iter()
                         .map(|k| {
-                            let chunks = shard_chunks(samples, k, shards);
+                            let chunks =
+                                shard_chunks(rvtol_engine::run::chunk_count(samples), k, shards);
                             let sobol =
                                 sobol_chunks(&scenario, settings, chunks.clone(), &|_| {}).unwrap();
                             let header = test_header(
@@ -282,6 +286,7 @@ fn merge_refuses_gaps_and_overlaps() {
         samples: 5 * CHUNK_SIZE as u64,
         seed: 3,
         exact_percentile_limit: u64::MAX,
+        sampling: Default::default(),
     };
     let part = |a: u64, b: u64| run_chunks(&scenario, settings, a..b, &|_| {}).unwrap();
     let gap = merge(&scenario, settings, vec![part(0, 2), part(3, 5)]).unwrap_err();
@@ -353,6 +358,11 @@ fn cli_merge_is_the_run_and_the_baseline() {
         (
             "sketch",
             vec!["--samples", "30000", "--exact-percentile-limit", "1000"],
+        ),
+        // Replicates that do not fill their last chunk, drawn from scrambled Sobol' points.
+        (
+            "rqmc",
+            vec!["--samples", "30000", "--sampling", "rqmc", "--replicates", "6"],
         ),
     ] {
         let full = dir.file(&format!("{label}-full.json"));
@@ -431,7 +441,7 @@ fn cli_merge_refuses_what_is_not_one_whole_run() {
     let conflict = dir.file("conflict.part");
     rewritten(&p[1], &conflict, |_, content| {
         if let ShardContent::Run(partial) = content {
-            partial.outputs[0].below_lower += 1;
+            partial.replicates[0].1[0].below_lower += 1;
         }
     });
     refused(
@@ -445,6 +455,25 @@ fn cli_merge_refuses_what_is_not_one_whole_run() {
     let seed = dir.file("seed.part");
     shard(&file, 1, 4, &seed, &["--samples", "20000", "--seed", "99"]);
     refused(&["merge", &p[0], &seed], "the settings differ from");
+    let sampling = dir.file("sampling.part");
+    shard(
+        &file,
+        1,
+        4,
+        &sampling,
+        &["--samples", "20000", "--sampling", "lhs", "--replicates", "4"],
+    );
+    refused(&["merge", &p[0], &sampling], "the settings differ from");
+    // Samples that do not split into the replicates, and replicates without a method
+    // that has them: one line each, before anything runs.
+    refused(
+        &["run", &file, "--sampling", "rqmc", "--samples", "1001"],
+        "samples: 1001 samples do not split into 16 replicates",
+    );
+    refused(
+        &["run", &file, "--replicates", "4", "--samples", "1000"],
+        "replicates: Monte Carlo rows are independent",
+    );
     let count = dir.file("count.part");
     shard(&file, 1, 3, &count, &samples);
     refused(&["merge", &p[0], &count], "the shard count differs from");

@@ -14,6 +14,7 @@ fn report(file: &str, samples: u64) -> serde_json::Value {
         samples,
         seed: scenario.seed,
         exact_percentile_limit: 8_000_000,
+        sampling: Default::default(),
     };
     let result = run(&scenario, settings, &|_| {}).unwrap();
     serde_json::from_str(&RunReport::new(&scenario, result).to_json()).unwrap()

@@ -8,13 +8,14 @@ use std::path::Path;
 
 use anyhow::Result;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rvtol_deviation::SamplingMethod;
 use rvtol_engine::allocation::report::AllocationReport;
 use rvtol_engine::allocation::spec::{CostKind, Target};
 use rvtol_engine::allocation::{
     allocate as run_allocation, default_samples, proposal_document, AllocationSettings,
 };
 use rvtol_engine::memory::{self, MemoryNeed};
-use rvtol_engine::run::check_non_finite;
+use rvtol_engine::run::{check_non_finite, Sampling};
 use rvtol_engine::sensitivity::{sobol_indices, SensitivitySettings, DEFAULT_ROW_BOOTSTRAP_LIMIT};
 use rvtol_engine::sensitivity_report::SensitivityReport;
 use rvtol_engine::shapley::{shapley_effects, ShapleySettings};
@@ -222,21 +223,55 @@ fn parsed(json: &str) -> serde_json::Value {
     serde_json::from_str(json).expect("the engine's JSON report parses")
 }
 
+/// A run's settings as the command line gives them (each unset one from the scenario).
+pub struct RunChoice {
+    /// `--samples`.
+    pub samples: Option<u64>,
+    /// `--seed`.
+    pub seed: Option<u64>,
+    /// `--exact-percentile-limit`.
+    pub exact_percentile_limit: u64,
+    /// `--sampling`.
+    pub sampling: Option<SamplingMethod>,
+    /// `--replicates`.
+    pub replicates: Option<u64>,
+}
+
+impl RunChoice {
+    /// The settings for `scenario`: what the command line says, else the scenario's
+    /// (`--sampling` alone takes the scenario's replicates when it names the scenario's
+    /// method, else the method's default).
+    pub fn settings(&self, scenario: &Scenario) -> RunSettings {
+        let method = self.sampling.unwrap_or(scenario.sampling.method);
+        let mut sampling = if method == scenario.sampling.method {
+            scenario.sampling
+        } else {
+            Sampling::of(method)
+        };
+        if let Some(replicates) = self.replicates {
+            sampling.replicates = replicates;
+        }
+        RunSettings {
+            samples: self.samples.unwrap_or(scenario.samples),
+            seed: self.seed.unwrap_or(scenario.seed),
+            exact_percentile_limit: self.exact_percentile_limit,
+            sampling,
+        }
+    }
+}
+
 pub fn run(
     scenario_path: &Path,
-    samples: Option<u64>,
-    seed: Option<u64>,
+    choice: RunChoice,
     to: Destinations<'_>,
-    exact_percentile_limit: u64,
     execution: &Execution,
 ) -> Result<()> {
     to.check()?;
     let scenario = load(scenario_path)?;
-    let settings = RunSettings {
-        samples: samples.unwrap_or(scenario.samples),
-        seed: seed.unwrap_or(scenario.seed),
-        exact_percentile_limit,
-    };
+    let settings = choice.settings(&scenario);
+    settings
+        .check(&scenario)
+        .map_err(|err| bad_scenario(scenario_path, err))?;
     if to.samples.is_some() {
         rvtol_engine::run::check_table_rows(&scenario, settings.samples)
             .map_err(|message| BadInput(format!("--samples-out: {message}; run fewer samples")))?;
@@ -532,7 +567,11 @@ pub fn sensitivity_shard(
     let pool = pool_for(execution, "sensitivity", |threads| {
         memory::sensitivity(&scenario, &settings, threads)
     })?;
-    let chunks = rvtol_engine::shard_chunks(settings.base_samples, shard, shards);
+    let chunks = rvtol_engine::shard_chunks(
+        rvtol_engine::run::chunk_count(settings.base_samples),
+        shard,
+        shards,
+    );
     let chunk_samples =
         |c: u64| (c * rvtol_engine::run::CHUNK_SIZE as u64).min(settings.base_samples);
     let bar = progress_bar(
@@ -614,6 +653,7 @@ pub fn baseline(
         samples: samples.unwrap_or(scenario.samples),
         seed: seed.unwrap_or(scenario.seed),
         exact_percentile_limit,
+        sampling: scenario.sampling,
     };
     if settings.samples < 2 {
         return Err(BadInput("--samples: a baseline needs at least 2 samples".into()).into());
@@ -678,6 +718,7 @@ pub fn check(
         samples: recorded.samples,
         seed,
         exact_percentile_limit: recorded.exact_percentile_limit,
+        sampling: scenario.sampling,
     };
     let pool = pool_for(execution, "check", |threads| {
         memory::run(&scenario, &settings, threads)
@@ -1168,26 +1209,24 @@ fn build_identity() -> Result<String> {
 /// partial result.
 pub fn run_shard(
     scenario_path: &Path,
-    settings: (Option<u64>, Option<u64>, u64),
+    choice: RunChoice,
     (shard, shards): (u64, u64),
     partial_path: &Path,
     execution: &Execution,
 ) -> Result<()> {
     writable(&[Some(partial_path)])?;
     let (scenario, text) = read(scenario_path)?;
-    let (samples, seed, exact_percentile_limit) = settings;
-    let settings = RunSettings {
-        samples: samples.unwrap_or(scenario.samples),
-        seed: seed.unwrap_or(scenario.seed),
-        exact_percentile_limit,
-    };
+    let settings = choice.settings(&scenario);
+    settings
+        .check(&scenario)
+        .map_err(|err| bad_scenario(scenario_path, err))?;
     let build = build_identity()?;
-    let chunks = rvtol_engine::shard_chunks(settings.samples, shard, shards);
+    let chunks = rvtol_engine::shard_chunks(settings.chunk_count(), shard, shards);
     let pool = pool_for(execution, "run", |threads| {
         memory::run(&scenario, &settings, threads)
     })?;
-    let chunk_samples = |c: u64| (c * rvtol_engine::run::CHUNK_SIZE as u64).min(settings.samples);
-    let shard_samples = chunk_samples(chunks.end) - chunk_samples(chunks.start);
+    let shard_samples =
+        settings.samples_before_chunk(chunks.end) - settings.samples_before_chunk(chunks.start);
     let bar = progress_bar(shard_samples, execution.quiet);
     let partial = pool
         .install(|| rvtol_engine::run_chunks(&scenario, settings, chunks.clone(), &|n| bar.inc(n)))
@@ -1201,7 +1240,9 @@ pub fn run_shard(
         command: rvtol_engine::shard::ShardCommand::Run {
             samples: settings.samples,
             seed: settings.seed,
-            exact_percentile_limit,
+            exact_percentile_limit: settings.exact_percentile_limit,
+            sampling: settings.sampling.method.name().to_string(),
+            replicates: settings.sampling.replicates,
         },
         shard,
         shards,
@@ -1287,10 +1328,21 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
             samples,
             seed,
             exact_percentile_limit,
+            ref sampling,
+            replicates,
         } => RunSettings {
             samples,
             seed,
             exact_percentile_limit,
+            sampling: Sampling {
+                method: SamplingMethod::parse(sampling).ok_or_else(|| {
+                    BadInput(format!(
+                        "{}: damaged: sampling {sampling:?}",
+                        first.display()
+                    ))
+                })?,
+                replicates,
+            },
         },
         shard::ShardCommand::Sensitivity {
             samples,

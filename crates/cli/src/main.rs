@@ -14,11 +14,22 @@ use std::process::ExitCode;
 
 use crate::commands::SensitivityArgs;
 use clap::{Args, Parser, Subcommand};
+use rvtol_deviation::SamplingMethod;
 use rvtol_engine::DEFAULT_EXACT_PERCENTILE_LIMIT;
 
 use crate::limits::{parse_count, parse_share, parse_size};
 
 /// `K/N` of `--shard`.
+/// `--sampling`: a method name.
+fn parse_sampling(text: &str) -> Result<SamplingMethod, String> {
+    SamplingMethod::parse(text).ok_or_else(|| {
+        format!(
+            "unknown method {text:?}, expected one of {}",
+            SamplingMethod::NAMES.join(", ")
+        )
+    })
+}
+
 fn parse_shard_arg(text: &str) -> Result<(u64, u64), String> {
     rvtol_engine::shard::parse_shard(text)
 }
@@ -64,6 +75,15 @@ enum Command {
         /// Seed of the random streams (default: the scenario's `seed`, else 1).
         #[arg(long, allow_hyphen_values = true)]
         seed: Option<u64>,
+        /// How rows are drawn: mc (independent draws), lhs (Latin hypercube) or rqmc
+        /// (scrambled Sobol' points); default: the scenario's `sampling`, else mc.
+        #[arg(long, value_name = "METHOD", value_parser = parse_sampling)]
+        sampling: Option<SamplingMethod>,
+        /// Independent randomizations of an lhs or rqmc run, whose spread gives the
+        /// intervals (default: the scenario's `replicates`, else 16); the samples split
+        /// evenly between them.
+        #[arg(long, value_name = "R", value_parser = parse_count, allow_hyphen_values = true)]
+        replicates: Option<u64>,
         /// Write the JSON report to PATH ("-" for stdout instead of the table).
         #[arg(long, value_name = "PATH")]
         json: Option<PathBuf>,
@@ -359,6 +379,8 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             scenario,
             samples,
             seed,
+            sampling,
+            replicates,
             exact_percentile_limit,
             shard: Some(shard),
             partial: Some(partial),
@@ -366,7 +388,13 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             ..
         } => run_shard(
             &scenario,
-            (samples, seed, exact_percentile_limit),
+            RunChoice {
+                samples,
+                seed,
+                exact_percentile_limit,
+                sampling,
+                replicates,
+            },
             shard,
             &partial,
             &execution,
@@ -375,6 +403,8 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             scenario,
             samples,
             seed,
+            sampling,
+            replicates,
             json,
             html,
             samples_out,
@@ -383,14 +413,18 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             ..
         } => run(
             &scenario,
-            samples,
-            seed,
+            RunChoice {
+                samples,
+                seed,
+                exact_percentile_limit,
+                sampling,
+                replicates,
+            },
             Destinations {
                 json: json.as_deref(),
                 html: html.as_deref(),
                 samples: samples_out.as_deref(),
             },
-            exact_percentile_limit,
             &execution,
         ),
         Command::Merge {

@@ -38,6 +38,8 @@ use crate::normal::{Ziggurat, ZigguratScratch};
 use crate::part::PartSpec;
 use crate::scalar::ScalarDistribution;
 
+mod quasi;
+
 /// Most consecutive rejections of one row before the run is abandoned. At the lowest
 /// accepted rate (1 %), the chance of reaching it is 0.99^100000 ≈ 1e-437.
 const MAX_REJECTIONS_PER_ROW: u64 = 100_000;
@@ -345,6 +347,7 @@ impl InputSpaceBuilder {
             covariance_blocks: Vec::new(),
             covariance_group_columns: Vec::new(),
             max_rank: 0,
+            quasi: quasi::QuasiLayout::default(),
         };
         for (members, matrix) in components.into_iter().zip(matrices) {
             let columns: Vec<usize> = members.iter().map(|&g| self.gaussian[g].column).collect();
@@ -406,6 +409,7 @@ impl InputSpaceBuilder {
         space.covariance_blocks = covariance_blocks;
         space.constrained_groups = group_inequalities(inequalities, constrained_blocks);
         space.measure_acceptance()?;
+        space.quasi = quasi::QuasiLayout::new(&space);
         Ok(space)
     }
 }
@@ -833,6 +837,8 @@ pub struct InputSpace {
     /// The columns of each correlated group, in the order of its matrix.
     covariance_group_columns: Vec<Vec<usize>>,
     max_rank: usize,
+    /// How rows are drawn from uniform points (`quasi.rs`).
+    quasi: quasi::QuasiLayout,
 }
 
 impl InputSpace {
@@ -851,6 +857,15 @@ impl InputSpace {
         ConstraintCounts {
             groups: vec![(0, 0); self.constrained_groups.len()],
         }
+    }
+
+    /// The share of unconstrained draws that satisfy every inequality, as measured by the
+    /// build's deterministic pilot (product over the independent groups).
+    pub fn pilot_acceptance_rate(&self) -> f64 {
+        self.constrained_groups
+            .iter()
+            .map(|g| g.pilot_acceptance)
+            .product()
     }
 
     /// JSON paths of the constrained parts.

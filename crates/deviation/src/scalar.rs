@@ -42,6 +42,7 @@ use rand::{Rng, RngExt};
 use statrs::function::erf::{erfc, erfc_inv};
 
 use crate::error::DeviationError;
+use crate::inverse_normal::standard_normal_inverse;
 
 /// The distribution of one scalar error parameter.
 #[derive(Debug, Clone, PartialEq)]
@@ -120,7 +121,7 @@ pub const RAYLEIGH_QUANTILE: f64 = 3.635_285_597_179_897;
 /// The 99.865 % quantile of |Z| for a standard normal Z, Φ⁻¹(1 − 0.00135/2) = 3.2051.
 pub const FOLDED_QUANTILE: f64 = 3.205_133_180_184_792;
 
-fn standard_normal_cdf(x: f64) -> f64 {
+pub(crate) fn standard_normal_cdf(x: f64) -> f64 {
     0.5 * erfc(-x / std::f64::consts::SQRT_2)
 }
 
@@ -458,17 +459,16 @@ impl ScalarDistribution {
         }
     }
 
-    /// Draws one value. Normal kinds are normally drawn by the joint sampler; this method
-    /// draws them too, for completeness. The magnitude laws take their normals from the
-    /// ziggurat, one at a time ([`Self::from_normals`]).
-    #[inline]
-    pub fn sample<R: Rng + ?Sized>(&self, rng: &mut R) -> f64 {
+    /// The value at the uniform u in (0, 1), for the quasi-random and stratified rows:
+    /// the inverse CDF of the uniform, triangular, truncated normal and Rayleigh laws
+    /// (σ·√(−2·ln(1 − u))); |μ + σ·Φ⁻¹(u)| and exp(μ + σ·Φ⁻¹(u)) for the folded normal and
+    /// the lognormal; the empirical inverse CDF, and when smoothed the kernel's normal from
+    /// the position of u inside its value's share, v = u·n − ⌊u·n⌋ (uniform on (0, 1) and
+    /// independent of the chosen value), z = Φ⁻¹(v). One uniform per value for every law.
+    pub fn from_uniform(&self, u: f64) -> f64 {
         match *self {
-            ScalarDistribution::Uniform { lower, upper } => {
-                lower + (upper - lower) * rng.random::<f64>()
-            }
+            ScalarDistribution::Uniform { lower, upper } => lower + (upper - lower) * u,
             ScalarDistribution::Triangular { lower, mode, upper } => {
-                let u: f64 = rng.random();
                 let width = upper - lower;
                 if width == 0.0 {
                     return lower;
@@ -487,7 +487,6 @@ impl ScalarDistribution {
                 upper,
             } => {
                 let (a, b) = ((lower - mean) / sd, (upper - mean) / sd);
-                let u: f64 = rng.random();
                 let z = if a > 0.0 {
                     // Upper tail: work with Q(x) = 1 − Φ(x) to keep precision.
                     let (qa, qb) = (standard_normal_upper_tail(a), standard_normal_upper_tail(b));
@@ -498,6 +497,34 @@ impl ScalarDistribution {
                 };
                 (mean + sd * z).clamp(lower, upper)
             }
+            ScalarDistribution::FoldedNormal { .. } | ScalarDistribution::Lognormal { .. } => {
+                self.from_normals(&[standard_normal_inverse(u)])
+            }
+            ScalarDistribution::Rayleigh { sigma } => sigma * (-2.0 * (-u).ln_1p()).sqrt(),
+            ScalarDistribution::Empirical(ref law) => {
+                if law.bandwidth() == 0.0 {
+                    return law.quantile_of(u);
+                }
+                let position = u * law.values().len() as f64;
+                let v = (position - position.floor()).clamp(f64::EPSILON, 1.0 - f64::EPSILON);
+                law.value(u, standard_normal_inverse(v))
+            }
+            ref normal => {
+                let (mean, sd) = normal.as_normal().unwrap_or((0.0, 0.0));
+                mean + sd * standard_normal_inverse(u)
+            }
+        }
+    }
+
+    /// Draws one value. Normal kinds are normally drawn by the joint sampler; this method
+    /// draws them too, for completeness. The magnitude laws take their normals from the
+    /// ziggurat, one at a time ([`Self::from_normals`]).
+    #[inline]
+    pub fn sample<R: Rng + ?Sized>(&self, rng: &mut R) -> f64 {
+        match *self {
+            ScalarDistribution::Uniform { .. }
+            | ScalarDistribution::Triangular { .. }
+            | ScalarDistribution::TruncatedNormal { .. } => self.from_uniform(rng.random::<f64>()),
             ScalarDistribution::Empirical(ref law) => law.sample(rng),
             ScalarDistribution::FoldedNormal { .. }
             | ScalarDistribution::Rayleigh { .. }

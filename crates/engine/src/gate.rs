@@ -515,6 +515,8 @@ pub fn baseline_of(
         samples,
         seed,
         exact_percentile_limit,
+        // The scenario file the baseline keeps says how its rows are drawn.
+        sampling: _,
     } = settings;
     Ok(Baseline {
         rvtol_version: env!("CARGO_PKG_VERSION").to_string(),
@@ -841,6 +843,7 @@ pub fn check_result(
         samples,
         seed,
         exact_percentile_limit: baseline.exact_percentile_limit,
+        sampling: scenario.sampling,
     };
     let (figures, capability) = figures_of(scenario, result_of(settings)?, z, max_non_finite)?;
     let comparisons: Vec<Comparison> = baseline

@@ -14,7 +14,9 @@ use rayon::prelude::*;
 use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
 
-use crate::run::{Distribution, OutputAccumulator, PercentileMethod, RunResult, CHUNK_SIZE};
+use crate::run::{
+    Distribution, OutputAccumulator, PercentileMethod, ReplicateFigures, RunResult, CHUNK_SIZE,
+};
 use crate::scenario::{OutputInfo, Scenario};
 use crate::stats::quantile_sketch::bucket_representative;
 use crate::stats::{
@@ -24,17 +26,9 @@ use crate::stats::{
 };
 use rvtol_deviation::Shown;
 use rvtol_models::{ConditionEffect, OutputKind};
+use statrs::distribution::{ContinuousCDF, StudentsT};
 
-/// Percentiles every report gives: the ±1, 2, 3 σ points of a normal law and the median.
-pub const PERCENTS: [(&str, f64); 7] = [
-    ("0.135", 0.135),
-    ("2.275", 2.275),
-    ("15.866", 15.866),
-    ("50", 50.0),
-    ("84.134", 84.134),
-    ("97.725", 97.725),
-    ("99.865", 99.865),
-];
+pub use crate::stats::PERCENTS;
 /// Bins of the report histograms.
 pub const HISTOGRAM_BINS: usize = 40;
 /// Confidence of the intervals on ppm and fractions.
@@ -105,8 +99,59 @@ pub struct ConstraintReport {
     /// Candidate draws over all groups.
     pub candidate_draws: u64,
     /// Probability that an unconstrained draw satisfies the whole constraint (product of
-    /// the groups' acceptance rates).
+    /// the groups' acceptance rates; for a replicated run, from the build's pilot).
     pub acceptance_rate: f64,
+    /// How a replicated run drew the constrained parts (absent: by rejection, counted in
+    /// `candidate_draws`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub drawn_by: Option<&'static str>,
+}
+
+/// How a Latin hypercube or RQMC run drew its rows (absent from a Monte Carlo report).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SamplingReport {
+    /// `lhs` or `rqmc`.
+    pub method: &'static str,
+    /// Independent randomizations R.
+    pub replicates: u64,
+    /// Points n of each (samples = R·n).
+    pub points_per_replicate: u64,
+    /// How `replicate_ci95` is computed.
+    pub interval_method: &'static str,
+}
+
+/// The 95 % intervals of a replicated run's figures from the spread of their replicate
+/// values: the figure of all rows ± t(0.975, R − 1)·s/√R, s the standard deviation of
+/// the R replicates' values of it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ReplicateIntervals {
+    /// Of the mean.
+    pub mean: [f64; 2],
+    /// Of the standard deviation.
+    pub sd: [f64; 2],
+    /// Of each percentile.
+    pub percentiles: OrderedIntervals,
+    /// Of ppm out of spec (lower end at least 0), when the output has spec limits and some
+    /// but not all rows are out of spec.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ppm_out_of_spec: Option<[f64; 2]>,
+}
+
+/// What `interval_method` says.
+const REPLICATE_INTERVAL_METHOD: &str = "figure of all rows +- t(0.975, R-1)*s/sqrt(R), s the standard deviation of the figure over the R independent replicates";
+
+/// The half-width t(0.975, R − 1)·s/√R of the values' mean (NaN for fewer than two).
+fn replicate_half_width(values: &[f64]) -> f64 {
+    let r = values.len();
+    if r < 2 || values.iter().any(|v| !v.is_finite()) {
+        return f64::NAN;
+    }
+    let mean = values.iter().sum::<f64>() / r as f64;
+    let s = (values.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / (r - 1) as f64).sqrt();
+    let t = StudentsT::new(0.0, 1.0, (r - 1) as f64)
+        .expect("positive degrees of freedom")
+        .inverse_cdf(0.975);
+    t * s / (r as f64).sqrt()
 }
 
 /// Histogram in the report.
@@ -235,6 +280,10 @@ pub struct OutputReport {
     /// Capability, when spec limits are set.
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     pub capability: Option<CapabilityReport>,
+    /// A replicated run's 95 % intervals from its replicates (the iid intervals above
+    /// assume independent rows, which a Latin hypercube or RQMC replicate does not have).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub replicate_ci95: Option<ReplicateIntervals>,
 }
 
 /// The report of `rvtol run`.
@@ -255,6 +304,9 @@ pub struct RunReport {
     /// Constraint acceptance, when a part is constrained.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub constraint: Option<ConstraintReport>,
+    /// How the rows were drawn, for a Latin hypercube or RQMC run (absent: Monte Carlo).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sampling: Option<SamplingReport>,
     /// One entry per output.
     pub outputs: Vec<OutputReport>,
 }
@@ -381,15 +433,25 @@ impl RunReport {
                 parts: scenario.input_space.constraint_paths().to_vec(),
                 independent_groups: result.constraint_counts.groups.len(),
                 candidate_draws: result.constraint_counts.attempts(),
-                acceptance_rate: result.constraint_counts.acceptance_rate(),
+                acceptance_rate: if result.sampling.is_replicated() {
+                    scenario.input_space.pilot_acceptance_rate()
+                } else {
+                    result.constraint_counts.acceptance_rate()
+                },
+                drawn_by: result
+                    .sampling
+                    .is_replicated()
+                    .then_some("exact conditional inversion"),
             });
+        let replicates = std::mem::take(&mut result.replicates);
         // Each output's percentiles and histogram on its own (in parallel: the selection
         // over every kept value is the report's dearest step), collected in order.
         let outputs = scenario
             .outputs
             .par_iter()
             .zip(result.outputs.par_iter_mut())
-            .map(|(info, acc)| {
+            .enumerate()
+            .map(|(o, (info, acc))| {
                 let m = &acc.moments;
                 let (min, max) = if m.n > 0 {
                     (m.min, m.max)
@@ -503,6 +565,53 @@ impl RunReport {
                 let interval = out_of_spec_interval(acc.nonzero, m.n, CONFIDENCE);
                 let samples = result.samples;
                 let defined = |x: f64| if m.n > 0 { x } else { f64::NAN };
+                let replicate_ci95 = (!replicates.is_empty() && !indicator).then(|| {
+                    // The figure of all rows ± the replicates' half-width; no interval where
+                    // a replicate has no value.
+                    let around = |center: Option<f64>, values: Vec<f64>| {
+                        let h = replicate_half_width(&values);
+                        match center {
+                            Some(c) if h.is_finite() && c.is_finite() => [Some(c - h), Some(c + h)],
+                            _ => [None, None],
+                        }
+                    };
+                    let of = |center: f64, figure: fn(&ReplicateFigures) -> f64| {
+                        let [l, u] = around(
+                            Some(center),
+                            replicates.iter().map(|r| figure(&r[o])).collect(),
+                        );
+                        [l.unwrap_or(f64::NAN), u.unwrap_or(f64::NAN)]
+                    };
+                    ReplicateIntervals {
+                        mean: of(m.mean, |r| r.mean),
+                        sd: of(m.sd(), |r| r.sd),
+                        percentiles: OrderedIntervals(
+                            PERCENTS
+                                .iter()
+                                .enumerate()
+                                .map(|(k, (key, _))| {
+                                    let values = replicates
+                                        .iter()
+                                        .map(|r| r[o].percentiles[k].unwrap_or(f64::NAN))
+                                        .collect();
+                                    (key.to_string(), around(percentiles.get(key), values))
+                                })
+                                .collect(),
+                        ),
+                        // Not when no row or every row is out of spec: the replicates then
+                        // agree exactly and their spread says nothing (the Clopper–Pearson
+                        // interval of the capability still does).
+                        ppm_out_of_spec: info.spec.and_then(|_| {
+                            let out = acc.out_of_spec(info.flagged_conform);
+                            (out > 0 && out < samples).then(|| {
+                                let [l, u] = of(1e6 * out as f64 / samples as f64, |r| {
+                                    1e6 * r.out_of_spec_fraction
+                                });
+                                [l.max(0.0), u]
+                            })
+                        }),
+                    }
+                });
                 OutputReport {
                     name: info.name.clone(),
                     unit: info.unit.clone(),
@@ -551,6 +660,7 @@ impl RunReport {
                     events,
                     fraction: indicator.then_some(interval.fraction),
                     fraction_ci95: indicator.then_some([interval.lower, interval.upper]),
+                    replicate_ci95,
                 }
             })
             .collect();
@@ -562,6 +672,12 @@ impl RunReport {
             chunk_size: CHUNK_SIZE,
             percentile_method,
             constraint,
+            sampling: result.sampling.is_replicated().then(|| SamplingReport {
+                method: result.sampling.method.name(),
+                replicates: result.sampling.replicates,
+                points_per_replicate: result.samples / result.sampling.replicates,
+                interval_method: REPLICATE_INTERVAL_METHOD,
+            }),
             outputs,
         }
     }
@@ -590,14 +706,33 @@ impl RunReport {
             group_thousands(self.samples),
             self.seed
         ));
-        if let Some(c) = &self.constraint {
+        if let Some(sampling) = &self.sampling {
             lines.push(format!(
-                "constraint 001 Eq. 11 on {}: acceptance {:.2} % ({} candidate draws in {} independent groups)",
-                c.parts.join(", "),
-                100.0 * c.acceptance_rate,
-                group_thousands(c.candidate_draws),
-                c.independent_groups
+                "sampling {}: {} independent replicates of {} points; intervals from the replicates' spread (Student t, {} degrees of freedom)",
+                match sampling.method {
+                    "lhs" => "Latin hypercube",
+                    _ => "randomized QMC (scrambled Sobol')",
+                },
+                sampling.replicates,
+                group_thousands(sampling.points_per_replicate),
+                sampling.replicates - 1
             ));
+        }
+        if let Some(c) = &self.constraint {
+            lines.push(match c.drawn_by {
+                Some(method) => format!(
+                    "constraint 001 Eq. 11 on {}: drawn by {method} (it holds for {:.2} % of unconstrained draws)",
+                    c.parts.join(", "),
+                    100.0 * c.acceptance_rate,
+                ),
+                None => format!(
+                    "constraint 001 Eq. 11 on {}: acceptance {:.2} % ({} candidate draws in {} independent groups)",
+                    c.parts.join(", "),
+                    100.0 * c.acceptance_rate,
+                    group_thousands(c.candidate_draws),
+                    c.independent_groups
+                ),
+            });
         }
         lines.push(String::new());
         let name_width = name_column_width(self.outputs.iter().map(|o| o.name.as_str()));
@@ -636,7 +771,40 @@ impl RunReport {
             .iter()
             .filter(|o| o.kind != "indicator" && o.n > 0)
             .collect();
-        if !continuous.is_empty() {
+        if let (false, Some(sampling)) = (continuous.is_empty(), &self.sampling) {
+            lines.push(String::new());
+            lines.push(format!(
+                "95 % intervals from the {} replicates",
+                sampling.replicates
+            ));
+            lines.push(format!(
+                "{:<name_width$}  {:>23} {:>23} {:>23} {:>23}",
+                "output", "mean", "sd", "P50", "P99.865"
+            ));
+            let pair = |[l, u]: [Option<f64>; 2]| match (l, u) {
+                (Some(l), Some(u)) => format!("{} .. {}", format_sig(l), format_sig(u)),
+                _ => "n/a".to_string(),
+            };
+            for o in &continuous {
+                let Some(r) = &o.replicate_ci95 else { continue };
+                let [ml, mu] = r.mean;
+                let [sl, su] = r.sd;
+                lines.push(format!(
+                    "{:<name_width$}  {:>23} {:>23} {:>23} {:>23}",
+                    o.name,
+                    pair([
+                        Some(ml).filter(|x| x.is_finite()),
+                        Some(mu).filter(|x| x.is_finite())
+                    ]),
+                    pair([
+                        Some(sl).filter(|x| x.is_finite()),
+                        Some(su).filter(|x| x.is_finite())
+                    ]),
+                    pair(r.percentiles.get("50").unwrap_or([None, None])),
+                    pair(r.percentiles.get("99.865").unwrap_or([None, None])),
+                ));
+            }
+        } else if !continuous.is_empty() {
             let sketch = if self.percentile_method.relative_error.is_some() {
                 ", from the sketch moved out by its error bound"
             } else {
@@ -703,6 +871,13 @@ impl RunReport {
                     format_sig(c.ppm_out_ci95[0]),
                     format_sig(c.ppm_out_ci95[1]),
                 ));
+                if let Some([l, u]) = o.replicate_ci95.as_ref().and_then(|r| r.ppm_out_of_spec) {
+                    lines.push(format!(
+                        "    out of spec from the replicates: 95 % interval {} .. {} ppm",
+                        format_sig(l),
+                        format_sig(u)
+                    ));
+                }
                 if let Some(note) = &c.capability_note {
                     lines.push(format!("    {note}"));
                 }

@@ -1,10 +1,15 @@
 //! The reproducible parallel Monte Carlo run.
 //!
-//! Reproducibility contract: the same (rvtol version, scenario, seed, samples) give
-//! bit-identical statistics whatever the thread count.
+//! Reproducibility contract: the same (rvtol version, scenario, seed, samples, sampling)
+//! give bit-identical statistics whatever the thread count.
 //! - Samples are drawn in chunks of [`CHUNK_SIZE`]; chunk k draws from its own stream,
 //!   `ChaCha8Rng::seed_from_u64(seed)` then `set_stream(k)`. The chunk size never depends
-//!   on the thread count.
+//!   on the thread count. A Latin hypercube or RQMC run ([`Sampling`]) lays its replicates
+//!   out one after another, each in chunks of its own (its last one shorter), and a row is
+//!   the point of its replicate and index, a pure function of the seed: no stream.
+//! - Each replicate's counts and distributions stay apart until the merge, which computes
+//!   its figures ([`ReplicateFigures`]) for the replicate intervals and then pools them;
+//!   a Monte Carlo run has one replicate, so its statistics are those it always had.
 //! - Each chunk's moments are kept with its index and merged sequentially in chunk order
 //!   (never with a parallel float reduction). Everything else merged across threads is an
 //!   integer count (spec violations, events, sketch buckets, constraint attempts) or a
@@ -29,12 +34,12 @@ use std::ops::Range;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
-use rvtol_deviation::{ConstraintCounts, SamplerScratch};
+use rvtol_deviation::{ConstraintCounts, PointSet, SamplerScratch, SamplingMethod};
 use rvtol_models::{ConditionEffect, Curve, OutputKind};
 
 use crate::evaluate::ChunkEvaluator;
 use crate::scenario::{Scenario, ScenarioError};
-use crate::stats::{Moments, QuantileSketch, SpecLimits};
+use crate::stats::{percentiles_type7, Moments, QuantileSketch, SpecLimits, PERCENTS};
 
 /// Samples per chunk (part of the reproducibility contract: changing it changes results).
 pub const CHUNK_SIZE: usize = 4096;
@@ -58,6 +63,168 @@ pub struct RunSettings {
     /// Exact percentiles while samples × outputs stays at or below this; a quantile sketch
     /// beyond it.
     pub exact_percentile_limit: u64,
+    /// How the rows are drawn.
+    pub sampling: Sampling,
+}
+
+/// How a run's rows are drawn: the method and its independent randomizations.
+///
+/// Monte Carlo has one (its rows are independent; the report's intervals come from them).
+/// A Latin hypercube or scrambled Sobol' run of N samples is R independent replicates of
+/// n = N/R points (replicate r holds samples r·n … (r+1)·n − 1); its statistics are those
+/// of all N rows, and each figure's interval comes from the spread of its R replicate
+/// values (Student t with R − 1 degrees of freedom), the rows of one replicate not being
+/// independent.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Sampling {
+    /// The method.
+    pub method: SamplingMethod,
+    /// Independent randomizations (1 for Monte Carlo).
+    pub replicates: u64,
+}
+
+impl Default for Sampling {
+    fn default() -> Sampling {
+        Sampling::MONTE_CARLO
+    }
+}
+
+impl Sampling {
+    /// Plain Monte Carlo.
+    pub const MONTE_CARLO: Sampling = Sampling {
+        method: SamplingMethod::MonteCarlo,
+        replicates: 1,
+    };
+    /// Replicates of a Latin hypercube or RQMC run unless the scenario says.
+    pub const DEFAULT_REPLICATES: u64 = 16;
+    /// Fewest replicates: an interval from R values needs R − 1 ≥ 1 degrees of freedom.
+    pub const MIN_REPLICATES: u64 = 2;
+    /// Most replicates (each keeps its own statistics).
+    pub const MAX_REPLICATES: u64 = 1024;
+
+    /// The method with its default replicates.
+    pub fn of(method: SamplingMethod) -> Sampling {
+        match method {
+            SamplingMethod::MonteCarlo => Sampling::MONTE_CARLO,
+            _ => Sampling {
+                method,
+                replicates: Sampling::DEFAULT_REPLICATES,
+            },
+        }
+    }
+
+    /// Whether the rows come from replicated point sets (Latin hypercube or RQMC).
+    pub fn is_replicated(&self) -> bool {
+        self.method != SamplingMethod::MonteCarlo
+    }
+}
+
+impl RunSettings {
+    /// Rows per replicate (all the samples for Monte Carlo).
+    pub fn replicate_points(&self) -> u64 {
+        self.samples / self.sampling.replicates.max(1)
+    }
+
+    fn chunks_per_replicate(&self) -> u64 {
+        self.replicate_points().div_ceil(CHUNK_SIZE as u64)
+    }
+
+    /// Number of chunks: each replicate's rows in chunks of [`CHUNK_SIZE`] (the last one
+    /// of each replicate shorter), replicate after replicate.
+    pub fn chunk_count(&self) -> u64 {
+        self.sampling.replicates.max(1) * self.chunks_per_replicate()
+    }
+
+    /// Chunk `chunk` as (replicate, its first row within the replicate, its first sample
+    /// in the run, rows).
+    pub fn chunk_rows(&self, chunk: u64) -> (u64, u64, u64, usize) {
+        let per = self.chunks_per_replicate().max(1);
+        let (replicate, local) = (chunk / per, chunk % per);
+        let n = self.replicate_points();
+        let first = local * CHUNK_SIZE as u64;
+        let rows = (n - first).min(CHUNK_SIZE as u64) as usize;
+        (replicate, first, replicate * n + first, rows)
+    }
+
+    /// Samples in the chunks before `chunk` (for progress).
+    pub fn samples_before_chunk(&self, chunk: u64) -> u64 {
+        if chunk >= self.chunk_count() {
+            return self.samples;
+        }
+        self.chunk_rows(chunk).2
+    }
+
+    /// Checks the settings against the scenario: at least one sample; for a replicated
+    /// method, replicates within their range dividing the samples, points per replicate
+    /// within the method's limit, and an input space it can draw (one line each, naming
+    /// the setting).
+    pub fn check(&self, scenario: &Scenario) -> Result<(), ScenarioError> {
+        if self.samples == 0 {
+            return Err(ScenarioError::new("samples", "must be at least 1"));
+        }
+        let Sampling { method, replicates } = self.sampling;
+        if !self.sampling.is_replicated() {
+            if replicates != 1 {
+                return Err(ScenarioError::new(
+                    "replicates",
+                    "Monte Carlo rows are independent and have no replicates: give replicates with \"sampling\": \"lhs\" or \"rqmc\"",
+                ));
+            }
+            return Ok(());
+        }
+        if !(Sampling::MIN_REPLICATES..=Sampling::MAX_REPLICATES).contains(&replicates) {
+            return Err(ScenarioError::new(
+                "replicates",
+                format!(
+                    "must lie in {}..={}, got {replicates}",
+                    Sampling::MIN_REPLICATES,
+                    Sampling::MAX_REPLICATES
+                ),
+            ));
+        }
+        if !self.samples.is_multiple_of(replicates) || self.samples < 2 * replicates {
+            return Err(ScenarioError::new(
+                "samples",
+                format!(
+                    "{} samples do not split into {replicates} replicates of equal size (at least 2 points each): give a multiple of {replicates}{}",
+                    self.samples,
+                    if method == SamplingMethod::Rqmc {
+                        format!(", best {replicates} × a power of two such as {}", replicates * (self.samples / replicates).max(2).next_power_of_two())
+                    } else {
+                        String::new()
+                    }
+                ),
+            ));
+        }
+        if self.replicate_points() > method.max_points() {
+            return Err(ScenarioError::new(
+                "samples",
+                format!(
+                    "{} points per replicate, {} takes at most {}: give more replicates",
+                    self.replicate_points(),
+                    method.name(),
+                    method.max_points()
+                ),
+            ));
+        }
+        scenario.input_space.quasi_dimensions()?;
+        Ok(())
+    }
+}
+
+/// One replicate's figures of one output, for the replicate intervals.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReplicateFigures {
+    /// Finite values.
+    pub n: u64,
+    /// Mean.
+    pub mean: f64,
+    /// Standard deviation.
+    pub sd: f64,
+    /// The percentiles of [`PERCENTS`] (exact type 7, or from the sketch).
+    pub percentiles: Vec<Option<f64>>,
+    /// Share of the replicate's rows out of spec.
+    pub out_of_spec_fraction: f64,
 }
 
 /// How the percentiles of a run were computed.
@@ -190,8 +357,47 @@ pub struct RunResult {
     pub percentile_method: PercentileMethod,
     /// Constraint rejection tally, per independent group of inequalities.
     pub constraint_counts: ConstraintCounts,
-    /// One accumulator per scenario output, in order.
+    /// One accumulator per scenario output, in order: the statistics of all the rows.
     pub outputs: Vec<OutputAccumulator>,
+    /// How the rows were drawn.
+    pub sampling: Sampling,
+    /// Per replicate of a Latin hypercube or RQMC run, each output's figures (empty for
+    /// Monte Carlo).
+    pub replicates: Vec<Vec<ReplicateFigures>>,
+}
+
+/// Each replicate's accumulators (one per output) among some chunks, by replicate index
+/// in increasing order; a Monte Carlo run has replicate 0 only.
+pub type ReplicateAccumulators = Vec<(u64, Vec<OutputAccumulator>)>;
+
+/// The accumulators of `replicate` in `list`, created empty by `new` when missing.
+fn replicate_entry(
+    list: &mut ReplicateAccumulators,
+    replicate: u64,
+    new: impl FnOnce() -> Vec<OutputAccumulator>,
+) -> &mut Vec<OutputAccumulator> {
+    let at = match list.binary_search_by_key(&replicate, |(r, _)| *r) {
+        Ok(at) => at,
+        Err(at) => {
+            list.insert(at, (replicate, new()));
+            at
+        }
+    };
+    &mut list[at].1
+}
+
+/// Adds `other`'s replicates' counts and distributions to `mine` (both by replicate).
+fn absorb_replicates(
+    mine: &mut ReplicateAccumulators,
+    other: ReplicateAccumulators,
+) -> Result<(), ScenarioError> {
+    for (replicate, outputs) in other {
+        match mine.binary_search_by_key(&replicate, |(r, _)| *r) {
+            Ok(at) => absorb_counts(&mut mine[at].1, outputs)?,
+            Err(at) => mine.insert(at, (replicate, outputs)),
+        }
+    }
+    Ok(())
 }
 
 /// One worker's scratch buffers and the statistics of the chunks it ran.
@@ -202,8 +408,9 @@ struct Worker<'a> {
     evaluator: ChunkEvaluator<'a>,
     finite: Vec<f64>,
     chunk_moments: Vec<(u64, Vec<Moments>)>,
-    /// Counts and distributions per output (their moments stay per chunk until the merge).
-    outputs: Vec<OutputAccumulator>,
+    /// Counts and distributions per replicate and output (their moments stay per chunk
+    /// until the merge).
+    replicates: ReplicateAccumulators,
     constraint_counts: ConstraintCounts,
     error: Option<(u64, ScenarioError)>,
 }
@@ -222,6 +429,28 @@ struct Plan<'a> {
     only_output: Option<usize>,
     /// Per output: whether flagged samples conform (`flagged_conform`).
     flagged_conform: Vec<bool>,
+    /// The Latin hypercube or scrambled Sobol' points of a replicated run.
+    points: Option<PointSet>,
+}
+
+/// The point set of a replicated run (None for Monte Carlo), after checking the settings.
+fn point_set(
+    scenario: &Scenario,
+    settings: RunSettings,
+) -> Result<Option<PointSet>, ScenarioError> {
+    settings.check(scenario)?;
+    if !settings.sampling.is_replicated() {
+        return Ok(None);
+    }
+    let dims = scenario.input_space.quasi_dimensions()?;
+    PointSet::new(
+        settings.sampling.method,
+        dims,
+        settings.replicate_points(),
+        settings.seed,
+    )
+    .map(Some)
+    .map_err(|message| ScenarioError::new("sampling", message))
 }
 
 impl<'a> Plan<'a> {
@@ -232,6 +461,7 @@ impl<'a> Plan<'a> {
         settings: RunSettings,
         exact: bool,
         only_output: Option<usize>,
+        points: Option<PointSet>,
     ) -> Plan<'a> {
         Plan {
             scenario,
@@ -247,6 +477,7 @@ impl<'a> Plan<'a> {
             sketch_frames: vec![(0.0, 1.0); scenario.outputs.len()],
             only_output,
             flagged_conform: scenario.outputs.iter().map(|o| o.flagged_conform).collect(),
+            points,
         }
     }
 
@@ -257,9 +488,7 @@ impl<'a> Plan<'a> {
         settings: RunSettings,
         only_output: Option<usize>,
     ) -> Result<Plan<'a>, ScenarioError> {
-        if settings.samples == 0 {
-            return Err(ScenarioError::new("samples", "must be at least 1"));
-        }
+        let points = point_set(scenario, settings)?;
         let kept_outputs = if only_output.is_some() {
             1
         } else {
@@ -267,7 +496,7 @@ impl<'a> Plan<'a> {
         };
         let exact =
             settings.samples.saturating_mul(kept_outputs.max(1)) <= settings.exact_percentile_limit;
-        let mut plan = Plan::new(scenario, settings, exact, only_output);
+        let mut plan = Plan::new(scenario, settings, exact, only_output, points);
         if !exact {
             plan.sketch_frames = plan.pilot_sketch_frames()?;
         }
@@ -287,10 +516,15 @@ impl<'a> Plan<'a> {
             },
             constraint_counts: self.scenario.input_space.new_constraint_counts(),
             chunk_moments: Vec::new(),
-            outputs: (0..self.scenario.outputs.len())
-                .map(|o| OutputAccumulator::new(self.new_distribution(o)))
-                .collect(),
+            replicates: Vec::new(),
         }
+    }
+
+    /// Empty accumulators of every output.
+    fn new_accumulators(&self) -> Vec<OutputAccumulator> {
+        (0..self.scenario.outputs.len())
+            .map(|o| OutputAccumulator::new(self.new_distribution(o)))
+            .collect()
     }
 
     /// Runs the chunks of one wave in parallel and gathers them into one partial.
@@ -330,12 +564,8 @@ impl<'a> Plan<'a> {
         let mut partial = self.empty_partial(chunks.start);
         partial.chunks = chunks;
         for worker in workers {
-            absorb_counts(
-                &mut partial.outputs,
-                &mut partial.constraint_counts,
-                worker.outputs,
-                &worker.constraint_counts,
-            )?;
+            partial.constraint_counts.add(&worker.constraint_counts);
+            absorb_replicates(&mut partial.replicates, worker.replicates)?;
             partial.chunk_moments.extend(worker.chunk_moments);
         }
         partial
@@ -345,16 +575,13 @@ impl<'a> Plan<'a> {
     }
 
     fn worker(&self) -> Worker<'a> {
-        let n_out = self.scenario.outputs.len();
         Worker {
             columns: vec![0.0; BLOCK_ROWS * self.scenario.input_space.n_columns()],
             sampler: SamplerScratch::default(),
             evaluator: ChunkEvaluator::new(self.scenario),
             finite: Vec::with_capacity(CHUNK_SIZE),
             chunk_moments: Vec::new(),
-            outputs: (0..n_out)
-                .map(|o| OutputAccumulator::new(self.new_distribution(o)))
-                .collect(),
+            replicates: Vec::new(),
             constraint_counts: self.scenario.input_space.new_constraint_counts(),
             error: None,
         }
@@ -378,8 +605,7 @@ impl<'a> Plan<'a> {
     }
 
     fn chunk_len(&self, chunk: u64) -> usize {
-        let start = chunk * CHUNK_SIZE as u64;
-        (self.settings.samples - start).min(CHUNK_SIZE as u64) as usize
+        self.settings.chunk_rows(chunk).3
     }
 
     /// Draws chunk `chunk` and evaluates the models into `worker.output_columns`;
@@ -396,7 +622,7 @@ impl<'a> Plan<'a> {
         chunk: u64,
         mut inputs: Option<&mut Vec<f64>>,
     ) -> Option<usize> {
-        let m = self.chunk_len(chunk);
+        let (replicate, first_row, _, m) = self.settings.chunk_rows(chunk);
         let space = &self.scenario.input_space;
         let n_columns = space.n_columns();
         let mut rng = ChaCha8Rng::seed_from_u64(self.settings.seed);
@@ -404,12 +630,22 @@ impl<'a> Plan<'a> {
         for first in (0..m).step_by(BLOCK_ROWS) {
             let block = (m - first).min(BLOCK_ROWS);
             let columns = &mut worker.columns[..block * n_columns];
-            if let Err(err) = space.sample_columns_with(
-                &mut rng,
-                columns,
-                &mut worker.constraint_counts,
-                &mut worker.sampler,
-            ) {
+            let drawn = match &self.points {
+                None => space.sample_columns_with(
+                    &mut rng,
+                    columns,
+                    &mut worker.constraint_counts,
+                    &mut worker.sampler,
+                ),
+                Some(points) => space.sample_columns_from_points(
+                    points,
+                    replicate,
+                    first_row + first as u64,
+                    columns,
+                    &mut worker.sampler,
+                ),
+            };
+            if let Err(err) = drawn {
                 worker.error = Some((chunk, err.into()));
                 return None;
             }
@@ -464,12 +700,15 @@ impl<'a> Plan<'a> {
         let Some(m) = self.evaluate_chunk(worker, chunk) else {
             return;
         };
-        let first_sample = chunk * CHUNK_SIZE as u64;
+        let (replicate, _, first_sample, _) = self.settings.chunk_rows(chunk);
         let columns = &worker.evaluator.output_columns;
+        let accumulators = replicate_entry(&mut worker.replicates, replicate, || {
+            self.new_accumulators()
+        });
         let mut moments = Vec::with_capacity(columns.len());
         for (o, column) in columns.iter().enumerate() {
             let values = &column[..m];
-            let acc = &mut worker.outputs[o];
+            let acc = &mut accumulators[o];
             if self.indicator[o] {
                 // Events only: the moments follow from the counts at the end.
                 let finite = values.iter().filter(|v| v.is_finite()).count();
@@ -614,15 +853,13 @@ pub fn sample_table(
     scenario: &Scenario,
     settings: RunSettings,
 ) -> Result<SampleTable, ScenarioError> {
-    if settings.samples == 0 {
-        return Err(ScenarioError::new("samples", "must be at least 1"));
-    }
+    let points = point_set(scenario, settings)?;
     check_table_rows(scenario, settings.samples)
         .map_err(|message| ScenarioError::new("samples", message))?;
     let n_inputs = scenario.input_space.n_columns();
     let n_outputs = scenario.outputs.len();
-    let plan = Plan::new(scenario, settings, true, None);
-    let n_chunks = chunk_count(settings.samples);
+    let plan = Plan::new(scenario, settings, true, None, points);
+    let n_chunks = settings.chunk_count();
     // Per chunk: its input rows and output rows, row-major.
     type Rows = (Vec<f64>, Vec<f64>);
     let chunks: Vec<Result<Rows, ScenarioError>> = (0..n_chunks)
@@ -697,21 +934,23 @@ fn run_keeping(
 ) -> Result<RunResult, ScenarioError> {
     let plan = Plan::for_run(scenario, settings, only_output)?;
     let mut merger = RunMerger::new(scenario, settings);
-    for wave in waves(0..chunk_count(settings.samples)) {
+    for wave in waves(0..settings.chunk_count()) {
         merger.add(plan.run_wave(wave, progress)?)?;
     }
     merger.finish()
 }
 
-/// Number of chunks of a run of `samples` samples.
+/// Number of chunks of `samples` samples in chunks of [`CHUNK_SIZE`] (a Monte Carlo run,
+/// the base matrix of a sensitivity analysis).
 pub fn chunk_count(samples: u64) -> u64 {
     samples.div_ceil(CHUNK_SIZE as u64)
 }
 
-/// The chunks shard `shard` of `shards` computes: the `shard`-th of `shards` contiguous
-/// ranges as equal as whole chunks allow (empty when there are more shards than chunks).
-pub fn shard_chunks(samples: u64, shard: u64, shards: u64) -> Range<u64> {
-    shard_range(chunk_count(samples), shard, shards)
+/// The chunks shard `shard` of `shards` computes out of `chunks`: the `shard`-th of
+/// `shards` contiguous ranges as equal as whole chunks allow (empty when there are more
+/// shards than chunks).
+pub fn shard_chunks(chunks: u64, shard: u64, shards: u64) -> Range<u64> {
+    shard_range(chunks, shard, shards)
 }
 
 /// The `shard`-th of `shards` contiguous ranges of `0..total`, as equal as whole items
@@ -744,9 +983,9 @@ pub struct RunPartial {
     pub constraint_counts: ConstraintCounts,
     /// Each chunk's moments of every output, in chunk order.
     pub chunk_moments: Vec<(u64, Vec<Moments>)>,
-    /// Counts and distribution of each output over these chunks; their `moments` are
-    /// empty (see `chunk_moments`).
-    pub outputs: Vec<OutputAccumulator>,
+    /// Counts and distribution of each output over these chunks, per replicate; their
+    /// `moments` are empty (see `chunk_moments`).
+    pub replicates: ReplicateAccumulators,
 }
 
 impl RunPartial {
@@ -761,12 +1000,8 @@ impl RunPartial {
                 ),
             ));
         }
-        absorb_counts(
-            &mut self.outputs,
-            &mut self.constraint_counts,
-            next.outputs,
-            &next.constraint_counts,
-        )?;
+        self.constraint_counts.add(&next.constraint_counts);
+        absorb_replicates(&mut self.replicates, next.replicates)?;
         self.chunk_moments.extend(next.chunk_moments);
         self.chunks.end = next.chunks.end;
         Ok(())
@@ -783,7 +1018,7 @@ pub fn run_chunks(
     chunks: Range<u64>,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<RunPartial, ScenarioError> {
-    let n_chunks = chunk_count(settings.samples);
+    let n_chunks = settings.chunk_count();
     if chunks.start > chunks.end || chunks.end > n_chunks {
         return Err(ScenarioError::new(
             "(run)",
@@ -821,17 +1056,34 @@ pub fn merge(
 struct RunMerger<'a> {
     scenario: &'a Scenario,
     settings: RunSettings,
-    result: Option<RunResult>,
     next_chunk: u64,
+    percentile_method: Option<PercentileMethod>,
+    constraint_counts: ConstraintCounts,
+    /// Each replicate's accumulators, as they arrive.
+    replicates: Vec<Option<Vec<OutputAccumulator>>>,
+    /// The moments of all rows, folded in chunk order.
+    moments: Vec<Moments>,
+    /// Each replicate's moments, folded in chunk order (replicated runs only).
+    replicate_moments: Vec<Vec<Moments>>,
 }
 
 impl<'a> RunMerger<'a> {
     fn new(scenario: &'a Scenario, settings: RunSettings) -> RunMerger<'a> {
+        let n_out = scenario.outputs.len();
+        let replicates = settings.sampling.replicates.max(1) as usize;
         RunMerger {
             scenario,
             settings,
-            result: None,
             next_chunk: 0,
+            percentile_method: None,
+            constraint_counts: scenario.input_space.new_constraint_counts(),
+            replicates: vec![None; replicates],
+            moments: vec![Moments::new(); n_out],
+            replicate_moments: if settings.sampling.is_replicated() {
+                vec![vec![Moments::new(); n_out]; replicates]
+            } else {
+                Vec::new()
+            },
         }
     }
 
@@ -851,103 +1103,185 @@ impl<'a> RunMerger<'a> {
                 )
             });
         }
-        if partial.outputs.len() != self.scenario.outputs.len() {
+        let n_out = self.scenario.outputs.len();
+        if let Some((_, outputs)) = partial.replicates.iter().find(|(_, o)| o.len() != n_out) {
             return broken(format!(
-                "a partial has {} outputs, the scenario {}",
-                partial.outputs.len(),
-                self.scenario.outputs.len()
+                "a partial has {} outputs, the scenario {n_out}",
+                outputs.len()
             ));
         }
         let expected: Vec<u64> = partial.chunks.clone().collect();
         let has: Vec<u64> = partial.chunk_moments.iter().map(|(c, _)| *c).collect();
-        let widths_match = partial
-            .chunk_moments
+        let widths_match = partial.chunk_moments.iter().all(|(_, m)| m.len() == n_out);
+        let replicates_match = partial
+            .replicates
             .iter()
-            .all(|(_, m)| m.len() == self.scenario.outputs.len());
-        if expected != has || !widths_match {
+            .all(|(r, _)| (*r as usize) < self.replicates.len());
+        if expected != has || !widths_match || !replicates_match {
             return broken(format!(
                 "the moments of chunks {}..{} are incomplete",
                 partial.chunks.start, partial.chunks.end
             ));
         }
         self.next_chunk = partial.chunks.end;
-        let RunPartial {
-            percentile_method,
-            constraint_counts,
-            chunk_moments,
-            outputs,
-            ..
-        } = partial;
-        let result = match &mut self.result {
-            None => {
-                let mut outputs = outputs;
-                for output in &mut outputs {
-                    if let Distribution::Values(values) = &mut output.distribution {
-                        values.reserve_exact(self.settings.samples as usize - values.len());
+        match self.percentile_method {
+            Some(method) if method != partial.percentile_method => {
+                return broken("the partials' percentile methods differ".into());
+            }
+            _ => self.percentile_method = Some(partial.percentile_method),
+        }
+        self.constraint_counts.add(&partial.constraint_counts);
+        let points = self.settings.replicate_points() as usize;
+        for (replicate, outputs) in partial.replicates {
+            match &mut self.replicates[replicate as usize] {
+                slot @ None => {
+                    let mut outputs = outputs;
+                    for output in &mut outputs {
+                        if let Distribution::Values(values) = &mut output.distribution {
+                            values.reserve_exact(points.saturating_sub(values.len()));
+                        }
                     }
+                    *slot = Some(outputs);
                 }
-                self.result.insert(RunResult {
-                    samples: self.settings.samples,
-                    seed: self.settings.seed,
-                    percentile_method,
-                    constraint_counts,
-                    outputs,
-                })
+                Some(mine) => absorb_counts(mine, outputs)?,
             }
-            Some(result) => {
-                if result.percentile_method != percentile_method {
-                    return broken("the partials' percentile methods differ".into());
+        }
+        for (chunk, moments) in partial.chunk_moments {
+            for (output, m) in self.moments.iter_mut().zip(&moments) {
+                output.merge(m);
+            }
+            if !self.replicate_moments.is_empty() {
+                let (replicate, ..) = self.settings.chunk_rows(chunk);
+                for (output, m) in self.replicate_moments[replicate as usize]
+                    .iter_mut()
+                    .zip(&moments)
+                {
+                    output.merge(m);
                 }
-                absorb_counts(
-                    &mut result.outputs,
-                    &mut result.constraint_counts,
-                    outputs,
-                    &constraint_counts,
-                )?;
-                result
-            }
-        };
-        for (_, moments) in chunk_moments {
-            for (output, m) in result.outputs.iter_mut().zip(&moments) {
-                output.moments.merge(m);
             }
         }
         Ok(())
     }
 
     fn finish(self) -> Result<RunResult, ScenarioError> {
-        let n_chunks = chunk_count(self.settings.samples);
-        let Some(mut result) = self.result.filter(|_| self.next_chunk == n_chunks) else {
-            return Err(ScenarioError::new(
+        let n_chunks = self.settings.chunk_count();
+        let missing = || {
+            ScenarioError::new(
                 "(merge)",
                 format!(
                     "chunks {}..{n_chunks} are missing",
                     self.next_chunk.min(n_chunks)
                 ),
-            ));
+            )
         };
-        for (output, info) in result.outputs.iter_mut().zip(&self.scenario.outputs) {
-            if info.kind == OutputKind::Indicator {
-                let n = self.settings.samples - output.non_finite;
-                output.moments = indicator_moments(output.nonzero, n);
+        if self.next_chunk != n_chunks || self.replicates.iter().any(Option::is_none) {
+            return Err(missing());
+        }
+        let percentile_method = self.percentile_method.ok_or_else(missing)?;
+        let indicator: Vec<bool> = (self.scenario.outputs.iter())
+            .map(|o| o.kind == OutputKind::Indicator)
+            .collect();
+        let mut replicates: Vec<Vec<OutputAccumulator>> =
+            self.replicates.into_iter().flatten().collect();
+        // Each replicate's figures before its values join the others.
+        let figures: Vec<Vec<ReplicateFigures>> = if self.replicate_moments.is_empty() {
+            Vec::new()
+        } else {
+            let points = self.settings.replicate_points();
+            replicates
+                .iter_mut()
+                .zip(&self.replicate_moments)
+                .map(|(outputs, moments)| {
+                    outputs
+                        .iter_mut()
+                        .zip(moments)
+                        .zip(self.scenario.outputs.iter().zip(&indicator))
+                        .map(|((acc, m), (info, &indicator))| {
+                            let m = if indicator {
+                                indicator_moments(acc.nonzero, points - acc.non_finite)
+                            } else {
+                                m.clone()
+                            };
+                            replicate_figures(acc, &m, points, info.flagged_conform)
+                        })
+                        .collect()
+                })
+                .collect()
+        };
+        let mut replicates = replicates.into_iter();
+        let mut outputs = replicates.next().expect("at least one replicate");
+        if !figures.is_empty() {
+            for output in &mut outputs {
+                if let Distribution::Values(values) = &mut output.distribution {
+                    values.reserve_exact(self.settings.samples as usize - values.len());
+                }
             }
         }
-        Ok(result)
+        for other in replicates {
+            absorb_counts(&mut outputs, other)?;
+        }
+        for ((output, moments), &indicator) in outputs.iter_mut().zip(self.moments).zip(&indicator)
+        {
+            output.moments = if indicator {
+                indicator_moments(output.nonzero, self.settings.samples - output.non_finite)
+            } else {
+                moments
+            };
+        }
+        Ok(RunResult {
+            samples: self.settings.samples,
+            seed: self.settings.seed,
+            percentile_method,
+            constraint_counts: self.constraint_counts,
+            outputs,
+            sampling: self.settings.sampling,
+            replicates: figures,
+        })
+    }
+}
+
+/// One replicate's figures of an output from its accumulator and moments (`points` rows).
+fn replicate_figures(
+    acc: &mut OutputAccumulator,
+    moments: &Moments,
+    points: u64,
+    flagged_conform: bool,
+) -> ReplicateFigures {
+    let percents: Vec<f64> = PERCENTS.iter().map(|p| p.1).collect();
+    let percentiles = match &mut acc.distribution {
+        Distribution::Values(values) => percentiles_type7(values, &percents),
+        Distribution::Sketch {
+            sketch,
+            center,
+            scale,
+        } => percents
+            .iter()
+            .map(|p| {
+                sketch
+                    .quantile(p / 100.0)
+                    .map(|z| (*center + *scale * z).clamp(moments.min, moments.max))
+            })
+            .collect(),
+        Distribution::Indicator | Distribution::Dropped => vec![None; percents.len()],
+    };
+    ReplicateFigures {
+        n: moments.n,
+        mean: moments.mean,
+        sd: moments.sd(),
+        percentiles,
+        out_of_spec_fraction: acc.out_of_spec(flagged_conform) as f64 / points as f64,
     }
 }
 
 /// Adds `other`'s counts and distributions (not its moments) to `outputs`.
 fn absorb_counts(
     outputs: &mut [OutputAccumulator],
-    constraint_counts: &mut ConstraintCounts,
     other: Vec<OutputAccumulator>,
-    other_constraint_counts: &ConstraintCounts,
 ) -> Result<(), ScenarioError> {
     let mismatch = || ScenarioError::new("(merge)", "the partials' output statistics differ");
     if outputs.len() != other.len() {
         return Err(mismatch());
     }
-    constraint_counts.add(other_constraint_counts);
     for (output, part) in outputs.iter_mut().zip(other) {
         output.add_counts(&part);
         match (&mut output.distribution, part.distribution) {

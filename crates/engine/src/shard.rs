@@ -42,7 +42,7 @@ use rvtol_deviation::ConstraintCounts;
 /// First bytes of a shard file.
 pub const MAGIC: &[u8] = b"rvtol-partial\n";
 /// Layout version written and read.
-pub const FORMAT: u32 = 1;
+pub const FORMAT: u32 = 2;
 
 /// What a shard file says about the run or analysis it belongs to.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
@@ -79,6 +79,10 @@ pub enum ShardCommand {
         seed: u64,
         /// Exact percentiles up to this many values (decides the percentile method).
         exact_percentile_limit: u64,
+        /// Sampling method (`mc`, `lhs`, `rqmc`).
+        sampling: String,
+        /// Its replicates (1 for Monte Carlo).
+        replicates: u64,
     },
     /// `rvtol sensitivity`.
     Sensitivity {
@@ -129,6 +133,22 @@ impl ShardCommand {
             ShardCommand::Run { samples, .. } | ShardCommand::Sensitivity { samples, .. } => {
                 *samples
             }
+        }
+    }
+
+    /// The chunks the command's work divides into: the run's chunks (replicate after
+    /// replicate), the sensitivity's base-sample chunks.
+    pub fn chunk_count(&self) -> u64 {
+        match self {
+            ShardCommand::Run {
+                samples,
+                replicates,
+                ..
+            } => {
+                let replicates = (*replicates).max(1);
+                replicates * (samples / replicates).div_ceil(crate::run::CHUNK_SIZE as u64)
+            }
+            ShardCommand::Sensitivity { samples, .. } => crate::run::chunk_count(*samples),
         }
     }
 
@@ -223,8 +243,27 @@ fn write_run(out: &mut Writer, partial: &RunPartial) {
         out.u64(candidates);
         out.u64(accepted);
     }
-    out.u64(partial.outputs.len() as u64);
-    for output in &partial.outputs {
+    out.u64(partial.replicates.len() as u64);
+    for (replicate, outputs) in &partial.replicates {
+        out.u64(*replicate);
+        write_outputs(out, outputs);
+    }
+    out.u64(partial.chunk_moments.len() as u64);
+    for (chunk, moments) in &partial.chunk_moments {
+        out.u64(*chunk);
+        out.u64(moments.len() as u64);
+        for m in moments {
+            out.u64(m.n);
+            for v in [m.mean, m.m2, m.m3, m.m4, m.min, m.max] {
+                out.f64(v);
+            }
+        }
+    }
+}
+
+fn write_outputs(out: &mut Writer, outputs: &[OutputAccumulator]) {
+    out.u64(outputs.len() as u64);
+    for output in outputs {
         for count in [
             output.non_finite,
             output.first_non_finite.map_or(u64::MAX, |first| first),
@@ -263,17 +302,6 @@ fn write_run(out: &mut Writer, partial: &RunPartial) {
             }
             Distribution::Indicator => out.u8(2),
             Distribution::Dropped => out.u8(3),
-        }
-    }
-    out.u64(partial.chunk_moments.len() as u64);
-    for (chunk, moments) in &partial.chunk_moments {
-        out.u64(*chunk);
-        out.u64(moments.len() as u64);
-        for m in moments {
-            out.u64(m.n);
-            for v in [m.mean, m.m2, m.m3, m.m4, m.min, m.max] {
-                out.f64(v);
-            }
         }
     }
 }
@@ -417,6 +445,45 @@ fn read_run(input: &mut Reader, chunks: Range<u64>) -> Result<RunPartial, String
             .map(|_| Ok((input.u64()?, input.u64()?)))
             .collect::<Result<_, String>>()?,
     };
+    let n_replicates = input.count(16)?;
+    let mut replicates = Vec::with_capacity(n_replicates);
+    for _ in 0..n_replicates {
+        let replicate = input.u64()?;
+        if replicates.last().is_some_and(|(r, _)| *r >= replicate) {
+            return Err(damaged("replicates out of order"));
+        }
+        replicates.push((replicate, read_outputs(input)?));
+    }
+    let n_chunks = input.count(16)?;
+    let mut chunk_moments = Vec::with_capacity(n_chunks);
+    for _ in 0..n_chunks {
+        let chunk = input.u64()?;
+        let n = input.count(56)?;
+        let moments = (0..n)
+            .map(|_| {
+                Ok(Moments {
+                    n: input.u64()?,
+                    mean: input.f64()?,
+                    m2: input.f64()?,
+                    m3: input.f64()?,
+                    m4: input.f64()?,
+                    min: input.f64()?,
+                    max: input.f64()?,
+                })
+            })
+            .collect::<Result<_, String>>()?;
+        chunk_moments.push((chunk, moments));
+    }
+    Ok(RunPartial {
+        chunks,
+        percentile_method,
+        constraint_counts,
+        chunk_moments,
+        replicates,
+    })
+}
+
+fn read_outputs(input: &mut Reader) -> Result<Vec<OutputAccumulator>, String> {
     let n_outputs = input.count(65)?;
     let mut outputs = Vec::with_capacity(n_outputs);
     for _ in 0..n_outputs {
@@ -469,33 +536,7 @@ fn read_run(input: &mut Reader, chunks: Range<u64>) -> Result<RunPartial, String
             distribution,
         });
     }
-    let n_chunks = input.count(16)?;
-    let mut chunk_moments = Vec::with_capacity(n_chunks);
-    for _ in 0..n_chunks {
-        let chunk = input.u64()?;
-        let n = input.count(56)?;
-        let moments = (0..n)
-            .map(|_| {
-                Ok(Moments {
-                    n: input.u64()?,
-                    mean: input.f64()?,
-                    m2: input.f64()?,
-                    m3: input.f64()?,
-                    m4: input.f64()?,
-                    min: input.f64()?,
-                    max: input.f64()?,
-                })
-            })
-            .collect::<Result<_, String>>()?;
-        chunk_moments.push((chunk, moments));
-    }
-    Ok(RunPartial {
-        chunks,
-        percentile_method,
-        constraint_counts,
-        chunk_moments,
-        outputs,
-    })
+    Ok(outputs)
 }
 
 fn read_sobol(input: &mut Reader, chunks: Range<u64>) -> Result<SobolPartial, String> {
@@ -682,8 +723,10 @@ fn settings_text(command: &ShardCommand) -> String {
             samples,
             seed,
             exact_percentile_limit,
+            sampling,
+            replicates,
         } => format!(
-            "samples {samples}, seed {seed}, exact percentile limit {exact_percentile_limit}"
+            "samples {samples}, seed {seed}, exact percentile limit {exact_percentile_limit}, sampling {sampling} × {replicates}"
         ),
         ShardCommand::Sensitivity {
             samples,
@@ -704,7 +747,7 @@ fn settings_text(command: &ShardCommand) -> String {
 /// Whether the file's ranges and content are those its shard index gets.
 fn covers_its_ranges(file: &ShardFile) -> bool {
     let h = &file.header;
-    let chunks = shard_chunks(h.command.samples(), h.shard, h.shards);
+    let chunks = shard_chunks(h.command.chunk_count(), h.shard, h.shards);
     if h.chunks != [chunks.start, chunks.end] {
         return false;
     }
@@ -809,7 +852,7 @@ mod tests {
             for shards in [1u64, 2, 3, 7, 64] {
                 let mut next = 0;
                 for k in 0..shards {
-                    let range = shard_chunks(samples, k, shards);
+                    let range = shard_chunks(crate::run::chunk_count(samples), k, shards);
                     assert_eq!(range.start, next);
                     next = range.end;
                 }

@@ -211,6 +211,7 @@ fn run<'py>(
         samples: samples.unwrap_or(s.samples),
         seed: seed.unwrap_or(s.seed),
         exact_percentile_limit,
+        sampling: s.sampling,
     };
     if samples_out {
         rvtol_engine::run::check_table_rows(s, settings.samples)

@@ -720,6 +720,7 @@ impl Problem<'_> {
                 samples: self.samples,
                 seed,
                 exact_percentile_limit: u64::MAX,
+                sampling: scenario.sampling,
             },
             self.output,
             &|_| {},

@@ -4,8 +4,8 @@
 use std::collections::{BTreeMap, BTreeSet};
 
 use rvtol_deviation::{
-    index_list, unit_scale, EmpiricalLaw, InputSpaceBuilder, PartSpec, ScalarDistribution, Shown,
-    SixDof, RAYLEIGH_QUANTILE,
+    index_list, unit_scale, EmpiricalLaw, InputSpaceBuilder, PartSpec, SamplingMethod,
+    ScalarDistribution, Shown, SixDof, RAYLEIGH_QUANTILE,
 };
 use rvtol_models::{ConditionEffect, ErrorModel, ModelEntry, ModelParams, OutputKind, ParamValue};
 use serde_json::Value;
@@ -18,6 +18,7 @@ use super::{
     DEFAULT_SAMPLES, DEFAULT_SEED,
 };
 use crate::allocation::spec::{compile_allocation, compile_levers, ToleranceKind, ToleranceSource};
+use crate::run::Sampling;
 use crate::stats::SpecLimits;
 
 fn fixed_array<const N: usize>(path: &str, values: &[f64]) -> Result<[f64; N], ScenarioError> {
@@ -640,6 +641,11 @@ pub(super) fn compile(
     if file.samples == Some(0) {
         report(Err(ScenarioError::new("samples", "must be at least 1")));
     }
+    let sampling = sampling_of(&file);
+    if let Err(err) = &sampling {
+        report(Err(err.clone()));
+    }
+    let sampling = sampling.unwrap_or_default();
     let mut builder = InputSpaceBuilder::new();
     let mut columns: Vec<ColumnInfo> = Vec::new();
     let mut sources: Vec<InputGroup> = Vec::new();
@@ -1181,6 +1187,7 @@ pub(super) fn compile(
         description: file.description.unwrap_or_default(),
         samples: file.samples.unwrap_or(DEFAULT_SAMPLES),
         seed: file.seed.unwrap_or(DEFAULT_SEED),
+        sampling,
         input_space: input_space?,
         columns,
         sources,
@@ -1190,6 +1197,34 @@ pub(super) fn compile(
         allocation,
         allocation_levers,
     })
+}
+
+/// The scenario's `sampling` and `replicates` (a method name and, for `lhs` and `rqmc`,
+/// the replicates, [`Sampling::DEFAULT_REPLICATES`] when not given).
+fn sampling_of(file: &ScenarioFile) -> Result<Sampling, ScenarioError> {
+    let method = match file.sampling.as_deref() {
+        None => SamplingMethod::MonteCarlo,
+        Some(name) => SamplingMethod::parse(name).ok_or_else(|| {
+            ScenarioError::new(
+                "sampling",
+                format!(
+                    "unknown method {name:?}, expected one of {}",
+                    SamplingMethod::NAMES.map(|n| format!("{n:?}")).join(", ")
+                ),
+            )
+        })?,
+    };
+    let mut sampling = Sampling::of(method);
+    if let Some(replicates) = file.replicates {
+        if method == SamplingMethod::MonteCarlo {
+            return Err(ScenarioError::new(
+                "replicates",
+                "Monte Carlo rows are independent and have no replicates: give replicates with \"sampling\": \"lhs\" or \"rqmc\"",
+            ));
+        }
+        sampling.replicates = replicates;
+    }
+    Ok(sampling)
 }
 
 /// The spec limits of one output.

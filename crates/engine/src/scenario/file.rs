@@ -39,6 +39,8 @@ pub(super) struct ScenarioFile {
     pub(super) description: Option<String>,
     pub(super) samples: Option<u64>,
     pub(super) seed: Option<u64>,
+    pub(super) sampling: Option<String>,
+    pub(super) replicates: Option<u64>,
     pub(super) parts: Vec<(usize, PartFile)>,
     pub(super) variables: Vec<(usize, VariableFile)>,
     pub(super) correlations: Vec<(usize, CorrelationFile)>,
@@ -376,11 +378,13 @@ fn tidy_serde_message(message: &str) -> String {
 }
 
 /// The keys a scenario file may have at its top level.
-const TOP_LEVEL_KEYS: [&str; 11] = [
+const TOP_LEVEL_KEYS: [&str; 13] = [
     "name",
     "description",
     "samples",
     "seed",
+    "sampling",
+    "replicates",
     "parts",
     "variables",
     "correlations",
@@ -433,6 +437,8 @@ pub(super) fn parse(text: &str) -> Result<(ScenarioFile, Vec<ScenarioError>), Sc
     scalar!("description", description);
     scalar!("samples", samples);
     scalar!("seed", seed);
+    scalar!("sampling", sampling);
+    scalar!("replicates", replicates);
     scalar!("allocation", allocation);
     if let Some(value) = take("spec_limits") {
         match value {

@@ -151,6 +151,8 @@ pub struct Scenario {
     pub samples: u64,
     /// Seed when the command line does not say.
     pub seed: u64,
+    /// How rows are drawn when the command line does not say (`sampling`, `replicates`).
+    pub sampling: crate::run::Sampling,
     /// The joint input space.
     pub input_space: InputSpace,
     /// Its columns' names.
@@ -209,7 +211,17 @@ impl Scenario {
     ) -> Result<Scenario, Vec<ScenarioError>> {
         let (file, mut problems) = file::parse(text).map_err(|err| vec![err])?;
         match compile::compile(file, fallback_name, &mut problems) {
-            Some(scenario) if problems.is_empty() => Ok(scenario),
+            Some(scenario) if problems.is_empty() => {
+                // The file's sampling against its own samples and input space.
+                let settings = crate::run::RunSettings {
+                    samples: scenario.samples,
+                    seed: scenario.seed,
+                    exact_percentile_limit: 0,
+                    sampling: scenario.sampling,
+                };
+                settings.check(&scenario).map_err(|err| vec![err])?;
+                Ok(scenario)
+            }
             _ => {
                 if problems.is_empty() {
                     problems.push(ScenarioError::new("(root)", "the scenario is not valid"));

@@ -25,6 +25,17 @@ pub use exact::{
     binomial_rank_interval, order_statistic_interval, percentile_type7, percentile_type7_of_sorted,
     percentiles_type7, percentiles_type7_with_intervals, PercentileWithInterval,
 };
+/// Percentiles every report gives: the ±1, 2, 3 σ points of a normal law and the median.
+pub const PERCENTS: [(&str, f64); 7] = [
+    ("0.135", 0.135),
+    ("2.275", 2.275),
+    ("15.866", 15.866),
+    ("50", 50.0),
+    ("84.134", 84.134),
+    ("97.725", 97.725),
+    ("99.865", 99.865),
+];
+
 pub use histogram::Histogram;
 pub use moments::{proportion_standard_error, Moments};
 pub use quantile_sketch::{QuantileSketch, SketchMismatch, SketchParts, StandardisedSketch};
