@@ -362,7 +362,14 @@ fn cli_merge_is_the_run_and_the_baseline() {
         // Replicates that do not fill their last chunk, drawn from scrambled Sobol' points.
         (
             "rqmc",
-            vec!["--samples", "30000", "--sampling", "rqmc", "--replicates", "6"],
+            vec![
+                "--samples",
+                "30000",
+                "--sampling",
+                "rqmc",
+                "--replicates",
+                "6",
+            ],
         ),
     ] {
         let full = dir.file(&format!("{label}-full.json"));
@@ -461,7 +468,14 @@ fn cli_merge_refuses_what_is_not_one_whole_run() {
         1,
         4,
         &sampling,
-        &["--samples", "20000", "--sampling", "lhs", "--replicates", "4"],
+        &[
+            "--samples",
+            "20000",
+            "--sampling",
+            "lhs",
+            "--replicates",
+            "4",
+        ],
     );
     refused(&["merge", &p[0], &sampling], "the settings differ from");
     // Samples that do not split into the replicates, and replicates without a method

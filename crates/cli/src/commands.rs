@@ -239,23 +239,13 @@ pub struct RunChoice {
 
 impl RunChoice {
     /// The settings for `scenario`: what the command line says, else the scenario's
-    /// (`--sampling` alone takes the scenario's replicates when it names the scenario's
-    /// method, else the method's default).
+    /// ([`Sampling::chosen`]).
     pub fn settings(&self, scenario: &Scenario) -> RunSettings {
-        let method = self.sampling.unwrap_or(scenario.sampling.method);
-        let mut sampling = if method == scenario.sampling.method {
-            scenario.sampling
-        } else {
-            Sampling::of(method)
-        };
-        if let Some(replicates) = self.replicates {
-            sampling.replicates = replicates;
-        }
         RunSettings {
             samples: self.samples.unwrap_or(scenario.samples),
             seed: self.seed.unwrap_or(scenario.seed),
             exact_percentile_limit: self.exact_percentile_limit,
-            sampling,
+            sampling: Sampling::chosen(scenario.sampling, self.sampling, self.replicates),
         }
     }
 }

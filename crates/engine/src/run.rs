@@ -34,7 +34,8 @@ use std::ops::Range;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
-use rvtol_deviation::{ConstraintCounts, PointSet, SamplerScratch, SamplingMethod};
+pub use rvtol_deviation::SamplingMethod;
+use rvtol_deviation::{ConstraintCounts, PointSet, SamplerScratch};
 use rvtol_models::{ConditionEffect, Curve, OutputKind};
 
 use crate::evaluate::ChunkEvaluator;
@@ -111,6 +112,26 @@ impl Sampling {
                 replicates: Sampling::DEFAULT_REPLICATES,
             },
         }
+    }
+
+    /// The sampling a caller asks for over `scenario`'s: the method given, else the
+    /// scenario's; the replicates given, else the scenario's when the method is the
+    /// scenario's, else the method's default.
+    pub fn chosen(
+        scenario: Sampling,
+        method: Option<SamplingMethod>,
+        replicates: Option<u64>,
+    ) -> Sampling {
+        let method = method.unwrap_or(scenario.method);
+        let mut sampling = if method == scenario.method {
+            scenario
+        } else {
+            Sampling::of(method)
+        };
+        if let Some(replicates) = replicates {
+            sampling.replicates = replicates;
+        }
+        sampling
     }
 
     /// Whether the rows come from replicated point sets (Latin hypercube or RQMC).

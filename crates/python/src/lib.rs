@@ -15,6 +15,7 @@ use pyo3::types::{PyDict, PyList};
 use rvtol_engine::allocation::report::AllocationReport;
 use rvtol_engine::allocation::spec::{CostKind, Target};
 use rvtol_engine::allocation::{allocate as run_allocation, default_samples, AllocationSettings};
+use rvtol_engine::run::{Sampling, SamplingMethod};
 use rvtol_engine::sensitivity::{sobol_indices, SensitivitySettings};
 use rvtol_engine::sensitivity_report::SensitivityReport;
 use rvtol_engine::shapley::{shapley_effects, ShapleySettings};
@@ -189,30 +190,45 @@ fn evaluate<'py>(
 
 /// Runs the Monte Carlo simulation (as `rvtol run`): returns the JSON report as a dict,
 /// and with `samples_out=True` also a dict of the samples: `inputs` and `outputs` (2-D
-/// arrays, one row per sample), `input_names`, `output_names`. `samples` and `seed`
-/// default to the scenario's. A run whose share of non-finite values exceeds
-/// `max_non_finite` raises after nothing is returned.
+/// arrays, one row per sample), `input_names`, `output_names`. `samples`, `seed`,
+/// `sampling` ("mc", "lhs" or "rqmc") and `replicates` default to the scenario's. A run
+/// whose share of non-finite values exceeds `max_non_finite` raises after nothing is
+/// returned.
 #[pyfunction]
-#[pyo3(signature = (scenario, samples = None, seed = None, *, samples_out = false,
-    exact_percentile_limit = DEFAULT_EXACT_PERCENTILE_LIMIT, max_non_finite = 0.0, threads = None))]
+#[pyo3(signature = (scenario, samples = None, seed = None, *, sampling = None, replicates = None,
+    samples_out = false, exact_percentile_limit = DEFAULT_EXACT_PERCENTILE_LIMIT,
+    max_non_finite = 0.0, threads = None))]
 #[allow(clippy::too_many_arguments)]
 fn run<'py>(
     py: Python<'py>,
     scenario: &Scenario,
     samples: Option<u64>,
     seed: Option<u64>,
+    sampling: Option<&str>,
+    replicates: Option<u64>,
     samples_out: bool,
     exact_percentile_limit: u64,
     max_non_finite: f64,
     threads: Option<usize>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let s = &scenario.inner;
+    let method = sampling
+        .map(|name| {
+            SamplingMethod::parse(name).ok_or_else(|| {
+                value_error(format!(
+                    "sampling: unknown method {name:?}, expected one of {}",
+                    SamplingMethod::NAMES.join(", ")
+                ))
+            })
+        })
+        .transpose()?;
     let settings = RunSettings {
         samples: samples.unwrap_or(s.samples),
         seed: seed.unwrap_or(s.seed),
         exact_percentile_limit,
-        sampling: s.sampling,
+        sampling: Sampling::chosen(s.sampling, method, replicates),
     };
+    settings.check(s).map_err(value_error)?;
     if samples_out {
         rvtol_engine::run::check_table_rows(s, settings.samples)
             .map_err(|message| value_error(format!("samples_out: {message}; run fewer samples")))?;

@@ -203,3 +203,15 @@ def test_readme_example_runs_and_prints_what_it_says(capsys, monkeypatch):
         if line.startswith("print(")
     ]
     assert printed == expected
+
+
+def test_run_with_replicated_sampling_is_the_command_line_report(tmp_path):
+    path = scenario_path("rv20e-hysteresis.json")
+    expected = cli_json(tmp_path, "run", path, "--samples", "32768", "--sampling", "rqmc", "--replicates", "8")
+    report = rvtol.run(rvtol.Scenario(path), samples=32768, sampling="rqmc", replicates=8)
+    assert report == expected
+    assert report["sampling"]["method"] == "rqmc" and report["sampling"]["replicates"] == 8
+    with pytest.raises(ValueError, match="samples: 1001 samples do not split into 16 replicates"):
+        rvtol.run(rvtol.Scenario(path), samples=1001, sampling="lhs")
+    with pytest.raises(ValueError, match="sampling: unknown method"):
+        rvtol.run(rvtol.Scenario(path), sampling="qmc")

@@ -242,6 +242,22 @@ fn record_section(report: &Report) -> String {
         if let Some(n) = json.get(samples_key).and_then(Value::as_u64) {
             parts.push(format!("{} samples", thousands(n)));
         }
+        if let Some(sampling) = json.get("sampling") {
+            parts.push(format!(
+                "{} sampling, {} replicates of {} points (intervals from the replicates)",
+                escape(s(sampling, "method").unwrap_or("?")),
+                sampling
+                    .get("replicates")
+                    .and_then(Value::as_u64)
+                    .unwrap_or(0),
+                thousands(
+                    sampling
+                        .get("points_per_replicate")
+                        .and_then(Value::as_u64)
+                        .unwrap_or(0)
+                )
+            ));
+        }
         if let Some(method) = json.get("percentile_method") {
             parts.push(format!(
                 "{} percentiles ({})",
@@ -276,11 +292,15 @@ fn record_section(report: &Report) -> String {
     out
 }
 
-/// The report's percentiles, in its order, keyed by the percent as text.
+/// The report's percentiles, in its order, keyed by the percent as text, with their
+/// intervals: a replicated run's from its replicates, else the order-statistic ones.
 fn markers(output: &Value) -> Vec<Marker> {
+    let replicated = output
+        .get("replicate_ci95")
+        .and_then(|r| r.get("percentiles"));
     let (Some(values), intervals) = (
         output.get("percentiles").and_then(Value::as_object),
-        output.get("percentile_ci95"),
+        replicated.or_else(|| output.get("percentile_ci95")),
     ) else {
         return Vec::new();
     };
@@ -299,11 +319,27 @@ fn markers(output: &Value) -> Vec<Marker> {
 fn run_section(run: &Value) -> Result<String, ReportError> {
     let outputs = array(run, "outputs", "run report")?;
     let mut out = String::from("<section id=\"run\">\n<h2>Output distributions</h2>\n");
+    let percentile_intervals = match run.get("sampling") {
+        Some(sampling) => {
+            format!(
+            "Rows from {} ({} independent replicates); percentile intervals are 95 % intervals \
+             from the replicates' spread (Student t). The out-of-spec fraction's interval is \
+             Clopper–Pearson's for independent rows (the text report adds the replicates').",
+            match s(sampling, "method") {
+                Some("lhs") => "a Latin hypercube",
+                _ => "scrambled Sobol' points",
+            },
+            sampling.get("replicates").and_then(Value::as_u64).unwrap_or(0)
+        )
+        }
+        None => "Percentile intervals are distribution-free 95 % confidence intervals from order \
+                 statistics (exact binomial ranks); an open end means the interval reaches \
+                 beyond the sample's extreme. The out-of-spec fraction's interval is \
+                 Clopper–Pearson's exact one."
+            .to_string(),
+    };
     out.push_str(&format!(
-        "<p class=\"note\">{} samples, seed {}. Percentile intervals are distribution-free 95 % \
-         confidence intervals from order statistics (exact binomial ranks); an open end means the \
-         interval reaches beyond the sample's extreme. The out-of-spec fraction's interval is \
-         Clopper–Pearson's exact one.</p>\n",
+        "<p class=\"note\">{} samples, seed {}. {percentile_intervals}</p>\n",
         thousands(run.get("samples").and_then(Value::as_u64).unwrap_or(0)),
         run.get("seed").and_then(Value::as_u64).unwrap_or(0)
     ));
