@@ -16,9 +16,18 @@
 //! independent standard normals t with the inequalities tⱼ ≤ τⱼ on the first ones only.
 //! So tⱼ = Φ⁻¹(u·Φ(τⱼ)) (the truncated normal's inverse CDF), the other t = Φ⁻¹(u), and
 //! x = μ + (L·E)·t: exactly the conditioned law rejection samples, from r uniforms, with
-//! the point set's structure intact. Inequalities that the covariance couples
-//! (ŵ₁·ŵ₂ ≠ 0) would need the bivariate normal law's inverse; such a scenario is refused
-//! for these methods with the reason ([`InputSpace::quasi_dimensions`]).
+//! the point set's structure intact.
+//!
+//! Two inequalities that the covariance couples (ρ = ŵ₁·ŵ₂ ≠ 0, a part's 6×6 covariance
+//! that correlates (Δu, Δβ) with (Δv, Δα)) are drawn by the same idea in two steps
+//! ([`CoupledPair`]): with E's first columns ŵ₁ and e₂ = (ŵ₂ − ρŵ₁)/s, s = √(1 − ρ²), the
+//! inequalities read t₁ ≤ τ₁ and ρt₁ + s·t₂ ≤ τ₂. The marginal of t₁ has the density
+//! φ(t)·Φ((τ₂ − ρt)/s) on t ≤ τ₁ (over Φ₂(τ₁, τ₂; ρ)); its CDF is tabulated once by
+//! Gauss–Legendre quadrature and inverted per row by Newton steps on the exact integral
+//! from the nearest node, to round-off; then t₂ given t₁ is the normal truncated at
+//! (τ₂ − ρt₁)/s, by its inverse CDF. Three or more coupled inequalities (two constrained
+//! parts correlated with each other) are refused for these methods with the reason
+//! ([`InputSpace::quasi_dimensions`]).
 
 use super::{column_mut, prefix, InputSpace, SamplerScratch};
 use crate::error::DeviationError;
@@ -40,6 +49,125 @@ pub(super) struct QuasiGroup {
     factor: Vec<f64>,
     /// Φ(τⱼ) of the first `truncated.len()` normals.
     truncated: Vec<f64>,
+    /// The first two normals, when two inequalities are coupled (then `truncated` is
+    /// empty).
+    coupled: Option<CoupledPair>,
+}
+
+/// Nodes and weights of 5-point Gauss–Legendre quadrature on [−1, 1] (closed form:
+/// nodes 0, ±⅓√(5 ∓ 2√(10/7)), weights 128/225, (322 ± 13√70)/900).
+fn gauss_legendre_5() -> [(f64, f64); 5] {
+    let a = (5.0 - 2.0 * (10.0f64 / 7.0).sqrt()).sqrt() / 3.0;
+    let b = (5.0 + 2.0 * (10.0f64 / 7.0).sqrt()).sqrt() / 3.0;
+    let wa = (322.0 + 13.0 * 70.0f64.sqrt()) / 900.0;
+    let wb = (322.0 - 13.0 * 70.0f64.sqrt()) / 900.0;
+    [(0.0, 128.0 / 225.0), (-a, wa), (a, wa), (-b, wb), (b, wb)]
+}
+
+/// Two coupled inequalities t₁ ≤ τ₁, ρt₁ + s·t₂ ≤ τ₂ over standard normals (module docs).
+#[derive(Debug, Clone)]
+pub(super) struct CoupledPair {
+    rho: f64,
+    s: f64,
+    tau2: f64,
+    /// Nodes t_k of the table, from [`CoupledPair::LOWEST`] to min(τ₁, −LOWEST).
+    nodes: Vec<f64>,
+    /// ∫ from the lowest node to t_k of the unnormalised marginal density.
+    cdf: Vec<f64>,
+    rule: [(f64, f64); 5],
+}
+
+impl CoupledPair {
+    /// Below this the marginal holds less than Φ(−9) ≈ 1e−19 of its mass: the table
+    /// starts there.
+    const LOWEST: f64 = -9.0;
+    /// Spacing of the table's nodes.
+    const STEP: f64 = 1.0 / 256.0;
+
+    fn new(rho: f64, tau1: f64, tau2: f64) -> CoupledPair {
+        let s = (1.0 - rho * rho).sqrt();
+        let top = tau1.min(-Self::LOWEST);
+        let intervals = ((top - Self::LOWEST) / Self::STEP).ceil().max(1.0) as usize;
+        let nodes: Vec<f64> = (0..=intervals)
+            .map(|k| {
+                if k == intervals {
+                    top
+                } else {
+                    Self::LOWEST + k as f64 * Self::STEP
+                }
+            })
+            .collect();
+        let mut pair = CoupledPair {
+            rho,
+            s,
+            tau2,
+            nodes,
+            cdf: Vec::new(),
+            rule: gauss_legendre_5(),
+        };
+        let mut cdf = Vec::with_capacity(pair.nodes.len());
+        let mut total = 0.0;
+        cdf.push(0.0);
+        for k in 1..pair.nodes.len() {
+            total += pair.integral(pair.nodes[k - 1], pair.nodes[k]);
+            cdf.push(total);
+        }
+        pair.cdf = cdf;
+        pair
+    }
+
+    /// The unnormalised marginal density of t₁: φ(t)·Φ((τ₂ − ρt)/s).
+    #[inline]
+    fn density(&self, t: f64) -> f64 {
+        (-0.5 * t * t).exp() / (2.0 * std::f64::consts::PI).sqrt()
+            * standard_normal_cdf((self.tau2 - self.rho * t) / self.s)
+    }
+
+    /// ∫ₐᵇ of the density (one 5-point rule: a and b lie within one table step).
+    fn integral(&self, a: f64, b: f64) -> f64 {
+        let (mid, half) = (0.5 * (a + b), 0.5 * (b - a));
+        half * self
+            .rule
+            .iter()
+            .map(|&(x, w)| w * self.density(mid + half * x))
+            .sum::<f64>()
+    }
+
+    /// t₁ at the uniform u: the inverse of the marginal CDF, by Newton steps on the exact
+    /// integral from the node below, kept inside that node's interval.
+    fn first(&self, u: f64) -> f64 {
+        let target = u * self.cdf[self.cdf.len() - 1];
+        let k = self
+            .cdf
+            .partition_point(|&c| c <= target)
+            .clamp(1, self.cdf.len() - 1)
+            - 1;
+        let (lo, hi) = (self.nodes[k], self.nodes[k + 1]);
+        let (c_lo, c_hi) = (self.cdf[k], self.cdf[k + 1]);
+        let mut t = if c_hi > c_lo {
+            lo + (hi - lo) * ((target - c_lo) / (c_hi - c_lo)).clamp(0.0, 1.0)
+        } else {
+            lo
+        };
+        for _ in 0..4 {
+            let g = self.density(t);
+            if g <= 0.0 {
+                break;
+            }
+            let step = (c_lo + self.integral(lo, t) - target) / g;
+            t = (t - step).clamp(lo, hi);
+            if step.abs() <= 1e-15 * t.abs().max(1.0) {
+                break;
+            }
+        }
+        t
+    }
+
+    /// t₂ given t₁ at the uniform u: the normal truncated at (τ₂ − ρt₁)/s.
+    #[inline]
+    fn second(&self, t1: f64, u: f64) -> f64 {
+        standard_normal_quantile(u * standard_normal_cdf((self.tau2 - self.rho * t1) / self.s))
+    }
 }
 
 /// How a quasi-random row is drawn: its dimensions, the constrained groups, or why the
@@ -87,7 +215,7 @@ impl QuasiLayout {
             }
             // Each inequality as (ŵ, τ).
             let mut directions: Vec<Vec<f64>> = Vec::new();
-            let mut truncated = Vec::new();
+            let mut thresholds = Vec::new();
             for q in &group.inequalities {
                 let mut w = vec![0.0; rank];
                 let mut slack = q.bound;
@@ -109,15 +237,39 @@ impl QuasiLayout {
                     continue;
                 }
                 w.iter_mut().for_each(|x| *x /= sigma);
-                if let Some(coupled) = directions
-                    .iter()
-                    .find(|d| d.iter().zip(&w).map(|(a, b)| a * b).sum::<f64>().abs() > ORTHOGONAL)
-                {
-                    let rho: f64 = coupled.iter().zip(&w).map(|(a, b)| a * b).sum();
+                directions.push(w);
+                thresholds.push(slack / sigma);
+            }
+            let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+            let coupling = (0..directions.len())
+                .flat_map(|i| (i + 1..directions.len()).map(move |j| (i, j)))
+                .map(|(i, j)| dot(&directions[i], &directions[j]))
+                .find(|rho| rho.abs() > ORTHOGONAL);
+            let (truncated, coupled) = match (coupling, directions.len()) {
+                (None, _) => (
+                    thresholds
+                        .iter()
+                        .map(|&tau| standard_normal_cdf(tau))
+                        .collect(),
+                    None,
+                ),
+                (Some(rho), 2) if rho.abs() < 1.0 - 1e-9 => {
+                    // E's first two columns: ŵ₁ and the part of ŵ₂ orthogonal to it.
+                    let s = (1.0 - rho * rho).sqrt();
+                    let e2: Vec<f64> = (directions[1].iter().zip(&directions[0]))
+                        .map(|(w2, w1)| (w2 - rho * w1) / s)
+                        .collect();
+                    directions[1] = e2;
+                    (
+                        Vec::new(),
+                        Some(CoupledPair::new(rho, thresholds[0], thresholds[1])),
+                    )
+                }
+                (Some(rho), n) => {
                     let refusal = (
                         space.constraint_paths.join(", "),
                         format!(
-                            "lhs and rqmc draw the Eq. 11 constraint by exact inversion, which needs its two inequalities uncorrelated; this covariance couples them (correlation {rho:.3} between Δu + Δβ·L1/2 and Δv + Δα·L1/2): use \"sampling\": \"mc\", or a covariance that does not couple (Δu, Δβ) with (Δv, Δα)"
+                            "lhs and rqmc draw the Eq. 11 constraint by exact inversion, which handles at most two coupled inequalities per group of correlated columns; here {n} are coupled (correlation {rho:.3}), as when constrained parts are correlated with each other: use \"sampling\": \"mc\""
                         ),
                     );
                     return QuasiLayout {
@@ -126,9 +278,7 @@ impl QuasiLayout {
                         refusal: Some(refusal),
                     };
                 }
-                directions.push(w);
-                truncated.push(standard_normal_cdf(slack / sigma));
-            }
+            };
             let basis = orthonormal_completion(directions, rank);
             // L·E.
             let mut factor = vec![0.0; columns.len() * rank];
@@ -144,6 +294,7 @@ impl QuasiLayout {
                 rank,
                 factor,
                 truncated,
+                coupled,
             });
         }
         QuasiLayout {
@@ -246,7 +397,17 @@ impl InputSpace {
         }
         for group in &self.quasi.groups {
             let rank = group.rank;
-            for k in 0..rank {
+            let mut k = 0;
+            if let Some(pair) = &group.coupled {
+                let (first, second) = (next(), next());
+                for (r, (&u1, &u2)) in first.iter().zip(second).enumerate() {
+                    let t1 = pair.first(u1);
+                    z[r * rank] = t1;
+                    z[r * rank + 1] = pair.second(t1, u2);
+                }
+                k = 2;
+            }
+            for k in k..rank {
                 let truncation = group.truncated.get(k).copied();
                 for (r, &u) in next().iter().enumerate() {
                     z[r * rank + k] = match truncation {
@@ -364,9 +525,26 @@ mod tests {
         }
     }
 
+    /// Φ₂(τ₁, τ₂; ρ) by composite Simpson over t₁ (200,000 intervals from −12): a
+    /// different quadrature from the pair's table.
+    fn bivariate_cdf(tau1: f64, tau2: f64, rho: f64) -> f64 {
+        let s = (1.0 - rho * rho).sqrt();
+        let f = |t: f64| density(t) * standard_normal_cdf((tau2 - rho * t) / s);
+        let (a, n) = (-12.0, 200_000);
+        let h = (tau1 - a) / n as f64;
+        let inner: f64 = (1..n)
+            .map(|k| f(a + k as f64 * h) * if k % 2 == 1 { 4.0 } else { 2.0 })
+            .sum();
+        h / 3.0 * (f(a) + inner + f(tau1))
+    }
+
     #[test]
-    fn coupled_inequalities_are_refused_with_the_reason() {
-        // A covariance that correlates Δu with Δv couples the two halves of Eq. 11.
+    fn coupled_inequalities_follow_the_truncated_bivariate_law() {
+        // A covariance that correlates Δu with Δv (ρ_uv = 0.5) couples the two halves of
+        // Eq. 11. Every row satisfies both, and the means of the standardised left sides
+        // X₁, X₂ are Tallis's (1961) moments of the bivariate normal truncated to
+        // X₁ ≤ τ₁, X₂ ≤ τ₂: E[X₁] = −(φ(τ₁)Φ((τ₂ − ρτ₁)/s) + ρφ(τ₂)Φ((τ₁ − ρτ₂)/s))/Φ₂,
+        // within 5 Monte Carlo standard errors (the truncated sd is below 1).
         let mut part = PartSpec::from_tolerance_band("parts[0]", 0.006, 120.0, true).unwrap();
         let c = 0.5 * (part.covariance[0][0] * part.covariance[1][1]).sqrt();
         part.covariance[0][1] = c;
@@ -374,8 +552,80 @@ mod tests {
         let mut builder = InputSpaceBuilder::new();
         builder.add_part("parts[0]", &part);
         let space = builder.build("correlations").unwrap();
+        let dims = space.quasi_dimensions().unwrap();
+        let n = 1usize << 14;
+        let constraint = part.constraint.unwrap();
+        let q = constraint.inequalities(0);
+        let standardised = |k: usize| {
+            let (mu, var) = (0..2).fold((0.0, 0.0), |(m, v), j| {
+                let (c, a) = (q[k].columns[j], q[k].coefficients[j]);
+                (
+                    m + a * space.mean_row()[c],
+                    v + a * a * space.covariance(c, c),
+                )
+            });
+            (mu, var.sqrt())
+        };
+        let (s1, s2) = (standardised(0), standardised(1));
+        // ρ between the two sums: Cov(Δu + hΔβ, Δv + hΔα) = Cov(Δu, Δv) (the tilts are
+        // independent of everything).
+        let rho = c / (s1.1 * s2.1);
+        let (tau1, tau2) = ((q[0].bound - s1.0) / s1.1, (q[1].bound - s2.0) / s2.1);
+        let s = (1.0 - rho * rho).sqrt();
+        let z = bivariate_cdf(tau1, tau2, rho);
+        let tallis = |a: f64, b: f64| {
+            -(density(a) * standard_normal_cdf((b - rho * a) / s)
+                + rho * density(b) * standard_normal_cdf((a - rho * b) / s))
+                / z
+        };
+        let expected = [tallis(tau1, tau2), tallis(tau2, tau1)];
+        for method in [SamplingMethod::Rqmc, SamplingMethod::LatinHypercube] {
+            let points = PointSet::new(method, dims, n as u64, 23).unwrap();
+            let mut columns = vec![f64::NAN; n * space.n_columns()];
+            space
+                .sample_columns_from_points(
+                    &points,
+                    0,
+                    0,
+                    &mut columns,
+                    &mut SamplerScratch::default(),
+                )
+                .unwrap();
+            for (k, (mu, sigma)) in [s1, s2].into_iter().enumerate() {
+                let mut sum = 0.0;
+                for row in 0..n {
+                    let lhs = q[k].coefficients[0] * columns[q[k].columns[0] * n + row]
+                        + q[k].coefficients[1] * columns[q[k].columns[1] * n + row];
+                    assert!(lhs <= q[k].bound * (1.0 + 1e-12), "{method:?} row {row}");
+                    sum += (lhs - mu) / sigma;
+                }
+                let mean = sum / n as f64;
+                assert!(
+                    (mean - expected[k]).abs() < 5.0 / (n as f64).sqrt(),
+                    "{method:?} inequality {k}: {mean} against {}",
+                    expected[k]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn three_coupled_inequalities_are_refused_with_the_reason() {
+        // parts[0]'s halves coupled (Δu with Δv), and parts[1]'s Δu correlated with
+        // parts[0]'s Δu: three coupled inequalities in one group.
+        let band = |path| PartSpec::from_tolerance_band(path, 0.006, 120.0, true).unwrap();
+        let mut part = band("parts[0]");
+        let c = 0.5 * (part.covariance[0][0] * part.covariance[1][1]).sqrt();
+        part.covariance[0][1] = c;
+        part.covariance[1][0] = c;
+        let mut builder = InputSpaceBuilder::new();
+        let p0 = builder.add_part("parts[0]", &part);
+        let p1 = builder.add_part("parts[1]", &band("parts[1]"));
+        builder.correlate("correlations[0]", p0, p1, 0.3).unwrap();
+        let space = builder.build("correlations").unwrap();
         let err = space.quasi_dimensions().unwrap_err().to_string();
-        assert!(err.starts_with("parts[0]: lhs and rqmc"), "{err}");
+        assert!(err.starts_with("parts[0], parts[1]: lhs and rqmc"), "{err}");
+        assert!(err.contains("here 3 are coupled"), "{err}");
         assert!(err.contains("\"sampling\": \"mc\""), "{err}");
     }
 }
