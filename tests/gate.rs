@@ -321,3 +321,61 @@ fn one_sided_checks_pass_an_improvement_and_fail_a_deterioration() {
         .any(|l| l.starts_with("moved: gap p99.865:")));
     assert!(!verdict(0.04, false).passed);
 }
+
+/// The RV-20E scenario drawn by scrambled Sobol' points (16 replicates).
+fn rqmc_text(text: &str) -> String {
+    text.replacen('{', "{\n  \"sampling\": \"rqmc\",", 1)
+}
+
+#[test]
+fn replicated_gates_keep_the_false_alarm_bound_with_narrower_bands() {
+    // Under RQMC the bands come from the replicates' spread (Student t, 15 degrees of
+    // freedom): the same false-alarm bound over 50 independent pairs as above, bands of
+    // the mean and sd at least 3 times narrower than Monte Carlo's at the same samples
+    // (measured: about 7 times), and a 1 % wider pin circle tolerance (lost motion mean
+    // +0.6 %, which Monte Carlo's bands of ±0.6 % at these samples let pass) caught for
+    // every seed tried.
+    let text = rqmc_text(&rv20e_text());
+    let s = scenario(&text);
+    let rqmc = |seed| RunSettings {
+        sampling: s.sampling,
+        ..settings(seed)
+    };
+    let failures = (0..50u64)
+        .filter(|&k| {
+            let recorded = baseline(&s, &text, rqmc(2 * k + 1), 0.0, &|_| {}).unwrap();
+            !check(&s, &text, &recorded, 2 * k + 2, 0.0, &|_| {})
+                .unwrap()
+                .passed
+        })
+        .count();
+    assert!(failures <= 3, "{failures} false alarms in 50 pairs");
+    let recorded = baseline(&s, &text, rqmc(1), 0.0, &|_| {}).unwrap();
+    let mc_text = rv20e_text();
+    let mc = baseline(&scenario(&mc_text), &mc_text, settings(1), 0.0, &|_| {}).unwrap();
+    for figure in ["mean", "sd"] {
+        let width = |b: &Baseline| {
+            let f = b
+                .figures
+                .iter()
+                .find(|f| f.output == "hysteresis_arcmin" && f.figure == figure)
+                .unwrap();
+            f.upper - f.lower
+        };
+        assert!(
+            3.0 * width(&recorded) < width(&mc),
+            "{figure}: {} against Monte Carlo's {}",
+            width(&recorded),
+            width(&mc)
+        );
+    }
+    let wider = rqmc_text(&rv20e_text().replacen(
+        "\"lower\": -0.010, \"upper\": 0.010",
+        "\"lower\": -0.0101, \"upper\": 0.0101",
+        1,
+    ));
+    for seed in [2, 3, 4] {
+        let report = check(&scenario(&wider), &wider, &recorded, seed, 0.0, &|_| {}).unwrap();
+        assert!(!report.passed, "seed {seed}");
+    }
+}

@@ -29,17 +29,18 @@
 
 use rvtol_deviation::Shown;
 use serde::{Deserialize, Serialize};
-use statrs::distribution::{ContinuousCDF, Normal};
+use statrs::distribution::{ContinuousCDF, Normal, StudentsT};
 
 use crate::allocation::spec::{Target, TargetFigure};
 use crate::report::escape_markup;
 use crate::run::{
-    check_non_finite, run, Distribution, RunResult, RunSettings, DEFAULT_EXACT_PERCENTILE_LIMIT,
+    check_non_finite, run, Distribution, ReplicateFigures, RunResult, RunSettings,
+    DEFAULT_EXACT_PERCENTILE_LIMIT,
 };
 use crate::scenario::{OutputInfo, Scenario, ScenarioError};
 use crate::stats::{
     order_statistic_interval, percentile_type7_of_sorted, proportion_standard_error,
-    QuantileSketch, StandardisedSketch,
+    QuantileSketch, StandardisedSketch, PERCENTS,
 };
 use rvtol_models::OutputKind;
 
@@ -319,6 +320,13 @@ pub fn measure_with_capability(
 
 /// The gated figures and capability indices of [`measure_with_capability`] from a run's
 /// result (a run, or the merge of its shards).
+///
+/// A Latin hypercube or RQMC run's rows are not independent: its mean, sd, percentiles
+/// and ppm get their band from the spread of their R replicate values instead,
+/// ± √2·t·s/√R with t the Student quantile (R − 1 degrees of freedom) of the same tail
+/// probability as z (the figures' family false-alarm rate is kept). Where the replicates
+/// agree exactly (a constant figure) the band is 0, except ppm out of spec with no
+/// event in the run, which keeps its independent-rows band. Cp and Cpk keep theirs.
 pub fn figures_of(
     scenario: &Scenario,
     result: RunResult,
@@ -328,6 +336,26 @@ pub fn figures_of(
     check_non_finite(scenario, &result, max_non_finite)?;
     let samples = result.samples;
     let two_sample = std::f64::consts::SQRT_2 * z;
+    let replicates = &result.replicates;
+    // √2·t/√R: the band's half-width per unit of the replicate values' sd.
+    let replicate_scale = (!replicates.is_empty()).then(|| {
+        let r = replicates.len() as f64;
+        let tail = Normal::new(0.0, 1.0).expect("standard normal").cdf(z);
+        let t = StudentsT::new(0.0, 1.0, r - 1.0)
+            .expect("at least two replicates")
+            .inverse_cdf(tail);
+        std::f64::consts::SQRT_2 * t / r.sqrt()
+    });
+    // The half-width from output o's replicate values of a figure, for a replicated run.
+    let replicate_half = |o: usize, figure: &dyn Fn(&ReplicateFigures) -> f64| {
+        replicate_scale.map(|scale| {
+            let values: Vec<f64> = replicates.iter().map(|r| figure(&r[o])).collect();
+            let n = values.len() as f64;
+            let mean = values.iter().sum::<f64>() / n;
+            let var = values.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / (n - 1.0);
+            scale * var.sqrt()
+        })
+    };
     let mut figures = Vec::new();
     let mut capability = Vec::new();
     let mut push = |output: &str, figure: &str, value: f64, below: f64, above: f64| {
@@ -347,7 +375,7 @@ pub fn figures_of(
             worse: None,
         });
     };
-    for (info, acc) in scenario.outputs.iter().zip(result.outputs) {
+    for (o, (info, acc)) in scenario.outputs.iter().zip(result.outputs).enumerate() {
         let n = acc.moments.n;
         if n < 2 {
             return Err(ScenarioError::new(
@@ -362,23 +390,33 @@ pub fn figures_of(
             continue;
         }
         let (mean, sd) = (acc.moments.mean, acc.moments.sd());
-        let half = two_sample * acc.moments.mean_standard_error();
+        let half = replicate_half(o, &|r| r.mean)
+            .unwrap_or_else(|| two_sample * acc.moments.mean_standard_error());
         push(&info.name, "mean", mean, half, half);
-        let half = two_sample * acc.moments.sd_standard_error();
+        let half = replicate_half(o, &|r| r.sd)
+            .unwrap_or_else(|| two_sample * acc.moments.sd_standard_error());
         push(&info.name, "sd", sd, half, half);
         let out = acc.out_of_spec(info.flagged_conform);
         let (min, max) = (acc.moments.min, acc.moments.max);
         let mut percentiles = Percentiles::new(acc.distribution, n, min, max);
         for (name, percent) in GATED_PERCENTS {
             let (value, low, high) = percentiles.with_interval(percent, z);
-            let half = std::f64::consts::SQRT_2 * 0.5 * (high - low).max(0.0);
+            let k = PERCENTS.iter().position(|p| p.1 == percent);
+            let half = k
+                .and_then(|k| {
+                    replicate_half(o, &|r| r.percentiles[k].unwrap_or(f64::NAN))
+                        .filter(|h| h.is_finite())
+                })
+                .unwrap_or_else(|| std::f64::consts::SQRT_2 * 0.5 * (high - low).max(0.0));
             push(&info.name, name, value, half, half);
         }
         if info.spec.is_some() {
             // Out of spec among every sample drawn (non-finite, excluded and flagged ones
             // included).
             let fraction = out as f64 / samples as f64;
-            let half = two_sample * proportion_standard_error(fraction, samples) * 1e6;
+            let half = replicate_half(o, &|r| 1e6 * r.out_of_spec_fraction)
+                .filter(|_| out > 0)
+                .unwrap_or_else(|| two_sample * proportion_standard_error(fraction, samples) * 1e6);
             push(&info.name, "ppm_out", fraction * 1e6, half, half);
         }
         let hidden = acc.non_finite
