@@ -6,52 +6,11 @@
 use rvtol_engine::report::RunReport;
 use rvtol_engine::run::{PercentileMethod, SKETCH_RELATIVE_ACCURACY};
 use rvtol_engine::{nominal, run, RunSettings, Scenario, DEFAULT_EXACT_PERCENTILE_LIMIT};
-use rvtol_tests::{scenario_path, SIGMA_BOUND};
+use rvtol_tests::{linear_closed_form, run_with_threads, scenario_path, SIGMA_BOUND};
 use statrs::distribution::{ContinuousCDF, Normal};
 
 fn load(file: &str) -> Scenario {
     Scenario::load(&scenario_path(file)).unwrap()
-}
-
-fn run_with_threads(scenario: &Scenario, settings: RunSettings, threads: usize) -> String {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .unwrap();
-    let result = pool.install(|| run(scenario, settings, &|_| {})).unwrap();
-    RunReport::new(scenario, result).to_json()
-}
-
-/// Closed form of scenarios/linear-stack-correlated.json: mean c + aᵀμ and sd √(aᵀΣa)
-/// over the normal columns (validation.md, "Checks that need no document").
-fn linear_closed_form(scenario: &Scenario) -> (f64, f64) {
-    let coefficients = [
-        ("bore_depth", 1.0),
-        ("bearing_width", -1.0),
-        ("spacer_width", -1.0),
-        ("carrier.dw", -1.0),
-        ("carrier.dbeta", -40.0),
-    ];
-    let (columns, mean, cov) = scenario.input_space.gaussian_specification();
-    let a: Vec<f64> = columns
-        .iter()
-        .map(|&c| {
-            let name = &scenario.columns[c].name;
-            coefficients
-                .iter()
-                .find(|(n, _)| n == name)
-                .map(|(_, v)| *v)
-                .unwrap_or(0.0)
-        })
-        .collect();
-    let m: f64 = a.iter().zip(mean.iter()).map(|(a, m)| a * m).sum();
-    let mut variance = 0.0;
-    for i in 0..a.len() {
-        for j in 0..a.len() {
-            variance += a[i] * cov[(i, j)] * a[j];
-        }
-    }
-    (m, variance.sqrt())
 }
 
 #[test]

@@ -39,3 +39,50 @@ pub fn ks_statistic(values: &mut [f64], cdf: impl Fn(f64) -> f64) -> f64 {
         .fold(0.0, f64::max);
     n.sqrt() * d
 }
+
+/// Closed form of scenarios/linear-stack-correlated.json: mean c + aᵀμ and sd √(aᵀΣa)
+/// over the normal columns (validation.md, "Checks that need no document").
+pub fn linear_closed_form(scenario: &rvtol_engine::Scenario) -> (f64, f64) {
+    let coefficients = [
+        ("bore_depth", 1.0),
+        ("bearing_width", -1.0),
+        ("spacer_width", -1.0),
+        ("carrier.dw", -1.0),
+        ("carrier.dbeta", -40.0),
+    ];
+    let (columns, mean, cov) = scenario.input_space.gaussian_specification();
+    let a: Vec<f64> = columns
+        .iter()
+        .map(|&c| {
+            let name = &scenario.columns[c].name;
+            coefficients
+                .iter()
+                .find(|(n, _)| n == name)
+                .map_or(0.0, |(_, v)| *v)
+        })
+        .collect();
+    let m: f64 = a.iter().zip(mean.iter()).map(|(a, m)| a * m).sum();
+    let mut variance = 0.0;
+    for i in 0..a.len() {
+        for j in 0..a.len() {
+            variance += a[i] * cov[(i, j)] * a[j];
+        }
+    }
+    (m, variance.sqrt())
+}
+
+/// The JSON report of a run of `scenario` on a pool of `threads` threads.
+pub fn run_with_threads(
+    scenario: &rvtol_engine::Scenario,
+    settings: rvtol_engine::RunSettings,
+    threads: usize,
+) -> String {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    let result = pool
+        .install(|| rvtol_engine::run(scenario, settings, &|_| {}))
+        .unwrap();
+    rvtol_engine::report::RunReport::new(scenario, result).to_json()
+}

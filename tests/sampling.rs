@@ -13,7 +13,7 @@ use rvtol_deviation::SamplingMethod;
 use rvtol_engine::report::RunReport;
 use rvtol_engine::run::Sampling;
 use rvtol_engine::{merge, run, run_chunks, shard_chunks, RunSettings, Scenario};
-use rvtol_tests::{scenario_path, SIGMA_BOUND};
+use rvtol_tests::{linear_closed_form, run_with_threads, scenario_path, SIGMA_BOUND};
 
 fn load(file: &str) -> Scenario {
     Scenario::load(&scenario_path(file)).unwrap()
@@ -29,37 +29,6 @@ fn settings(method: SamplingMethod, replicates: u64, samples: u64, seed: u64) ->
 }
 
 const REPLICATED: [SamplingMethod; 2] = [SamplingMethod::LatinHypercube, SamplingMethod::Rqmc];
-
-/// Closed form of scenarios/linear-stack-correlated.json: mean c + aᵀμ and sd √(aᵀΣa)
-/// (as in tests/engine.rs).
-fn linear_closed_form(scenario: &Scenario) -> (f64, f64) {
-    let coefficients = [
-        ("bore_depth", 1.0),
-        ("bearing_width", -1.0),
-        ("spacer_width", -1.0),
-        ("carrier.dw", -1.0),
-        ("carrier.dbeta", -40.0),
-    ];
-    let (columns, mean, cov) = scenario.input_space.gaussian_specification();
-    let a: Vec<f64> = columns
-        .iter()
-        .map(|&c| {
-            let name = &scenario.columns[c].name;
-            coefficients
-                .iter()
-                .find(|(n, _)| n == name)
-                .map_or(0.0, |(_, v)| *v)
-        })
-        .collect();
-    let m: f64 = a.iter().zip(mean.iter()).map(|(a, m)| a * m).sum();
-    let mut variance = 0.0;
-    for i in 0..a.len() {
-        for j in 0..a.len() {
-            variance += a[i] * cov[(i, j)] * a[j];
-        }
-    }
-    (m, variance.sqrt())
-}
 
 /// Ishigami (a = 7, b = 0.1, inputs uniform on (−π, π)): mean a/2 and variance
 /// a²/8 + bπ⁴/5 + b²π⁸/18 + 1/2 (Ishigami & Homma 1990; Saltelli et al. 2008, §4.5).
@@ -218,16 +187,6 @@ fn rqmc_half_width_shrinks_faster_than_monte_carlo() {
     assert!(slope < -0.75, "slope {slope} over {points:?}");
 }
 
-/// The JSON report of a run on `threads` threads.
-fn report_on(scenario: &Scenario, settings: RunSettings, threads: usize) -> String {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .unwrap();
-    let result = pool.install(|| run(scenario, settings, &|_| {})).unwrap();
-    RunReport::new(scenario, result).to_json()
-}
-
 #[test]
 fn replicated_runs_have_the_same_bits_for_any_thread_and_shard_count() {
     // Constrained parts (exact inversion), the exact and the sketch percentile paths,
@@ -239,10 +198,10 @@ fn replicated_runs_have_the_same_bits_for_any_thread_and_shard_count() {
                 exact_percentile_limit: limit,
                 ..settings(method, 6, 30_000, 5)
             };
-            let one = report_on(&scenario, settings, 1);
+            let one = run_with_threads(&scenario, settings, 1);
             assert!(one.contains("\"replicate_ci95\""));
-            assert_eq!(one, report_on(&scenario, settings, 2), "{method:?}");
-            assert_eq!(one, report_on(&scenario, settings, 3), "{method:?}");
+            assert_eq!(one, run_with_threads(&scenario, settings, 2), "{method:?}");
+            assert_eq!(one, run_with_threads(&scenario, settings, 3), "{method:?}");
             for shards in [2u64, 5, 13] {
                 let partials = (0..shards)
                     .map(|k| {

@@ -381,52 +381,37 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             seed,
             sampling,
             replicates,
-            exact_percentile_limit,
-            shard: Some(shard),
-            partial: Some(partial),
-            execution,
-            ..
-        } => run_shard(
-            &scenario,
-            RunChoice {
-                samples,
-                seed,
-                exact_percentile_limit,
-                sampling,
-                replicates,
-            },
-            shard,
-            &partial,
-            &execution,
-        ),
-        Command::Run {
-            scenario,
-            samples,
-            seed,
-            sampling,
-            replicates,
             json,
             html,
             samples_out,
             exact_percentile_limit,
+            shard,
+            partial,
             execution,
-            ..
-        } => run(
-            &scenario,
-            RunChoice {
+        } => {
+            let choice = RunChoice {
                 samples,
                 seed,
                 exact_percentile_limit,
                 sampling,
                 replicates,
-            },
-            Destinations {
-                json: json.as_deref(),
-                html: html.as_deref(),
-                samples: samples_out.as_deref(),
-            },
-            &execution,
-        ),
+            };
+            match (shard, partial) {
+                (Some(shard), Some(partial)) => {
+                    run_shard(&scenario, choice, shard, &partial, &execution)
+                }
+                _ => run(
+                    &scenario,
+                    choice,
+                    Destinations {
+                        json: json.as_deref(),
+                        html: html.as_deref(),
+                        samples: samples_out.as_deref(),
+                    },
+                    &execution,
+                ),
+            }
+        }
         Command::Merge {
             partials,
             missing,
