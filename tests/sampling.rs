@@ -12,7 +12,7 @@
 use rvtol_deviation::SamplingMethod;
 use rvtol_engine::report::RunReport;
 use rvtol_engine::run::Sampling;
-use rvtol_engine::{merge, run, run_chunks, shard_chunks, RunSettings, Scenario};
+use rvtol_engine::{merge, run, run_chunks, shard_range, RunSettings, Scenario};
 use rvtol_tests::{linear_closed_form, run_with_threads, scenario_path, SIGMA_BOUND};
 
 fn load(file: &str) -> Scenario {
@@ -205,7 +205,7 @@ fn replicated_runs_have_the_same_bits_for_any_thread_and_shard_count() {
             for shards in [2u64, 5, 13] {
                 let partials = (0..shards)
                     .map(|k| {
-                        let chunks = shard_chunks(settings.chunk_count(), k, shards);
+                        let chunks = shard_range(settings.chunk_count(), k, shards);
                         run_chunks(&scenario, settings, chunks, &|_| {}).unwrap()
                     })
                     .rev()

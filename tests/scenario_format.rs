@@ -351,12 +351,7 @@ fn empirical_values_in_micrometres_are_converted_to_the_models_millimetres() {
         &std::fs::read_to_string(scenario_path("rv20e-hysteresis.json")).unwrap(),
     )
     .unwrap();
-    let variable = document["variables"]
-        .as_array_mut()
-        .unwrap()
-        .iter_mut()
-        .find(|v| v["name"] == "pin_radius_error")
-        .unwrap();
+    let variable = variable_mut(&mut document, "pin_radius_error");
     variable["unit"] = "µm".into();
     variable["distribution"] = json!({ "empirical": { "values": MEASURED } });
     let scenario = scenario(&document);
@@ -369,12 +364,7 @@ fn empirical_values_in_micrometres_are_converted_to_the_models_millimetres() {
     let (m, _) = moments(&MEASURED);
     assert!((scenario.input_space.mean_row()[column] - m * 1e-3).abs() < 1e-18);
     // A unit rvtol does not know is named as such.
-    let variable = document["variables"]
-        .as_array_mut()
-        .unwrap()
-        .iter_mut()
-        .find(|v| v["name"] == "pin_radius_error")
-        .unwrap();
+    let variable = variable_mut(&mut document, "pin_radius_error");
     variable["unit"] = "micron".into();
     let message = error(&document);
     assert!(
@@ -746,4 +736,14 @@ fn part_unit_mistakes_are_refused_with_their_json_path() {
         json!({ "delta_tau_mm": 0.004, "length_mm": 50 }),
     );
     assert!(error(&document).contains("parts[0].units: a tolerance_band part is given in mm"));
+}
+
+/// The variable named `name` of a scenario document.
+fn variable_mut<'a>(document: &'a mut Value, name: &str) -> &'a mut Value {
+    document["variables"]
+        .as_array_mut()
+        .unwrap()
+        .iter_mut()
+        .find(|v| v["name"] == name)
+        .unwrap()
 }

@@ -15,7 +15,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use rvtol_engine::report::RunReport;
 use rvtol_engine::run::shard_range;
-use rvtol_engine::run::{shard_chunks, CHUNK_SIZE};
+use rvtol_engine::run::CHUNK_SIZE;
 use rvtol_engine::sensitivity::{merge_sobol, sobol_chunks, sobol_indices, SensitivitySettings};
 use rvtol_engine::shapley::{
     merge_shapley, shapley_effects, shapley_partial, shapley_permutations, ShapleySettings,
@@ -53,7 +53,7 @@ fn sharded_reports(scenario: &Scenario, settings: RunSettings, shards: u64) -> V
     let partials: Vec<_> = (0..shards)
         .into_par_iter()
         .map(|k| {
-            let chunks = shard_chunks(settings.chunk_count(), k, shards);
+            let chunks = shard_range(settings.chunk_count(), k, shards);
             let partial = run_chunks(scenario, settings, chunks.clone(), &|_| {}).unwrap();
             let header = test_header(
                 ShardCommand::Run {
@@ -173,7 +173,7 @@ fn sensitivity_merges_to_the_analysis_bit_for_bit() {
                         .into_par_iter()
                         .map(|k| {
                             let chunks =
-                                shard_chunks(rvtol_engine::run::chunk_count(samples), k, shards);
+                                shard_range(rvtol_engine::run::chunk_count(samples), k, shards);
                             let sobol =
                                 sobol_chunks(&scenario, settings, chunks.clone(), &|_| {}).unwrap();
                             let header = test_header(
@@ -499,6 +499,14 @@ fn cli_merge_refuses_what_is_not_one_whole_run() {
         &["merge", &p[0], &build, &p[2], &p[3]],
         "computed by another build of rvtol",
     );
+    // A sampling method this rvtol does not know.
+    let unknown = dir.file("unknown.part");
+    rewritten(&p[1], &unknown, |header, _| {
+        if let ShardCommand::Run { sampling, .. } = &mut header.command {
+            *sampling = "qmc".into();
+        }
+    });
+    refused(&["merge", &p[0], &unknown], "damaged: sampling \"qmc\"");
     // A chunk range that is not the shard's.
     let range = dir.file("range.part");
     rewritten(&p[1], &range, |header, _| header.shard = 2);

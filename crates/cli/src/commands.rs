@@ -557,7 +557,7 @@ pub fn sensitivity_shard(
     let pool = pool_for(execution, "sensitivity", |threads| {
         memory::sensitivity(&scenario, &settings, threads)
     })?;
-    let chunks = rvtol_engine::shard_chunks(
+    let chunks = rvtol_engine::shard_range(
         rvtol_engine::run::chunk_count(settings.base_samples),
         shard,
         shards,
@@ -1211,7 +1211,7 @@ pub fn run_shard(
         .check(&scenario)
         .map_err(|err| bad_scenario(scenario_path, err))?;
     let build = build_identity()?;
-    let chunks = rvtol_engine::shard_chunks(settings.chunk_count(), shard, shards);
+    let chunks = rvtol_engine::shard_range(settings.chunk_count(), shard, shards);
     let pool = pool_for(execution, "run", |threads| {
         memory::run(&scenario, &settings, threads)
     })?;
@@ -1314,26 +1314,11 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
         first.display()
     ));
     let settings = match header.command {
-        shard::ShardCommand::Run {
-            samples,
-            seed,
-            exact_percentile_limit,
-            ref sampling,
-            replicates,
-        } => RunSettings {
-            samples,
-            seed,
-            exact_percentile_limit,
-            sampling: Sampling {
-                method: SamplingMethod::parse(sampling).ok_or_else(|| {
-                    BadInput(format!(
-                        "{}: damaged: sampling {sampling:?}",
-                        first.display()
-                    ))
-                })?,
-                replicates,
-            },
-        },
+        shard::ShardCommand::Run { .. } => header
+            .command
+            .run_settings()
+            .map_err(|err| BadInput(format!("{}: {err}", first.display())))?
+            .expect("a run command has run settings"),
         shard::ShardCommand::Sensitivity {
             samples,
             seed,

@@ -40,7 +40,7 @@ use crate::run::{
 use crate::scenario::{OutputInfo, Scenario, ScenarioError};
 use crate::stats::{
     order_statistic_interval, percentile_type7_of_sorted, proportion_standard_error,
-    QuantileSketch, StandardisedSketch, PERCENTS,
+    replicate_standard_error, QuantileSketch, StandardisedSketch, PERCENTS,
 };
 use rvtol_models::OutputKind;
 
@@ -337,23 +337,19 @@ pub fn figures_of(
     let samples = result.samples;
     let two_sample = std::f64::consts::SQRT_2 * z;
     let replicates = &result.replicates;
-    // √2·t/√R: the band's half-width per unit of the replicate values' sd.
+    // √2·t: the band's half-width per unit of the replicates' standard error.
     let replicate_scale = (!replicates.is_empty()).then(|| {
-        let r = replicates.len() as f64;
         let tail = Normal::new(0.0, 1.0).expect("standard normal").cdf(z);
-        let t = StudentsT::new(0.0, 1.0, r - 1.0)
+        let t = StudentsT::new(0.0, 1.0, replicates.len() as f64 - 1.0)
             .expect("at least two replicates")
             .inverse_cdf(tail);
-        std::f64::consts::SQRT_2 * t / r.sqrt()
+        std::f64::consts::SQRT_2 * t
     });
     // The half-width from output o's replicate values of a figure, for a replicated run.
     let replicate_half = |o: usize, figure: &dyn Fn(&ReplicateFigures) -> f64| {
         replicate_scale.map(|scale| {
             let values: Vec<f64> = replicates.iter().map(|r| figure(&r[o])).collect();
-            let n = values.len() as f64;
-            let mean = values.iter().sum::<f64>() / n;
-            let var = values.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / (n - 1.0);
-            scale * var.sqrt()
+            scale * replicate_standard_error(&values)
         })
     };
     let mut figures = Vec::new();

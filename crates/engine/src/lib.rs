@@ -24,7 +24,7 @@ pub mod table;
 
 pub use report::{NominalReport, RunReport};
 pub use run::{
-    merge, nominal, nominal_curves, run, run_chunks, sample_table, shard_chunks, RunPartial,
+    merge, nominal, nominal_curves, run, run_chunks, sample_table, shard_range, RunPartial,
     RunResult, RunSettings, SampleTable, DEFAULT_EXACT_PERCENTILE_LIMIT,
 };
 pub use scenario::{Scenario, ScenarioError};

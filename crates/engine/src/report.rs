@@ -22,7 +22,7 @@ use crate::stats::quantile_sketch::bucket_representative;
 use crate::stats::{
     binomial_rank_interval, capability_from_moments, capability_percentile_method,
     cpk_on_upper_side, cpk_standard_error, out_of_spec_interval, percentiles_type7_with_intervals,
-    Histogram, Moments, QuantileSketch, SpecLimits, StandardisedSketch,
+    replicate_standard_error, Histogram, Moments, QuantileSketch, SpecLimits, StandardisedSketch,
 };
 use rvtol_deviation::Shown;
 use rvtol_models::{ConditionEffect, OutputKind};
@@ -139,20 +139,6 @@ pub struct ReplicateIntervals {
 
 /// What `interval_method` says.
 const REPLICATE_INTERVAL_METHOD: &str = "figure of all rows +- t(0.975, R-1)*s/sqrt(R), s the standard deviation of the figure over the R independent replicates";
-
-/// The half-width t(0.975, R − 1)·s/√R of the values' mean (NaN for fewer than two).
-fn replicate_half_width(values: &[f64]) -> f64 {
-    let r = values.len();
-    if r < 2 || values.iter().any(|v| !v.is_finite()) {
-        return f64::NAN;
-    }
-    let mean = values.iter().sum::<f64>() / r as f64;
-    let s = (values.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / (r - 1) as f64).sqrt();
-    let t = StudentsT::new(0.0, 1.0, (r - 1) as f64)
-        .expect("positive degrees of freedom")
-        .inverse_cdf(0.975);
-    t * s / (r as f64).sqrt()
-}
 
 /// Histogram in the report.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -444,6 +430,12 @@ impl RunReport {
                     .then_some("exact conditional inversion"),
             });
         let replicates = std::mem::take(&mut result.replicates);
+        // t(0.975, R − 1) of the replicate intervals (R ≥ 2 whenever there are any).
+        let replicate_t = (replicates.len() >= 2).then(|| {
+            StudentsT::new(0.0, 1.0, (replicates.len() - 1) as f64)
+                .expect("positive degrees of freedom")
+                .inverse_cdf(0.975)
+        });
         // Each output's percentiles and histogram on its own (in parallel: the selection
         // over every kept value is the report's dearest step), collected in order.
         let outputs = scenario
@@ -565,11 +557,11 @@ impl RunReport {
                 let interval = out_of_spec_interval(acc.nonzero, m.n, CONFIDENCE);
                 let samples = result.samples;
                 let defined = |x: f64| if m.n > 0 { x } else { f64::NAN };
-                let replicate_ci95 = (!replicates.is_empty() && !indicator).then(|| {
-                    // The figure of all rows ± the replicates' half-width; no interval where
-                    // a replicate has no value.
+                let replicate_ci95 = replicate_t.filter(|_| !indicator).map(|t| {
+                    // The figure of all rows ± t·s/√R; no interval where a replicate has no
+                    // value.
                     let around = |center: Option<f64>, values: Vec<f64>| {
-                        let h = replicate_half_width(&values);
+                        let h = t * replicate_standard_error(&values);
                         match center {
                             Some(c) if h.is_finite() && c.is_finite() => [Some(c - h), Some(c + h)],
                             _ => [None, None],

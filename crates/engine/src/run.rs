@@ -19,8 +19,8 @@
 //! - A run is the merge of partials ([`RunPartial`]: the statistics of a contiguous range
 //!   of chunks, their moments still per chunk): [`run`] merges its waves as they finish,
 //!   [`merge`] the partials of shards computed anywhere ([`run_chunks`] on the ranges of
-//!   [`shard_chunks`]); both fold through the same code in chunk order, so a sharded run
-//!   has the single run's bits for any shard count.
+//!   [`shard_range`] over [`RunSettings::chunk_count`]); both fold through the same code
+//!   in chunk order, so a sharded run has the single run's bits for any shard count.
 //!
 //! Per chunk, block of [`BLOCK_ROWS`] rows after block: draw the inputs as a column-major
 //! block, hand each model its input columns (constants pre-filled once) and evaluate it
@@ -236,8 +236,6 @@ impl RunSettings {
 /// One replicate's figures of one output, for the replicate intervals.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ReplicateFigures {
-    /// Finite values.
-    pub n: u64,
     /// Mean.
     pub mean: f64,
     /// Standard deviation.
@@ -967,13 +965,6 @@ pub fn chunk_count(samples: u64) -> u64 {
     samples.div_ceil(CHUNK_SIZE as u64)
 }
 
-/// The chunks shard `shard` of `shards` computes out of `chunks`: the `shard`-th of
-/// `shards` contiguous ranges as equal as whole chunks allow (empty when there are more
-/// shards than chunks).
-pub fn shard_chunks(chunks: u64, shard: u64, shards: u64) -> Range<u64> {
-    shard_range(chunks, shard, shards)
-}
-
 /// The `shard`-th of `shards` contiguous ranges of `0..total`, as equal as whole items
 /// allow (chunks of a run, permutations of a Shapley estimate).
 pub fn shard_range(total: u64, shard: u64, shards: u64) -> Range<u64> {
@@ -1286,7 +1277,6 @@ fn replicate_figures(
         Distribution::Indicator | Distribution::Dropped => vec![None; percents.len()],
     };
     ReplicateFigures {
-        n: moments.n,
         mean: moments.mean,
         sd: moments.sd(),
         percentiles,

@@ -1,7 +1,7 @@
 //! Shards of a run or a sensitivity analysis and their files: what `rvtol run` and
 //! `rvtol sensitivity` write with `--shard K/N --partial FILE`, and `rvtol merge` reads.
 //!
-//! A shard of a run computes the chunks [`crate::run::shard_chunks`] gives it
+//! A shard of a run computes the chunks [`crate::run::shard_range`] (over the run's chunk count) gives it
 //! ([`crate::run_chunks`]) and stores the [`RunPartial`]; a shard of a sensitivity analysis
 //! the same chunks of its matrices ([`crate::sensitivity::sobol_chunks`]) and, with
 //! Shapley effects, its range of permutations ([`crate::shapley::shapley_partial`]). The
@@ -32,7 +32,8 @@ use sha2::{Digest, Sha256};
 use std::ops::Range;
 
 use crate::run::{
-    shard_chunks, shard_range, Distribution, OutputAccumulator, PercentileMethod, RunPartial,
+    shard_range, Distribution, OutputAccumulator, PercentileMethod, RunPartial, RunSettings,
+    Sampling, SamplingMethod,
 };
 use crate::sensitivity::{BlockSums, SobolChunks, SobolPartial};
 use crate::shapley::ShapleyPartial;
@@ -136,18 +137,41 @@ impl ShardCommand {
         }
     }
 
+    /// A run command's settings (None for a sensitivity analysis); Err for a sampling
+    /// name this rvtol does not know (a damaged file; `decode` refuses it).
+    pub fn run_settings(&self) -> Result<Option<RunSettings>, String> {
+        let ShardCommand::Run {
+            samples,
+            seed,
+            exact_percentile_limit,
+            sampling,
+            replicates,
+        } = self
+        else {
+            return Ok(None);
+        };
+        let method = SamplingMethod::parse(sampling)
+            .ok_or_else(|| damaged(&format!("sampling {sampling:?}")))?;
+        Ok(Some(RunSettings {
+            samples: *samples,
+            seed: *seed,
+            exact_percentile_limit: *exact_percentile_limit,
+            sampling: Sampling {
+                method,
+                replicates: *replicates,
+            },
+        }))
+    }
+
     /// The chunks the command's work divides into: the run's chunks (replicate after
-    /// replicate), the sensitivity's base-sample chunks.
+    /// replicate, [`RunSettings::chunk_count`]), the sensitivity's base-sample chunks.
     pub fn chunk_count(&self) -> u64 {
         match self {
-            ShardCommand::Run {
-                samples,
-                replicates,
-                ..
-            } => {
-                let replicates = (*replicates).max(1);
-                replicates * (samples / replicates).div_ceil(crate::run::CHUNK_SIZE as u64)
-            }
+            ShardCommand::Run { .. } => self
+                .run_settings()
+                .ok()
+                .flatten()
+                .map_or(0, |settings| settings.chunk_count()),
             ShardCommand::Sensitivity { samples, .. } => crate::run::chunk_count(*samples),
         }
     }
@@ -394,6 +418,7 @@ pub fn decode(bytes: &[u8]) -> Result<ShardFile, String> {
     let header_len = input.count(1)?;
     let header: ShardHeader = serde_json::from_slice(input.take(header_len)?)
         .map_err(|err| damaged(&format!("header: {err}")))?;
+    header.command.run_settings()?;
     let [first, end] = header.chunks;
     let content = match input.u8()? {
         0 => ShardContent::Run(read_run(&mut input, first..end)?),
@@ -747,7 +772,7 @@ fn settings_text(command: &ShardCommand) -> String {
 /// Whether the file's ranges and content are those its shard index gets.
 fn covers_its_ranges(file: &ShardFile) -> bool {
     let h = &file.header;
-    let chunks = shard_chunks(h.command.chunk_count(), h.shard, h.shards);
+    let chunks = shard_range(h.command.chunk_count(), h.shard, h.shards);
     if h.chunks != [chunks.start, chunks.end] {
         return false;
     }
@@ -852,7 +877,7 @@ mod tests {
             for shards in [1u64, 2, 3, 7, 64] {
                 let mut next = 0;
                 for k in 0..shards {
-                    let range = shard_chunks(crate::run::chunk_count(samples), k, shards);
+                    let range = shard_range(crate::run::chunk_count(samples), k, shards);
                     assert_eq!(range.start, next);
                     next = range.end;
                 }

@@ -37,5 +37,5 @@ pub const PERCENTS: [(&str, f64); 7] = [
 ];
 
 pub use histogram::Histogram;
-pub use moments::{proportion_standard_error, Moments};
+pub use moments::{proportion_standard_error, replicate_standard_error, Moments};
 pub use quantile_sketch::{QuantileSketch, SketchMismatch, SketchParts, StandardisedSketch};

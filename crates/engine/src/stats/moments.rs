@@ -262,6 +262,19 @@ impl Moments {
     }
 }
 
+/// Standard error s/√R of a figure estimated by R independent replicates (Latin
+/// hypercube or RQMC), s the standard deviation of the replicate values (divisor R − 1):
+/// NaN for fewer than two values or a non-finite one.
+pub fn replicate_standard_error(values: &[f64]) -> f64 {
+    let r = values.len();
+    if r < 2 || values.iter().any(|v| !v.is_finite()) {
+        return f64::NAN;
+    }
+    let mean = values.iter().sum::<f64>() / r as f64;
+    let variance = values.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / (r - 1) as f64;
+    (variance / r as f64).sqrt()
+}
+
 /// Binomial standard error √(p(1 − p)/n) of an estimated fraction, with p raised to at
 /// least 1/n so that a fraction of 0 still has an error of one count's worth.
 pub fn proportion_standard_error(fraction: f64, n: u64) -> f64 {
