@@ -7,12 +7,13 @@
 //! (six intervals). The tests therefore check the coverage over many seeds against its
 //! binomial distribution (precision policy, tests/lib.rs), and every interval's width.
 
+use rvtol_deviation::SamplingMethod;
 use rvtol_engine::sensitivity::{
-    independent_groups, sobol_indices, BootstrapMethod, SensitivitySettings,
+    independent_groups, sobol_indices, IntervalMethod, SensitivitySettings,
     DEFAULT_ROW_BOOTSTRAP_LIMIT,
 };
 use rvtol_engine::sensitivity_report::SensitivityReport;
-use rvtol_engine::Scenario;
+use rvtol_engine::{Sampling, Scenario};
 use rvtol_models::{Ishigami, ModelParams, ParamValue, SobolG};
 use rvtol_tests::{scenario_path, SIGMA_BOUND};
 
@@ -25,6 +26,7 @@ fn settings(seed: u64) -> SensitivitySettings {
         bootstrap: 300,
         confidence: 0.95,
         row_bootstrap_limit: DEFAULT_ROW_BOOTSTRAP_LIMIT,
+        sampling: Sampling::MONTE_CARLO,
     }
 }
 
@@ -94,8 +96,8 @@ fn block_bootstrap_intervals_cover_the_closed_form_too() {
         ..settings(1)
     };
     assert_eq!(
-        blocks.bootstrap_method(&scenario),
-        BootstrapMethod::Blocks { rows: 64 }
+        blocks.interval_method(&scenario),
+        IntervalMethod::Blocks { rows: 64 }
     );
     let (covered, total, widest) = coverage_with(
         "ishigami.json",
@@ -135,6 +137,160 @@ fn g_function_intervals_cover_the_closed_form_and_are_narrow() {
     assert!(widest < 0.02, "widest interval {widest}");
 }
 
+/// A group's closed-form (first-order, total) indices.
+type ClosedForm<'a> = dyn Fn(&str) -> (f64, f64) + 'a;
+
+/// Settings of a replicated design: `replicates` of `points` each.
+fn replicated(
+    method: SamplingMethod,
+    replicates: u64,
+    points: u64,
+    seed: u64,
+) -> SensitivitySettings {
+    SensitivitySettings {
+        base_samples: replicates * points,
+        sampling: Sampling { method, replicates },
+        ..settings(seed)
+    }
+}
+
+/// Per index (group, first-order or total) of a one-output scenario, the estimates over
+/// `seeds` analyses and their interval widths.
+fn estimates_over_seeds(
+    file: &str,
+    seeds: u64,
+    settings: impl Fn(u64) -> SensitivitySettings,
+) -> std::collections::BTreeMap<(String, bool), Vec<(f64, f64)>> {
+    let scenario = Scenario::load(&scenario_path(file)).unwrap();
+    let mut all = std::collections::BTreeMap::new();
+    for seed in 1..=seeds {
+        let outputs = sobol_indices(&scenario, settings(seed), &|_| {}).unwrap();
+        for index in &outputs[0].indices {
+            for (total, estimate) in [(false, index.first_order), (true, index.total)] {
+                all.entry((index.group.clone(), total))
+                    .or_insert_with(Vec::new)
+                    .push((estimate.value, estimate.interval[1] - estimate.interval[0]));
+            }
+        }
+    }
+    all
+}
+
+#[test]
+fn replicated_designs_are_unbiased_and_their_intervals_cover_the_closed_form() {
+    // Ishigami and the G-function, 16 replicates of 2^10 points: the seeds' average of
+    // every index within SIGMA_BOUND standard errors (the seeds' spread / √seeds: the
+    // estimators' variance under LHS and RQMC has no closed form) of the closed form, and
+    // the coverage of the t intervals binomial at 95 % (assert_coverage).
+    let (s, st) = Ishigami::from_params(&ModelParams::new())
+        .unwrap()
+        .sobol_indices();
+    let ishigami = |name: &str| {
+        let i = ["x1", "x2", "x3"].iter().position(|n| *n == name).unwrap();
+        (s[i], st[i])
+    };
+    let coefficients = [0.0, 1.0, 4.5, 9.0, 99.0, 99.0];
+    let params = ModelParams::new().with(
+        "coefficients",
+        ParamValue::Named(
+            coefficients
+                .iter()
+                .enumerate()
+                .map(|(i, a)| (format!("x{}", i + 1), *a))
+                .collect(),
+        ),
+    );
+    let (g_s, g_st) = SobolG::from_params(&params).unwrap().sobol_indices();
+    let g = |name: &str| {
+        let i: usize = name[1..].parse::<usize>().unwrap() - 1;
+        (g_s[i], g_st[i])
+    };
+    let cases: [(&str, &ClosedForm<'_>); 2] = [("ishigami.json", &ishigami), ("sobol-g.json", &g)];
+    for method in [SamplingMethod::Rqmc, SamplingMethod::LatinHypercube] {
+        for (file, closed_form) in cases {
+            let seeds = 30;
+            let (covered, total, _) = coverage_with(file, seeds, closed_form, |seed| {
+                replicated(method, 16, 1 << 10, seed)
+            });
+            assert_coverage(covered, total);
+            for ((group, is_total), values) in
+                estimates_over_seeds(file, seeds, |seed| replicated(method, 16, 1 << 10, seed))
+            {
+                let (first, total) = closed_form(&group);
+                let exact = if is_total { total } else { first };
+                let n = values.len() as f64;
+                let mean = values.iter().map(|v| v.0).sum::<f64>() / n;
+                let spread =
+                    (values.iter().map(|v| (v.0 - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+                assert!(
+                    (mean - exact).abs() <= SIGMA_BOUND * spread / n.sqrt() + 1e-12,
+                    "{method:?} {file} {group} (total: {is_total}): mean {mean} vs {exact}, spread {spread}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn rqmc_intervals_shrink_faster_than_monte_carlo() {
+    // Ishigami is smooth: the scrambled Sobol' design's interval width falls faster than
+    // N^−1/2 (observed about N^−1.2 from 2^8 to 2^12 points per replicate), and at 2^12
+    // points it is several times narrower than the Monte Carlo bootstrap's at the same N.
+    // The mean width over every index and 5 seeds.
+    let mean_width = |settings: &dyn Fn(u64) -> SensitivitySettings| {
+        let all = estimates_over_seeds("ishigami.json", 5, settings);
+        let widths: Vec<f64> = all.values().flatten().map(|v| v.1).collect();
+        widths.iter().sum::<f64>() / widths.len() as f64
+    };
+    let small = mean_width(&|seed| replicated(SamplingMethod::Rqmc, 16, 1 << 8, seed));
+    let large = mean_width(&|seed| replicated(SamplingMethod::Rqmc, 16, 1 << 12, seed));
+    let slope = (large / small).ln() / 16f64.ln();
+    assert!(slope < -0.75, "width {small} → {large}: slope {slope}");
+    let monte_carlo = mean_width(&|seed| SensitivitySettings {
+        base_samples: 16 << 12,
+        ..settings(seed)
+    });
+    assert!(
+        large * 4.0 < monte_carlo,
+        "rqmc width {large} against Monte Carlo's {monte_carlo}"
+    );
+}
+
+#[test]
+fn replicated_designs_are_refused_where_they_do_not_fit() {
+    let scenario = Scenario::load(&scenario_path("ishigami.json")).unwrap();
+    let refused = |settings: SensitivitySettings| {
+        sobol_indices(&scenario, settings, &|_| {})
+            .unwrap_err()
+            .to_string()
+    };
+    let message = refused(SensitivitySettings {
+        base_samples: 1000,
+        ..replicated(SamplingMethod::Rqmc, 16, 1, 1)
+    });
+    assert!(
+        message.contains("samples: 1000 base samples do not split into 16 replicates")
+            && message.contains("such as 1024"),
+        "{message}"
+    );
+    let message = refused(replicated(SamplingMethod::Rqmc, 1, 1024, 1));
+    assert!(
+        message.contains("replicates: must lie in 2..=1024"),
+        "{message}"
+    );
+    let message = refused(SensitivitySettings {
+        sampling: Sampling {
+            method: SamplingMethod::MonteCarlo,
+            replicates: 4,
+        },
+        ..settings(1)
+    });
+    assert!(
+        message.contains("Monte Carlo rows are independent"),
+        "{message}"
+    );
+}
+
 #[test]
 fn correlated_sources_form_one_group_and_a_part_is_one_group() {
     // linear-stack-correlated.json correlates bearing_width with spacer_width and the
@@ -155,24 +311,33 @@ fn correlated_sources_form_one_group_and_a_part_is_one_group() {
 #[test]
 fn report_is_byte_identical_for_1_and_2_threads() {
     let scenario = Scenario::load(&scenario_path("rv20e-hysteresis.json")).unwrap();
-    let settings = SensitivitySettings {
-        base_samples: 10_000,
-        seed: 4,
-        bootstrap: 50,
-        confidence: 0.95,
-        row_bootstrap_limit: DEFAULT_ROW_BOOTSTRAP_LIMIT,
-    };
-    let json = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        let outputs = pool
-            .install(|| sobol_indices(&scenario, settings, &|_| {}))
-            .unwrap();
-        SensitivityReport::new(&scenario, settings, outputs).to_json()
-    };
-    assert_eq!(json(1), json(2));
+    for sampling in [
+        Sampling::MONTE_CARLO,
+        Sampling {
+            method: SamplingMethod::Rqmc,
+            replicates: 4,
+        },
+    ] {
+        let settings = SensitivitySettings {
+            base_samples: 10_000,
+            seed: 4,
+            bootstrap: 50,
+            confidence: 0.95,
+            row_bootstrap_limit: DEFAULT_ROW_BOOTSTRAP_LIMIT,
+            sampling,
+        };
+        let json = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let outputs = pool
+                .install(|| sobol_indices(&scenario, settings, &|_| {}))
+                .unwrap();
+            SensitivityReport::new(&scenario, settings, outputs).to_json()
+        };
+        assert_eq!(json(1), json(2), "{sampling:?}");
+    }
 }
 
 /// Closed-form Shapley effects of y = aᵀx, x ~ N(μ, Σ) (Owen & Prieur 2017): with

@@ -13,6 +13,7 @@ use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
+use rvtol_deviation::SamplingMethod;
 use rvtol_engine::report::RunReport;
 use rvtol_engine::run::shard_range;
 use rvtol_engine::run::CHUNK_SIZE;
@@ -21,7 +22,7 @@ use rvtol_engine::shapley::{
     merge_shapley, shapley_effects, shapley_partial, shapley_permutations, ShapleySettings,
 };
 use rvtol_engine::shard::{decode, encode, ShapleyShard, ShardCommand, ShardContent, ShardHeader};
-use rvtol_engine::{merge, run, run_chunks, RunSettings, Scenario};
+use rvtol_engine::{merge, run, run_chunks, RunSettings, Sampling, Scenario};
 use rvtol_tests::scenario_path;
 
 /// Shard counts of the acceptance: one, a few, more than the chunks (empty shards).
@@ -138,8 +139,9 @@ fn every_shipped_scenario_merges_to_the_run_bit_for_bit() {
     }
 }
 
-/// Sobol' indices (row and block bootstrap) and Shapley effects merged from 1, 2, 3, 7 and
-/// 64 shards in shuffled order are those of one process, bit for bit.
+/// Sobol' indices (row and block bootstrap, replicated Latin hypercube and scrambled
+/// Sobol' designs) and Shapley effects merged from 1, 2, 3, 7 and 64 shards in shuffled
+/// order are those of one process, bit for bit.
 #[test]
 fn sensitivity_merges_to_the_analysis_bit_for_bit() {
     let pool = rayon::ThreadPoolBuilder::new()
@@ -156,14 +158,30 @@ fn sensitivity_merges_to_the_analysis_bit_for_bit() {
         "shapley-linear-gaussian.json",
     ] {
         let scenario = Scenario::load(&scenario_path(file)).unwrap();
-        // The row bootstrap, then the block bootstrap (a limit of 0 values forces it).
-        for row_bootstrap_limit in [u64::MAX, 0] {
+        // The row bootstrap, then the block bootstrap (a limit of 0 values forces it); a
+        // scrambled Sobol' design of 2 replicates (two chunks each, the second part-filled)
+        // and a Latin hypercube of 4 (one part-filled chunk each).
+        let rqmc = Sampling {
+            method: SamplingMethod::Rqmc,
+            replicates: 2,
+        };
+        let lhs = Sampling {
+            method: SamplingMethod::LatinHypercube,
+            replicates: 4,
+        };
+        for (row_bootstrap_limit, sampling) in [
+            (u64::MAX, Sampling::MONTE_CARLO),
+            (0, Sampling::MONTE_CARLO),
+            (u64::MAX, rqmc),
+            (u64::MAX, lhs),
+        ] {
             let settings = SensitivitySettings {
                 base_samples: samples,
                 seed: 11,
                 bootstrap: 200,
                 confidence: 0.95,
                 row_bootstrap_limit,
+                sampling,
             };
             let single = pool
                 .install(|| format!("{:?}", sobol_indices(&scenario, settings, &|_| {}).unwrap()));
@@ -172,8 +190,7 @@ fn sensitivity_merges_to_the_analysis_bit_for_bit() {
                     (0..shards)
                         .into_par_iter()
                         .map(|k| {
-                            let chunks =
-                                shard_range(rvtol_engine::run::chunk_count(samples), k, shards);
+                            let chunks = shard_range(settings.chunk_count(), k, shards);
                             let sobol =
                                 sobol_chunks(&scenario, settings, chunks.clone(), &|_| {}).unwrap();
                             let header = test_header(
@@ -182,6 +199,8 @@ fn sensitivity_merges_to_the_analysis_bit_for_bit() {
                                     seed: 11,
                                     bootstrap: 200,
                                     row_bootstrap_limit,
+                                    sampling: sampling.method.name().to_string(),
+                                    replicates: sampling.replicates,
                                     shapley: None,
                                 },
                                 k,
@@ -207,7 +226,7 @@ fn sensitivity_merges_to_the_analysis_bit_for_bit() {
                 });
                 assert!(
                     merged == single,
-                    "{file}: {shards} shards, row limit {row_bootstrap_limit}: the merged indices differ"
+                    "{file}: {shards} shards, row limit {row_bootstrap_limit}, {sampling:?}: the merged indices differ"
                 );
             }
         }
@@ -235,6 +254,8 @@ fn sensitivity_merges_to_the_analysis_bit_for_bit() {
                             seed: 5,
                             bootstrap: 2,
                             row_bootstrap_limit: 0,
+                            sampling: "mc".into(),
+                            replicates: 1,
                             shapley: Some(ShapleyShard {
                                 budget: 120,
                                 outer: 64,
@@ -651,5 +672,93 @@ fn cli_sensitivity_merge_is_the_analysis() {
     refused(
         &["merge", &parts[0], &parts[2], &parts[3]],
         "shard 1 of 4 has no file: run them (rvtol sensitivity",
+    );
+}
+
+#[test]
+fn cli_replicated_sensitivity_merge_is_the_analysis() {
+    // 4 replicates of 3000 points of a scrambled Sobol' design: shards cut inside the
+    // replicates, and the merge gives the analysis' bytes.
+    let dir = Dir::new("sensitivity-rqmc");
+    let file = scenario("rv20e-hysteresis.json");
+    let options = [
+        "--samples",
+        "12000",
+        "--sampling",
+        "rqmc",
+        "--replicates",
+        "4",
+    ];
+    let full = dir.file("full.json");
+    let mut args = vec!["sensitivity", &file, "--json", &full, "-q"];
+    args.extend_from_slice(&options);
+    ok(&args);
+    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(&full).unwrap()).unwrap();
+    assert_eq!(report["sampling"]["method"], "rqmc");
+    assert_eq!(report["sampling"]["points_per_replicate"], 3000);
+    assert!(report.get("bootstrap").is_none(), "{report}");
+    let parts: Vec<String> = (0..3).map(|k| dir.file(&format!("{k}.part"))).collect();
+    for (k, part) in parts.iter().enumerate() {
+        let shard = format!("{k}/3");
+        let mut args = vec![
+            "sensitivity",
+            &file,
+            "--shard",
+            &shard,
+            "--partial",
+            part,
+            "-q",
+        ];
+        args.extend_from_slice(&options);
+        ok(&args);
+    }
+    let merged = dir.file("merged.json");
+    ok(&["merge", &parts[2], &parts[0], &parts[1], "--json", &merged]);
+    assert_eq!(
+        std::fs::read(&full).unwrap(),
+        std::fs::read(&merged).unwrap()
+    );
+    // A Latin hypercube shard is another analysis.
+    let other = dir.file("lhs.part");
+    let mut args = vec![
+        "sensitivity",
+        &file,
+        "--shard",
+        "1/3",
+        "--partial",
+        &other,
+        "-q",
+    ];
+    args.extend_from_slice(&options[..2]);
+    args.extend_from_slice(&["--sampling", "lhs", "--replicates", "4"]);
+    ok(&args);
+    refused(
+        &["merge", &parts[0], &other],
+        "(samples 12000, seed 20221013, sampling lhs × 4, no Shapley against",
+    );
+    // A replicated design has no bootstrap; its samples must split into the replicates.
+    refused(
+        &[
+            "sensitivity",
+            &file,
+            "--sampling",
+            "rqmc",
+            "--bootstrap",
+            "100",
+        ],
+        "--bootstrap: the intervals of a replicated rqmc design come from its replicates",
+    );
+    refused(
+        &[
+            "sensitivity",
+            &file,
+            "--sampling",
+            "lhs",
+            "--samples",
+            "1000",
+            "--replicates",
+            "16",
+        ],
+        "samples: 1000 base samples do not split into 16 replicates",
     );
 }

@@ -12,6 +12,10 @@ bootstrap), wall clock, the tool's own process or calls:
 - rvtol: `rvtol sensitivity SCENARIO --samples N --json FILE --quiet` (Saltelli 2010
   first order and Jansen total on both A_B and B_A designs, N(2d + 2) evaluations,
   percentile bootstrap of 500 resamples), a subprocess timed from outside;
+- rvtol-rqmc: the same with `--sampling rqmc` (A and B the two halves of Owen-scrambled
+  Sobol' points in 2d dimensions, 16 replicates of N/16 points, Student t intervals from
+  the replicates' spread); its N doubles from 2^12 (the N^(-1/2) law would overshoot a
+  design that converges faster);
 - SALib 1.6: `sobol.sample(..., calc_second_order=False)` (scrambled Sobol' points,
   N(d + 2) evaluations), the model, `sobol.analyze(..., num_resamples=500)`, whose
   interval is ±S1_conf / ±ST_conf (a normal interval from the bootstrap sd);
@@ -29,7 +33,8 @@ that output alone, while rvtol's time includes all six continuous outputs of the
 (it has no option to skip outputs), which counts against it.
 
 Usage: sensitivity_peers.py [--rvtol target/release/rvtol] [--width 0.01]
-       [--problems ishigami,sobol_g,rv20e] [--tools rvtol,salib,openturns] [--max-log2 21]
+       [--problems ishigami,sobol_g,rv20e] [--tools rvtol,rvtol-rqmc,salib,openturns]
+       [--max-log2 21]
 Needs numpy, scipy, SALib, openturns and the rvtol Python package (for the RV-20E peers).
 """
 
@@ -137,13 +142,14 @@ class Problem:
         return np.concatenate(pieces)
 
 
-def widths_rvtol(problem, n, binary):
+def widths_rvtol(problem, n, binary, rqmc=False):
+    intervals = ["--sampling", "rqmc", "--replicates", "16"] if rqmc else ["--bootstrap", str(BOOTSTRAP)]
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "s.json")
         started = time.perf_counter()
         subprocess.run(
-            [binary, "sensitivity", problem.scenario, "--samples", str(n), "--json", out, "--quiet",
-             "--bootstrap", str(BOOTSTRAP)],
+            [binary, "sensitivity", problem.scenario, "--samples", str(n), "--json", out, "--quiet"]
+            + intervals,
             check=True, stdout=subprocess.DEVNULL,
         )
         elapsed = time.perf_counter() - started
@@ -202,7 +208,7 @@ def main():
     parser.add_argument("--rvtol", default=os.path.join(ROOT, "target", "release", "rvtol"))
     parser.add_argument("--width", type=float, default=0.01)
     parser.add_argument("--problems", default="ishigami,sobol_g,rv20e")
-    parser.add_argument("--tools", default="rvtol,salib,openturns")
+    parser.add_argument("--tools", default="rvtol,rvtol-rqmc,salib,openturns")
     parser.add_argument("--max-log2", type=int, default=21)
     args = parser.parse_args()
     for name in args.problems.split(","):
@@ -213,6 +219,8 @@ def main():
                 n = 2 ** log2
                 if tool == "rvtol":
                     elapsed, widest = widths_rvtol(problem, n, args.rvtol)
+                elif tool == "rvtol-rqmc":
+                    elapsed, widest = widths_rvtol(problem, n, args.rvtol, rqmc=True)
                 elif tool == "salib":
                     elapsed, widest = widths_salib(problem, n)
                 else:
@@ -224,7 +232,7 @@ def main():
                                       "seconds": round(elapsed, 3)}), flush=True)
                     break
                 predicted = math.ceil(math.log2(n * (widest / args.width) ** 2))
-                log2 = max(log2 + 1, predicted)
+                log2 = log2 + 1 if tool == "rvtol-rqmc" else max(log2 + 1, predicted)
             else:
                 print(json.dumps({"problem": name, "tool": tool, "n": None,
                                   "widest": widest, "seconds": None}), flush=True)

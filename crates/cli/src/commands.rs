@@ -25,7 +25,7 @@ use rvtol_engine::{
     ScenarioError,
 };
 
-use crate::limits::{memory_budget, parse_count, thread_pool, threads};
+use crate::limits::{memory_budget, parse_count, parse_sampling, thread_pool, threads};
 use crate::output::{check_destination, note, print, write_bytes, write_report};
 use crate::{BadInput, Execution, Failed};
 
@@ -409,9 +409,18 @@ pub struct SensitivityArgs {
     /// Seed of the random streams (default: the scenario's `seed`, else 1).
     #[arg(long, allow_hyphen_values = true)]
     pub seed: Option<u64>,
-    /// Bootstrap resamples for the 95 % intervals.
-    #[arg(long, default_value_t = 500, value_parser = parse_count, allow_hyphen_values = true)]
-    pub bootstrap: u64,
+    /// How the rows of A and B are drawn: mc (independent draws; bootstrap intervals),
+    /// lhs or rqmc (replicates of a Latin hypercube or scrambled Sobol' design; intervals
+    /// from their spread); default: the scenario's `sampling`, else mc.
+    #[arg(long, value_name = "METHOD", value_parser = parse_sampling)]
+    pub sampling: Option<SamplingMethod>,
+    /// Independent randomizations of an lhs or rqmc design (default: the scenario's
+    /// `replicates`, else 16); the base samples split evenly between them.
+    #[arg(long, value_name = "R", value_parser = parse_count, allow_hyphen_values = true)]
+    pub replicates: Option<u64>,
+    /// Bootstrap resamples for the 95 % intervals of a Monte Carlo analysis (default 500).
+    #[arg(long, value_parser = parse_count, allow_hyphen_values = true)]
+    pub bootstrap: Option<u64>,
     /// Most model values kept for the row bootstrap; beyond, the intervals come from a
     /// bootstrap of blocks of rows (bounded memory).
     #[arg(long, value_name = "VALUES", default_value_t = DEFAULT_ROW_BOOTSTRAP_LIMIT, value_parser = parse_count, allow_hyphen_values = true)]
@@ -427,6 +436,9 @@ pub struct SensitivityArgs {
     #[arg(long, default_value_t = 256, value_parser = parse_count, allow_hyphen_values = true)]
     pub outer: u64,
 }
+
+/// Bootstrap resamples of a Monte Carlo sensitivity analysis unless the command line says.
+const DEFAULT_BOOTSTRAP: u64 = 500;
 
 /// Most Shapley permutations and outer draws: their product sets the model evaluations.
 const MAX_SHAPLEY_DRAWS: u64 = 1_000_000_000;
@@ -469,7 +481,16 @@ fn sensitivity_settings(
     if args.samples < 2 {
         return Err(BadInput("--samples: sensitivity needs at least 2 base samples".into()).into());
     }
-    if args.bootstrap < 2 || args.bootstrap > 1_000_000 {
+    let sampling = Sampling::chosen(scenario.sampling, args.sampling, args.replicates);
+    if sampling.is_replicated() && args.bootstrap.is_some() {
+        return Err(BadInput(format!(
+            "--bootstrap: the intervals of a replicated {} design come from its replicates, not a bootstrap; leave --bootstrap out, or give --sampling mc",
+            sampling.method.name()
+        ))
+        .into());
+    }
+    let bootstrap = args.bootstrap.unwrap_or(DEFAULT_BOOTSTRAP);
+    if !(2..=1_000_000).contains(&bootstrap) {
         return Err(BadInput("--bootstrap: must be between 2 and 1000000 resamples".into()).into());
     }
     if args.shapley && args.permutations.saturating_mul(args.outer) > MAX_SHAPLEY_DRAWS {
@@ -482,9 +503,10 @@ fn sensitivity_settings(
     Ok(SensitivitySettings {
         base_samples: args.samples,
         seed: args.seed.unwrap_or(scenario.seed),
-        bootstrap: args.bootstrap as usize,
+        bootstrap: bootstrap as usize,
         confidence: 0.95,
         row_bootstrap_limit: args.row_bootstrap_limit,
+        sampling,
     })
 }
 
@@ -557,15 +579,9 @@ pub fn sensitivity_shard(
     let pool = pool_for(execution, "sensitivity", |threads| {
         memory::sensitivity(&scenario, &settings, threads)
     })?;
-    let chunks = rvtol_engine::shard_range(
-        rvtol_engine::run::chunk_count(settings.base_samples),
-        shard,
-        shards,
-    );
-    let chunk_samples =
-        |c: u64| (c * rvtol_engine::run::CHUNK_SIZE as u64).min(settings.base_samples);
+    let chunks = rvtol_engine::shard_range(settings.chunk_count(), shard, shards);
     let bar = progress_bar(
-        chunk_samples(chunks.end) - chunk_samples(chunks.start),
+        settings.samples_before_chunk(chunks.end) - settings.samples_before_chunk(chunks.start),
         execution.quiet,
     );
     let sobol = pool
@@ -606,8 +622,10 @@ pub fn sensitivity_shard(
         command: ShardCommand::Sensitivity {
             samples: settings.base_samples,
             seed: settings.seed,
-            bootstrap: args.bootstrap,
+            bootstrap: settings.bootstrap as u64,
             row_bootstrap_limit: args.row_bootstrap_limit,
+            sampling: settings.sampling.method.name().to_string(),
+            replicates: settings.sampling.replicates,
             shapley: shapley_shard,
         },
         shard,
@@ -622,7 +640,7 @@ pub fn sensitivity_shard(
         "{}: sensitivity shard {shard}/{shards} of {} ({} of {} base samples, seed {}) written to {}\n",
         path.display(),
         scenario.name,
-        rvtol_engine::report::group_thousands(chunk_samples(chunks.end) - chunk_samples(chunks.start)),
+        rvtol_engine::report::group_thousands(settings.samples_before_chunk(chunks.end) - settings.samples_before_chunk(chunks.start)),
         rvtol_engine::report::group_thousands(settings.base_samples),
         settings.seed,
         partial_path.display()
@@ -1324,7 +1342,8 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
             seed,
             bootstrap,
             row_bootstrap_limit,
-            shapley,
+            ref shapley,
+            ..
         } => {
             if args.baseline.is_some() || args.check.is_some() {
                 return Err(BadInput(
@@ -1332,10 +1351,16 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
                 )
                 .into());
             }
+            let sampling = header
+                .command
+                .sampling()
+                .map_err(|err| BadInput(format!("{}: {err}", first.display())))?;
             let sensitivity_args = SensitivityArgs {
                 samples,
                 seed: Some(seed),
-                bootstrap,
+                sampling: Some(sampling.method),
+                replicates: Some(sampling.replicates),
+                bootstrap: (!sampling.is_replicated()).then_some(bootstrap),
                 row_bootstrap_limit,
                 shapley: shapley.is_some(),
                 permutations: shapley.as_ref().map_or(0, |s| s.budget),

@@ -137,6 +137,17 @@ pub fn memory_budget(asked: Option<f64>) -> (f64, String) {
     }
 }
 
+/// `--sampling`: a method name.
+pub fn parse_sampling(text: &str) -> Result<rvtol_deviation::SamplingMethod, String> {
+    use rvtol_deviation::SamplingMethod;
+    SamplingMethod::parse(text).ok_or_else(|| {
+        format!(
+            "unknown method {text:?}, expected one of {}",
+            SamplingMethod::NAMES.join(", ")
+        )
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

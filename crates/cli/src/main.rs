@@ -17,19 +17,9 @@ use clap::{Args, Parser, Subcommand};
 use rvtol_deviation::SamplingMethod;
 use rvtol_engine::DEFAULT_EXACT_PERCENTILE_LIMIT;
 
-use crate::limits::{parse_count, parse_share, parse_size};
+use crate::limits::{parse_count, parse_sampling, parse_share, parse_size};
 
 /// `K/N` of `--shard`.
-/// `--sampling`: a method name.
-fn parse_sampling(text: &str) -> Result<SamplingMethod, String> {
-    SamplingMethod::parse(text).ok_or_else(|| {
-        format!(
-            "unknown method {text:?}, expected one of {}",
-            SamplingMethod::NAMES.join(", ")
-        )
-    })
-}
-
 fn parse_shard_arg(text: &str) -> Result<(u64, u64), String> {
     rvtol_engine::shard::parse_shard(text)
 }

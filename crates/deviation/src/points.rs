@@ -273,10 +273,26 @@ impl PointSet {
     /// with points `first .. first + count` of replicate `replicate`, each coordinate in
     /// (0, 1). Panics when the range leaves the replicate (a caller's bug).
     pub fn fill(&self, replicate: u64, first: u64, count: usize, out: &mut [f64]) {
-        assert!(first + count as u64 <= self.points && out.len() >= self.dims * count);
-        for d in 0..self.dims {
+        self.fill_dims(replicate, first, count, 0..self.dims, out);
+    }
+
+    /// [`PointSet::fill`] for the dimensions `dims` only: `out[j·count + k]` is dimension
+    /// `dims.start + j` of point first + k (the A and B matrices of a sensitivity design
+    /// are two windows of one point). Panics when the range leaves the replicate or the
+    /// point (a caller's bug).
+    pub fn fill_dims(
+        &self,
+        replicate: u64,
+        first: u64,
+        count: usize,
+        dims: std::ops::Range<usize>,
+        out: &mut [f64],
+    ) {
+        assert!(first + count as u64 <= self.points && dims.end <= self.dims);
+        assert!(out.len() >= dims.len() * count);
+        for (j, d) in dims.enumerate() {
             let key = self.key(replicate, d);
-            let column = &mut out[d * count..(d + 1) * count];
+            let column = &mut out[j * count..(j + 1) * count];
             match self.method {
                 SamplingMethod::LatinHypercube => {
                     let (n, p) = (self.points as u32, (key >> 32) as u32);

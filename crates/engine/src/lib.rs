@@ -25,6 +25,6 @@ pub mod table;
 pub use report::{NominalReport, RunReport};
 pub use run::{
     merge, nominal, nominal_curves, run, run_chunks, sample_table, shard_range, RunPartial,
-    RunResult, RunSettings, SampleTable, DEFAULT_EXACT_PERCENTILE_LIMIT,
+    RunResult, RunSettings, SampleTable, Sampling, DEFAULT_EXACT_PERCENTILE_LIMIT,
 };
 pub use scenario::{Scenario, ScenarioError};

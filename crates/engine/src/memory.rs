@@ -9,7 +9,7 @@
 
 use crate::run::{RunSettings, BLOCK_ROWS, CHUNK_SIZE, WAVE_CHUNKS};
 use crate::scenario::Scenario;
-use crate::sensitivity::{independent_groups, BootstrapMethod, SensitivitySettings};
+use crate::sensitivity::{independent_groups, IntervalMethod, SensitivitySettings};
 use rvtol_deviation::human_bytes;
 
 /// Bytes of one kept value.
@@ -117,13 +117,17 @@ pub fn sensitivity(
     let variants = (2 * independent_groups(scenario).len() + 2) as f64;
     let continuous = scenario.continuous_outputs().len() as f64;
     let n = settings.base_samples as f64;
-    let method = settings.bootstrap_method(scenario);
-    let rows = method == BootstrapMethod::Rows;
+    let method = settings.interval_method(scenario);
+    let rows = method == IntervalMethod::Rows;
     let kept = match method {
-        BootstrapMethod::Rows => VALUE * n * variants * (continuous + 1.0),
+        IntervalMethod::Rows => VALUE * n * variants * (continuous + 1.0),
         // Block sums: 2G + 3 numbers per block and output.
-        BootstrapMethod::Blocks { rows } => {
+        IntervalMethod::Blocks { rows } => {
             VALUE * (n / rows as f64).ceil() * (variants + 1.0) * continuous
+        }
+        // One block per chunk.
+        IntervalMethod::Replicates => {
+            VALUE * settings.chunk_count() as f64 * (variants + 1.0) * continuous
         }
     };
     let columns = scenario.input_space.n_columns() as f64;

@@ -116,7 +116,8 @@ pub struct SamplingReport {
     pub replicates: u64,
     /// Points n of each (samples = R·n).
     pub points_per_replicate: u64,
-    /// How `replicate_ci95` is computed.
+    /// How the intervals are computed (`replicate_ci95` of a run, the indices' intervals
+    /// of a sensitivity analysis).
     pub interval_method: &'static str,
 }
 

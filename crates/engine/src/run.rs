@@ -68,7 +68,8 @@ pub struct RunSettings {
     pub sampling: Sampling,
 }
 
-/// How a run's rows are drawn: the method and its independent randomizations.
+/// How a run's rows (and a sensitivity analysis' matrices A and B,
+/// [`crate::sensitivity`]) are drawn: the method and its independent randomizations.
 ///
 /// Monte Carlo has one (its rows are independent; the report's intervals come from them).
 /// A Latin hypercube or scrambled Sobol' run of N samples is R independent replicates of
@@ -140,51 +141,54 @@ impl Sampling {
     }
 }
 
-impl RunSettings {
-    /// Rows per replicate (all the samples for Monte Carlo).
-    pub fn replicate_points(&self) -> u64 {
-        self.samples / self.sampling.replicates.max(1)
+impl Sampling {
+    /// Rows per replicate of `samples` rows (all of them for Monte Carlo).
+    pub fn replicate_points(&self, samples: u64) -> u64 {
+        samples / self.replicates.max(1)
     }
 
-    fn chunks_per_replicate(&self) -> u64 {
-        self.replicate_points().div_ceil(CHUNK_SIZE as u64)
+    fn chunks_per_replicate(&self, samples: u64) -> u64 {
+        self.replicate_points(samples).div_ceil(CHUNK_SIZE as u64)
     }
 
-    /// Number of chunks: each replicate's rows in chunks of [`CHUNK_SIZE`] (the last one
-    /// of each replicate shorter), replicate after replicate.
-    pub fn chunk_count(&self) -> u64 {
-        self.sampling.replicates.max(1) * self.chunks_per_replicate()
+    /// Number of chunks of `samples` rows: each replicate's rows in chunks of
+    /// [`CHUNK_SIZE`] (the last one of each replicate shorter), replicate after replicate.
+    pub fn chunk_count(&self, samples: u64) -> u64 {
+        self.replicates.max(1) * self.chunks_per_replicate(samples)
     }
 
-    /// Chunk `chunk` as (replicate, its first row within the replicate, its first sample
-    /// in the run, rows).
-    pub fn chunk_rows(&self, chunk: u64) -> (u64, u64, u64, usize) {
-        let per = self.chunks_per_replicate().max(1);
+    /// Chunk `chunk` of `samples` rows as (replicate, its first row within the replicate,
+    /// its first row overall, rows).
+    pub fn chunk_rows(&self, samples: u64, chunk: u64) -> (u64, u64, u64, usize) {
+        let per = self.chunks_per_replicate(samples).max(1);
         let (replicate, local) = (chunk / per, chunk % per);
-        let n = self.replicate_points();
+        let n = self.replicate_points(samples);
         let first = local * CHUNK_SIZE as u64;
         let rows = (n - first).min(CHUNK_SIZE as u64) as usize;
         (replicate, first, replicate * n + first, rows)
     }
 
-    /// Samples in the chunks before `chunk` (for progress).
-    pub fn samples_before_chunk(&self, chunk: u64) -> u64 {
-        if chunk >= self.chunk_count() {
-            return self.samples;
+    /// Rows of `samples` in the chunks before `chunk` (for progress).
+    pub fn rows_before_chunk(&self, samples: u64, chunk: u64) -> u64 {
+        if chunk >= self.chunk_count(samples) {
+            return samples;
         }
-        self.chunk_rows(chunk).2
+        self.chunk_rows(samples, chunk).2
     }
 
-    /// Checks the settings against the scenario: at least one sample; for a replicated
-    /// method, replicates within their range dividing the samples, points per replicate
-    /// within the method's limit, and an input space it can draw (one line each, naming
-    /// the setting).
-    pub fn check(&self, scenario: &Scenario) -> Result<(), ScenarioError> {
-        if self.samples == 0 {
-            return Err(ScenarioError::new("samples", "must be at least 1"));
-        }
-        let Sampling { method, replicates } = self.sampling;
-        if !self.sampling.is_replicated() {
+    /// Checks this sampling of `samples` rows (`what` names that count in messages)
+    /// against the scenario: for a replicated method, replicates within their range
+    /// dividing the rows, points per replicate within the method's limit, and an input
+    /// space it can draw; Monte Carlo has one replicate (one line each, naming the
+    /// setting).
+    pub fn check(
+        &self,
+        samples: u64,
+        what: &str,
+        scenario: &Scenario,
+    ) -> Result<(), ScenarioError> {
+        let Sampling { method, replicates } = *self;
+        if !self.is_replicated() {
             if replicates != 1 {
                 return Err(ScenarioError::new(
                     "replicates",
@@ -203,26 +207,25 @@ impl RunSettings {
                 ),
             ));
         }
-        if !self.samples.is_multiple_of(replicates) || self.samples < 2 * replicates {
+        if !samples.is_multiple_of(replicates) || samples < 2 * replicates {
             return Err(ScenarioError::new(
                 "samples",
                 format!(
-                    "{} samples do not split into {replicates} replicates of equal size (at least 2 points each): give a multiple of {replicates}{}",
-                    self.samples,
+                    "{samples} {what} do not split into {replicates} replicates of equal size (at least 2 points each): give a multiple of {replicates}{}",
                     if method == SamplingMethod::Rqmc {
-                        format!(", best {replicates} × a power of two such as {}", replicates * (self.samples / replicates).max(2).next_power_of_two())
+                        format!(", best {replicates} × a power of two such as {}", replicates * (samples / replicates).max(2).next_power_of_two())
                     } else {
                         String::new()
                     }
                 ),
             ));
         }
-        if self.replicate_points() > method.max_points() {
+        if self.replicate_points(samples) > method.max_points() {
             return Err(ScenarioError::new(
                 "samples",
                 format!(
                     "{} points per replicate, {} takes at most {}: give more replicates",
-                    self.replicate_points(),
+                    self.replicate_points(samples),
                     method.name(),
                     method.max_points()
                 ),
@@ -230,6 +233,38 @@ impl RunSettings {
         }
         scenario.input_space.quasi_dimensions()?;
         Ok(())
+    }
+}
+
+impl RunSettings {
+    /// Rows per replicate (all the samples for Monte Carlo).
+    pub fn replicate_points(&self) -> u64 {
+        self.sampling.replicate_points(self.samples)
+    }
+
+    /// Number of chunks ([`Sampling::chunk_count`]).
+    pub fn chunk_count(&self) -> u64 {
+        self.sampling.chunk_count(self.samples)
+    }
+
+    /// Chunk `chunk` as (replicate, its first row within the replicate, its first sample
+    /// in the run, rows).
+    pub fn chunk_rows(&self, chunk: u64) -> (u64, u64, u64, usize) {
+        self.sampling.chunk_rows(self.samples, chunk)
+    }
+
+    /// Samples in the chunks before `chunk` (for progress).
+    pub fn samples_before_chunk(&self, chunk: u64) -> u64 {
+        self.sampling.rows_before_chunk(self.samples, chunk)
+    }
+
+    /// Checks the settings against the scenario: at least one sample, and the sampling
+    /// ([`Sampling::check`]).
+    pub fn check(&self, scenario: &Scenario) -> Result<(), ScenarioError> {
+        if self.samples == 0 {
+            return Err(ScenarioError::new("samples", "must be at least 1"));
+        }
+        self.sampling.check(self.samples, "samples", scenario)
     }
 }
 

@@ -20,18 +20,37 @@
 //! (Archer, Saltelli & Sobol' 1997), resample b drawn from its own stream, while the
 //! N·(2G + 2) values per output fit the row-bootstrap limit; beyond it, a bootstrap over
 //! blocks of consecutive rows whose sums alone are kept (bounded memory at any N; see
-//! [`BootstrapMethod`]). The row bootstrap never reads rows at random: each row's 2G + 2
+//! [`IntervalMethod`]). The row bootstrap never reads rows at random: each row's 2G + 2
 //! estimator terms are stored contiguously, and a resample is the multinomial count of
 //! every row, drawn block by block (conditional binomials split the N picks among blocks
 //! of rows that stay in cache, uniform picks place them within a block) and summed in one
 //! sequential pass per block for all resamples ([`row_resamples`]).
 //!
+//! **Replicated designs** (`"sampling": "lhs" | "rqmc"`, [`IntervalMethod::Replicates`]):
+//! A and B are the two halves of one randomized point in 2D dimensions (D the uniforms a
+//! row takes, [`InputSpace::quasi_dimensions`]): row i of A is point i's dimensions
+//! 0 … D − 1 and row i of B its dimensions D … 2D − 1, turned into rows by the inverse
+//! CDFs of the run's quasi path (the design of Saltelli et al. 2010: A and B the left and
+//! right halves of one quasi-random sample of dimension 2k). Each point
+//! of a scrambled Sobol' or Latin hypercube design is uniform on (0, 1)^2D, so row i of A
+//! and row i of B are independent and the estimators above keep their expectations; the
+//! design's balance makes their error shrink faster than N^−1/2 for smooth models. The
+//! rows of one design are not independent, so no bootstrap over them: the N base samples
+//! are R independent randomizations of N/R points, the index is the estimator over all N
+//! rows, and its interval is ± t(R − 1)·s/√R, s the standard deviation of the R
+//! replicates' own estimates (the randomized-QMC interval: Owen, *Monte Carlo theory,
+//! methods and examples*, ch. 17). Values are centred on the mean of f over [`CHUNK_SIZE`] Monte Carlo rows of a
+//! stream of their own (so that the replicates stay independent of one another).
+//!
+//! [`InputSpace::quasi_dimensions`]: rvtol_deviation::InputSpace::quasi_dimensions
+//!
 //! Reproducibility: chunk k of A and B draws from `ChaCha8Rng::seed_from_u64(seed)` with
-//! streams 2k and 2k + 1; chunks are collected in order and every sum runs sequentially,
-//! so the result does not depend on the thread count. The analysis is the merge of
-//! partials of chunk ranges ([`sobol_chunks`], [`merge_sobol`]): a shard computes the
-//! model values of its chunks, the merge the indices and the bootstrap, so the result does
-//! not depend on the shard count either.
+//! streams 2k and 2k + 1 (Monte Carlo), or is points of its replicate (replicates laid out
+//! one after another in chunks, as a run's: [`Sampling::chunk_rows`]); chunks are collected
+//! in order and every sum runs sequentially, so the result does not depend on the thread
+//! count. The analysis is the merge of partials of chunk ranges ([`sobol_chunks`],
+//! [`merge_sobol`]): a shard computes the model values of its chunks, the merge the
+//! indices and the bootstrap, so the result does not depend on the shard count either.
 
 use std::ops::Range;
 
@@ -39,13 +58,19 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Binomial, Distribution};
 use rayon::prelude::*;
+use statrs::distribution::{ContinuousCDF, StudentsT};
+
+use rvtol_deviation::{PointSet, SamplerScratch};
 
 use crate::evaluate::ChunkEvaluator;
-use crate::run::CHUNK_SIZE;
+use crate::run::{Sampling, CHUNK_SIZE};
 use crate::scenario::{InputGroup, Scenario, ScenarioError};
 
 /// First bootstrap stream (far above the 2k, 2k + 1 streams of the sample matrices).
 const BOOTSTRAP_STREAM_BASE: u64 = 1 << 62;
+/// Stream of the Monte Carlo rows that centre a replicated design's values (apart from
+/// the matrices' and the bootstrap's streams).
+const CENTRE_STREAM: u64 = 1 << 61;
 
 /// Default most model values (N·(2G + 2) per continuous output) kept for the row
 /// bootstrap (800 MB); beyond it the intervals come from the block bootstrap.
@@ -66,13 +91,17 @@ pub struct SensitivitySettings {
     /// Confidence of the intervals (0.95).
     pub confidence: f64,
     /// Most model values kept for the row bootstrap; beyond, the block bootstrap
-    /// ([`BootstrapMethod`]).
+    /// ([`IntervalMethod`]).
     pub row_bootstrap_limit: u64,
+    /// How the rows of A and B are drawn: Monte Carlo (bootstrap intervals) or R
+    /// replicates of a Latin hypercube or scrambled Sobol' design (intervals from the
+    /// replicates, module docs).
+    pub sampling: Sampling,
 }
 
-/// How the intervals are resampled.
+/// How the intervals are computed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum BootstrapMethod {
+pub enum IntervalMethod {
     /// Every model value is kept and the bootstrap resamples rows (the estimator's own
     /// sampling unit); values centred on the mean of f(A), f(B).
     Rows,
@@ -85,24 +114,42 @@ pub enum BootstrapMethod {
         /// Rows per block.
         rows: u64,
     },
+    /// A replicated Latin hypercube or scrambled Sobol' design: per chunk only the
+    /// estimator's sums are kept, and the interval is Student's from the spread of the
+    /// replicates' estimates (module docs). Values centred on the mean of f over
+    /// [`CHUNK_SIZE`] Monte Carlo rows of their own stream.
+    Replicates,
 }
 
 impl SensitivitySettings {
-    /// The bootstrap a run of `scenario` with these settings uses.
-    pub fn bootstrap_method(&self, scenario: &Scenario) -> BootstrapMethod {
+    /// How an analysis of `scenario` with these settings computes its intervals.
+    pub fn interval_method(&self, scenario: &Scenario) -> IntervalMethod {
+        if self.sampling.is_replicated() {
+            return IntervalMethod::Replicates;
+        }
         let variants = 2 * independent_groups(scenario).len() as u64 + 2;
         let values = self
             .base_samples
             .saturating_mul(variants)
             .saturating_mul(scenario.continuous_outputs().len() as u64);
         if values <= self.row_bootstrap_limit {
-            BootstrapMethod::Rows
+            IntervalMethod::Rows
         } else {
             let wanted = self.base_samples.div_ceil(MAX_BOOTSTRAP_BLOCKS);
-            BootstrapMethod::Blocks {
+            IntervalMethod::Blocks {
                 rows: wanted.next_power_of_two().clamp(64, CHUNK_SIZE as u64),
             }
         }
+    }
+
+    /// Number of chunks of A and B ([`Sampling::chunk_count`]).
+    pub fn chunk_count(&self) -> u64 {
+        self.sampling.chunk_count(self.base_samples)
+    }
+
+    /// Base samples in the chunks before `chunk` (for progress).
+    pub fn samples_before_chunk(&self, chunk: u64) -> u64 {
+        self.sampling.rows_before_chunk(self.base_samples, chunk)
     }
 }
 
@@ -111,7 +158,7 @@ impl SensitivitySettings {
 pub struct Estimate {
     /// Point estimate from all N rows.
     pub value: f64,
-    /// Percentile bootstrap interval.
+    /// Percentile bootstrap interval, or Student's from the replicates.
     pub interval: [f64; 2],
 }
 
@@ -210,53 +257,95 @@ pub type ChunkBlocks = Vec<(Vec<BlockSums>, u64)>;
 
 fn evaluate_chunk(
     scenario: &Scenario,
-    groups: &[InputGroup],
-    continuous: &[usize],
+    plan: &SobolPlan,
     settings: SensitivitySettings,
     chunk: u64,
 ) -> Result<ChunkValues, ScenarioError> {
-    let start = chunk * CHUNK_SIZE as u64;
-    let m = (settings.base_samples - start).min(CHUNK_SIZE as u64) as usize;
+    let (groups, continuous) = (&plan.groups, &plan.continuous);
+    let (replicate, first_row, _, m) = settings.sampling.chunk_rows(settings.base_samples, chunk);
     let space = &scenario.input_space;
     let n_columns = space.n_columns();
     let mut counts = space.new_constraint_counts();
-    let mut draw = |stream: u64| -> Result<Vec<f64>, ScenarioError> {
-        let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
-        rng.set_stream(stream);
-        let mut rows = vec![0.0; m * n_columns];
-        space.sample_rows(&mut rng, &mut rows, &mut counts)?;
-        Ok(rows)
-    };
-    let a = draw(2 * chunk)?;
-    let b = draw(2 * chunk + 1)?;
+    let mut scratch = SamplerScratch::default();
+    // Column-major matrices (`a[c·m + r]` is column c of row r), as the models take them.
+    let mut a = vec![0.0; m * n_columns];
+    let mut b = vec![0.0; m * n_columns];
+    match &plan.points {
+        None => {
+            for (matrix, stream) in [(&mut a, 2 * chunk), (&mut b, 2 * chunk + 1)] {
+                let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
+                rng.set_stream(stream);
+                space.sample_columns_with(&mut rng, matrix, &mut counts, &mut scratch)?;
+            }
+        }
+        Some(points) => {
+            let dims = points.dims() / 2;
+            for (matrix, first_dim) in [(&mut a, 0), (&mut b, dims)] {
+                space.sample_columns_from_point_dims(
+                    points,
+                    first_dim,
+                    replicate,
+                    first_row,
+                    matrix,
+                    &mut scratch,
+                )?;
+            }
+        }
+    }
     let mut evaluator = ChunkEvaluator::new(scenario);
     let mut values: ChunkValues = vec![Vec::with_capacity(2 * groups.len() + 2); continuous.len()];
-    let keep = |evaluator: &ChunkEvaluator, values: &mut ChunkValues| {
+    let mut evaluate = |matrix: &[f64], values: &mut ChunkValues| {
+        evaluator.evaluate_columns_at(matrix, m, 0);
         for (slot, &o) in continuous.iter().enumerate() {
             values[slot].push(evaluator.output_columns[o][..m].to_vec());
         }
     };
-    evaluator.evaluate(&a, m);
-    keep(&evaluator, &mut values);
-    evaluator.evaluate(&b, m);
-    keep(&evaluator, &mut values);
+    evaluate(&a, &mut values);
+    evaluate(&b, &mut values);
     let mut mixed = a.clone();
     for (base, donor) in [(&a, &b), (&b, &a)] {
         for group in groups {
             mixed.copy_from_slice(base);
-            for (row_mixed, row_donor) in mixed
-                .chunks_exact_mut(n_columns)
-                .zip(donor.chunks_exact(n_columns))
-            {
-                for &c in &group.columns {
-                    row_mixed[c] = row_donor[c];
-                }
+            for &c in &group.columns {
+                mixed[c * m..(c + 1) * m].copy_from_slice(&donor[c * m..(c + 1) * m]);
             }
-            evaluator.evaluate(&mixed, m);
-            keep(&evaluator, &mut values);
+            evaluate(&mixed, &mut values);
         }
     }
     Ok(values)
+}
+
+/// The mean of the finite values (0 when none is): the centre of block sums.
+fn finite_mean<'a>(values: impl Iterator<Item = &'a f64>) -> f64 {
+    let finite: Vec<f64> = values.copied().filter(|v| v.is_finite()).collect();
+    if finite.is_empty() {
+        0.0
+    } else {
+        crate::stats::Moments::from_slice(&finite).mean
+    }
+}
+
+/// The centres of a replicated design ([`IntervalMethod::Replicates`]): the mean of f over
+/// [`CHUNK_SIZE`] Monte Carlo rows drawn from [`CENTRE_STREAM`], independent of every
+/// replicate.
+fn replicate_centres(scenario: &Scenario, plan: &SobolPlan) -> Result<Vec<f64>, ScenarioError> {
+    let space = &scenario.input_space;
+    let mut rows = vec![0.0; CHUNK_SIZE * space.n_columns()];
+    let mut rng = ChaCha8Rng::seed_from_u64(plan.seed);
+    rng.set_stream(CENTRE_STREAM);
+    space.sample_columns_with(
+        &mut rng,
+        &mut rows,
+        &mut space.new_constraint_counts(),
+        &mut SamplerScratch::default(),
+    )?;
+    let mut evaluator = ChunkEvaluator::new(scenario);
+    evaluator.evaluate_columns_at(&rows, CHUNK_SIZE, 0);
+    Ok(plan
+        .continuous
+        .iter()
+        .map(|&o| finite_mean(evaluator.output_columns[o][..CHUNK_SIZE].iter()))
+        .collect())
 }
 
 /// The estimator's 2G + 2 terms of row `r` of `f[variant][row]`, values less `centre`:
@@ -367,8 +456,9 @@ impl BlockSums {
 pub enum SobolChunks {
     /// Every value of each chunk (the row bootstrap).
     Rows(Vec<ChunkValues>),
-    /// The block sums of each chunk (the block bootstrap), the values centred on `centres`
-    /// (per continuous output: the mean of f(A), f(B) over chunk 0).
+    /// The block sums of each chunk, the values centred on `centres` (per continuous
+    /// output): the block bootstrap (centred on the mean of f(A), f(B) over chunk 0), or a
+    /// replicated design (one block per chunk, [`IntervalMethod::Replicates`]).
     Blocks {
         /// Centre per continuous output.
         centres: Vec<f64>,
@@ -391,7 +481,10 @@ pub struct SobolPartial {
 struct SobolPlan {
     groups: Vec<InputGroup>,
     continuous: Vec<usize>,
-    method: BootstrapMethod,
+    method: IntervalMethod,
+    seed: u64,
+    /// A replicated design's points: 2D dimensions, A the first D, B the last D.
+    points: Option<PointSet>,
 }
 
 fn sobol_plan(
@@ -417,10 +510,27 @@ fn sobol_plan(
             "the scenario has no random input",
         ));
     }
+    let sampling = settings.sampling;
+    sampling.check(settings.base_samples, "base samples", scenario)?;
+    let points = if sampling.is_replicated() {
+        let dims = scenario.input_space.quasi_dimensions()?;
+        let points = PointSet::new(
+            sampling.method,
+            2 * dims,
+            sampling.replicate_points(settings.base_samples),
+            settings.seed,
+        )
+        .map_err(|message| ScenarioError::new("sampling", message))?;
+        Some(points)
+    } else {
+        None
+    };
     Ok(SobolPlan {
         groups,
         continuous: scenario.continuous_outputs(),
-        method: settings.bootstrap_method(scenario),
+        method: settings.interval_method(scenario),
+        seed: settings.seed,
+        points,
     })
 }
 
@@ -434,7 +544,7 @@ pub fn sobol_chunks(
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<SobolPartial, ScenarioError> {
     let plan = sobol_plan(scenario, settings)?;
-    let n_chunks = settings.base_samples.div_ceil(CHUNK_SIZE as u64);
+    let n_chunks = settings.chunk_count();
     if chunks.start > chunks.end || chunks.end > n_chunks {
         return Err(ScenarioError::new(
             "(sensitivity)",
@@ -444,74 +554,64 @@ pub fn sobol_chunks(
             ),
         ));
     }
-    let (groups, continuous) = (&plan.groups, &plan.continuous);
     let chunk_samples =
-        |chunk: u64| (settings.base_samples - chunk * CHUNK_SIZE as u64).min(CHUNK_SIZE as u64);
-    let values = match plan.method {
-        BootstrapMethod::Rows => SobolChunks::Rows(
-            (chunks.start..chunks.end)
+        |chunk: u64| settings.sampling.chunk_rows(settings.base_samples, chunk).3 as u64;
+    let evaluate = |chunk: u64| {
+        let values = evaluate_chunk(scenario, &plan, settings, chunk);
+        progress(chunk_samples(chunk));
+        values
+    };
+    let (centres, block_rows) = match plan.method {
+        IntervalMethod::Rows => {
+            let values = (chunks.start..chunks.end)
                 .into_par_iter()
-                .map(|chunk| {
-                    let values = evaluate_chunk(scenario, groups, continuous, settings, chunk);
-                    progress(chunk_samples(chunk));
-                    values
-                })
-                .collect::<Result<_, _>>()?,
-        ),
-        BootstrapMethod::Blocks { rows: block_rows } => {
-            let n_groups = groups.len();
-            // Centres from chunk 0, which every run draws identically.
-            let pilot = evaluate_chunk(scenario, groups, continuous, settings, 0)?;
-            let centres: Vec<f64> = pilot
-                .iter()
-                .map(|f| {
-                    let finite: Vec<f64> = f[0]
-                        .iter()
-                        .chain(&f[1])
-                        .copied()
-                        .filter(|v| v.is_finite())
-                        .collect();
-                    if finite.is_empty() {
-                        0.0
-                    } else {
-                        crate::stats::Moments::from_slice(&finite).mean
-                    }
-                })
-                .collect();
-            drop(pilot);
-            let blocks = (chunks.start..chunks.end)
-                .into_par_iter()
-                .map(|chunk| {
-                    let values = evaluate_chunk(scenario, groups, continuous, settings, chunk)?;
-                    progress(chunk_samples(chunk));
-                    Ok(values
-                        .iter()
-                        .zip(&centres)
-                        .map(|(f, &centre)| {
-                            let m = f[0].len();
-                            let mut dropped = 0;
-                            let mut terms = vec![0.0; 2 * n_groups + 2];
-                            let blocks = (0..m)
-                                .step_by(block_rows as usize)
-                                .map(|first| {
-                                    let mut sums = BlockSums::new(n_groups);
-                                    for r in first..(first + block_rows as usize).min(m) {
-                                        dropped +=
-                                            u64::from(!sums.add_row(f, r, centre, &mut terms));
-                                    }
-                                    sums
-                                })
-                                .collect();
-                            (blocks, dropped)
-                        })
-                        .collect())
-                })
-                .collect::<Result<_, ScenarioError>>()?;
-            SobolChunks::Blocks {
-                centres,
-                chunks: blocks,
-            }
+                .map(evaluate)
+                .collect::<Result<_, _>>()?;
+            return Ok(SobolPartial {
+                chunks,
+                values: SobolChunks::Rows(values),
+            });
         }
+        // Centres from chunk 0, which every run draws identically.
+        IntervalMethod::Blocks { rows } => (
+            evaluate_chunk(scenario, &plan, settings, 0)?
+                .iter()
+                .map(|f| finite_mean(f[0].iter().chain(&f[1])))
+                .collect::<Vec<f64>>(),
+            rows as usize,
+        ),
+        IntervalMethod::Replicates => (replicate_centres(scenario, &plan)?, CHUNK_SIZE),
+    };
+    let n_groups = plan.groups.len();
+    let blocks = (chunks.start..chunks.end)
+        .into_par_iter()
+        .map(|chunk| {
+            let values = evaluate(chunk)?;
+            Ok(values
+                .iter()
+                .zip(&centres)
+                .map(|(f, &centre)| {
+                    let m = f[0].len();
+                    let mut dropped = 0;
+                    let mut terms = vec![0.0; 2 * n_groups + 2];
+                    let blocks = (0..m)
+                        .step_by(block_rows)
+                        .map(|first| {
+                            let mut sums = BlockSums::new(n_groups);
+                            for r in first..(first + block_rows).min(m) {
+                                dropped += u64::from(!sums.add_row(f, r, centre, &mut terms));
+                            }
+                            sums
+                        })
+                        .collect();
+                    (blocks, dropped)
+                })
+                .collect())
+        })
+        .collect::<Result<_, ScenarioError>>()?;
+    let values = SobolChunks::Blocks {
+        centres,
+        chunks: blocks,
     };
     Ok(SobolPartial { chunks, values })
 }
@@ -526,7 +626,7 @@ pub fn merge_sobol(
     let plan = sobol_plan(scenario, settings)?;
     let broken = |message: String| Err(ScenarioError::new("(merge)", message));
     partials.sort_by_key(|p| (p.chunks.start, p.chunks.end));
-    let n_chunks = settings.base_samples.div_ceil(CHUNK_SIZE as u64);
+    let n_chunks = settings.chunk_count();
     let mut next = 0;
     for partial in &partials {
         if partial.chunks.start != next {
@@ -549,14 +649,12 @@ pub fn merge_sobol(
     let n_outputs = plan.continuous.len();
     let n_variants = 2 * plan.groups.len() + 2;
     match plan.method {
-        BootstrapMethod::Rows => {
+        IntervalMethod::Rows => {
             let mut chunks = Vec::with_capacity(n_chunks as usize);
             for partial in partials {
                 let width = partial.chunks.end - partial.chunks.start;
-                let rows_of = |chunk: u64| {
-                    (settings.base_samples - chunk * CHUNK_SIZE as u64).min(CHUNK_SIZE as u64)
-                        as usize
-                };
+                let rows_of =
+                    |chunk: u64| settings.sampling.chunk_rows(settings.base_samples, chunk).3;
                 match partial.values {
                     SobolChunks::Rows(values)
                         if values.len() as u64 == width
@@ -575,7 +673,7 @@ pub fn merge_sobol(
             }
             Ok(indices_from_rows(scenario, &plan, settings, &chunks)?)
         }
-        BootstrapMethod::Blocks { .. } => {
+        IntervalMethod::Blocks { .. } | IntervalMethod::Replicates => {
             let mut centres_seen: Option<Vec<f64>> = None;
             let mut chunks = Vec::with_capacity(n_chunks as usize);
             for partial in partials {
@@ -605,12 +703,81 @@ pub fn merge_sobol(
                     _ => return broken("a partial's block sums do not fit the analysis".into()),
                 }
             }
-            Ok(indices_from_blocks(scenario, &plan, settings, &chunks)?)
+            if plan.method == IntervalMethod::Replicates {
+                indices_from_replicates(scenario, &plan, settings, &chunks)
+            } else {
+                indices_from_blocks(scenario, &plan, settings, &chunks)
+            }
         }
     }
 }
 
-/// The block bootstrap ([`BootstrapMethod::Blocks`]): the indices from the totals of every
+/// A replicated design ([`IntervalMethod::Replicates`]): the indices from the totals of
+/// every chunk's sums, their intervals from the spread of each replicate's own indices.
+fn indices_from_replicates(
+    scenario: &Scenario,
+    plan: &SobolPlan,
+    settings: SensitivitySettings,
+    chunks: &[ChunkBlocks],
+) -> Result<Vec<OutputSensitivity>, ScenarioError> {
+    let (groups, continuous) = (&plan.groups, &plan.continuous);
+    let n_groups = groups.len();
+    let sampling = settings.sampling;
+    let mut results = Vec::with_capacity(continuous.len());
+    for (slot, &o) in continuous.iter().enumerate() {
+        let mut replicates = vec![BlockSums::new(n_groups); sampling.replicates as usize];
+        let mut non_finite_rows = 0;
+        for (chunk, blocks) in (0..).zip(chunks) {
+            let (replicate, _, _, rows) = sampling.chunk_rows(settings.base_samples, chunk);
+            match &blocks[slot] {
+                (sums, dropped)
+                    if sums.len() == 1
+                        && sums[0].first.len() == n_groups
+                        && sums[0].total.len() == n_groups
+                        && sums[0].rows + dropped == rows as u64 =>
+                {
+                    replicates[replicate as usize].add(&sums[0]);
+                    non_finite_rows += dropped;
+                }
+                _ => {
+                    return Err(ScenarioError::new(
+                        "(merge)",
+                        "a partial's sums do not fit the analysis' replicates",
+                    ))
+                }
+            }
+        }
+        if replicates.iter().any(|r| r.rows < 2) {
+            return Err(ScenarioError::new(
+                format!("(output {})", scenario.outputs[o].name),
+                "a replicate has fewer than 2 finite rows: the sensitivity is undefined",
+            ));
+        }
+        let mut all = BlockSums::new(n_groups);
+        replicates.iter().for_each(|r| all.add(r));
+        let (variance, first, total) = all.indices();
+        let estimates = replicates
+            .iter()
+            .map(|r| {
+                let (_, first, total) = r.indices();
+                (first, total)
+            })
+            .collect();
+        results.push(output_sensitivity(
+            scenario,
+            o,
+            groups,
+            settings,
+            variance,
+            non_finite_rows,
+            (first, total),
+            Spread::Replicates(estimates),
+        ));
+    }
+    Ok(results)
+}
+
+/// The block bootstrap ([`IntervalMethod::Blocks`]): the indices from the totals of every
 /// chunk's block sums and the intervals from resampled blocks.
 fn indices_from_blocks(
     scenario: &Scenario,
@@ -666,14 +833,43 @@ fn indices_from_blocks(
             variance,
             non_finite_rows,
             (first, total),
-            resamples,
+            Spread::Bootstrap(resamples),
         ));
     }
     Ok(results)
 }
 
-/// The indices of output `o` with their percentile intervals, groups sorted by decreasing
-/// total index.
+/// What an interval comes from: per resample or replicate, (first-order, total) indices
+/// of every group.
+enum Spread {
+    /// Bootstrap resamples: the percentile interval.
+    Bootstrap(Vec<(Vec<f64>, Vec<f64>)>),
+    /// Independent replicates: the estimate ± t(R − 1)·s/√R.
+    Replicates(Vec<(Vec<f64>, Vec<f64>)>),
+}
+
+impl Spread {
+    /// The interval of `value`, group g's first-order (`total` false) or total index.
+    fn interval(&self, value: f64, g: usize, total: bool, confidence: f64) -> [f64; 2] {
+        let pick =
+            |(first, totals): &(Vec<f64>, Vec<f64>)| if total { totals[g] } else { first[g] };
+        match self {
+            Spread::Bootstrap(resamples) => {
+                percentile_interval(resamples.iter().map(pick).collect(), confidence)
+            }
+            Spread::Replicates(estimates) => {
+                let values: Vec<f64> = estimates.iter().map(pick).collect();
+                let t = StudentsT::new(0.0, 1.0, (values.len() - 1) as f64)
+                    .expect("at least 2 replicates")
+                    .inverse_cdf(0.5 + confidence / 2.0);
+                let h = t * crate::stats::replicate_standard_error(&values);
+                [value - h, value + h]
+            }
+        }
+    }
+}
+
+/// The indices of output `o` with their intervals, groups sorted by decreasing total index.
 #[allow(clippy::too_many_arguments)]
 fn output_sensitivity(
     scenario: &Scenario,
@@ -683,7 +879,7 @@ fn output_sensitivity(
     variance: f64,
     non_finite_rows: u64,
     (first, total): (Vec<f64>, Vec<f64>),
-    resamples: Vec<(Vec<f64>, Vec<f64>)>,
+    spread: Spread,
 ) -> OutputSensitivity {
     let mut group_indices: Vec<GroupIndices> = groups
         .iter()
@@ -692,17 +888,11 @@ fn output_sensitivity(
             group: group.name.clone(),
             first_order: Estimate {
                 value: first[g],
-                interval: percentile_interval(
-                    resamples.iter().map(|r| r.0[g]).collect(),
-                    settings.confidence,
-                ),
+                interval: spread.interval(first[g], g, false, settings.confidence),
             },
             total: Estimate {
                 value: total[g],
-                interval: percentile_interval(
-                    resamples.iter().map(|r| r.1[g]).collect(),
-                    settings.confidence,
-                ),
+                interval: spread.interval(total[g], g, true, settings.confidence),
             },
         })
         .collect();
@@ -728,9 +918,7 @@ pub fn sobol_indices(
     settings: SensitivitySettings,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Vec<OutputSensitivity>, ScenarioError> {
-    sobol_plan(scenario, settings)?;
-    let n_chunks = settings.base_samples.div_ceil(CHUNK_SIZE as u64);
-    let partial = sobol_chunks(scenario, settings, 0..n_chunks, progress)?;
+    let partial = sobol_chunks(scenario, settings, 0..settings.chunk_count(), progress)?;
     merge_sobol(scenario, settings, vec![partial])
 }
 
@@ -828,7 +1016,7 @@ fn row_resamples(
         .collect()
 }
 
-/// The row bootstrap ([`BootstrapMethod::Rows`]) over every chunk's values, in chunk order.
+/// The row bootstrap ([`IntervalMethod::Rows`]) over every chunk's values, in chunk order.
 fn indices_from_rows(
     scenario: &Scenario,
     plan: &SobolPlan,
@@ -898,7 +1086,7 @@ fn indices_from_rows(
             variance,
             non_finite_rows,
             (first, total),
-            resamples,
+            Spread::Bootstrap(resamples),
         ));
     }
     Ok(results)

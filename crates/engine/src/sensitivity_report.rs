@@ -1,14 +1,21 @@
 //! The report of `rvtol sensitivity`: JSON (`rvtol_version`, `scenario`, `seed`,
-//! `base_samples`, `evaluations`, `bootstrap`, `confidence`, `method`, and `outputs`, each
+//! `base_samples`, `evaluations`, `bootstrap` and `bootstrap_unit` (Monte Carlo) or
+//! `sampling` (a replicated design), `confidence`, `method`, and `outputs`, each
 //! with `name`, `unit`, `variance`, `non_finite_rows` and `indices`: per input group
 //! `input`, `first_order`, `first_order_ci`, `total`, `total_ci`, sorted by decreasing
 //! total index) and a readable ranking table per output.
 
 use serde::Serialize;
 
-use crate::report::format_sig;
+use crate::report::{format_sig, group_thousands, SamplingReport};
 use crate::scenario::Scenario;
-use crate::sensitivity::{BootstrapMethod, OutputSensitivity, SensitivitySettings};
+use crate::sensitivity::{IntervalMethod, OutputSensitivity, SensitivitySettings};
+
+/// The estimators, in words.
+const ESTIMATORS: &str = "Sobol' indices of independent input groups: first order by Saltelli et al. (2010), total by Jansen (1999), each averaged over the A_B and B_A designs";
+
+/// The intervals of a replicated design, in words.
+const REPLICATE_INTERVAL_METHOD: &str = "index of all N rows +- t(0.975, R-1)*s/sqrt(R), s the standard deviation of the index over the R independent replicates";
 
 /// Most rows of the linearised screening that completes a sensitivity report.
 pub const SCREENING_ROWS: u64 = 65_536;
@@ -20,11 +27,11 @@ pub struct IndexReport {
     pub input: String,
     /// First-order Sobol' index.
     pub first_order: f64,
-    /// Its bootstrap interval.
+    /// Its interval (bootstrap, or from the replicates).
     pub first_order_ci: [f64; 2],
     /// Total Sobol' index.
     pub total: f64,
-    /// Its bootstrap interval.
+    /// Its interval (bootstrap, or from the replicates).
     pub total_ci: [f64; 2],
 }
 
@@ -101,18 +108,25 @@ pub struct SensitivityReport {
     pub base_samples: u64,
     /// Model evaluations, N·(2G + 2).
     pub evaluations: u64,
-    /// Bootstrap resamples.
-    pub bootstrap: usize,
+    /// Bootstrap resamples (Monte Carlo only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bootstrap: Option<usize>,
     /// Confidence of the intervals.
     pub confidence: f64,
-    /// Estimators, in words.
-    pub method: &'static str,
-    /// How the intervals were resampled: `rows`, or `blocks` of `bootstrap_block_rows`
-    /// consecutive rows (bounded memory beyond the row-bootstrap limit).
-    pub bootstrap_unit: &'static str,
+    /// Estimators and intervals, in words.
+    pub method: String,
+    /// How a Monte Carlo analysis' intervals were resampled: `rows`, or `blocks` of
+    /// `bootstrap_block_rows` consecutive rows (bounded memory beyond the row-bootstrap
+    /// limit).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bootstrap_unit: Option<&'static str>,
     /// Rows per resampled block, for `blocks`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub bootstrap_block_rows: Option<u64>,
+    /// How a Latin hypercube or RQMC design drew A and B and gives the intervals (absent
+    /// for Monte Carlo).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sampling: Option<SamplingReport>,
     /// One entry per continuous output.
     pub outputs: Vec<OutputSensitivityReport>,
 }
@@ -125,21 +139,37 @@ impl SensitivityReport {
         outputs: Vec<OutputSensitivity>,
     ) -> Self {
         let groups = outputs.first().map_or(0, |o| o.indices.len()) as u64;
-        let (bootstrap_unit, bootstrap_block_rows) = match settings.bootstrap_method(scenario) {
-            BootstrapMethod::Rows => ("rows", None),
-            BootstrapMethod::Blocks { rows } => ("blocks", Some(rows)),
+        let (bootstrap_unit, bootstrap_block_rows) = match settings.interval_method(scenario) {
+            IntervalMethod::Rows => (Some("rows"), None),
+            IntervalMethod::Blocks { rows } => (Some("blocks"), Some(rows)),
+            IntervalMethod::Replicates => (None, None),
         };
+        let sampling = settings.sampling;
+        let replicated = sampling.is_replicated();
         SensitivityReport {
             rvtol_version: env!("CARGO_PKG_VERSION"),
             scenario: scenario.name.clone(),
             seed: settings.seed,
             base_samples: settings.base_samples,
             evaluations: settings.base_samples * (2 * groups + 2),
-            bootstrap: settings.bootstrap,
+            bootstrap: (!replicated).then_some(settings.bootstrap),
             confidence: settings.confidence,
-            method: "Sobol' indices of independent input groups: first order by Saltelli et al. (2010), total by Jansen (1999), each averaged over the A_B and B_A designs; percentile bootstrap intervals over the base samples",
+            method: if replicated {
+                format!("{ESTIMATORS}; A and B the two halves of each point of {} replicates of a {}; intervals from the replicates", sampling.replicates, match sampling.method {
+                    rvtol_deviation::SamplingMethod::Rqmc => "scrambled Sobol' design",
+                    _ => "Latin hypercube",
+                })
+            } else {
+                format!("{ESTIMATORS}; percentile bootstrap intervals over the base samples")
+            },
             bootstrap_unit,
             bootstrap_block_rows,
+            sampling: replicated.then(|| SamplingReport {
+                method: sampling.method.name(),
+                replicates: sampling.replicates,
+                points_per_replicate: sampling.replicate_points(settings.base_samples),
+                interval_method: REPLICATE_INTERVAL_METHOD,
+            }),
             outputs: outputs
                 .into_iter()
                 .map(|o| OutputSensitivityReport {
@@ -256,18 +286,30 @@ impl SensitivityReport {
 
     /// One ranking table per output.
     pub fn to_text(&self) -> String {
+        let intervals = match (&self.sampling, self.bootstrap) {
+            (Some(sampling), _) => format!(
+                "sampling {}: {} replicates of {} points, intervals from their spread (Student t, {} degrees of freedom)",
+                sampling.method,
+                sampling.replicates,
+                group_thousands(sampling.points_per_replicate),
+                sampling.replicates - 1
+            ),
+            (None, bootstrap) => format!(
+                "{} bootstrap resamples{}",
+                bootstrap.unwrap_or(0),
+                match self.bootstrap_block_rows {
+                    Some(rows) => format!(" of blocks of {rows} rows"),
+                    None => String::new(),
+                }
+            ),
+        };
         let mut lines = vec![format!(
-            "rvtol {} | scenario {} | sensitivity: {} base samples ({} model evaluations) | seed {} | {} bootstrap resamples{}, {:.0} % intervals",
+            "rvtol {} | scenario {} | sensitivity: {} base samples ({} model evaluations) | seed {} | {intervals}, {:.0} % intervals",
             self.rvtol_version,
             self.scenario,
             self.base_samples,
             self.evaluations,
             self.seed,
-            self.bootstrap,
-            match self.bootstrap_block_rows {
-                Some(rows) => format!(" of blocks of {rows} rows"),
-                None => String::new(),
-            },
             100.0 * self.confidence
         )];
         let interval = |ci: [f64; 2]| format!("[{}, {}]", format_sig(ci[0]), format_sig(ci[1]));
@@ -295,19 +337,41 @@ impl SensitivityReport {
                 .max()
                 .unwrap_or(5)
                 .max(5);
-            lines.push(format!(
-                "  {:<width$}  {:>9} {:<22} {:>9} {:<22}",
-                "input", "first", "interval", "total", "interval"
-            ));
-            for index in &output.indices {
-                lines.push(format!(
-                    "  {:<width$}  {:>9} {:<22} {:>9} {:<22}",
-                    index.input,
-                    format_sig(index.first_order),
-                    interval(index.first_order_ci),
-                    format_sig(index.total),
-                    interval(index.total_ci)
-                ));
+            // Columns as wide as their widest entry, so that every row lines up.
+            let cells: Vec<[String; 4]> = output
+                .indices
+                .iter()
+                .map(|index| {
+                    [
+                        format_sig(index.first_order),
+                        interval(index.first_order_ci),
+                        format_sig(index.total),
+                        interval(index.total_ci),
+                    ]
+                })
+                .collect();
+            let column = |k: usize, heading: &str| {
+                cells
+                    .iter()
+                    .map(|c| c[k].chars().count())
+                    .chain([heading.len()])
+                    .max()
+                    .unwrap_or(0)
+            };
+            let (w0, w1, w2) = (
+                column(0, "first"),
+                column(1, "interval"),
+                column(2, "total"),
+            );
+            let row = |input: &str, c: [&str; 4]| {
+                format!(
+                    "  {input:<width$}  {:>w0$} {:<w1$}  {:>w2$} {}",
+                    c[0], c[1], c[2], c[3]
+                )
+            };
+            lines.push(row("input", ["first", "interval", "total", "interval"]));
+            for (index, c) in output.indices.iter().zip(&cells) {
+                lines.push(row(&index.input, [&c[0], &c[1], &c[2], &c[3]]));
             }
             if let Some(screening) = &output.screening {
                 lines.push(format!(

@@ -43,7 +43,7 @@ use rvtol_deviation::ConstraintCounts;
 /// First bytes of a shard file.
 pub const MAGIC: &[u8] = b"rvtol-partial\n";
 /// Layout version written and read.
-pub const FORMAT: u32 = 2;
+pub const FORMAT: u32 = 3;
 
 /// What a shard file says about the run or analysis it belongs to.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
@@ -95,6 +95,10 @@ pub enum ShardCommand {
         bootstrap: u64,
         /// Most model values kept for the row bootstrap.
         row_bootstrap_limit: u64,
+        /// Sampling method of A and B (`mc`, `lhs`, `rqmc`).
+        sampling: String,
+        /// Its replicates (1 for Monte Carlo).
+        replicates: u64,
         /// With Shapley effects: their settings and this shard's permutations.
         shapley: Option<ShapleyShard>,
     },
@@ -137,43 +141,52 @@ impl ShardCommand {
         }
     }
 
-    /// A run command's settings (None for a sensitivity analysis); Err for a sampling
-    /// name this rvtol does not know (a damaged file; `decode` refuses it).
+    /// The command's sampling; Err for a method name this rvtol does not know (a damaged
+    /// file; `decode` refuses it).
+    pub fn sampling(&self) -> Result<Sampling, String> {
+        let (ShardCommand::Run {
+            sampling,
+            replicates,
+            ..
+        }
+        | ShardCommand::Sensitivity {
+            sampling,
+            replicates,
+            ..
+        }) = self;
+        let method = SamplingMethod::parse(sampling)
+            .ok_or_else(|| damaged(&format!("sampling {sampling:?}")))?;
+        Ok(Sampling {
+            method,
+            replicates: *replicates,
+        })
+    }
+
+    /// A run command's settings (None for a sensitivity analysis); Err as
+    /// [`ShardCommand::sampling`].
     pub fn run_settings(&self) -> Result<Option<RunSettings>, String> {
         let ShardCommand::Run {
             samples,
             seed,
             exact_percentile_limit,
-            sampling,
-            replicates,
+            ..
         } = self
         else {
             return Ok(None);
         };
-        let method = SamplingMethod::parse(sampling)
-            .ok_or_else(|| damaged(&format!("sampling {sampling:?}")))?;
         Ok(Some(RunSettings {
             samples: *samples,
             seed: *seed,
             exact_percentile_limit: *exact_percentile_limit,
-            sampling: Sampling {
-                method,
-                replicates: *replicates,
-            },
+            sampling: self.sampling()?,
         }))
     }
 
-    /// The chunks the command's work divides into: the run's chunks (replicate after
-    /// replicate, [`RunSettings::chunk_count`]), the sensitivity's base-sample chunks.
+    /// The chunks the command's work divides into: the run's or the analysis' rows in
+    /// chunks, replicate after replicate ([`Sampling::chunk_count`]).
     pub fn chunk_count(&self) -> u64 {
-        match self {
-            ShardCommand::Run { .. } => self
-                .run_settings()
-                .ok()
-                .flatten()
-                .map_or(0, |settings| settings.chunk_count()),
-            ShardCommand::Sensitivity { samples, .. } => crate::run::chunk_count(*samples),
-        }
+        self.sampling()
+            .map_or(0, |sampling| sampling.chunk_count(self.samples()))
     }
 
     /// The command's name on the command line.
@@ -418,7 +431,7 @@ pub fn decode(bytes: &[u8]) -> Result<ShardFile, String> {
     let header_len = input.count(1)?;
     let header: ShardHeader = serde_json::from_slice(input.take(header_len)?)
         .map_err(|err| damaged(&format!("header: {err}")))?;
-    header.command.run_settings()?;
+    header.command.sampling()?;
     let [first, end] = header.chunks;
     let content = match input.u8()? {
         0 => ShardContent::Run(read_run(&mut input, first..end)?),
@@ -758,9 +771,16 @@ fn settings_text(command: &ShardCommand) -> String {
             seed,
             bootstrap,
             row_bootstrap_limit,
+            sampling,
+            replicates,
             shapley,
         } => format!(
-            "samples {samples}, seed {seed}, bootstrap {bootstrap}, row bootstrap limit {row_bootstrap_limit}, {}",
+            "samples {samples}, seed {seed}, {}, {}",
+            if sampling == "mc" {
+                format!("bootstrap {bootstrap}, row bootstrap limit {row_bootstrap_limit}")
+            } else {
+                format!("sampling {sampling} × {replicates}")
+            },
             shapley.as_ref().map_or("no Shapley".to_string(), |s| format!(
                 "Shapley permutations {} outer {}",
                 s.budget, s.outer

@@ -212,21 +212,11 @@ fn run<'py>(
     threads: Option<usize>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let s = &scenario.inner;
-    let method = sampling
-        .map(|name| {
-            SamplingMethod::parse(name).ok_or_else(|| {
-                value_error(format!(
-                    "sampling: unknown method {name:?}, expected one of {}",
-                    SamplingMethod::NAMES.join(", ")
-                ))
-            })
-        })
-        .transpose()?;
     let settings = RunSettings {
         samples: samples.unwrap_or(s.samples),
         seed: seed.unwrap_or(s.seed),
         exact_percentile_limit,
-        sampling: Sampling::chosen(s.sampling, method, replicates),
+        sampling: chosen_sampling(s, sampling, replicates)?,
     };
     settings.check(s).map_err(value_error)?;
     if samples_out {
@@ -272,11 +262,34 @@ fn run<'py>(
     Ok((report, out).into_pyobject(py)?.into_any())
 }
 
-/// Sobol' first-order and total indices with bootstrap intervals, the linearised
-/// screening and, with `shapley=True`, Shapley effects (as `rvtol sensitivity`): the JSON
-/// report as a dict.
+/// The sampling `sampling` (a method name) and `replicates` ask for over the scenario's
+/// ([`Sampling::chosen`]).
+fn chosen_sampling(
+    scenario: &rvtol_engine::Scenario,
+    sampling: Option<&str>,
+    replicates: Option<u64>,
+) -> PyResult<Sampling> {
+    let method = sampling
+        .map(|name| {
+            SamplingMethod::parse(name).ok_or_else(|| {
+                value_error(format!(
+                    "sampling: unknown method {name:?}, expected one of {}",
+                    SamplingMethod::NAMES.join(", ")
+                ))
+            })
+        })
+        .transpose()?;
+    Ok(Sampling::chosen(scenario.sampling, method, replicates))
+}
+
+/// Sobol' first-order and total indices with their intervals, the linearised screening
+/// and, with `shapley=True`, Shapley effects (as `rvtol sensitivity`): the JSON report as
+/// a dict. `sampling` ("mc", "lhs" or "rqmc") and `replicates` default to the scenario's;
+/// Monte Carlo intervals come from `bootstrap` resamples (default 500), those of an lhs or
+/// rqmc design from its replicates.
 #[pyfunction]
-#[pyo3(signature = (scenario, samples = 65_536, seed = None, *, bootstrap = 500,
+#[pyo3(signature = (scenario, samples = 65_536, seed = None, *, sampling = None,
+    replicates = None, bootstrap = None,
     row_bootstrap_limit = rvtol_engine::sensitivity::DEFAULT_ROW_BOOTSTRAP_LIMIT,
     shapley = false, permutations = 600, outer = 256, threads = None))]
 #[allow(clippy::too_many_arguments)]
@@ -285,7 +298,9 @@ fn sensitivity<'py>(
     scenario: &Scenario,
     samples: u64,
     seed: Option<u64>,
-    bootstrap: usize,
+    sampling: Option<&str>,
+    replicates: Option<u64>,
+    bootstrap: Option<usize>,
     row_bootstrap_limit: u64,
     shapley: bool,
     permutations: usize,
@@ -293,12 +308,20 @@ fn sensitivity<'py>(
     threads: Option<usize>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let s = &scenario.inner;
+    let sampling = chosen_sampling(s, sampling, replicates)?;
+    if sampling.is_replicated() && bootstrap.is_some() {
+        return Err(value_error(format!(
+            "bootstrap: the intervals of a replicated {} design come from its replicates, not a bootstrap; leave bootstrap out, or give sampling=\"mc\"",
+            sampling.method.name()
+        )));
+    }
     let settings = SensitivitySettings {
         base_samples: samples,
         seed: seed.unwrap_or(s.seed),
-        bootstrap,
+        bootstrap: bootstrap.unwrap_or(500),
         confidence: 0.95,
         row_bootstrap_limit,
+        sampling,
     };
     let pool = pool(threads)?;
     let json = py

@@ -132,6 +132,16 @@ def test_sensitivity_is_the_command_line_report(tmp_path):
     assert report == expected
 
 
+def test_replicated_sensitivity_is_the_command_line_report(tmp_path):
+    path = scenario_path("ishigami.json")
+    expected = cli_json(tmp_path, "sensitivity", path, "--samples", "8192", "--sampling", "rqmc", "--replicates", "8")
+    report = rvtol.sensitivity(rvtol.Scenario(path), samples=8192, sampling="rqmc", replicates=8)
+    assert report == expected
+    assert report["sampling"]["method"] == "rqmc" and "bootstrap" not in report
+    with pytest.raises(ValueError, match="bootstrap: the intervals of a replicated rqmc design"):
+        rvtol.sensitivity(rvtol.Scenario(path), samples=8192, sampling="rqmc", bootstrap=100)
+
+
 def test_allocate_is_the_command_line_report(tmp_path):
     path = scenario_path("allocation-linear.json")
     out = tmp_path / "allocation.json"

@@ -266,7 +266,7 @@ fn record_section(report: &Report) -> String {
             ));
         }
         if let Some(b) = json.get("bootstrap").and_then(Value::as_u64) {
-            parts.push(format!("{b} bootstrap replicates"));
+            parts.push(format!("{b} bootstrap resamples"));
         }
         if let Some(e) = json.get("evaluations").and_then(Value::as_u64) {
             parts.push(format!("{} evaluations", thousands(e)));
@@ -579,17 +579,41 @@ fn output_block(output: &Value, name: &str, unit: &str) -> Result<String, Report
 fn sensitivity_section(report: &Value) -> Result<String, ReportError> {
     let outputs = array(report, "outputs", "sensitivity report")?;
     let mut out = String::from("<section id=\"sensitivity\">\n<h2>Sensitivity</h2>\n");
+    let sampling = report.get("sampling");
+    let intervals_from = match sampling {
+        Some(sampling) => format!(
+            "the spread of {} independent replicates of {} points (Student t)",
+            sampling
+                .get("replicates")
+                .and_then(Value::as_u64)
+                .unwrap_or(0),
+            thousands(
+                sampling
+                    .get("points_per_replicate")
+                    .and_then(Value::as_u64)
+                    .unwrap_or(0)
+            )
+        ),
+        None => format!(
+            "{} bootstrap resamples over the {}",
+            report.get("bootstrap").and_then(Value::as_u64).unwrap_or(0),
+            escape(s(report, "bootstrap_unit").unwrap_or("rows"))
+        ),
+    };
     if let Some(method) = s(report, "method") {
         out.push_str(&format!(
-            "<p class=\"note\">{}. {} base samples, {} model evaluations; intervals at {} % from {} bootstrap replicates over the {}.</p>\n",
+            "<p class=\"note\">{}. {} base samples, {} model evaluations; intervals at {} % from {intervals_from}.</p>\n",
             escape(method),
             thousands(report.get("base_samples").and_then(Value::as_u64).unwrap_or(0)),
             thousands(report.get("evaluations").and_then(Value::as_u64).unwrap_or(0)),
-            number(f(report, "confidence").map(|c| c * 100.0)),
-            report.get("bootstrap").and_then(Value::as_u64).unwrap_or(0),
-            escape(s(report, "bootstrap_unit").unwrap_or("rows"))
+            f(report, "confidence").map_or("n/a".to_string(), |c| format!("{:.0}", c * 100.0)),
         ));
     }
+    let whiskers = if sampling.is_some() {
+        "Whiskers: intervals from the replicates."
+    } else {
+        "Whiskers: bootstrap intervals."
+    };
     for output in outputs {
         let name = s(output, "name").unwrap_or("output");
         out.push_str(&format!(
@@ -629,8 +653,10 @@ fn sensitivity_section(report: &Value) -> Result<String, ReportError> {
             )?;
             out.push_str(&figure(
                 &svg,
-                "Sources sorted by total index. First order: the share of the variance the source \
-                 explains alone; total: with all its interactions. Whiskers: bootstrap intervals.",
+                &format!(
+                    "Sources sorted by total index. First order: the share of the variance the \
+                     source explains alone; total: with all its interactions. {whiskers}"
+                ),
             ));
         }
         if let Some(effects) = output.get("shapley").and_then(Value::as_array) {

@@ -353,13 +353,29 @@ impl InputSpace {
         scratch: &mut SamplerScratch,
     ) -> Result<(), DeviationError> {
         let dims = self.quasi_dimensions()?;
+        assert_eq!(points.dims(), dims, "the point set's dimensions");
+        self.sample_columns_from_point_dims(points, 0, replicate, first, columns, scratch)
+    }
+
+    /// [`InputSpace::sample_columns_from_points`] from the dimensions `first_dim ..
+    /// first_dim + quasi_dimensions()` of a wider point set: the A and B matrices of a
+    /// sensitivity design are the two halves of one point.
+    pub fn sample_columns_from_point_dims(
+        &self,
+        points: &PointSet,
+        first_dim: usize,
+        replicate: u64,
+        first: u64,
+        columns: &mut [f64],
+        scratch: &mut SamplerScratch,
+    ) -> Result<(), DeviationError> {
+        let dims = self.quasi_dimensions()?;
         if self.n_columns == 0 {
             return Ok(());
         }
-        assert_eq!(points.dims(), dims, "the point set's dimensions");
         let n_rows = columns.len() / self.n_columns;
         let u = prefix(&mut scratch.candidates, dims * n_rows);
-        points.fill(replicate, first, n_rows, u);
+        points.fill_dims(replicate, first, n_rows, first_dim..first_dim + dims, u);
         let mut uniforms = u.chunks_exact(n_rows.max(1));
         let mut next = || uniforms.next().expect("a column of uniforms per dimension");
         for &(column, mean) in &self.fixed {
