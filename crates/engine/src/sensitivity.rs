@@ -31,16 +31,16 @@
 //! row takes, [`InputSpace::quasi_dimensions`]): row i of A is point i's dimensions
 //! 0 … D − 1 and row i of B its dimensions D … 2D − 1, turned into rows by the inverse
 //! CDFs of the run's quasi path (the design of Saltelli et al. 2010: A and B the left and
-//! right halves of one quasi-random sample of dimension 2k). Each point
-//! of a scrambled Sobol' or Latin hypercube design is uniform on (0, 1)^2D, so row i of A
-//! and row i of B are independent and the estimators above keep their expectations; the
-//! design's balance makes their error shrink faster than N^−1/2 for smooth models. The
-//! rows of one design are not independent, so no bootstrap over them: the N base samples
-//! are R independent randomizations of N/R points, the index is the estimator over all N
-//! rows, and its interval is ± t(R − 1)·s/√R, s the standard deviation of the R
-//! replicates' own estimates (the randomized-QMC interval: Owen, *Monte Carlo theory,
-//! methods and examples*, ch. 17). Values are centred on the mean of f over [`CHUNK_SIZE`] Monte Carlo rows of a
-//! stream of their own (so that the replicates stay independent of one another).
+//! right halves of one quasi-random sample of dimension 2k). Each point of a scrambled
+//! Sobol' or Latin hypercube design is uniform on (0, 1)^2D, so row i of A and row i of B
+//! are independent and the estimators above keep their expectations; the design's balance
+//! makes their error shrink faster than N^−1/2 for smooth models. The rows of one design
+//! are not independent, so no bootstrap over them: the N base samples are R independent
+//! randomizations of N/R points, the index is the estimator over all N rows, and its
+//! interval is ± t(R − 1)·s/√R, s the standard deviation of the R replicates' own
+//! estimates (the randomized-QMC interval: Owen, *Monte Carlo theory, methods and
+//! examples*, ch. 17). Values are centred on the mean of f over [`CHUNK_SIZE`] Monte Carlo
+//! rows of a stream of their own (so that the replicates stay independent of one another).
 //!
 //! [`InputSpace::quasi_dimensions`]: rvtol_deviation::InputSpace::quasi_dimensions
 //!
