@@ -394,12 +394,12 @@ impl SensitivityReport {
             }
             if let Some(shapley) = &output.shapley {
                 lines.push(format!(
-                    "  {:<width$}  {:>9} {:<22}",
+                    "  {:<width$}  {:>9} {}",
                     "input", "Shapley", "interval"
                 ));
                 for effect in shapley {
                     lines.push(format!(
-                        "  {:<width$}  {:>9} {:<22}",
+                        "  {:<width$}  {:>9} {}",
                         effect.input,
                         format_sig(effect.effect),
                         interval(effect.ci)
