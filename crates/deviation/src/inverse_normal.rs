@@ -10,38 +10,44 @@
 //! points across (0, 1), tails included. The Monte Carlo path (the truncated normal's
 //! inverse CDF) keeps statrs' form, so its streams keep their bits.
 
+/// The rational function of AS 241's central region, 0.075 ≤ p ≤ 0.925, at q = p − 0.5.
+#[inline(always)]
+fn central(q: f64) -> f64 {
+    let r = 0.180_625 - q * q;
+    let num = (((((((2.509_080_928_730_122_7e3 * r + 3.343_057_558_358_813e4) * r
+        + 6.726_577_092_700_87e4)
+        * r
+        + 4.592_195_393_154_987e4)
+        * r
+        + 1.373_169_376_550_946e4)
+        * r
+        + 1.971_590_950_306_551_3e3)
+        * r
+        + 1.331_416_678_917_843_8e2)
+        * r
+        + 3.387_132_872_796_366_5)
+        * q;
+    let den = ((((((5.226_495_278_852_545e3 * r + 2.872_908_573_572_194_3e4) * r
+        + 3.930_789_580_009_271e4)
+        * r
+        + 2.121_379_430_158_659_7e4)
+        * r
+        + 5.394_196_021_424_751e3)
+        * r
+        + 6.871_870_074_920_579e2)
+        * r
+        + 4.231_333_070_160_091e1)
+        * r
+        + 1.0;
+    num / den
+}
+
 /// Φ⁻¹(p) for p in (0, 1) (±∞ at 0 and 1, NaN outside).
 #[inline]
 pub fn standard_normal_inverse(p: f64) -> f64 {
     let q = p - 0.5;
     if q.abs() <= 0.425 {
-        let r = 0.180_625 - q * q;
-        let num = (((((((2.509_080_928_730_122_7e3 * r + 3.343_057_558_358_813e4) * r
-            + 6.726_577_092_700_87e4)
-            * r
-            + 4.592_195_393_154_987e4)
-            * r
-            + 1.373_169_376_550_946e4)
-            * r
-            + 1.971_590_950_306_551_3e3)
-            * r
-            + 1.331_416_678_917_843_8e2)
-            * r
-            + 3.387_132_872_796_366_5)
-            * q;
-        let den = ((((((5.226_495_278_852_545e3 * r + 2.872_908_573_572_194_3e4) * r
-            + 3.930_789_580_009_271e4)
-            * r
-            + 2.121_379_430_158_659_7e4)
-            * r
-            + 5.394_196_021_424_751e3)
-            * r
-            + 6.871_870_074_920_579e2)
-            * r
-            + 4.231_333_070_160_091e1)
-            * r
-            + 1.0;
-        return num / den;
+        return central(q);
     }
     let tail = if q < 0.0 { p } else { 1.0 - p };
     if tail.is_nan() || tail <= 0.0 {
@@ -114,6 +120,27 @@ pub fn standard_normal_inverse(p: f64) -> f64 {
     }
 }
 
+/// Φ⁻¹ of every value of `ps`, in place, bit for bit [`standard_normal_inverse`]: the
+/// central region (85 % of uniform values) by a loop without branches, which the compiler
+/// vectorises, then the tails one by one.
+pub fn standard_normal_inverse_in_place(ps: &mut [f64]) {
+    const PIECE: usize = 64;
+    let mut original = [0.0; PIECE];
+    for piece in ps.chunks_mut(PIECE) {
+        let original = &mut original[..piece.len()];
+        original.copy_from_slice(piece);
+        for (x, &p) in piece.iter_mut().zip(original.iter()) {
+            *x = central(p - 0.5);
+        }
+        for (x, &p) in piece.iter_mut().zip(original.iter()) {
+            let central_region = (p - 0.5).abs() <= 0.425;
+            if !central_region {
+                *x = standard_normal_inverse(p);
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -151,5 +178,33 @@ mod tests {
         assert_eq!(standard_normal_inverse(0.0), f64::NEG_INFINITY);
         assert_eq!(standard_normal_inverse(1.0), f64::INFINITY);
         assert!(standard_normal_inverse(1.5).is_nan());
+    }
+
+    #[test]
+    fn the_batched_form_is_the_scalar_one_bit_for_bit() {
+        // Centre, both tails, the branch edges, 0, 1, NaN and values outside (0, 1), in a
+        // length that leaves the last piece part-filled.
+        let mut points: Vec<f64> = (0..1000).map(|k| (k as f64 + 0.5) / 1000.0).collect();
+        points.extend([
+            0.0,
+            1.0,
+            f64::NAN,
+            -0.5,
+            1.5,
+            0.075,
+            0.925,
+            1e-300,
+            1.0 - 1e-16,
+        ]);
+        points.extend((1..=20).map(|e| 10f64.powi(-e)));
+        let mut batched = points.clone();
+        standard_normal_inverse_in_place(&mut batched);
+        for (p, x) in points.iter().zip(&batched) {
+            assert_eq!(
+                x.to_bits(),
+                standard_normal_inverse(*p).to_bits(),
+                "p = {p:e}"
+            );
+        }
     }
 }

@@ -94,6 +94,10 @@ const UNIT: f64 = 1.0 / (1u64 << 53) as f64;
 /// The largest double below 1: no uniform reaches 1 (nor 0), so Φ⁻¹(u) stays finite.
 const BELOW_ONE: f64 = 1.0 - UNIT;
 
+/// Points a scrambled Sobol' column is filled by at a time: their coordinates in one
+/// sequential pass, their scrambling in a second, independent one.
+const FILL_PIECE: usize = 64;
+
 /// The splitmix64 finaliser (Steele, Lea & Flood 2014): a bijective 64-bit mixer.
 #[inline]
 fn mix(mut x: u64) -> u64 {
@@ -309,12 +313,25 @@ impl PointSet {
                     let prefix = &self.prefixes[d];
                     let seed = (key >> 32) as u32;
                     let mut x = sobol_coordinate(prefix, first as u32);
-                    for (i, u) in (first..).zip(column.iter_mut()) {
-                        let digits = owen_scramble(x, seed) as u64;
-                        let deeper = mix(key ^ i.wrapping_mul(0x9fb2_1c65_1e98_df25)) >> 43;
-                        *u = (((digits << 21 | deeper) as f64 + 0.5) * UNIT).min(BELOW_ONE);
-                        // Point i + 1 flips bits 0 … c of i, c = trailing ones of i.
-                        x ^= prefix[(i as u32).trailing_ones().min(31) as usize];
+                    let mut coordinates = [0u32; FILL_PIECE];
+                    for (p, piece) in column.chunks_mut(FILL_PIECE).enumerate() {
+                        let start = first + (p * FILL_PIECE) as u64;
+                        // The Sobol' coordinates, each one XOR from the last (point i + 1
+                        // flips bits 0 … c of point i, c = trailing ones of i) ...
+                        for (i, slot) in (start..).zip(&mut coordinates[..piece.len()]) {
+                            *slot = x;
+                            x ^= prefix[(i as u32).trailing_ones().min(31) as usize];
+                        }
+                        // ... then scrambled and completed each on its own (a loop the
+                        // compiler vectorises).
+                        let coordinates = &coordinates[..piece.len()];
+                        for k in 0..piece.len() {
+                            let i = start + k as u64;
+                            let digits = owen_scramble(coordinates[k], seed) as u64;
+                            let deeper = mix(key ^ i.wrapping_mul(0x9fb2_1c65_1e98_df25)) >> 43;
+                            piece[k] =
+                                (((digits << 21 | deeper) as f64 + 0.5) * UNIT).min(BELOW_ONE);
+                        }
                     }
                 }
                 SamplingMethod::MonteCarlo => unreachable!("checked in new"),

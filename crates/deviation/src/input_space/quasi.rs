@@ -31,7 +31,9 @@
 
 use super::{column_mut, prefix, InputSpace, SamplerScratch};
 use crate::error::DeviationError;
-use crate::inverse_normal::standard_normal_inverse as standard_normal_quantile;
+use crate::inverse_normal::{
+    standard_normal_inverse as standard_normal_quantile, standard_normal_inverse_in_place,
+};
 use crate::points::PointSet;
 use crate::scalar::standard_normal_cdf;
 
@@ -376,14 +378,23 @@ impl InputSpace {
         let n_rows = columns.len() / self.n_columns;
         let u = prefix(&mut scratch.candidates, dims * n_rows);
         points.fill_dims(replicate, first, n_rows, first_dim..first_dim + dims, u);
-        let mut uniforms = u.chunks_exact(n_rows.max(1));
+        let mut uniforms = u.chunks_exact_mut(n_rows.max(1));
         let mut next = || uniforms.next().expect("a column of uniforms per dimension");
+        // A column of uniforms turned into standard normals in place (batched Φ⁻¹).
+        let mut normals = || {
+            let column = next();
+            standard_normal_inverse_in_place(column);
+            column
+        };
         for &(column, mean) in &self.fixed {
             column_mut(columns, column, n_rows).fill(mean);
         }
         for &(column, mean, sd) in &self.singles {
-            for (x, &u) in column_mut(columns, column, n_rows).iter_mut().zip(next()) {
-                *x = mean + sd * standard_normal_quantile(u);
+            for (x, &z) in column_mut(columns, column, n_rows)
+                .iter_mut()
+                .zip(normals().iter())
+            {
+                *x = mean + sd * z;
             }
         }
         let widest = (self.quasi.groups.iter().map(|g| g.rank))
@@ -393,8 +404,8 @@ impl InputSpace {
         let z = prefix(&mut scratch.block_z, widest * n_rows.max(1));
         for block in &self.blocks {
             for k in 0..block.rank {
-                for (r, &u) in next().iter().enumerate() {
-                    z[r * block.rank + k] = standard_normal_quantile(u);
+                for (r, &normal) in normals().iter().enumerate() {
+                    z[r * block.rank + k] = normal;
                 }
             }
             for r in 0..n_rows {
@@ -407,7 +418,10 @@ impl InputSpace {
             }
         }
         for (column, distribution) in &self.independent {
-            for (x, &u) in column_mut(columns, *column, n_rows).iter_mut().zip(next()) {
+            for (x, &u) in column_mut(columns, *column, n_rows)
+                .iter_mut()
+                .zip(next().iter())
+            {
                 *x = distribution.from_uniform(u);
             }
         }
@@ -416,7 +430,7 @@ impl InputSpace {
             let mut k = 0;
             if let Some(pair) = &group.coupled {
                 let (first, second) = (next(), next());
-                for (r, (&u1, &u2)) in first.iter().zip(second).enumerate() {
+                for (r, (&u1, &u2)) in first.iter().zip(second.iter()).enumerate() {
                     let t1 = pair.first(u1);
                     z[r * rank] = t1;
                     z[r * rank + 1] = pair.second(t1, u2);
@@ -424,12 +438,13 @@ impl InputSpace {
                 k = 2;
             }
             for k in k..rank {
-                let truncation = group.truncated.get(k).copied();
-                for (r, &u) in next().iter().enumerate() {
-                    z[r * rank + k] = match truncation {
-                        Some(mass) => standard_normal_quantile(u * mass),
-                        None => standard_normal_quantile(u),
-                    };
+                let column = next();
+                if let Some(&mass) = group.truncated.get(k) {
+                    column.iter_mut().for_each(|u| *u *= mass);
+                }
+                standard_normal_inverse_in_place(column);
+                for (r, &normal) in column.iter().enumerate() {
+                    z[r * rank + k] = normal;
                 }
             }
             for r in 0..n_rows {
