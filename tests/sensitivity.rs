@@ -71,13 +71,7 @@ fn assert_coverage(covered: u64, total: u64) {
 
 #[test]
 fn ishigami_intervals_cover_the_closed_form_and_are_narrow() {
-    let (s, st) = Ishigami::from_params(&ModelParams::new())
-        .unwrap()
-        .sobol_indices();
-    let (covered, total, widest) = coverage("ishigami.json", 20, |name| {
-        let i = ["x1", "x2", "x3"].iter().position(|n| *n == name).unwrap();
-        (s[i], st[i])
-    });
+    let (covered, total, widest) = coverage("ishigami.json", 20, ishigami_closed_form());
     assert_coverage(covered, total);
     assert!(widest < 0.02, "widest interval {widest}");
 }
@@ -87,9 +81,6 @@ fn block_bootstrap_intervals_cover_the_closed_form_too() {
     // With the row-bootstrap limit below N·(2G + 2) the intervals come from resampled blocks
     // of rows (2^16 base samples: 64-row blocks, 1024 of them); their coverage must hold at
     // the same nominal rate, and their width stay that of the row bootstrap (< 0.02).
-    let (s, st) = Ishigami::from_params(&ModelParams::new())
-        .unwrap()
-        .sobol_indices();
     let scenario = Scenario::load(&scenario_path("ishigami.json")).unwrap();
     let blocks = SensitivitySettings {
         row_bootstrap_limit: 1,
@@ -99,24 +90,41 @@ fn block_bootstrap_intervals_cover_the_closed_form_too() {
         blocks.interval_method(&scenario),
         IntervalMethod::Blocks { rows: 64 }
     );
-    let (covered, total, widest) = coverage_with(
-        "ishigami.json",
-        20,
-        |name| {
-            let i = ["x1", "x2", "x3"].iter().position(|n| *n == name).unwrap();
-            (s[i], st[i])
-        },
-        |seed| SensitivitySettings {
-            row_bootstrap_limit: 1,
-            ..settings(seed)
-        },
-    );
+    let (covered, total, widest) =
+        coverage_with("ishigami.json", 20, ishigami_closed_form(), |seed| {
+            SensitivitySettings {
+                row_bootstrap_limit: 1,
+                ..settings(seed)
+            }
+        });
     assert_coverage(covered, total);
     assert!(widest < 0.02, "widest interval {widest}");
 }
 
 #[test]
 fn g_function_intervals_cover_the_closed_form_and_are_narrow() {
+    let (covered, total, widest) = coverage("sobol-g.json", 10, g_closed_form());
+    assert_coverage(covered, total);
+    assert!(widest < 0.02, "widest interval {widest}");
+}
+
+/// A group's closed-form (first-order, total) indices.
+type ClosedForm<'a> = dyn Fn(&str) -> (f64, f64) + 'a;
+
+/// The closed-form indices of scenarios/ishigami.json's inputs x1, x2, x3 (a = 7, b = 0.1).
+fn ishigami_closed_form() -> impl Fn(&str) -> (f64, f64) {
+    let (s, st) = Ishigami::from_params(&ModelParams::new())
+        .unwrap()
+        .sobol_indices();
+    move |name: &str| {
+        let i = ["x1", "x2", "x3"].iter().position(|n| *n == name).unwrap();
+        (s[i], st[i])
+    }
+}
+
+/// The closed-form indices of scenarios/sobol-g.json's inputs x1 … x6 (a = 0, 1, 4.5, 9,
+/// 99, 99).
+fn g_closed_form() -> impl Fn(&str) -> (f64, f64) {
     let coefficients = [0.0, 1.0, 4.5, 9.0, 99.0, 99.0];
     let params = ModelParams::new().with(
         "coefficients",
@@ -129,16 +137,11 @@ fn g_function_intervals_cover_the_closed_form_and_are_narrow() {
         ),
     );
     let (s, st) = SobolG::from_params(&params).unwrap().sobol_indices();
-    let (covered, total, widest) = coverage("sobol-g.json", 10, |name| {
+    move |name: &str| {
         let i: usize = name[1..].parse::<usize>().unwrap() - 1;
         (s[i], st[i])
-    });
-    assert_coverage(covered, total);
-    assert!(widest < 0.02, "widest interval {widest}");
+    }
 }
-
-/// A group's closed-form (first-order, total) indices.
-type ClosedForm<'a> = dyn Fn(&str) -> (f64, f64) + 'a;
 
 /// Settings of a replicated design: `replicates` of `points` each.
 fn replicated(
@@ -182,29 +185,7 @@ fn replicated_designs_are_unbiased_and_their_intervals_cover_the_closed_form() {
     // every index within SIGMA_BOUND standard errors (the seeds' spread / √seeds: the
     // estimators' variance under LHS and RQMC has no closed form) of the closed form, and
     // the coverage of the t intervals binomial at 95 % (assert_coverage).
-    let (s, st) = Ishigami::from_params(&ModelParams::new())
-        .unwrap()
-        .sobol_indices();
-    let ishigami = |name: &str| {
-        let i = ["x1", "x2", "x3"].iter().position(|n| *n == name).unwrap();
-        (s[i], st[i])
-    };
-    let coefficients = [0.0, 1.0, 4.5, 9.0, 99.0, 99.0];
-    let params = ModelParams::new().with(
-        "coefficients",
-        ParamValue::Named(
-            coefficients
-                .iter()
-                .enumerate()
-                .map(|(i, a)| (format!("x{}", i + 1), *a))
-                .collect(),
-        ),
-    );
-    let (g_s, g_st) = SobolG::from_params(&params).unwrap().sobol_indices();
-    let g = |name: &str| {
-        let i: usize = name[1..].parse::<usize>().unwrap() - 1;
-        (g_s[i], g_st[i])
-    };
+    let (ishigami, g) = (ishigami_closed_form(), g_closed_form());
     let cases: [(&str, &ClosedForm<'_>); 2] = [("ishigami.json", &ishigami), ("sobol-g.json", &g)];
     for method in [SamplingMethod::Rqmc, SamplingMethod::LatinHypercube] {
         for (file, closed_form) in cases {

@@ -593,6 +593,29 @@ fn cli_merge_refuses_what_is_not_one_whole_run() {
     assert!(!Path::new(&dir.file("x.part")).exists());
 }
 
+/// Writes the `n` shards of `rvtol sensitivity file options…` to K.part in `dir`; returns
+/// their paths in shard order.
+fn sensitivity_shards(dir: &Dir, file: &str, n: u64, options: &[&str]) -> Vec<String> {
+    (0..n)
+        .map(|k| {
+            let part = dir.file(&format!("{k}.part"));
+            let shard = format!("{k}/{n}");
+            let mut args = vec![
+                "sensitivity",
+                file,
+                "--shard",
+                &shard,
+                "--partial",
+                &part,
+                "-q",
+            ];
+            args.extend_from_slice(options);
+            ok(&args);
+            part
+        })
+        .collect()
+}
+
 #[test]
 fn cli_sensitivity_merge_is_the_analysis() {
     let dir = Dir::new("sensitivity");
@@ -612,21 +635,7 @@ fn cli_sensitivity_merge_is_the_analysis() {
     let mut args = vec!["sensitivity", &file, "--json", &full, "-q"];
     args.extend_from_slice(&options);
     ok(&args);
-    let parts: Vec<String> = (0..4).map(|k| dir.file(&format!("{k}.part"))).collect();
-    for (k, part) in parts.iter().enumerate() {
-        let shard = format!("{k}/4");
-        let mut args = vec![
-            "sensitivity",
-            &file,
-            "--shard",
-            &shard,
-            "--partial",
-            part,
-            "-q",
-        ];
-        args.extend_from_slice(&options);
-        ok(&args);
-    }
+    let parts = sensitivity_shards(&dir, &file, 4, &options);
     let merged = dir.file("merged.json");
     ok(&[
         "merge", &parts[3], &parts[1], &parts[0], &parts[2], "--json", &merged,
@@ -697,21 +706,7 @@ fn cli_replicated_sensitivity_merge_is_the_analysis() {
     assert_eq!(report["sampling"]["method"], "rqmc");
     assert_eq!(report["sampling"]["points_per_replicate"], 3000);
     assert!(report.get("bootstrap").is_none(), "{report}");
-    let parts: Vec<String> = (0..3).map(|k| dir.file(&format!("{k}.part"))).collect();
-    for (k, part) in parts.iter().enumerate() {
-        let shard = format!("{k}/3");
-        let mut args = vec![
-            "sensitivity",
-            &file,
-            "--shard",
-            &shard,
-            "--partial",
-            part,
-            "-q",
-        ];
-        args.extend_from_slice(&options);
-        ok(&args);
-    }
+    let parts = sensitivity_shards(&dir, &file, 3, &options);
     let merged = dir.file("merged.json");
     ok(&["merge", &parts[2], &parts[0], &parts[1], "--json", &merged]);
     assert_eq!(

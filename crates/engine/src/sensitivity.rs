@@ -429,6 +429,12 @@ impl BlockSums {
         true
     }
 
+    /// The first-order and total indices ([`BlockSums::indices`] without the variance).
+    fn first_and_total(&self) -> (Vec<f64>, Vec<f64>) {
+        let (_, first, total) = self.indices();
+        (first, total)
+    }
+
     /// (variance V of the 2·rows values f_A, f_B, first-order indices, total indices):
     /// V = (Σ(f_A² + f_B²)/2n − mean²)·2n/(2n − 1), S_g = first_g/(2n)/V, ST_g =
     /// total_g/(4n)/V (module docs).
@@ -756,13 +762,7 @@ fn indices_from_replicates(
         let mut all = BlockSums::new(n_groups);
         replicates.iter().for_each(|r| all.add(r));
         let (variance, first, total) = all.indices();
-        let estimates = replicates
-            .iter()
-            .map(|r| {
-                let (_, first, total) = r.indices();
-                (first, total)
-            })
-            .collect();
+        let estimates = replicates.iter().map(BlockSums::first_and_total).collect();
         results.push(output_sensitivity(
             scenario,
             o,
@@ -821,8 +821,7 @@ fn indices_from_blocks(
                 for _ in 0..blocks.len() {
                     sums.add(blocks[rng.random_range(0..blocks.len())]);
                 }
-                let (_, first, total) = sums.indices();
-                (first, total)
+                sums.first_and_total()
             })
             .collect();
         results.push(output_sensitivity(
@@ -1073,10 +1072,7 @@ fn indices_from_rows(
         let resamples: Vec<(Vec<f64>, Vec<f64>)> =
             row_resamples(&terms, k, n_groups, settings.seed, settings.bootstrap)
                 .into_iter()
-                .map(|sums| {
-                    let (_, first, total) = sums.indices();
-                    (first, total)
-                })
+                .map(|sums| sums.first_and_total())
                 .collect();
         results.push(output_sensitivity(
             scenario,

@@ -244,18 +244,9 @@ fn record_section(report: &Report) -> String {
         }
         if let Some(sampling) = json.get("sampling") {
             parts.push(format!(
-                "{} sampling, {} replicates of {} points (intervals from the replicates)",
+                "{} sampling, {} (intervals from the replicates)",
                 escape(s(sampling, "method").unwrap_or("?")),
-                sampling
-                    .get("replicates")
-                    .and_then(Value::as_u64)
-                    .unwrap_or(0),
-                thousands(
-                    sampling
-                        .get("points_per_replicate")
-                        .and_then(Value::as_u64)
-                        .unwrap_or(0)
-                )
+                replicates_of(sampling)
             ));
         }
         if let Some(method) = json.get("percentile_method") {
@@ -576,24 +567,22 @@ fn output_block(output: &Value, name: &str, unit: &str) -> Result<String, Report
     Ok(out)
 }
 
+/// "R replicates of n points" from a report's `sampling`.
+fn replicates_of(sampling: &Value) -> String {
+    let count = |key: &str| sampling.get(key).and_then(Value::as_u64).unwrap_or(0);
+    format!(
+        "{} replicates of {} points",
+        count("replicates"),
+        thousands(count("points_per_replicate"))
+    )
+}
+
 fn sensitivity_section(report: &Value) -> Result<String, ReportError> {
     let outputs = array(report, "outputs", "sensitivity report")?;
     let mut out = String::from("<section id=\"sensitivity\">\n<h2>Sensitivity</h2>\n");
     let sampling = report.get("sampling");
     let intervals_from = match sampling {
-        Some(sampling) => format!(
-            "the spread of {} independent replicates of {} points (Student t)",
-            sampling
-                .get("replicates")
-                .and_then(Value::as_u64)
-                .unwrap_or(0),
-            thousands(
-                sampling
-                    .get("points_per_replicate")
-                    .and_then(Value::as_u64)
-                    .unwrap_or(0)
-            )
-        ),
+        Some(sampling) => format!("the spread of {} (Student t)", replicates_of(sampling)),
         None => format!(
             "{} bootstrap resamples over the {}",
             report.get("bootstrap").and_then(Value::as_u64).unwrap_or(0),
