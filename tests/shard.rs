@@ -500,14 +500,15 @@ fn cli_merge_refuses_what_is_not_one_whole_run() {
     );
     refused(&["merge", &p[0], &sampling], "the settings differ from");
     // Samples that do not split into the replicates, and replicates without a method
-    // that has them: one line each, before anything runs.
+    // that has them: one line each, before anything runs, naming the option that gave
+    // the value.
     refused(
         &["run", &file, "--sampling", "rqmc", "--samples", "1001"],
-        "samples: 1001 samples do not split into 16 replicates",
+        "error: --samples: 1001 samples do not split into 16 replicates",
     );
     refused(
         &["run", &file, "--replicates", "4", "--samples", "1000"],
-        "replicates: Monte Carlo rows are independent",
+        "error: --replicates: Monte Carlo rows are independent",
     );
     let count = dir.file("count.part");
     shard(&file, 1, 3, &count, &samples);
@@ -754,6 +755,6 @@ fn cli_replicated_sensitivity_merge_is_the_analysis() {
             "--replicates",
             "16",
         ],
-        "samples: 1000 base samples do not split into 16 replicates",
+        "error: --samples: 1000 base samples do not split into 16 replicates",
     );
 }

@@ -237,7 +237,37 @@ pub struct RunChoice {
     pub replicates: Option<u64>,
 }
 
+/// A check's error about a value the command line gave (its `option` named when `given`),
+/// else about the scenario file's value.
+fn option_or_scenario_error(
+    path: &Path,
+    err: ScenarioError,
+    options: &[(&str, &str, bool)],
+) -> anyhow::Error {
+    match options
+        .iter()
+        .find(|(key, _, given)| *given && err.path == *key)
+    {
+        Some((_, option, _)) => BadInput(format!("{option}: {}", err.message)).into(),
+        None => bad_scenario(path, err),
+    }
+}
+
 impl RunChoice {
+    /// The error of [`RunSettings::check`], named after the option when the command line
+    /// gave the value it is about.
+    fn checked_error(&self, path: &Path, err: ScenarioError) -> anyhow::Error {
+        option_or_scenario_error(
+            path,
+            err,
+            &[
+                ("samples", "--samples", self.samples.is_some()),
+                ("sampling", "--sampling", self.sampling.is_some()),
+                ("replicates", "--replicates", self.replicates.is_some()),
+            ],
+        )
+    }
+
     /// The settings for `scenario`: what the command line says, else the scenario's
     /// ([`Sampling::chosen`]).
     pub fn settings(&self, scenario: &Scenario) -> RunSettings {
@@ -261,7 +291,7 @@ pub fn run(
     let settings = choice.settings(&scenario);
     settings
         .check(&scenario)
-        .map_err(|err| bad_scenario(scenario_path, err))?;
+        .map_err(|err| choice.checked_error(scenario_path, err))?;
     if to.samples.is_some() {
         rvtol_engine::run::check_table_rows(&scenario, settings.samples)
             .map_err(|message| BadInput(format!("--samples-out: {message}; run fewer samples")))?;
@@ -451,7 +481,7 @@ pub fn sensitivity(
 ) -> Result<()> {
     to.check()?;
     let scenario = load(path)?;
-    let settings = sensitivity_settings(&scenario, &args)?;
+    let settings = sensitivity_settings(path, &scenario, &args)?;
     let pool = pool_for(execution, "sensitivity", |threads| {
         memory::sensitivity(&scenario, &settings, threads)
     })?;
@@ -475,6 +505,7 @@ pub fn sensitivity(
 
 /// The analysis' settings from the command line, checked.
 fn sensitivity_settings(
+    path: &Path,
     scenario: &Scenario,
     args: &SensitivityArgs,
 ) -> Result<SensitivitySettings> {
@@ -489,6 +520,21 @@ fn sensitivity_settings(
         ))
         .into());
     }
+    // The base samples are the command line's (`--samples` or its default), never the
+    // scenario's.
+    sampling
+        .check(args.samples, "base samples", scenario)
+        .map_err(|err| {
+            option_or_scenario_error(
+                path,
+                err,
+                &[
+                    ("samples", "--samples", true),
+                    ("sampling", "--sampling", args.sampling.is_some()),
+                    ("replicates", "--replicates", args.replicates.is_some()),
+                ],
+            )
+        })?;
     let bootstrap = args.bootstrap.unwrap_or(DEFAULT_BOOTSTRAP);
     if !(2..=1_000_000).contains(&bootstrap) {
         return Err(BadInput("--bootstrap: must be between 2 and 1000000 resamples".into()).into());
@@ -574,7 +620,7 @@ pub fn sensitivity_shard(
     writable(&[Some(partial_path)])?;
     use rvtol_engine::shard::{ShapleyShard, ShardCommand, ShardContent, ShardHeader};
     let (scenario, text) = read(path)?;
-    let settings = sensitivity_settings(&scenario, &args)?;
+    let settings = sensitivity_settings(path, &scenario, &args)?;
     let build = build_identity()?;
     let pool = pool_for(execution, "sensitivity", |threads| {
         memory::sensitivity(&scenario, &settings, threads)
@@ -1227,7 +1273,7 @@ pub fn run_shard(
     let settings = choice.settings(&scenario);
     settings
         .check(&scenario)
-        .map_err(|err| bad_scenario(scenario_path, err))?;
+        .map_err(|err| choice.checked_error(scenario_path, err))?;
     let build = build_identity()?;
     let chunks = rvtol_engine::shard_range(settings.chunk_count(), shard, shards);
     let pool = pool_for(execution, "run", |threads| {
@@ -1366,7 +1412,7 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
                 permutations: shapley.as_ref().map_or(0, |s| s.budget),
                 outer: shapley.as_ref().map_or(0, |s| s.outer),
             };
-            let settings = sensitivity_settings(&scenario, &sensitivity_args)?;
+            let settings = sensitivity_settings(first, &scenario, &sensitivity_args)?;
             let (mut sobol, mut permutations) = (Vec::new(), Vec::new());
             for file in assembly.shards {
                 if let shard::ShardContent::Sensitivity {
