@@ -215,9 +215,13 @@ fn replicated_designs_are_unbiased_and_their_intervals_cover_the_closed_form() {
 #[test]
 fn rqmc_intervals_shrink_faster_than_monte_carlo() {
     // Ishigami is smooth: the scrambled Sobol' design's interval width falls faster than
-    // N^−1/2 (observed about N^−1.2 from 2^8 to 2^12 points per replicate), and at 2^12
-    // points it is several times narrower than the Monte Carlo bootstrap's at the same N.
-    // The mean width over every index and 5 seeds.
+    // N^−1/2 (observed N^−0.90 from 2^8 to 2^12 points per replicate), and at 2^12 points
+    // it is narrower than the Monte Carlo bootstrap's at the same N (observed 4.0 times).
+    // The mean width over every index and 5 seeds. Each seed's mean width varies by about
+    // 17 % under rqmc (its t interval rests on 16 replicates), so the 5 seeds' mean by
+    // about 8 %: the bounds, slope −0.75 and half the Monte Carlo width, sit several of
+    // those spreads from the observed values, and a design that lost its balance (slope
+    // −0.5, width ratio 1) fails both.
     let mean_width = |settings: &dyn Fn(u64) -> SensitivitySettings| {
         let all = estimates_over_seeds("ishigami.json", 5, settings);
         let widths: Vec<f64> = all.values().flatten().map(|v| v.1).collect();
@@ -232,7 +236,7 @@ fn rqmc_intervals_shrink_faster_than_monte_carlo() {
         ..settings(seed)
     });
     assert!(
-        large * 4.0 < monte_carlo,
+        large * 2.0 < monte_carlo,
         "rqmc width {large} against Monte Carlo's {monte_carlo}"
     );
 }

@@ -29,7 +29,7 @@
 
 use rvtol_deviation::Shown;
 use serde::{Deserialize, Serialize};
-use statrs::distribution::{ContinuousCDF, Normal, StudentsT};
+use statrs::distribution::{ContinuousCDF, Normal};
 
 use crate::allocation::spec::{Target, TargetFigure};
 use crate::report::escape_markup;
@@ -40,7 +40,7 @@ use crate::run::{
 use crate::scenario::{OutputInfo, Scenario, ScenarioError};
 use crate::stats::{
     order_statistic_interval, percentile_type7_of_sorted, proportion_standard_error,
-    replicate_standard_error, QuantileSketch, StandardisedSketch, PERCENTS,
+    replicate_standard_error, student_t_quantile, QuantileSketch, StandardisedSketch, PERCENTS,
 };
 use rvtol_models::OutputKind;
 
@@ -340,10 +340,7 @@ pub fn figures_of(
     // √2·t: the band's half-width per unit of the replicates' standard error.
     let replicate_scale = (!replicates.is_empty()).then(|| {
         let tail = Normal::new(0.0, 1.0).expect("standard normal").cdf(z);
-        let t = StudentsT::new(0.0, 1.0, replicates.len() as f64 - 1.0)
-            .expect("at least two replicates")
-            .inverse_cdf(tail);
-        std::f64::consts::SQRT_2 * t
+        std::f64::consts::SQRT_2 * student_t_quantile(replicates.len() as f64 - 1.0, tail)
     });
     // The half-width from output o's replicate values of a figure, for a replicated run.
     let replicate_half = |o: usize, figure: &dyn Fn(&ReplicateFigures) -> f64| {

@@ -22,11 +22,11 @@ use crate::stats::quantile_sketch::bucket_representative;
 use crate::stats::{
     binomial_rank_interval, capability_from_moments, capability_percentile_method,
     cpk_on_upper_side, cpk_standard_error, out_of_spec_interval, percentiles_type7_with_intervals,
-    replicate_standard_error, Histogram, Moments, QuantileSketch, SpecLimits, StandardisedSketch,
+    replicate_standard_error, student_t_quantile, Histogram, Moments, QuantileSketch, SpecLimits,
+    StandardisedSketch,
 };
 use rvtol_deviation::Shown;
 use rvtol_models::{ConditionEffect, OutputKind};
-use statrs::distribution::{ContinuousCDF, StudentsT};
 
 pub use crate::stats::PERCENTS;
 /// Bins of the report histograms.
@@ -432,11 +432,8 @@ impl RunReport {
             });
         let replicates = std::mem::take(&mut result.replicates);
         // t(0.975, R − 1) of the replicate intervals (R ≥ 2 whenever there are any).
-        let replicate_t = (replicates.len() >= 2).then(|| {
-            StudentsT::new(0.0, 1.0, (replicates.len() - 1) as f64)
-                .expect("positive degrees of freedom")
-                .inverse_cdf(0.975)
-        });
+        let replicate_t = (replicates.len() >= 2)
+            .then(|| student_t_quantile((replicates.len() - 1) as f64, 0.975));
         // Each output's percentiles and histogram on its own (in parallel: the selection
         // over every kept value is the report's dearest step), collected in order.
         let outputs = scenario

@@ -994,12 +994,6 @@ fn run_keeping(
     merger.finish()
 }
 
-/// Number of chunks of `samples` samples in chunks of [`CHUNK_SIZE`] (a Monte Carlo run,
-/// the base matrix of a sensitivity analysis).
-pub fn chunk_count(samples: u64) -> u64 {
-    samples.div_ceil(CHUNK_SIZE as u64)
-}
-
 /// The `shard`-th of `shards` contiguous ranges of `0..total`, as equal as whole items
 /// allow (chunks of a run, permutations of a Shapley estimate).
 pub fn shard_range(total: u64, shard: u64, shards: u64) -> Range<u64> {

@@ -1,5 +1,6 @@
 //! Variance-based sensitivity of every continuous output to the scenario's error sources:
-//! Sobol' first-order and total indices with bootstrap confidence intervals.
+//! Sobol' first-order and total indices with confidence intervals (bootstrap, or from the
+//! replicates of a Latin hypercube or scrambled Sobol' design).
 //!
 //! Estimators, from two independent sample matrices A and B of N rows and, per group g,
 //! the matrices A_B^(g) (A with g's columns taken from B) and B_A^(g) (the converse):
@@ -58,13 +59,13 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Binomial, Distribution};
 use rayon::prelude::*;
-use statrs::distribution::{ContinuousCDF, StudentsT};
 
 use rvtol_deviation::{PointSet, SamplerScratch};
 
 use crate::evaluate::ChunkEvaluator;
 use crate::run::{Sampling, CHUNK_SIZE};
 use crate::scenario::{InputGroup, Scenario, ScenarioError};
+use crate::stats::{replicate_standard_error, student_t_quantile};
 
 /// First bootstrap stream (far above the 2k, 2k + 1 streams of the sample matrices).
 const BOOTSTRAP_STREAM_BASE: u64 = 1 << 62;
@@ -328,10 +329,14 @@ fn finite_mean<'a>(values: impl Iterator<Item = &'a f64>) -> f64 {
 /// The centres of a replicated design ([`IntervalMethod::Replicates`]): the mean of f over
 /// [`CHUNK_SIZE`] Monte Carlo rows drawn from [`CENTRE_STREAM`], independent of every
 /// replicate.
-fn replicate_centres(scenario: &Scenario, plan: &SobolPlan) -> Result<Vec<f64>, ScenarioError> {
+fn replicate_centres(
+    scenario: &Scenario,
+    plan: &SobolPlan,
+    seed: u64,
+) -> Result<Vec<f64>, ScenarioError> {
     let space = &scenario.input_space;
     let mut rows = vec![0.0; CHUNK_SIZE * space.n_columns()];
-    let mut rng = ChaCha8Rng::seed_from_u64(plan.seed);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
     rng.set_stream(CENTRE_STREAM);
     space.sample_columns_with(
         &mut rng,
@@ -488,7 +493,6 @@ struct SobolPlan {
     groups: Vec<InputGroup>,
     continuous: Vec<usize>,
     method: IntervalMethod,
-    seed: u64,
     /// A replicated design's points: 2D dimensions, A the first D, B the last D.
     points: Option<PointSet>,
 }
@@ -535,7 +539,6 @@ fn sobol_plan(
         groups,
         continuous: scenario.continuous_outputs(),
         method: settings.interval_method(scenario),
-        seed: settings.seed,
         points,
     })
 }
@@ -586,7 +589,10 @@ pub fn sobol_chunks(
                 .collect::<Vec<f64>>(),
             rows as usize,
         ),
-        IntervalMethod::Replicates => (replicate_centres(scenario, &plan)?, CHUNK_SIZE),
+        IntervalMethod::Replicates => (
+            replicate_centres(scenario, &plan, settings.seed)?,
+            CHUNK_SIZE,
+        ),
     };
     let n_groups = plan.groups.len();
     let blocks = (chunks.start..chunks.end)
@@ -729,6 +735,10 @@ fn indices_from_replicates(
     let (groups, continuous) = (&plan.groups, &plan.continuous);
     let n_groups = groups.len();
     let sampling = settings.sampling;
+    let t = student_t_quantile(
+        (sampling.replicates - 1) as f64,
+        0.5 + settings.confidence / 2.0,
+    );
     let mut results = Vec::with_capacity(continuous.len());
     for (slot, &o) in continuous.iter().enumerate() {
         let mut replicates = vec![BlockSums::new(n_groups); sampling.replicates as usize];
@@ -771,7 +781,7 @@ fn indices_from_replicates(
             variance,
             non_finite_rows,
             (first, total),
-            Spread::Replicates(estimates),
+            Spread::Replicates { estimates, t },
         ));
     }
     Ok(results)
@@ -843,8 +853,14 @@ fn indices_from_blocks(
 enum Spread {
     /// Bootstrap resamples: the percentile interval.
     Bootstrap(Vec<(Vec<f64>, Vec<f64>)>),
-    /// Independent replicates: the estimate ± t(R − 1)·s/√R.
-    Replicates(Vec<(Vec<f64>, Vec<f64>)>),
+    /// Independent replicates: the estimate ± t·s/√R, t the Student quantile of the
+    /// confidence (R − 1 degrees of freedom).
+    Replicates {
+        /// Per replicate, its (first-order, total) indices.
+        estimates: Vec<(Vec<f64>, Vec<f64>)>,
+        /// The t quantile.
+        t: f64,
+    },
 }
 
 impl Spread {
@@ -856,12 +872,9 @@ impl Spread {
             Spread::Bootstrap(resamples) => {
                 percentile_interval(resamples.iter().map(pick).collect(), confidence)
             }
-            Spread::Replicates(estimates) => {
+            Spread::Replicates { estimates, t } => {
                 let values: Vec<f64> = estimates.iter().map(pick).collect();
-                let t = StudentsT::new(0.0, 1.0, (values.len() - 1) as f64)
-                    .expect("at least 2 replicates")
-                    .inverse_cdf(0.5 + confidence / 2.0);
-                let h = t * crate::stats::replicate_standard_error(&values);
+                let h = t * replicate_standard_error(&values);
                 [value - h, value + h]
             }
         }

@@ -897,11 +897,11 @@ mod tests {
             for shards in [1u64, 2, 3, 7, 64] {
                 let mut next = 0;
                 for k in 0..shards {
-                    let range = shard_range(crate::run::chunk_count(samples), k, shards);
+                    let range = shard_range(Sampling::MONTE_CARLO.chunk_count(samples), k, shards);
                     assert_eq!(range.start, next);
                     next = range.end;
                 }
-                assert_eq!(next, crate::run::chunk_count(samples));
+                assert_eq!(next, Sampling::MONTE_CARLO.chunk_count(samples));
             }
         }
     }

@@ -37,5 +37,7 @@ pub const PERCENTS: [(&str, f64); 7] = [
 ];
 
 pub use histogram::Histogram;
-pub use moments::{proportion_standard_error, replicate_standard_error, Moments};
+pub use moments::{
+    proportion_standard_error, replicate_standard_error, student_t_quantile, Moments,
+};
 pub use quantile_sketch::{QuantileSketch, SketchMismatch, SketchParts, StandardisedSketch};

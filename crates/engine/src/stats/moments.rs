@@ -275,6 +275,15 @@ pub fn replicate_standard_error(values: &[f64]) -> f64 {
     (variance / r as f64).sqrt()
 }
 
+/// The quantile at probability `p` of Student's t with `degrees_of_freedom` (the
+/// replicate intervals' t, R − 1 degrees of freedom).
+pub fn student_t_quantile(degrees_of_freedom: f64, p: f64) -> f64 {
+    use statrs::distribution::{ContinuousCDF, StudentsT};
+    StudentsT::new(0.0, 1.0, degrees_of_freedom)
+        .expect("positive degrees of freedom")
+        .inverse_cdf(p)
+}
+
 /// Binomial standard error √(p(1 − p)/n) of an estimated fraction, with p raised to at
 /// least 1/n so that a fraction of 0 still has an error of one count's worth.
 pub fn proportion_standard_error(fraction: f64, n: u64) -> f64 {
