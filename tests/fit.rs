@@ -316,3 +316,61 @@ fn a_part_is_fitted_from_a_wider_file_in_its_headings_units() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn a_constant_column_has_its_value_as_mean_and_no_spread_and_no_normality_test() {
+    // 0.0035 summed ten times and divided by ten is 0.0035000000000000027 in floating
+    // point, and the deviations from that give an sd of 10⁻¹⁸ and a normality test on
+    // rounding noise; a measured constant is its value with sd 0.
+    let rows: Vec<Vec<f64>> = (0..10)
+        .map(|k| vec![0.0035, k as f64 + 0.5 * (k % 3) as f64])
+        .collect();
+    let fitted = fit(&["a".to_string(), "b".to_string()], &rows).expect("fit");
+    assert_eq!(fitted.mean[0], 0.0035);
+    assert_eq!(fitted.covariance[0], 0.0, "variance of the constant column");
+    assert_eq!(fitted.covariance[1], 0.0, "its covariance with the other");
+    assert!(fitted.anderson_darling[0].is_none());
+    assert!(fitted.anderson_darling[1].is_some());
+    assert!(anderson_darling(&[0.0035; 12]).is_none());
+}
+
+#[test]
+fn the_sample_index_of_a_samples_file_is_not_fitted() {
+    let dir = std::env::temp_dir().join(format!("rvtol-fit-index-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("dir");
+    let samples = dir.join("s.csv");
+    let scenario = common::workspace_dir().join("scenarios/linear-stack-correlated.json");
+    let out = run_rvtol(&[
+        "run",
+        scenario.to_str().unwrap(),
+        "--samples",
+        "40",
+        "--quiet",
+        "--samples-out",
+        samples.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let out = run_rvtol(&["fit", samples.to_str().unwrap()]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let fragment: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let names: Vec<&str> = fragment["variables"]
+        .as_array()
+        .expect("variables")
+        .iter()
+        .map(|v| v["name"].as_str().expect("name"))
+        .collect();
+    assert!(!names.contains(&"sample"), "{names:?}");
+    assert!(names.contains(&"bore_depth"), "{names:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -10,7 +10,8 @@ mod common;
 
 use common::{run_rvtol, workspace_dir};
 use rvtol_engine::gate::{
-    baseline, check, check_with, Baseline, CheckOptions, Worse, FAMILY_FALSE_ALARM,
+    baseline, check, check_with, parse_requirement, Baseline, CheckOptions, Worse,
+    FAMILY_FALSE_ALARM,
 };
 use rvtol_engine::{RunSettings, Scenario};
 
@@ -378,4 +379,21 @@ fn replicated_gates_keep_the_false_alarm_bound_with_narrower_bands() {
         let report = check(&scenario(&wider), &wider, &recorded, seed, 0.0, &|_| {}).unwrap();
         assert!(!report.passed, "seed {seed}");
     }
+}
+
+#[test]
+fn a_requirement_that_does_not_parse_says_why_once() {
+    // The target's message quotes what it read; the requirement's text is not repeated
+    // before it, and a named output is kept in front.
+    let s = scenario(&rv20e_text());
+    let err = parse_requirement(&s, "p99.865 <= abc").unwrap_err();
+    assert!(
+        err.starts_with("\"p99.865 <= abc\": \"abc\" is not a number"),
+        "{err}"
+    );
+    let err = parse_requirement(&s, "hysteresis_arcmin p99.865 <= abc").unwrap_err();
+    assert!(
+        err.starts_with("hysteresis_arcmin: \"p99.865 <= abc\": \"abc\" is not a number"),
+        "{err}"
+    );
 }

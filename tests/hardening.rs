@@ -458,7 +458,7 @@ fn requests_that_cannot_fit_are_refused_before_they_start() {
         .len();
     assert!(
         run.starts_with(&format!(
-            "error: run: needs about {:.1} GB of memory ({},000,000,000 kept values for exact percentiles of {continuous} outputs), more than the 1.1 GB available (--max-memory): lower --exact-percentile-limit",
+            "error: run: needs about {:.1} GB of memory ({},000,000,000 kept values for exact percentiles of {continuous} outputs, and 64.0 MB for the program and its tables), more than the 1.1 GB available (--max-memory): lower --exact-percentile-limit",
             8.0 * continuous as f64 + 0.064 + 8.0 * continuous as f64 * 4.194304e-3,
             continuous
         )),
@@ -503,6 +503,44 @@ fn requests_that_cannot_fit_are_refused_before_they_start() {
     assert!(
         allocate.contains("kept values of the targeted output"),
         "{allocate}"
+    );
+    // Blocks of rows beyond memory on one thread: fewer samples help, more threads do not.
+    let blocks = one_line(
+        &run_rvtol(&[
+            "sensitivity",
+            path,
+            "--samples",
+            "1e12",
+            "--threads",
+            "1",
+            "--max-memory",
+            "1G",
+        ]),
+        2,
+    );
+    assert!(
+        blocks.contains("blocks of rows for the intervals"),
+        "{blocks}"
+    );
+    assert!(blocks.ends_with(": ask for fewer --samples"), "{blocks}");
+    // Below the fixed allowance nothing fits: the way out is a larger budget.
+    let tiny = one_line(
+        &run_rvtol(&[
+            "run",
+            path,
+            "--samples",
+            "10",
+            "--threads",
+            "1",
+            "--max-memory",
+            "60M",
+        ]),
+        2,
+    );
+    assert!(
+        tiny.contains("and 64.0 MB for the program and its tables")
+            && tiny.contains(": allow at least"),
+        "{tiny}"
     );
     // A baseline file that claims more than fits is refused by check, not aborted.
     let dir = scratch("memory");
@@ -769,13 +807,20 @@ fn validate_reports_every_problem_one_line_each() {
         s["variables"][0]["distribution"]["tolerance_band"]["cp"] = Value::from(-1.0);
         s["variables"][1]["distribution"]["tolerance_band"]["extra"] = Value::from(1.0);
         s["correlations"] = serde_json::json!([{ "between": ["a", "b", "c"], "rho": 0.5 }]);
+        // A spec on no output: its models are built, so every output name is known even
+        // though a variable they bind is broken.
+        s["spec_limits"]["nope"] = serde_json::json!({ "upper": 1 });
     });
     let scenario = TempScenario::new("hardening-many-problems", &contents);
     let out = run_rvtol(&["validate", path_arg(scenario.path())]);
     assert_eq!(out.status.code(), Some(2));
     let stderr = text(&out.stderr);
     let lines: Vec<&str> = stderr.lines().collect();
-    assert_eq!(lines.len(), 3, "{stderr}");
+    assert_eq!(lines.len(), 4, "{stderr}");
+    assert!(
+        stderr.contains("spec_limits.nope: no output named \"nope\""),
+        "{stderr}"
+    );
     assert!(lines.iter().all(|l| l.starts_with("error: ")), "{stderr}");
     assert!(stderr.contains("variables[0].distribution.tolerance_band.cp: process capability must be positive, got -1"), "{stderr}");
     assert!(
@@ -786,7 +831,25 @@ fn validate_reports_every_problem_one_line_each() {
         stderr.contains("correlations[0].between: invalid length 3, expected fewer elements"),
         "{stderr}"
     );
-    assert!(lines[2].ends_with("(3 problems)"), "{stderr}");
+    assert!(lines[3].ends_with("(4 problems)"), "{stderr}");
+    // A unit rvtol does not know is the variable's mistake, said at its `unit`.
+    let contents = with("rv20e-hysteresis.json", |s| {
+        s["variables"][1]["unit"] = Value::from("micron");
+    });
+    assert_refused(
+        "hardening-unknown-unit",
+        &contents,
+        &["variables[1].unit: \"micron\" is not a unit rvtol knows (lengths mm, µm"],
+    );
+    // Rust's type names stay out of the messages.
+    let contents = with("rv20e-hysteresis.json", |s| {
+        s["variables"][0]["distribution"]["tolerance_band"]["cp"] = Value::from("1");
+    });
+    assert_refused(
+        "hardening-string-number",
+        &contents,
+        &["variables[0].distribution.tolerance_band.cp: invalid type: string \"1\", expected a number"],
+    );
 }
 
 #[test]
@@ -853,4 +916,216 @@ fn usage_errors_are_one_line_naming_the_option() {
     assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
     let report: Value = serde_json::from_slice(&out.stdout).expect("json");
     assert_eq!(report["samples"], 2000);
+}
+
+// ---------------------------------------------------------------------------------------
+// Outputs that would destroy an input or each other, standard output and input as `-`.
+
+/// Runs rvtol with `input` on its standard input.
+fn run_with_stdin(args: &[&str], input: &str) -> Output {
+    use std::io::Write;
+    let mut child = Command::new(rvtol_binary())
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start rvtol");
+    child
+        .stdin
+        .take()
+        .expect("stdin")
+        .write_all(input.as_bytes())
+        .expect("write stdin");
+    child.wait_with_output().expect("rvtol output")
+}
+
+#[cfg(unix)]
+#[test]
+fn an_output_on_an_input_or_on_another_output_is_refused_and_nothing_is_touched() {
+    let dir = scratch("inputs");
+    let scenario = dir.join("my.json");
+    std::fs::copy(
+        workspace_dir().join("scenarios/linear-stack-correlated.json"),
+        &scenario,
+    )
+    .expect("copy");
+    let original = std::fs::read(&scenario).expect("read");
+    let link = dir.join("link.json");
+    std::os::unix::fs::symlink("my.json", &link).expect("symlink");
+    let same = dir.join("same.csv");
+    let s = path_arg(&scenario);
+    let destroy = "is the scenario file, which this command reads: writing there would destroy it";
+    for (args, message) in [
+        (vec!["run", s, "--json", s], destroy),
+        (vec!["run", s, "--json", path_arg(&link)], destroy),
+        (vec!["sensitivity", s, "--json", s], destroy),
+        (vec!["baseline", s, "-o", s], destroy),
+        (vec!["nominal", s, "--json", s], destroy),
+        (
+            vec![
+                "allocate",
+                s,
+                "--output",
+                "gap_mm",
+                "--target",
+                "p99.865 <= 1",
+                "--write-scenario",
+                s,
+            ],
+            destroy,
+        ),
+        (vec!["check", s, "--baseline", s, "--junit", s], destroy),
+        (
+            vec![
+                "run",
+                s,
+                "--json",
+                path_arg(&same),
+                "--samples-out",
+                path_arg(&same),
+            ],
+            "is also the file of --json: give each output its own file",
+        ),
+        (
+            vec!["run", s, "--json", "-", "--html", "-"],
+            "--html: standard output ('-') already takes --json",
+        ),
+        (
+            vec!["run", s, "--shard", "0/2", "--partial", "-"],
+            "--partial: '-' (standard output) cannot take a binary file",
+        ),
+        (
+            vec!["run", s, "--samples-out", "x.xlsx"],
+            "--samples-out: x.xlsx: name it .csv or .parquet (the extension chooses the format)",
+        ),
+        (
+            vec!["run", s, "--html", "x.pdf"],
+            "--html: x.pdf: name it .html or .htm",
+        ),
+        (vec!["curve", s, "--out-dir", s], "is a file: name a folder"),
+    ] {
+        let out = run_rvtol(&args);
+        let line = one_line(&out, 2);
+        assert!(line.contains(message), "{args:?}: {line}");
+        assert!(out.stdout.is_empty(), "{args:?}: {}", text(&out.stdout));
+        assert_eq!(
+            std::fs::read(&scenario).expect("read"),
+            original,
+            "{args:?}"
+        );
+        assert!(!same.exists(), "{args:?}");
+    }
+    // The data file an empirical distribution reads is an input too.
+    let data = dir.join("pins.csv");
+    std::fs::write(&data, "radius\n0.001\n0.002\n0.003\n").expect("write");
+    let with_data = dir.join("data.json");
+    std::fs::write(
+        &with_data,
+        with("linear-stack-correlated.json", |d| {
+            d["variables"][0]["distribution"] =
+                serde_json::json!({ "empirical": { "csv": "pins.csv", "column": "radius" } });
+        }),
+    )
+    .expect("write");
+    let line = one_line(
+        &run_rvtol(&[
+            "run",
+            path_arg(&with_data),
+            "--samples-out",
+            path_arg(&data),
+        ]),
+        2,
+    );
+    assert!(line.contains("is a data file of the scenario"), "{line}");
+    assert_eq!(
+        std::fs::read_to_string(&data).expect("read"),
+        "radius\n0.001\n0.002\n0.003\n"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn dash_is_standard_output_for_every_writer_and_standard_input_for_the_scenario() {
+    let dir = scratch("dash");
+    let scenario = workspace_dir().join("scenarios/linear-stack-correlated.json");
+    let s = path_arg(&scenario);
+    let run = |args: &[&str]| {
+        let out = Command::new(rvtol_binary())
+            .args(args)
+            .current_dir(&dir)
+            .output()
+            .expect("run");
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "{args:?}: {}",
+            text(&out.stderr)
+        );
+        text(&out.stdout)
+    };
+    let page = run(&["run", s, "--samples", "50", "--quiet", "--html", "-"]);
+    assert!(
+        page.starts_with("<!DOCTYPE html>"),
+        "{}",
+        &page[..page.len().min(80)]
+    );
+    let rows = run(&["run", s, "--samples", "3", "--quiet", "--samples-out", "-"]);
+    assert!(rows.starts_with("sample,"), "{rows}");
+    assert_eq!(rows.lines().count(), 4, "{rows}");
+    let skeleton = run(&["init", "linear_stack", "-o", "-"]);
+    assert!(skeleton.trim_start().starts_with('{'), "{skeleton}");
+    let baseline = run(&["baseline", s, "--samples", "100", "--quiet", "-o", "-"]);
+    let baseline: Value = serde_json::from_str(&baseline).expect("the baseline alone");
+    assert_eq!(baseline["samples"], 100);
+    assert!(
+        !dir.join("-").exists(),
+        "a file named '-' was created instead of writing to standard output"
+    );
+    // A scenario on standard input: the same report as from its file.
+    let from_file = run_rvtol(&["run", s, "--samples", "1000", "--json", "-"]);
+    let text_in = std::fs::read_to_string(&scenario).expect("read");
+    let from_stdin = run_with_stdin(&["run", "-", "--samples", "1000", "--json", "-"], &text_in);
+    assert_eq!(
+        from_stdin.status.code(),
+        Some(0),
+        "{}",
+        text(&from_stdin.stderr)
+    );
+    assert_eq!(from_stdin.stdout, from_file.stdout);
+    let valid = run_with_stdin(&["validate", "-"], &text_in);
+    assert_eq!(
+        text(&valid.stdout),
+        "standard input: valid (9 input columns, 1 model, 1 output)\n"
+    );
+    let broken = run_with_stdin(&["validate", "-"], "{");
+    assert!(one_line(&broken, 2).starts_with("error: standard input: JSON syntax"));
+    let twice = run_with_stdin(&["evaluate", "-", "--inputs", "-"], &text_in);
+    assert!(
+        one_line(&twice, 2).contains("--inputs: standard input ('-') already gives the scenario")
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[cfg(target_os = "linux")]
+#[test]
+fn a_folder_that_takes_no_new_file_is_refused_before_the_run() {
+    // /sys takes no new file, for root too (a chmod'ed folder would not stop root).
+    let scenario = workspace_dir().join("scenarios/linear-stack-correlated.json");
+    for option in ["--json", "--html", "--samples-out"] {
+        let name = if option == "--html" {
+            "/sys/x.html"
+        } else {
+            "/sys/x.csv"
+        };
+        let out = run_rvtol(&["run", path_arg(&scenario), option, name]);
+        let line = one_line(&out, 2);
+        assert!(
+            line.starts_with(&format!(
+                "error: {option}: cannot write {name}: its folder /sys takes no new file"
+            )),
+            "{line}"
+        );
+        assert!(out.stdout.is_empty());
+    }
 }

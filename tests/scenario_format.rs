@@ -200,7 +200,7 @@ fn array_mistakes_are_refused_with_their_json_path() {
         ),
         (
             Box::new(|d| d["variables"][0]["count"] = json!(2.5)),
-            "variables[0].count: invalid type: floating point `2.5`, expected u64",
+            "variables[0].count: invalid type: floating point `2.5`, expected a whole number of at least 0",
         ),
     ];
     cases.push((
@@ -363,12 +363,14 @@ fn empirical_values_in_micrometres_are_converted_to_the_models_millimetres() {
     assert_eq!(scenario.columns[column].unit.as_deref(), Some("mm"));
     let (m, _) = moments(&MEASURED);
     assert!((scenario.input_space.mean_row()[column] - m * 1e-3).abs() < 1e-18);
-    // A unit rvtol does not know is named as such.
+    // A unit rvtol does not know is named as such, at the variable's `unit`.
     let variable = variable_mut(&mut document, "pin_radius_error");
     variable["unit"] = "micron".into();
     let message = error(&document);
     assert!(
-        message.contains("\"pin_radius_error\" is in micron, which is not a unit rvtol knows (lengths mm, µm, um, m;"),
+        message.contains(
+            "variables[1].unit: \"micron\" is not a unit rvtol knows (lengths mm, µm, um, m;"
+        ),
         "{message}"
     );
 }

@@ -4,7 +4,7 @@
 
 use std::collections::BTreeSet;
 use std::io::IsTerminal;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -26,24 +26,91 @@ use rvtol_engine::{
 };
 
 use crate::limits::{memory_budget, parse_count, parse_sampling, thread_pool, threads};
-use crate::output::{check_destination, note, print, write_bytes, write_report};
+use crate::output::{
+    check_targets, is_stdout, note, print, write_bytes, write_report, Format, Input, OutputFile,
+};
 use crate::{BadInput, Execution, Failed};
 
 fn bad_scenario(path: &Path, err: ScenarioError) -> anyhow::Error {
-    BadInput(format!("{}: {err}", path.display())).into()
+    BadInput(format!("{}: {err}", shown(path))).into()
 }
 
-/// The scenario file's text, or one line saying why it cannot be read.
+/// An input path as messages name it: `-` is standard input.
+fn shown(path: &Path) -> String {
+    if is_stdout(path) {
+        "standard input".to_string()
+    } else {
+        path.display().to_string()
+    }
+}
+
+/// A file's text (standard input's for `-`), or one line saying why it cannot be read.
 fn read_text(path: &Path) -> Result<String> {
-    std::fs::read_to_string(path)
-        .map_err(|err| BadInput(format!("{}: cannot read: {err}", path.display())).into())
+    let text = if is_stdout(path) {
+        std::io::read_to_string(std::io::stdin())
+    } else {
+        std::fs::read_to_string(path)
+    };
+    text.map_err(|err| BadInput(format!("{}: cannot read: {err}", shown(path))).into())
 }
 
-/// The name a scenario without `name` gets: its file stem.
+/// The name a scenario without `name` gets: its file stem (`scenario` from standard input).
 fn fallback_name(path: &Path) -> String {
     path.file_stem()
+        .filter(|_| !is_stdout(path))
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "scenario".to_string())
+}
+
+/// The files a command on the scenario at `path` reads: the scenario and the data files it
+/// refers to (none from standard input, whose relative data paths start at the current
+/// folder and are listed all the same).
+fn scenario_inputs(path: &Path) -> Vec<(&'static str, PathBuf)> {
+    if is_stdout(path) {
+        return Vec::new();
+    }
+    let mut inputs = vec![("the scenario file", path.to_path_buf())];
+    if let Ok(text) = std::fs::read_to_string(path) {
+        let folder = rvtol_engine::scenario::scenario_folder(path);
+        inputs.extend(
+            rvtol_engine::scenario::data::data_files(&text, &folder)
+                .into_iter()
+                .map(|file| ("a data file of the scenario", file)),
+        );
+    }
+    inputs
+}
+
+/// Refuses, before a command's work, outputs that cannot be written or would destroy an
+/// input or each other ([`check_targets`]); `inputs` are what the command reads.
+fn outputs_ok(targets: &[OutputFile<'_>], inputs: &[(&str, PathBuf)]) -> Result<()> {
+    let inputs: Vec<Input<'_>> = inputs
+        .iter()
+        .map(|(what, p)| (*what, p.as_path()))
+        .collect();
+    check_targets(targets, &inputs).map_err(|err| BadInput(err.to_string()).into())
+}
+
+/// The target of a shard's `--partial` file.
+fn partial_target(path: &Path) -> OutputFile<'_> {
+    OutputFile {
+        option: "--partial",
+        path,
+        format: Format::Binary,
+    }
+}
+
+/// The target of an optional output.
+fn target<'a>(
+    option: &'static str,
+    path: Option<&'a Path>,
+    format: Format,
+) -> Option<OutputFile<'a>> {
+    path.map(|path| OutputFile {
+        option,
+        path,
+        format,
+    })
 }
 
 /// A scenario file's text, with the numbers of the data files it refers to written in.
@@ -67,20 +134,21 @@ fn load(path: &Path) -> Result<Scenario> {
     read(path).map(|(scenario, _)| scenario)
 }
 
-/// Prints the text, or writes the JSON to `json_path` and prints the text, or prints the
-/// JSON when the path is `-`.
+/// Writes the JSON to `json_path` when given (standard output for `-`) and prints the text
+/// unless an output of the command (`stdout_taken`) goes to standard output.
 fn emit(
     json_path: Option<&Path>,
+    stdout_taken: bool,
     json: impl FnOnce() -> String,
     text: impl FnOnce() -> String,
 ) -> Result<()> {
-    match json_path {
-        Some(p) if p == Path::new("-") => print(&json()),
-        Some(p) => {
-            write_report(p, &json())?;
-            print(&text())
-        }
-        None => print(&text()),
+    if let Some(path) = json_path {
+        write_report(path, &json())?;
+    }
+    if stdout_taken {
+        Ok(())
+    } else {
+        print(&text())
     }
 }
 
@@ -135,20 +203,27 @@ pub struct Destinations<'a> {
     pub samples: Option<&'a Path>,
 }
 
-impl Destinations<'_> {
-    /// Refuses, before the command's work, a destination that cannot be written.
-    fn check(&self) -> Result<()> {
-        writable(&[self.json, self.html, self.samples])
+impl<'a> Destinations<'a> {
+    /// `--json`, `--html` and `--samples-out` as targets, then `more`.
+    fn targets(&self, more: &[Option<OutputFile<'a>>]) -> Vec<OutputFile<'a>> {
+        [
+            target("--json", self.json, Format::Text),
+            target("--html", self.html, Format::Html),
+            target("--samples-out", self.samples, Format::Table),
+        ]
+        .into_iter()
+        .chain(more.iter().copied())
+        .flatten()
+        .collect()
     }
-}
 
-/// Refuses, before a command's work, any given output path that cannot be written
-/// ([`check_destination`]): a missing folder or a directory.
-fn writable(paths: &[Option<&Path>]) -> Result<()> {
-    for path in paths.iter().flatten() {
-        check_destination(path).map_err(|err| BadInput(err.to_string()))?;
+    /// Whether one of them is standard output: the command's text then stays off it.
+    fn on_stdout(&self) -> bool {
+        [self.json, self.html, self.samples]
+            .into_iter()
+            .flatten()
+            .any(is_stdout)
     }
-    Ok(())
 }
 
 /// The command line as typed (arguments with spaces or quotes quoted), for the page's
@@ -286,7 +361,7 @@ pub fn run(
     to: Destinations<'_>,
     execution: &Execution,
 ) -> Result<()> {
-    to.check()?;
+    outputs_ok(&to.targets(&[]), &scenario_inputs(scenario_path))?;
     let scenario = load(scenario_path)?;
     let settings = choice.settings(&scenario);
     settings
@@ -309,7 +384,12 @@ pub fn run(
     let failure = non_finite_failure(scenario_path, &scenario, &result, execution);
     let report = pool.install(|| RunReport::new(&scenario, result));
     let json = report.to_json();
-    emit(to.json, || json.clone(), || report.to_text())?;
+    emit(
+        to.json,
+        to.on_stdout(),
+        || json.clone(),
+        || report.to_text(),
+    )?;
     if let Some(path) = to.samples {
         let table = pool
             .install(|| rvtol_engine::sample_table(&scenario, settings))
@@ -337,14 +417,39 @@ pub fn run(
 }
 
 pub fn nominal(scenario_path: &Path, json: Option<&Path>) -> Result<()> {
+    outputs_ok(
+        &[target("--json", json, Format::Text)]
+            .into_iter()
+            .flatten()
+            .collect::<Vec<_>>(),
+        &scenario_inputs(scenario_path),
+    )?;
     let scenario = load(scenario_path)?;
     let values =
         rvtol_engine::nominal(&scenario).map_err(|err| bad_scenario(scenario_path, err))?;
     let report = NominalReport::new(&scenario, &values);
-    emit(json, || report.to_json(), || report.to_text())
+    emit(
+        json,
+        json.is_some_and(is_stdout),
+        || report.to_json(),
+        || report.to_text(),
+    )
 }
 
 pub fn curve(scenario_path: &Path, out_dir: &Path) -> Result<()> {
+    if is_stdout(out_dir) {
+        return Err(BadInput(
+            "--out-dir: a curve is two files (CSV and SVG): name a folder, not '-'".into(),
+        )
+        .into());
+    }
+    if std::fs::metadata(out_dir).is_ok_and(|m| !m.is_dir()) {
+        return Err(BadInput(format!(
+            "--out-dir: {} is a file: name a folder (it is created if missing)",
+            out_dir.display()
+        ))
+        .into());
+    }
     let scenario = load(scenario_path)?;
     let drawn = nominal_curves(&scenario).map_err(|err| bad_scenario(scenario_path, err))?;
     if drawn.is_empty() {
@@ -354,8 +459,12 @@ pub fn curve(scenario_path: &Path, out_dir: &Path) -> Result<()> {
         ))
         .into());
     }
-    std::fs::create_dir_all(out_dir)
-        .map_err(|err| BadInput(format!("cannot create {}: {err}", out_dir.display())))?;
+    std::fs::create_dir_all(out_dir).map_err(|err| {
+        BadInput(format!(
+            "--out-dir: cannot create {}: {err}",
+            out_dir.display()
+        ))
+    })?;
     let mut lines = String::new();
     for (model, curves) in drawn {
         for curve in curves {
@@ -388,6 +497,13 @@ pub fn init(model: &str, params: &[String], output: Option<&Path>) -> Result<()>
         };
         given.insert(key.trim().to_string(), value);
     }
+    outputs_ok(
+        &[target("-o", output, Format::Text)]
+            .into_iter()
+            .flatten()
+            .collect::<Vec<_>>(),
+        &[],
+    )?;
     let text = rvtol_engine::scenario::skeleton::skeleton_with(model, &given).map_err(BadInput)?;
     match output {
         Some(path) => write_report(path, &text),
@@ -403,7 +519,7 @@ pub fn validate(scenario_path: &Path) -> Result<()> {
                 |n: usize, noun: &str| format!("{n} {noun}{}", if n == 1 { "" } else { "s" });
             print(&format!(
                 "{}: valid ({}, {}, {})\n",
-                scenario_path.display(),
+                shown(scenario_path),
                 count(scenario.input_space.n_columns(), "input column"),
                 count(scenario.models.len(), "model"),
                 count(scenario.outputs.len(), "output")
@@ -413,7 +529,7 @@ pub fn validate(scenario_path: &Path) -> Result<()> {
             let count = problems.len();
             let mut lines: Vec<String> = problems
                 .iter()
-                .map(|err| format!("{}: {err}", scenario_path.display()))
+                .map(|err| format!("{}: {err}", shown(scenario_path)))
                 .collect();
             let last = lines.pop().unwrap_or_default();
             for line in lines {
@@ -479,7 +595,7 @@ pub fn sensitivity(
     to: Destinations<'_>,
     execution: &Execution,
 ) -> Result<()> {
-    to.check()?;
+    outputs_ok(&to.targets(&[]), &scenario_inputs(path))?;
     let scenario = load(path)?;
     let settings = sensitivity_settings(path, &scenario, &args)?;
     let pool = pool_for(execution, "sensitivity", |threads| {
@@ -578,12 +694,16 @@ fn finish_sensitivity(
     execution: &Execution,
     pool: &rayon::ThreadPool,
 ) -> Result<()> {
-    to.check()?;
     let report = pool
         .install(|| SensitivityReport::complete(scenario, settings, outputs, shapley))
         .map_err(|err| bad_scenario(path, err))?;
     let json = report.to_json();
-    emit(to.json, || json.clone(), || report.to_text())?;
+    emit(
+        to.json,
+        to.on_stdout(),
+        || json.clone(),
+        || report.to_text(),
+    )?;
     if let Some(html) = to.html {
         write_html(html, path, scenario, rvtol_report::Kind::Sensitivity, &json)?;
     }
@@ -617,7 +737,7 @@ pub fn sensitivity_shard(
     partial_path: &Path,
     execution: &Execution,
 ) -> Result<()> {
-    writable(&[Some(partial_path)])?;
+    outputs_ok(&[partial_target(partial_path)], &scenario_inputs(path))?;
     use rvtol_engine::shard::{ShapleyShard, ShardCommand, ShardContent, ShardHeader};
     let (scenario, text) = read(path)?;
     let settings = sensitivity_settings(path, &scenario, &args)?;
@@ -701,7 +821,14 @@ pub fn baseline(
     exact_percentile_limit: u64,
     execution: &Execution,
 ) -> Result<()> {
-    writable(&[Some(output)])?;
+    outputs_ok(
+        &[OutputFile {
+            option: "-o",
+            path: output,
+            format: Format::Text,
+        }],
+        &scenario_inputs(path),
+    )?;
     let (scenario, text) = read(path)?;
     let settings = RunSettings {
         samples: samples.unwrap_or(scenario.samples),
@@ -725,6 +852,9 @@ pub fn baseline(
         .map_err(|err| bad_scenario(path, err))?;
     bar.finish_and_clear();
     write_report(output, &baseline.to_json())?;
+    if is_stdout(output) {
+        return Ok(());
+    }
     print(&format!(
         "{}: {} figures of {} ({} samples, seed {}) written to {}\n",
         path.display(),
@@ -746,7 +876,18 @@ pub fn check(
     options: &gate::CheckOptions,
     execution: &Execution,
 ) -> Result<()> {
-    writable(&[junit, json])?;
+    let mut inputs = scenario_inputs(path);
+    inputs.push(("the baseline", baseline_path.to_path_buf()));
+    outputs_ok(
+        &[
+            target("--junit", junit, Format::Text),
+            target("--json", json, Format::Text),
+        ]
+        .into_iter()
+        .flatten()
+        .collect::<Vec<_>>(),
+        &inputs,
+    )?;
     let (scenario, text) = read(path)?;
     let baseline_text = std::fs::read_to_string(baseline_path)
         .map_err(|err| BadInput(format!("{}: cannot read: {err}", baseline_path.display())))?;
@@ -795,7 +936,8 @@ pub fn check(
     if let Some(junit) = junit {
         write_report(junit, &report.to_junit())?;
     }
-    emit(json, || report.to_json(), || report.to_text())?;
+    let stdout_taken = [junit, json].into_iter().flatten().any(is_stdout);
+    emit(json, stdout_taken, || report.to_json(), || report.to_text())?;
     if report.passed {
         Ok(())
     } else {
@@ -828,8 +970,10 @@ pub fn allocate(
     write_scenario: Option<&Path>,
     execution: &Execution,
 ) -> Result<()> {
-    to.check()?;
-    writable(&[write_scenario])?;
+    outputs_ok(
+        &to.targets(&[target("--write-scenario", write_scenario, Format::Text)]),
+        &scenario_inputs(path),
+    )?;
     let (scenario, text) = read(path)?;
     let target = Target::parse(&args.target).map_err(|err| BadInput(format!("--target: {err}")))?;
     let cost = args
@@ -879,7 +1023,8 @@ pub fn allocate(
     }
     let report = AllocationReport::new(&allocation);
     let json = report.to_json();
-    emit(to.json, || json.clone(), || report.to_text())?;
+    let stdout_taken = to.on_stdout() || write_scenario.is_some_and(is_stdout);
+    emit(to.json, stdout_taken, || json.clone(), || report.to_text())?;
     if let Some(html) = to.html {
         write_html(html, path, &scenario, rvtol_report::Kind::Allocation, &json)?;
     }
@@ -933,6 +1078,21 @@ pub fn report(
     output: &Path,
 ) -> Result<()> {
     use rvtol_report::{kind_of, Kind};
+    let mut inputs: Vec<(&str, PathBuf)> = files
+        .iter()
+        .map(|f| ("a report it composes", f.clone()))
+        .collect();
+    if let Some(path) = scenario_path {
+        inputs.extend(scenario_inputs(path));
+    }
+    outputs_ok(
+        &[OutputFile {
+            option: "-o",
+            path: output,
+            format: Format::Html,
+        }],
+        &inputs,
+    )?;
     let scenario_of = |v: &serde_json::Value| v["scenario"].as_str().unwrap_or("").to_string();
     let mut found: Vec<(Kind, serde_json::Value, &Path)> = Vec::new();
     for file in files {
@@ -1003,6 +1163,9 @@ pub fn report(
     })
     .map_err(|err| BadInput(format!("{}: {err}", output.display())))?;
     write_report(output, &page)?;
+    if is_stdout(output) {
+        return Ok(());
+    }
     let kinds: Vec<&str> = found.iter().map(|(k, _, _)| k.command()).collect();
     print(&format!(
         "{}: report of {} ({})\n",
@@ -1014,6 +1177,11 @@ pub fn report(
 
 /// Reads a CSV table of numbers (the engine's [`CsvTable`]); its error is one line.
 fn read_csv(path: &Path) -> Result<CsvTable<'_>> {
+    if is_stdout(path) {
+        let text = read_text(path)?;
+        return CsvTable::parse(Path::new("standard input"), &text)
+            .map_err(|message| BadInput(message).into());
+    }
     CsvTable::read(path).map_err(|message| BadInput(message).into())
 }
 
@@ -1024,12 +1192,26 @@ pub fn evaluate(
     output: Option<&Path>,
     execution: &Execution,
 ) -> Result<()> {
-    writable(&[output])?;
+    if is_stdout(scenario_path) && is_stdout(inputs_path) {
+        return Err(BadInput(
+            "--inputs: standard input ('-') already gives the scenario: name the rows' file".into(),
+        )
+        .into());
+    }
+    let mut inputs = scenario_inputs(scenario_path);
+    inputs.push(("the input rows", inputs_path.to_path_buf()));
+    outputs_ok(
+        &[target("-o", output, Format::Table)]
+            .into_iter()
+            .flatten()
+            .collect::<Vec<_>>(),
+        &inputs,
+    )?;
     let scenario = load(scenario_path)?;
     let table = read_csv(inputs_path)?;
     let names = table.names();
     let known_other =
-        |name: &str| name == "sample" || scenario.outputs.iter().any(|o| o.name == name);
+        |name: &str| name == SAMPLE_INDEX || scenario.outputs.iter().any(|o| o.name == name);
     // Where each input column is in the file.
     let mut position = Vec::with_capacity(scenario.columns.len());
     let mut missing = Vec::new();
@@ -1100,9 +1282,20 @@ fn write_sample_table(
     }
 }
 
+/// The row index column of `run --samples-out` and `evaluate`: not a measurement, `fit`
+/// and `evaluate` leave it out.
+const SAMPLE_INDEX: &str = "sample";
+
 /// `rvtol fit`: a normal model of measured parts, as a scenario fragment.
 pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()> {
     use rvtol_engine::fit::{fit as fit_normal, fragment, PART_COMPONENTS};
+    outputs_ok(
+        &[target("-o", output, Format::Text)]
+            .into_iter()
+            .flatten()
+            .collect::<Vec<_>>(),
+        &[("the measurements", path.to_path_buf())],
+    )?;
     let table = read_csv(path)?;
     let names = table.names();
     // A part's columns in its component order.
@@ -1126,7 +1319,7 @@ pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()>
             let qualified = names.iter().any(|n| n.starts_with(&prefix));
             let ignored: Vec<&str> = names
                 .iter()
-                .filter(|n| qualified && !n.starts_with(&prefix))
+                .filter(|n| (qualified && !n.starts_with(&prefix)) || **n == SAMPLE_INDEX)
                 .copied()
                 .collect();
             if !ignored.is_empty() {
@@ -1181,7 +1374,9 @@ pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()>
             }
             order
         }
-        None => (0..names.len()).collect(),
+        None => (0..names.len())
+            .filter(|&i| names[i] != SAMPLE_INDEX)
+            .collect(),
     };
     let mut rows = Vec::with_capacity(table.rows.len());
     for (line, record) in &table.rows {
@@ -1268,7 +1463,10 @@ pub fn run_shard(
     partial_path: &Path,
     execution: &Execution,
 ) -> Result<()> {
-    writable(&[Some(partial_path)])?;
+    outputs_ok(
+        &[partial_target(partial_path)],
+        &scenario_inputs(scenario_path),
+    )?;
     let (scenario, text) = read(scenario_path)?;
     let settings = choice.settings(&scenario);
     settings
@@ -1330,7 +1528,24 @@ pub struct MergeArgs {
 /// `rvtol merge`: checks the shard files for coverage and identity and folds them into the
 /// run's report (or a baseline, or a check against one).
 pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Result<()> {
-    to.check()?;
+    let mut inputs: Vec<(&str, PathBuf)> = args
+        .partials
+        .iter()
+        .map(|p| ("a shard file", p.clone()))
+        .collect();
+    inputs.extend(args.check.iter().map(|p| ("the baseline", p.clone())));
+    outputs_ok(
+        &to.targets(&[
+            target("--baseline", args.baseline.as_deref(), Format::Text),
+            target("--junit", args.junit.as_deref(), Format::Text),
+        ]),
+        &inputs,
+    )?;
+    let stdout_taken = to.on_stdout()
+        || [args.baseline.as_deref(), args.junit.as_deref()]
+            .into_iter()
+            .flatten()
+            .any(is_stdout);
     use rvtol_engine::shard;
     let build = build_identity()?;
     let mut files = Vec::with_capacity(args.partials.len());
@@ -1474,6 +1689,9 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
         )
         .map_err(|err| bad_scenario(first, err))?;
         write_report(path, &baseline.to_json())?;
+        if is_stdout(path) {
+            return Ok(());
+        }
         return print(&format!(
             "{} shards: {} figures of {} ({} samples, seed {}) written to {}\n",
             header.shards,
@@ -1529,7 +1747,12 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
         if let Some(junit) = &args.junit {
             write_report(junit, &report.to_junit())?;
         }
-        emit(to.json, || report.to_json(), || report.to_text())?;
+        emit(
+            to.json,
+            stdout_taken,
+            || report.to_json(),
+            || report.to_text(),
+        )?;
         return if report.passed {
             Ok(())
         } else {
@@ -1542,7 +1765,12 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
     let failure = non_finite_failure(first, &scenario, &result, execution);
     let report = pool.install(|| RunReport::new(&scenario, result));
     let json = report.to_json();
-    emit(to.json, || json.clone(), || report.to_text())?;
+    emit(
+        to.json,
+        to.on_stdout(),
+        || json.clone(),
+        || report.to_text(),
+    )?;
     if let Some(html) = to.html {
         write_html(html, &source, &scenario, rvtol_report::Kind::Run, &json)?;
     }

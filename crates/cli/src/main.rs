@@ -56,7 +56,7 @@ struct Execution {
 enum Command {
     /// Run the Monte Carlo simulation of a scenario and report its output distributions.
     Run {
-        /// Scenario file (JSON).
+        /// Scenario file (JSON; "-" reads standard input).
         scenario: PathBuf,
         /// Number of samples, e.g. 1000000 or 1e6 (default: the scenario's `samples`, else
         /// 1,000,000).
@@ -77,12 +77,13 @@ enum Command {
         /// Write the JSON report to PATH ("-" for stdout instead of the table).
         #[arg(long, value_name = "PATH")]
         json: Option<PathBuf>,
-        /// Write an HTML report to PATH: one self-contained page with the plots.
+        /// Write an HTML report to PATH (.html, or "-" for stdout): one self-contained page
+        /// with the plots.
         #[arg(long, value_name = "PATH")]
         html: Option<PathBuf>,
         /// Write every sample to PATH, one row per sample: its index, the drawn inputs and
-        /// the outputs (the run's own values; same seed, same bytes); Parquet when PATH
-        /// ends in .parquet, else CSV.
+        /// the outputs (the run's own values; same seed, same bytes); PATH ends in .csv or
+        /// .parquet, which chooses the format ("-": CSV on stdout instead of the table).
         #[arg(long, value_name = "PATH")]
         samples_out: Option<PathBuf>,
         /// Exact percentiles while samples × outputs stays at or below this many values;
@@ -115,7 +116,8 @@ enum Command {
         /// Write the JSON report to PATH ("-" for stdout instead of the table).
         #[arg(long, value_name = "PATH")]
         json: Option<PathBuf>,
-        /// Write an HTML report to PATH: one self-contained page with the plots.
+        /// Write an HTML report to PATH (.html, or "-" for stdout): one self-contained page
+        /// with the plots.
         #[arg(long, value_name = "PATH", conflicts_with_all = ["baseline", "check"])]
         html: Option<PathBuf>,
         /// Write the baseline of the merged run to FILE (what `rvtol baseline` writes for
@@ -141,15 +143,15 @@ enum Command {
     },
     /// Evaluate every model with every deviation at its mean.
     Nominal {
-        /// Scenario file (JSON).
+        /// Scenario file (JSON; "-" reads standard input).
         scenario: PathBuf,
         /// Write the JSON report to PATH ("-" for stdout instead of the table).
         #[arg(long, value_name = "PATH")]
         json: Option<PathBuf>,
     },
-    /// Rank the error sources: Sobol' first-order and total indices with bootstrap intervals.
+    /// Rank the error sources: Sobol' first-order and total indices with 95 % intervals (bootstrap, or from the replicates of an lhs or rqmc design).
     Sensitivity {
-        /// Scenario file (JSON).
+        /// Scenario file (JSON; "-" reads standard input).
         scenario: PathBuf,
         #[command(flatten)]
         options: SensitivityArgs,
@@ -165,7 +167,8 @@ enum Command {
         /// Write the JSON report to PATH ("-" for stdout instead of the table).
         #[arg(long, value_name = "PATH")]
         json: Option<PathBuf>,
-        /// Write an HTML report to PATH: one self-contained page with the plots.
+        /// Write an HTML report to PATH (.html, or "-" for stdout): one self-contained page
+        /// with the plots.
         #[arg(long, value_name = "PATH")]
         html: Option<PathBuf>,
         #[command(flatten)]
@@ -174,7 +177,7 @@ enum Command {
     /// Record the distribution figures of every output, with the band a re-run may move
     /// within, for `rvtol check`.
     Baseline {
-        /// Scenario file (JSON).
+        /// Scenario file (JSON; "-" reads standard input).
         scenario: PathBuf,
         /// Baseline file to write.
         #[arg(short, long, value_name = "FILE")]
@@ -194,7 +197,7 @@ enum Command {
     },
     /// Re-run a scenario and compare it with a baseline: exit 1 when a figure moved.
     Check {
-        /// Scenario file (JSON).
+        /// Scenario file (JSON; "-" reads standard input).
         scenario: PathBuf,
         /// Baseline file written by `rvtol baseline`.
         #[arg(long, value_name = "FILE")]
@@ -238,7 +241,7 @@ enum Command {
     },
     /// Check a scenario file without running it; one line per problem.
     Validate {
-        /// Scenario file (JSON).
+        /// Scenario file (JSON; "-" reads standard input).
         scenario: PathBuf,
     },
     /// Find the cheapest tolerances, within the scenario's `allocation` bounds, that meet a
@@ -270,7 +273,8 @@ enum Command {
         /// Write the JSON report to PATH ("-" for stdout instead of the table).
         #[arg(long, value_name = "PATH")]
         json: Option<PathBuf>,
-        /// Write an HTML report to PATH: one self-contained page with the plots.
+        /// Write an HTML report to PATH (.html, or "-" for stdout): one self-contained page
+        /// with the plots.
         #[arg(long, value_name = "PATH")]
         html: Option<PathBuf>,
         /// Write the scenario with the proposed tolerances to PATH.
@@ -283,7 +287,7 @@ enum Command {
     /// transmission-error trace and its order spectrum, the torsion curve): a CSV and an
     /// SVG plot per curve.
     Curve {
-        /// Scenario file (JSON).
+        /// Scenario file (JSON; "-" reads standard input).
         scenario: PathBuf,
         /// Directory for the files (created when missing).
         #[arg(long, value_name = "DIR", default_value = ".")]
@@ -293,15 +297,15 @@ enum Command {
     /// measured assemblies, another sampler's design): a CSV with one column per input
     /// (the header of `run --samples-out`), the outputs per row as CSV.
     Evaluate {
-        /// Scenario file (JSON).
+        /// Scenario file (JSON; "-" reads standard input).
         scenario: PathBuf,
         /// Input rows: CSV with a header naming every input column (`rvtol run
         /// --samples-out` writes one; a `[unit]` after a name, a `sample` column and
         /// output columns are allowed).
         #[arg(long, value_name = "CSV")]
         inputs: PathBuf,
-        /// Write the rows with their outputs to PATH instead of standard output (Parquet
-        /// when PATH ends in .parquet, else CSV).
+        /// Write the rows with their outputs to PATH instead of standard output (PATH ends
+        /// in .csv or .parquet, which chooses the format).
         #[arg(short = 'o', long = "output", value_name = "PATH")]
         output: Option<PathBuf>,
         #[command(flatten)]
@@ -311,7 +315,9 @@ enum Command {
     /// and one column per deviation component, with normality diagnostics: prints the
     /// scenario fragment (`variables` and `correlations`, or one part) to paste.
     Fit {
-        /// Measurements: CSV with a header naming each column (`name` or `name [unit]`).
+        /// Measurements: CSV with a header naming each column (`name` or `name [unit]`;
+        /// a `sample` column, the row index of a samples file, is left out); "-" reads
+        /// standard input.
         measurements: PathBuf,
         /// Fit one 6-DOF part of this name: the columns are its du, dv, dw, dalpha,
         /// dbeta, dgamma (or NAME.du …), in any order.
@@ -583,6 +589,7 @@ impl Cli {
     fn command_names() -> Vec<&'static str> {
         vec![
             "run",
+            "merge",
             "nominal",
             "sensitivity",
             "baseline",

@@ -9,7 +9,14 @@
 //! - a character or block device or a FIFO (`/dev/null`, `/dev/stdout`, a named pipe) is
 //!   written through, never replaced: renaming a file over a device would turn it into a
 //!   regular file and break every program that uses it;
-//! - a directory or a socket is an error naming the path.
+//! - a directory or a socket is an error naming the path;
+//! - `-` is standard output.
+//!
+//! Before any work, [`check_targets`] refuses what could not be written or would destroy
+//! something: a missing folder, a directory, a folder the process may not write in, an
+//! output that is one of the command's inputs (the scenario, its data files, a baseline),
+//! two outputs on one file, two on standard output, a name whose extension says another
+//! format than the one written.
 //!
 //! Temporary files are named `.NAME.rvtol-tmp-PID`; one left by a killed run is removed by
 //! the next write to the same path once its process is gone (checked through /proc where
@@ -35,6 +42,9 @@ pub fn write_report(path: &Path, contents: &str) -> Result<()> {
 
 /// Writes `contents` to `path` as [`write_report`] does (a binary file: a shard's partial).
 pub fn write_bytes(path: &Path, contents: &[u8]) -> Result<()> {
+    if is_stdout(path) {
+        return print_bytes(contents);
+    }
     // A path that ends on a device or FIFO through the kernel's own link resolution is
     // written through as it stands: `/dev/stdout` when standard output is a pipe links to
     // `/proc/self/fd/1`, whose link text (`pipe:[…]`) names no path to follow by hand.
@@ -67,21 +77,31 @@ pub fn write_bytes(path: &Path, contents: &[u8]) -> Result<()> {
     }
 }
 
-/// Refuses, before any work, a report path that cannot be written: a directory, or a path
-/// whose folder does not exist (`-`, standard output, always can be).
+/// Whether `path` names standard output (`-`).
+pub fn is_stdout(path: &Path) -> bool {
+    path == Path::new("-")
+}
+
+/// Refuses, before any work, a report path that cannot be written: a directory, a path
+/// whose folder does not exist, or a folder in which this process cannot create the
+/// report's temporary file (tried, then removed). `-`, standard output, and an existing
+/// device or FIFO (written through) always can be.
 pub fn check_destination(path: &Path) -> Result<()> {
-    if path == Path::new("-") {
+    if is_stdout(path) {
         return Ok(());
     }
     if let Ok(metadata) = fs::metadata(path) {
         if metadata.is_dir() {
             bail!("cannot write {}: it is a directory", path.display());
         }
-        return Ok(());
+        if !metadata.is_file() {
+            return Ok(());
+        }
     }
-    let (directory, _) = split(&resolve_links(path)?)?;
+    let target = resolve_links(path)?;
+    let (directory, name) = split(&target)?;
     match fs::metadata(&directory) {
-        Ok(metadata) if metadata.is_dir() => Ok(()),
+        Ok(metadata) if metadata.is_dir() => {}
         Ok(_) => bail!(
             "cannot write {}: {} is not a folder",
             path.display(),
@@ -93,6 +113,177 @@ pub fn check_destination(path: &Path) -> Result<()> {
             directory.display()
         ),
     }
+    // The report replaces the file through a temporary one beside it: the folder must
+    // take a new file (permissions, a read-only or full file system, an immutable folder).
+    let temporary = directory.join(format!("{}{}", temporary_prefix(&name), std::process::id()));
+    match OpenOptions::new()
+        .write(true)
+        .create(true)
+        .truncate(true)
+        .open(&temporary)
+    {
+        Ok(file) => {
+            drop(file);
+            let _ = fs::remove_file(&temporary);
+            Ok(())
+        }
+        Err(err) => bail!(
+            "cannot write {}: its folder {} takes no new file: {err}",
+            path.display(),
+            directory.display()
+        ),
+    }
+}
+
+/// A file a command is asked to write, with the option that names it (for messages).
+#[derive(Debug, Clone, Copy)]
+pub struct OutputFile<'a> {
+    /// The option, as typed: `--json`, `-o`.
+    pub option: &'static str,
+    pub path: &'a Path,
+    /// What is written, which decides the names and whether `-` may take it.
+    pub format: Format,
+}
+
+/// What an [`OutputFile`] receives, as far as its name is concerned.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Format {
+    /// Text of any name (JSON, JUnit XML, a scenario, a baseline); `-` allowed.
+    Text,
+    /// An HTML page: `.html` or `.htm`; `-` allowed.
+    Html,
+    /// A sample table, CSV or Parquet as the name says: `.csv` or `.parquet`; `-` is CSV.
+    Table,
+    /// Binary (a shard's partial result): any name, not standard output.
+    Binary,
+}
+
+impl Format {
+    /// Why the name matters, for the message refusing another.
+    fn what(self) -> &'static str {
+        match self {
+            Format::Html => "an HTML page is written there",
+            Format::Table => "the extension chooses the format",
+            Format::Text | Format::Binary => "",
+        }
+    }
+
+    fn extensions(self) -> &'static [&'static str] {
+        match self {
+            Format::Html => &["html", "htm"],
+            Format::Table => &["csv", "parquet"],
+            Format::Text | Format::Binary => &[],
+        }
+    }
+}
+
+/// A file a command reads, with what it is (for messages): "the scenario file".
+pub type Input<'a> = (&'a str, &'a Path);
+
+/// Refuses, before any work, outputs that cannot be written ([`check_destination`]) or
+/// would destroy something: one of the command's inputs, another output's file, a second
+/// claim on standard output, a name whose extension says another format. One line each,
+/// naming the option.
+pub fn check_targets(targets: &[OutputFile<'_>], inputs: &[Input<'_>]) -> Result<()> {
+    let mut stdout_taken: Option<&str> = None;
+    for (i, target) in targets.iter().enumerate() {
+        let OutputFile {
+            option,
+            path,
+            format,
+        } = *target;
+        if is_stdout(path) {
+            if format == Format::Binary {
+                bail!("{option}: '-' (standard output) cannot take a binary file: name a file");
+            }
+            if let Some(first) = stdout_taken {
+                bail!(
+                    "{option}: standard output ('-') already takes {first}: one output at most goes there"
+                );
+            }
+            stdout_taken = Some(option);
+            continue;
+        }
+        check_destination(path).map_err(|err| anyhow::anyhow!("{option}: {err}"))?;
+        let regular = fs::metadata(path).map_or(true, |m| m.is_file());
+        let extensions = format.extensions();
+        if regular && !extensions.is_empty() {
+            let extension = path
+                .extension()
+                .map(|e| e.to_string_lossy().to_lowercase())
+                .unwrap_or_default();
+            if !extensions.contains(&extension.as_str()) {
+                bail!(
+                    "{option}: {}: name it {} ({})",
+                    path.display(),
+                    extensions
+                        .iter()
+                        .map(|e| format!(".{e}"))
+                        .collect::<Vec<_>>()
+                        .join(" or "),
+                    format.what()
+                );
+            }
+        }
+        let Some(key) = file_key(path) else {
+            continue;
+        };
+        if let Some((what, _)) = inputs
+            .iter()
+            .find(|(_, input)| file_key(input).as_ref() == Some(&key))
+        {
+            bail!(
+                "{option}: {} is {what}, which this command reads: writing there would destroy it; name another file",
+                path.display()
+            );
+        }
+        if let Some(other) = targets[..i]
+            .iter()
+            .find(|other| !is_stdout(other.path) && file_key(other.path).as_ref() == Some(&key))
+        {
+            bail!(
+                "{option}: {} is also the file of {}: give each output its own file",
+                path.display(),
+                other.option
+            );
+        }
+    }
+    Ok(())
+}
+
+/// What makes two paths one file, for the checks of [`check_targets`]: an existing
+/// regular file's device and inode (links and other spellings included; elsewhere its
+/// canonical path), a new file's folder (resolved) and name. Devices and FIFOs have none: they are written through,
+/// and several outputs may share `/dev/null`.
+#[derive(Debug, PartialEq)]
+enum FileKey {
+    #[cfg(unix)]
+    Inode(u64, u64),
+    Path(PathBuf),
+}
+
+fn file_key(path: &Path) -> Option<FileKey> {
+    match fs::metadata(path) {
+        Ok(metadata) if metadata.is_file() => Some(inode_key(path, &metadata)),
+        Ok(_) => None,
+        Err(_) => {
+            let target = resolve_links(path).ok()?;
+            let (directory, name) = split(&target).ok()?;
+            let directory = fs::canonicalize(directory).ok()?;
+            Some(FileKey::Path(directory.join(name)))
+        }
+    }
+}
+
+#[cfg(unix)]
+fn inode_key(_path: &Path, metadata: &fs::Metadata) -> FileKey {
+    use std::os::unix::fs::MetadataExt;
+    FileKey::Inode(metadata.dev(), metadata.ino())
+}
+
+#[cfg(not(unix))]
+fn inode_key(path: &Path, _metadata: &fs::Metadata) -> FileKey {
+    FileKey::Path(fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf()))
 }
 
 #[cfg(unix)]
@@ -219,11 +410,13 @@ fn remove_stale_temporaries(directory: &Path, name: &OsString) {
 /// Writes `text` to standard output: a closed pipe ends the output quietly (the reader has
 /// what it wanted), any other failure is an error.
 pub fn print(text: &str) -> Result<()> {
+    print_bytes(text.as_bytes())
+}
+
+/// [`print`] for bytes.
+fn print_bytes(contents: &[u8]) -> Result<()> {
     let mut stdout = io::stdout().lock();
-    match stdout
-        .write_all(text.as_bytes())
-        .and_then(|()| stdout.flush())
-    {
+    match stdout.write_all(contents).and_then(|()| stdout.flush()) {
         Err(err) if err.kind() == io::ErrorKind::BrokenPipe => Ok(()),
         other => other.context("cannot write to standard output"),
     }

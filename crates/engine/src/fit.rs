@@ -80,8 +80,19 @@ pub fn fit(names: &[String], rows: &[Vec<f64>]) -> Result<Fit, String> {
         ));
     }
     let nf = n as f64;
+    // A constant column's mean is its value and its spread exactly 0 (the sum's rounding
+    // would give a mean in the last digits beside it and a spread of 10⁻¹⁸).
+    let constant: Vec<bool> = (0..p)
+        .map(|j| rows.iter().all(|r| r[j] == rows[0][j]))
+        .collect();
     let mean: Vec<f64> = (0..p)
-        .map(|j| rows.iter().map(|r| r[j]).sum::<f64>() / nf)
+        .map(|j| {
+            if constant[j] {
+                rows[0][j]
+            } else {
+                rows.iter().map(|r| r[j]).sum::<f64>() / nf
+            }
+        })
         .collect();
     // Sample standard deviations (n − 1) and the standardised data (1/n scaling, so that
     // R = YᵀY/n has a unit diagonal).
@@ -145,7 +156,7 @@ pub fn fit(names: &[String], rows: &[Vec<f64>]) -> Result<Fit, String> {
 /// Anderson–Darling A*² and its p-value for a normal with estimated μ and σ (module docs).
 pub fn anderson_darling(values: &[f64]) -> Option<Test> {
     let n = values.len();
-    if n < 8 {
+    if n < 8 || values.iter().all(|&v| v == values[0]) {
         return None;
     }
     let nf = n as f64;

@@ -689,7 +689,14 @@ pub fn parse_requirement(
             "{output} is an indicator; its requirement would be on its fraction, which a spec does not give"
         ));
     }
-    let target = Target::parse(rest).map_err(|err| format!("{text:?}: {err}"))?;
+    // The target's own message quotes what it read: the output before it, when named.
+    let target = Target::parse(rest).map_err(|err| {
+        if rest == trimmed {
+            err
+        } else {
+            format!("{output}: {err}")
+        }
+    })?;
     let figure = match target.figure {
         TargetFigure::Percentile(p) => GATED_PERCENTS
             .iter()
@@ -1033,7 +1040,7 @@ impl CheckReport {
             String::new()
         } else {
             format!(
-                ", {} of {} requirements not violated",
+                ", {} of {} requirements met",
                 self.requirements.len() - violated,
                 self.requirements.len()
             )

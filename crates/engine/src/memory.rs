@@ -29,6 +29,15 @@ pub struct MemoryNeed {
     pub way_out: &'static str,
 }
 
+/// How a user needs less worker memory: fewer threads while there are several.
+fn fewer_workers(threads: usize) -> &'static str {
+    if threads > 1 {
+        "use fewer threads (--threads) or fewer input columns"
+    } else {
+        "use fewer input columns"
+    }
+}
+
 impl MemoryNeed {
     /// `Err(one line)` when the need exceeds `budget` bytes (`budget_source` says where the
     /// budget comes from).
@@ -36,12 +45,18 @@ impl MemoryNeed {
         if self.bytes <= budget {
             return Ok(());
         }
+        // Below the fixed allowance no request fits: say so rather than advise less.
+        let way_out = if budget < BASE_BYTES {
+            format!("allow at least {} (--max-memory)", human_bytes(self.bytes))
+        } else {
+            self.way_out.to_string()
+        };
         Err(format!(
-            "needs about {} of memory ({}), more than the {} available ({budget_source}): {}",
+            "needs about {} of memory ({}, and {} for the program and its tables), more than the {} available ({budget_source}): {way_out}",
             human_bytes(self.bytes),
             self.what,
+            human_bytes(BASE_BYTES),
             human_bytes(budget),
-            self.way_out
         ))
     }
 }
@@ -89,8 +104,9 @@ pub fn run(scenario: &Scenario, settings: &RunSettings, threads: usize) -> Memor
         bytes: BASE_BYTES + kept + scratch,
         what: if exact {
             format!(
-                "{} kept values for exact percentiles of {continuous} outputs",
-                crate::report::group_thousands((samples * continuous) as u64)
+                "{} kept values for exact percentiles of {continuous} output{}",
+                crate::report::group_thousands((samples * continuous) as u64),
+                if continuous == 1.0 { "" } else { "s" }
             )
         } else {
             format!(
@@ -101,7 +117,7 @@ pub fn run(scenario: &Scenario, settings: &RunSettings, threads: usize) -> Memor
         way_out: if exact {
             "lower --exact-percentile-limit (the percentiles then come from the bounded-memory sketch) or ask for fewer --samples"
         } else {
-            "use fewer threads (--threads) or fewer input columns"
+            fewer_workers(threads)
         },
     }
 }
@@ -132,21 +148,35 @@ pub fn sensitivity(
     };
     let columns = scenario.input_space.n_columns() as f64;
     let per_thread = VALUE * CHUNK_SIZE as f64 * (4.0 * columns + variants * continuous);
-    MemoryNeed {
-        bytes: BASE_BYTES + kept + threads as f64 * per_thread,
-        what: if rows {
+    let workers = threads as f64 * per_thread;
+    let (what, way_out) = if rows {
+        (
             format!(
                 "{} model values for the row bootstrap",
                 crate::report::group_thousands((n * variants * continuous) as u64)
-            )
-        } else {
-            format!("the sample matrices of {columns} input columns per worker thread")
-        },
-        way_out: if rows {
-            "lower --row-bootstrap-limit (the intervals then come from the bounded-memory block bootstrap) or ask for fewer --samples"
-        } else {
-            "use fewer threads (--threads) or fewer input columns"
-        },
+            ),
+            "lower --row-bootstrap-limit (the intervals then come from the bounded-memory block bootstrap) or ask for fewer --samples",
+        )
+    } else if kept > workers {
+        (
+            format!(
+                "the sums of {} blocks of rows for the intervals",
+                crate::report::group_thousands(
+                    (kept / (VALUE * (variants + 1.0) * continuous.max(1.0))) as u64
+                )
+            ),
+            "ask for fewer --samples",
+        )
+    } else {
+        (
+            format!("the sample matrices of {columns} input columns per worker thread"),
+            fewer_workers(threads),
+        )
+    };
+    MemoryNeed {
+        bytes: BASE_BYTES + kept + workers,
+        what,
+        way_out,
     }
 }
 

@@ -857,9 +857,9 @@ impl RunReport {
                     with_ci(c.cpk, c.cpk_ci95),
                     index(c.cp_percentile),
                     index(c.cpk_percentile),
-                    format_sig(c.ppm_out),
-                    format_sig(c.ppm_out_ci95[0]),
-                    format_sig(c.ppm_out_ci95[1]),
+                    format_ppm(c.ppm_out),
+                    format_ppm(c.ppm_out_ci95[0]),
+                    format_ppm(c.ppm_out_ci95[1]),
                 ));
                 if let Some([l, u]) = o.replicate_ci95.as_ref().and_then(|r| r.ppm_out_of_spec) {
                     lines.push(format!(
@@ -1067,6 +1067,17 @@ pub fn format_sig(x: f64) -> String {
     }
     let decimals = (4 - magnitude).max(0) as usize;
     format!("{x:.decimals$}")
+}
+
+/// A ppm figure for the text report: [`format_sig`], except that a whole million (every
+/// sample out of spec) stays a plain number beside its neighbours (`1000000`, not
+/// `1.0000e6`).
+pub fn format_ppm(x: f64) -> String {
+    if x.is_finite() && x.abs() >= 1e5 {
+        format!("{x:.0}")
+    } else {
+        format_sig(x)
+    }
 }
 
 /// Text with `&`, `<`, `>`, `"` and `'` escaped for XML and HTML (the JUnit report of

@@ -21,6 +21,11 @@ impl<'a> CsvTable<'a> {
     pub fn read(path: &'a Path) -> Result<CsvTable<'a>, String> {
         let text = std::fs::read_to_string(path)
             .map_err(|err| format!("{}: cannot read: {err}", path.display()))?;
+        CsvTable::parse(path, &text)
+    }
+
+    /// [`CsvTable::read`] on a text already read; `path` names it in messages.
+    pub fn parse(path: &'a Path, text: &str) -> Result<CsvTable<'a>, String> {
         // Line ends of Windows exports: the reader would count the lines of a CRLF file
         // one short.
         let text = text.replace("\r\n", "\n");

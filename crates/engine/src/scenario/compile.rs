@@ -44,6 +44,19 @@ fn fixed_matrix(path: &str, rows: &[Vec<f64>]) -> Result<[[f64; 6]; 6], Scenario
     Ok(matrix)
 }
 
+/// The file index of the variable named `name`, or of the array whose member it is
+/// (`name_K`).
+fn variable_index(file: &ScenarioFile, name: &str) -> Option<usize> {
+    file.variables.iter().find_map(|(i, variable)| {
+        let member = variable.count.is_some()
+            && name
+                .strip_prefix(variable.name.as_str())
+                .and_then(|rest| rest.strip_prefix('_'))
+                .is_some_and(|k| k.parse::<u64>().is_ok());
+        (variable.name == name || member).then_some(*i)
+    })
+}
+
 fn check_name(path: &str, name: &str) -> Result<(), ScenarioError> {
     let ok = !name.is_empty()
         && name
@@ -849,6 +862,9 @@ pub(super) fn compile(
     }
     let mut models = Vec::new();
     let mut outputs: Vec<OutputInfo> = Vec::new();
+    // Models whose outputs are known (built, bound or not): every output name is known
+    // when all are.
+    let mut models_built = 0;
     for ((i, model_file), built) in file.models.iter().zip(built_models) {
         let path = format!("models[{i}]");
         let (entry, model) = match built {
@@ -858,6 +874,7 @@ pub(super) fn compile(
                 continue;
             }
         };
+        models_built += 1;
         let mut bindings = Vec::with_capacity(model.inputs().len());
         let mut bound = true;
         // Per `*` pattern, the indices of the inputs it binds.
@@ -945,6 +962,26 @@ pub(super) fn compile(
                             };
                             match column {
                                 Ok(Some(column)) => match &columns[column].unit {
+                                    // A unit rvtol does not know is the variable's mistake:
+                                    // said at its `unit`.
+                                    Some(unit)
+                                        if input.unit != "any"
+                                            && unit != &input.unit
+                                            && !super::units::is_known(unit)
+                                            && variable_index(&file, name).is_some() =>
+                                    {
+                                        Err(ScenarioError::new(
+                                            format!(
+                                                "variables[{}].unit",
+                                                variable_index(&file, name).unwrap_or_default()
+                                            ),
+                                            format!(
+                                                "{unit:?} is not a unit rvtol knows ({}); {binding_path} wants {}",
+                                                super::units::known(),
+                                                input.unit
+                                            ),
+                                        ))
+                                    }
                                     Some(unit) if input.unit != "any" && unit != &input.unit => {
                                         Err(ScenarioError::new(
                                             &binding_path,
@@ -1138,7 +1175,7 @@ pub(super) fn compile(
     for (name, spec) in &file.spec_limits {
         let path = format!("spec_limits.{name}");
         let Some(output) = outputs.iter_mut().find(|o| &o.name == name) else {
-            if models.len() == file.models.len() {
+            if models_built == file.models.len() {
                 report(Err(ScenarioError::new(
                     &path,
                     format!("no output named {name:?}"),

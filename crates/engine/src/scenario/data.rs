@@ -114,6 +114,26 @@ pub fn inline_data_files<'a>(text: &'a str, base: &Path) -> Result<Cow<'a, str>,
 
 /// The (file, column) of a variable's `empirical` distribution that names a CSV file and
 /// has no `values` yet; `None` for every other variable.
+/// The data files the scenario text refers to, relative paths joined to `base` (for the
+/// checks that keep a command's outputs off its inputs); a text that does not parse, or a
+/// malformed reference, names none (loading the scenario says what is wrong).
+pub fn data_files(text: &str, base: &Path) -> Vec<std::path::PathBuf> {
+    if !text.contains("\"csv\"") {
+        return Vec::new();
+    }
+    let Ok(document) = parse_value(text) else {
+        return Vec::new();
+    };
+    let Some(Value::Array(variables)) = document.get("variables") else {
+        return Vec::new();
+    };
+    variables
+        .iter()
+        .filter_map(|variable| csv_reference("", variable).ok().flatten())
+        .map(|(file, _)| base.join(file))
+        .collect()
+}
+
 fn csv_reference(at: &str, variable: &Value) -> Result<Option<(String, String)>, ScenarioError> {
     let Some(empirical) = variable
         .get("distribution")

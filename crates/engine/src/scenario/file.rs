@@ -353,6 +353,13 @@ fn tidy_serde_message(message: &str) -> String {
         "expected fewer elements in array",
         "expected fewer elements",
     );
+    // Rust's type names mean nothing to the reader of a scenario.
+    let message = message
+        .replace("expected f64", "expected a number")
+        .replace("expected u64", "expected a whole number of at least 0")
+        .replace("expected usize", "expected a whole number of at least 0")
+        .replace("expected i64", "expected a whole number")
+        .replace("expected a boolean", "expected true or false");
     // serde writes floats in full ("floating point `1000000…`"): shorten them.
     let mut out = String::with_capacity(message.len());
     let mut rest = message.as_str();
