@@ -83,21 +83,19 @@ fn scenario_inputs(path: &Path) -> Vec<(&'static str, PathBuf)> {
 
 /// Refuses, before a command's work, outputs that cannot be written or would destroy an
 /// input or each other ([`check_targets`]); `inputs` are what the command reads.
-fn outputs_ok(targets: &[OutputFile<'_>], inputs: &[(&str, PathBuf)]) -> Result<()> {
+/// `targets` are the command's outputs, `None` those not asked for.
+fn outputs_ok(targets: &[Option<OutputFile<'_>>], inputs: &[(&str, PathBuf)]) -> Result<()> {
+    let targets: Vec<OutputFile<'_>> = targets.iter().flatten().copied().collect();
     let inputs: Vec<Input<'_>> = inputs
         .iter()
         .map(|(what, p)| (*what, p.as_path()))
         .collect();
-    check_targets(targets, &inputs).map_err(|err| BadInput(err.to_string()).into())
+    check_targets(&targets, &inputs).map_err(|err| BadInput(err.to_string()).into())
 }
 
 /// The target of a shard's `--partial` file.
-fn partial_target(path: &Path) -> OutputFile<'_> {
-    OutputFile {
-        option: "--partial",
-        path,
-        format: Format::Binary,
-    }
+fn partial_target(path: &Path) -> Option<OutputFile<'_>> {
+    target("--partial", Some(path), Format::Binary)
 }
 
 /// The target of an optional output.
@@ -205,7 +203,7 @@ pub struct Destinations<'a> {
 
 impl<'a> Destinations<'a> {
     /// `--json`, `--html` and `--samples-out` as targets, then `more`.
-    fn targets(&self, more: &[Option<OutputFile<'a>>]) -> Vec<OutputFile<'a>> {
+    fn targets(&self, more: &[Option<OutputFile<'a>>]) -> Vec<Option<OutputFile<'a>>> {
         [
             target("--json", self.json, Format::Text),
             target("--html", self.html, Format::Html),
@@ -213,7 +211,6 @@ impl<'a> Destinations<'a> {
         ]
         .into_iter()
         .chain(more.iter().copied())
-        .flatten()
         .collect()
     }
 
@@ -418,10 +415,7 @@ pub fn run(
 
 pub fn nominal(scenario_path: &Path, json: Option<&Path>) -> Result<()> {
     outputs_ok(
-        &[target("--json", json, Format::Text)]
-            .into_iter()
-            .flatten()
-            .collect::<Vec<_>>(),
+        &[target("--json", json, Format::Text)],
         &scenario_inputs(scenario_path),
     )?;
     let scenario = load(scenario_path)?;
@@ -497,13 +491,7 @@ pub fn init(model: &str, params: &[String], output: Option<&Path>) -> Result<()>
         };
         given.insert(key.trim().to_string(), value);
     }
-    outputs_ok(
-        &[target("-o", output, Format::Text)]
-            .into_iter()
-            .flatten()
-            .collect::<Vec<_>>(),
-        &[],
-    )?;
+    outputs_ok(&[target("-o", output, Format::Text)], &[])?;
     let text = rvtol_engine::scenario::skeleton::skeleton_with(model, &given).map_err(BadInput)?;
     match output {
         Some(path) => write_report(path, &text),
@@ -822,11 +810,7 @@ pub fn baseline(
     execution: &Execution,
 ) -> Result<()> {
     outputs_ok(
-        &[OutputFile {
-            option: "-o",
-            path: output,
-            format: Format::Text,
-        }],
+        &[target("-o", Some(output), Format::Text)],
         &scenario_inputs(path),
     )?;
     let (scenario, text) = read(path)?;
@@ -882,10 +866,7 @@ pub fn check(
         &[
             target("--junit", junit, Format::Text),
             target("--json", json, Format::Text),
-        ]
-        .into_iter()
-        .flatten()
-        .collect::<Vec<_>>(),
+        ],
         &inputs,
     )?;
     let (scenario, text) = read(path)?;
@@ -1085,14 +1066,7 @@ pub fn report(
     if let Some(path) = scenario_path {
         inputs.extend(scenario_inputs(path));
     }
-    outputs_ok(
-        &[OutputFile {
-            option: "-o",
-            path: output,
-            format: Format::Html,
-        }],
-        &inputs,
-    )?;
+    outputs_ok(&[target("-o", Some(output), Format::Html)], &inputs)?;
     let scenario_of = |v: &serde_json::Value| v["scenario"].as_str().unwrap_or("").to_string();
     let mut found: Vec<(Kind, serde_json::Value, &Path)> = Vec::new();
     for file in files {
@@ -1200,13 +1174,7 @@ pub fn evaluate(
     }
     let mut inputs = scenario_inputs(scenario_path);
     inputs.push(("the input rows", inputs_path.to_path_buf()));
-    outputs_ok(
-        &[target("-o", output, Format::Table)]
-            .into_iter()
-            .flatten()
-            .collect::<Vec<_>>(),
-        &inputs,
-    )?;
+    outputs_ok(&[target("-o", output, Format::Table)], &inputs)?;
     let scenario = load(scenario_path)?;
     let table = read_csv(inputs_path)?;
     let names = table.names();
@@ -1290,10 +1258,7 @@ const SAMPLE_INDEX: &str = "sample";
 pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()> {
     use rvtol_engine::fit::{fit as fit_normal, fragment, PART_COMPONENTS};
     outputs_ok(
-        &[target("-o", output, Format::Text)]
-            .into_iter()
-            .flatten()
-            .collect::<Vec<_>>(),
+        &[target("-o", output, Format::Text)],
         &[("the measurements", path.to_path_buf())],
     )?;
     let table = read_csv(path)?;
