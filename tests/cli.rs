@@ -446,7 +446,7 @@ fn init_writes_a_valid_runnable_skeleton_for_every_model() {
             "pin_position_errors",
             "--param pin_position_errors: expected KEY=VALUE",
         ),
-        ("no_such=1", "params.no_such: unknown parameter"),
+        ("no_such=1", "--param no_such: unknown parameter"),
     ] {
         let out = run_rvtol(&["init", "transmission_error", "--param", bad]);
         assert_eq!(out.status.code(), Some(2));

@@ -1129,3 +1129,22 @@ fn a_folder_that_takes_no_new_file_is_refused_before_the_run() {
         assert!(out.stdout.is_empty());
     }
 }
+
+#[test]
+fn a_file_that_is_no_baseline_and_a_bad_init_parameter_are_named_as_such() {
+    let scenario = workspace_dir().join("scenarios/linear-stack-correlated.json");
+    let s = path_arg(&scenario);
+    let line = one_line(&run_rvtol(&["check", s, "--baseline", s]), 2);
+    assert!(
+        line.ends_with("not a baseline but a scenario (no `figures`): `rvtol baseline SCENARIO -o FILE` writes one"),
+        "{line}"
+    );
+    let line = one_line(
+        &run_rvtol(&["init", "geometric_hysteresis", "--param", "pin_count=abc"]),
+        2,
+    );
+    assert_eq!(
+        line,
+        "error: --param pin_count: must be a number, got a string"
+    );
+}

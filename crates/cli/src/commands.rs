@@ -63,8 +63,7 @@ fn fallback_name(path: &Path) -> String {
 }
 
 /// The files a command on the scenario at `path` reads: the scenario and the data files it
-/// refers to (none from standard input, whose relative data paths start at the current
-/// folder and are listed all the same).
+/// refers to (none for standard input, which cannot be read twice).
 fn scenario_inputs(path: &Path) -> Vec<(&'static str, PathBuf)> {
     if is_stdout(path) {
         return Vec::new();
@@ -492,7 +491,13 @@ pub fn init(model: &str, params: &[String], output: Option<&Path>) -> Result<()>
         given.insert(key.trim().to_string(), value);
     }
     outputs_ok(&[target("-o", output, Format::Text)], &[])?;
-    let text = rvtol_engine::scenario::skeleton::skeleton_with(model, &given).map_err(BadInput)?;
+    // The engine names a parameter by its scenario path; here it came from --param.
+    let text = rvtol_engine::scenario::skeleton::skeleton_with(model, &given).map_err(|m| {
+        BadInput(match m.strip_prefix("params.") {
+            Some(rest) => format!("--param {rest}"),
+            None => m,
+        })
+    })?;
     match output {
         Some(path) => write_report(path, &text),
         None => print(&text),

@@ -146,6 +146,27 @@ fn default_exact_percentile_limit() -> u64 {
 impl Baseline {
     /// Parses a baseline file, with the JSON path of any problem.
     pub fn from_json(text: &str) -> Result<Baseline, ScenarioError> {
+        // A scenario or a report given for a baseline is named as such, not by its first
+        // key; a damaged baseline is left to the field-by-field messages.
+        if let Ok(serde_json::Value::Object(map)) = serde_json::from_str(text) {
+            let looks_like = if map.contains_key("figures") {
+                None
+            } else if map.contains_key("models") {
+                Some("a scenario")
+            } else if map.contains_key("outputs") {
+                Some("a report")
+            } else {
+                None
+            };
+            if let Some(looks_like) = looks_like {
+                return Err(ScenarioError::new(
+                    "(root)",
+                    format!(
+                        "not a baseline but {looks_like} (no `figures`): `rvtol baseline SCENARIO -o FILE` writes one"
+                    ),
+                ));
+            }
+        }
         let mut deserializer = serde_json::Deserializer::from_str(text);
         let baseline: Baseline =
             serde_path_to_error::deserialize(&mut deserializer).map_err(|err| {
