@@ -895,6 +895,20 @@ fn usage_errors_are_one_line_naming_the_option() {
         line,
         "error: invalid value '-1' for '--samples <SAMPLES>': must be a whole number of at least 1 (see 'rvtol run --help')"
     );
+    // A seed is any u64, said without Rust's parser's words; the limit in groups.
+    let line = one_line(&run_rvtol(&["sensitivity", "x.json", "--seed", "-1"]), 2);
+    assert_eq!(
+        line,
+        "error: invalid value '-1' for '--seed <SEED>': must be a whole number from 0 to 18,446,744,073,709,551,615 (see 'rvtol sensitivity --help')"
+    );
+    let line = one_line(&run_rvtol(&["run", "x.json", "--samples", "1e30"]), 2);
+    assert!(
+        line.contains("must be at most 18,446,744,073,709,551,615"),
+        "{line}"
+    );
+    // merge's usage errors point at its own help.
+    let line = one_line(&run_rvtol(&["merge"]), 2);
+    assert!(line.ends_with("(see 'rvtol merge --help')"), "{line}");
     let line = one_line(&run_rvtol(&["run"]), 2);
     assert!(line.contains("<SCENARIO>"), "{line}");
     let line = one_line(&run_rvtol(&["frobnicate"]), 2);

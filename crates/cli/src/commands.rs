@@ -25,7 +25,7 @@ use rvtol_engine::{
     ScenarioError,
 };
 
-use crate::limits::{memory_budget, parse_count, parse_sampling, thread_pool, threads};
+use crate::limits::{memory_budget, parse_count, parse_sampling, parse_seed, thread_pool, threads};
 use crate::output::{
     check_targets, is_stdout, note, print, write_bytes, write_report, Format, Input, OutputFile,
 };
@@ -546,7 +546,7 @@ pub struct SensitivityArgs {
     #[arg(long, default_value_t = 65_536, value_parser = parse_count, allow_hyphen_values = true)]
     pub samples: u64,
     /// Seed of the random streams (default: the scenario's `seed`, else 1).
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, value_parser = parse_seed, allow_hyphen_values = true)]
     pub seed: Option<u64>,
     /// How the rows of A and B are drawn: mc (independent draws; bootstrap intervals),
     /// lhs or rqmc (replicates of a Latin hypercube or scrambled Sobol' design; intervals

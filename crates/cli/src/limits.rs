@@ -22,7 +22,10 @@ pub fn parse_count(text: &str) -> Result<u64, String> {
                 .map_err(|_| "must be a whole number of at least 1".to_string())?;
             if !(x.is_finite() && x.fract() == 0.0 && x >= 1.0 && x <= u64::MAX as f64) {
                 return Err(if x.is_finite() && x > u64::MAX as f64 {
-                    format!("must be at most {}", u64::MAX)
+                    format!(
+                        "must be at most {}",
+                        rvtol_engine::report::group_thousands(u64::MAX)
+                    )
                 } else {
                     "must be a whole number of at least 1".to_string()
                 });
@@ -34,6 +37,16 @@ pub fn parse_count(text: &str) -> Result<u64, String> {
         return Err("must be at least 1".to_string());
     }
     Ok(value)
+}
+
+/// A seed of the random streams: a whole number from 0 to 2⁶⁴ − 1 (`_` may group digits).
+pub fn parse_seed(text: &str) -> Result<u64, String> {
+    text.trim().replace('_', "").parse::<u64>().map_err(|_| {
+        format!(
+            "must be a whole number from 0 to {}",
+            rvtol_engine::report::group_thousands(u64::MAX)
+        )
+    })
 }
 
 /// A share between 0 and 1 (`0.001`).
@@ -164,8 +177,22 @@ mod tests {
         }
         assert_eq!(
             parse_count("1e30"),
-            Err(format!("must be at most {}", u64::MAX))
+            Err("must be at most 18,446,744,073,709,551,615".to_string())
         );
+    }
+
+    #[test]
+    fn seeds_are_any_u64() {
+        assert_eq!(parse_seed("0"), Ok(0));
+        assert_eq!(parse_seed("1_000"), Ok(1000));
+        assert_eq!(parse_seed("18446744073709551615"), Ok(u64::MAX));
+        for bad in ["-1", "1.5", "1e3", "x", "", "18446744073709551616"] {
+            assert_eq!(
+                parse_seed(bad),
+                Err("must be a whole number from 0 to 18,446,744,073,709,551,615".to_string()),
+                "{bad}"
+            );
+        }
     }
 
     #[test]

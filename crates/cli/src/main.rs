@@ -17,7 +17,7 @@ use clap::{Args, Parser, Subcommand};
 use rvtol_deviation::SamplingMethod;
 use rvtol_engine::DEFAULT_EXACT_PERCENTILE_LIMIT;
 
-use crate::limits::{parse_count, parse_sampling, parse_share, parse_size};
+use crate::limits::{parse_count, parse_sampling, parse_seed, parse_share, parse_size};
 
 /// `K/N` of `--shard`.
 fn parse_shard_arg(text: &str) -> Result<(u64, u64), String> {
@@ -63,7 +63,7 @@ enum Command {
         #[arg(long, value_parser = parse_count, allow_hyphen_values = true)]
         samples: Option<u64>,
         /// Seed of the random streams (default: the scenario's `seed`, else 1).
-        #[arg(long, allow_hyphen_values = true)]
+        #[arg(long, value_parser = parse_seed, allow_hyphen_values = true)]
         seed: Option<u64>,
         /// How rows are drawn: mc (independent draws), lhs (Latin hypercube) or rqmc
         /// (scrambled Sobol' points); default: the scenario's `sampling`, else mc.
@@ -186,7 +186,7 @@ enum Command {
         #[arg(long, value_parser = parse_count, allow_hyphen_values = true)]
         samples: Option<u64>,
         /// Seed (default: the scenario's `seed`, else 1).
-        #[arg(long, allow_hyphen_values = true)]
+        #[arg(long, value_parser = parse_seed, allow_hyphen_values = true)]
         seed: Option<u64>,
         /// Exact percentiles while samples × outputs stays at or below this many values;
         /// a bounded-memory sketch beyond it (recorded in the baseline for the check).
@@ -203,7 +203,7 @@ enum Command {
         #[arg(long, value_name = "FILE")]
         baseline: PathBuf,
         /// Seed of the check run (default: the baseline's).
-        #[arg(long, allow_hyphen_values = true)]
+        #[arg(long, value_parser = parse_seed, allow_hyphen_values = true)]
         seed: Option<u64>,
         /// Write a JUnit XML report to PATH.
         #[arg(long, value_name = "PATH")]
@@ -265,10 +265,10 @@ enum Command {
         #[arg(long, value_parser = parse_count, allow_hyphen_values = true)]
         samples: Option<u64>,
         /// Seed of the optimisation runs (default: the scenario's `seed`, else 1).
-        #[arg(long, allow_hyphen_values = true)]
+        #[arg(long, value_parser = parse_seed, allow_hyphen_values = true)]
         seed: Option<u64>,
         /// Seed of the verification run (default: seed + 1).
-        #[arg(long, allow_hyphen_values = true)]
+        #[arg(long, value_parser = parse_seed, allow_hyphen_values = true)]
         verify_seed: Option<u64>,
         /// Write the JSON report to PATH ("-" for stdout instead of the table).
         #[arg(long, value_name = "PATH")]
