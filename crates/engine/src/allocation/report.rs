@@ -387,10 +387,13 @@ impl AllocationReport {
             }
         }
         match &self.common_scale {
+            // Both unrounded: the proposal's rounding (down where a source matters) can
+            // cost a little more than either.
             Some(c) => out.push_str(&format!(
-                "every tolerance × {} instead (within its bounds): cost {}\n",
+                "every tolerance × {} instead (within its bounds): cost {} unrounded, against the optimum's {} unrounded\n",
                 format_sig(c.factor),
-                format_sig(c.cost)
+                format_sig(c.cost),
+                format_sig(self.optimum_cost)
             )),
             None => out.push_str("no common factor on the tolerances meets the target\n"),
         }
