@@ -176,9 +176,22 @@ fn same_seed_same_bits_whatever_the_threads() {
 #[test]
 fn infeasible_target_exits_1_and_says_so() {
     // x4 alone has σ = 0.003: no allocation of x1..x3 reaches σ ≤ 0.002.
-    let (code, report, stderr) = allocate(&["--target", "sd <= 0.002"]);
+    let proposal = TempScenario::new("allocate-infeasible", "");
+    std::fs::remove_file(proposal.path()).unwrap();
+    let (code, report, stderr) = allocate(&[
+        "--target",
+        "sd <= 0.002",
+        "--write-scenario",
+        proposal.path().to_str().unwrap(),
+    ]);
     assert_eq!(code, Some(1), "{stderr}");
     assert_eq!(report["status"], "infeasible");
+    // No scenario is written that a script could take for an answer.
+    assert!(!proposal.path().exists());
+    assert!(
+        stderr.contains("--write-scenario: nothing written to"),
+        "{stderr}"
+    );
     assert!(report["common_scale"].is_null());
     for s in report["sources"].as_array().unwrap() {
         assert_eq!(s["proposed"], s["bounds"][0], "tightest point shown");

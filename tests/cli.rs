@@ -668,6 +668,13 @@ input_shaft.dalpha,input_shaft.dbeta,input_shaft.dgamma";
             Some("no column for the inputs"),
         ),
         (format!("{header}\n"), Some("no rows")),
+        (
+            format!(
+                "{}\n{zeros}\n",
+                header.replacen("pin_radius_error,", "pin_radius_error [rad],", 1)
+            ),
+            Some("column 'pin_radius_error [rad]' is in rad, but the input is in mm and rad does not convert to it"),
+        ),
     ] {
         let path = dir.join("rows.csv");
         std::fs::write(&path, contents).unwrap();
@@ -692,6 +699,33 @@ input_shaft.dalpha,input_shaft.dbeta,input_shaft.dgamma";
             }
         }
     }
+    // A heading's unit is converted into the input's: 2 µm of pin radius error is the
+    // row of 0.002 mm, value for value.
+    let in_mm = format!("{header}\n0,0.002,{}\n", vec!["0"; 13].join(","));
+    let in_um = format!(
+        "{}\n0,2,{}\n",
+        header.replacen("pin_radius_error,", "pin_radius_error [µm],", 1),
+        vec!["0"; 13].join(",")
+    );
+    let mut outputs = Vec::new();
+    for (name, contents) in [("mm.csv", in_mm), ("um.csv", in_um)] {
+        let path = dir.join(name);
+        std::fs::write(&path, contents).unwrap();
+        let output = run_rvtol(&[
+            "evaluate",
+            &scenario("rv20e-hysteresis.json"),
+            "--inputs",
+            path.to_str().unwrap(),
+        ]);
+        assert_eq!(
+            output.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        outputs.push(output.stdout);
+    }
+    assert_eq!(outputs[0], outputs[1]);
     std::fs::remove_dir_all(&dir).ok();
 }
 

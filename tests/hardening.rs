@@ -967,7 +967,7 @@ fn an_output_on_an_input_or_on_another_output_is_refused_and_nothing_is_touched(
     let original = std::fs::read(&scenario).expect("read");
     let link = dir.join("link.json");
     std::os::unix::fs::symlink("my.json", &link).expect("symlink");
-    let same = dir.join("same.csv");
+    let same = dir.join("same.txt");
     let s = path_arg(&scenario);
     let destroy = "is the scenario file, which this command reads: writing there would destroy it";
     for (args, message) in [
@@ -989,17 +989,19 @@ fn an_output_on_an_input_or_on_another_output_is_refused_and_nothing_is_touched(
             ],
             destroy,
         ),
-        (vec!["check", s, "--baseline", s, "--junit", s], destroy),
+        (vec!["check", s, "--baseline", s, "--json", s], destroy),
         (
             vec![
-                "run",
+                "check",
                 s,
+                "--baseline",
+                "b.json",
                 "--json",
                 path_arg(&same),
-                "--samples-out",
+                "--junit",
                 path_arg(&same),
             ],
-            "is also the file of --json: give each output its own file",
+            "is also the file of --junit: give each output its own file",
         ),
         (
             vec!["run", s, "--json", "-", "--html", "-"],
@@ -1016,6 +1018,14 @@ fn an_output_on_an_input_or_on_another_output_is_refused_and_nothing_is_touched(
         (
             vec!["run", s, "--html", "x.pdf"],
             "--html: x.pdf: name it .html or .htm",
+        ),
+        (
+            vec!["run", s, "--json", "x.parquet"],
+            "--json: x.parquet: .parquet names another format (JSON is written there)",
+        ),
+        (
+            vec!["check", s, "--baseline", "b.json", "--junit", "j.json"],
+            "--junit: j.json: .json names another format (JUnit XML is written there)",
         ),
         (vec!["curve", s, "--out-dir", s], "is a file: name a folder"),
     ] {

@@ -204,7 +204,7 @@ impl<'a> Destinations<'a> {
     /// `--json`, `--html` and `--samples-out` as targets, then `more`.
     fn targets(&self, more: &[Option<OutputFile<'a>>]) -> Vec<Option<OutputFile<'a>>> {
         [
-            target("--json", self.json, Format::Text),
+            target("--json", self.json, Format::Json),
             target("--html", self.html, Format::Html),
             target("--samples-out", self.samples, Format::Table),
         ]
@@ -414,7 +414,7 @@ pub fn run(
 
 pub fn nominal(scenario_path: &Path, json: Option<&Path>) -> Result<()> {
     outputs_ok(
-        &[target("--json", json, Format::Text)],
+        &[target("--json", json, Format::Json)],
         &scenario_inputs(scenario_path),
     )?;
     let scenario = load(scenario_path)?;
@@ -490,7 +490,7 @@ pub fn init(model: &str, params: &[String], output: Option<&Path>) -> Result<()>
         };
         given.insert(key.trim().to_string(), value);
     }
-    outputs_ok(&[target("-o", output, Format::Text)], &[])?;
+    outputs_ok(&[target("-o", output, Format::Json)], &[])?;
     // The engine names a parameter by its scenario path; here it came from --param.
     let text = rvtol_engine::scenario::skeleton::skeleton_with(model, &given).map_err(|m| {
         BadInput(match m.strip_prefix("params.") {
@@ -815,7 +815,7 @@ pub fn baseline(
     execution: &Execution,
 ) -> Result<()> {
     outputs_ok(
-        &[target("-o", Some(output), Format::Text)],
+        &[target("-o", Some(output), Format::Json)],
         &scenario_inputs(path),
     )?;
     let (scenario, text) = read(path)?;
@@ -869,8 +869,8 @@ pub fn check(
     inputs.push(("the baseline", baseline_path.to_path_buf()));
     outputs_ok(
         &[
-            target("--junit", junit, Format::Text),
-            target("--json", json, Format::Text),
+            target("--junit", junit, Format::Xml),
+            target("--json", json, Format::Json),
         ],
         &inputs,
     )?;
@@ -957,7 +957,7 @@ pub fn allocate(
     execution: &Execution,
 ) -> Result<()> {
     outputs_ok(
-        &to.targets(&[target("--write-scenario", write_scenario, Format::Text)]),
+        &to.targets(&[target("--write-scenario", write_scenario, Format::Json)]),
         &scenario_inputs(path),
     )?;
     let (scenario, text) = read(path)?;
@@ -1002,14 +1002,25 @@ pub fn allocate(
         })
         .map_err(|err| bad_scenario(path, err))?;
     spinner.finish_and_clear();
+    // Only a verified proposal becomes a scenario: a file that exists after a failed
+    // allocation would pass for an answer.
+    let met = allocation.status() == "met";
     if let Some(proposal) = write_scenario {
-        let document =
-            proposal_document(&text, &allocation).map_err(|err| bad_scenario(path, err))?;
-        write_report(proposal, &document)?;
+        if met {
+            let document =
+                proposal_document(&text, &allocation).map_err(|err| bad_scenario(path, err))?;
+            write_report(proposal, &document)?;
+        } else {
+            note(&format!(
+                "--write-scenario: nothing written to {}: the allocation is {}",
+                proposal.display(),
+                allocation.status()
+            ));
+        }
     }
     let report = AllocationReport::new(&allocation);
     let json = report.to_json();
-    let stdout_taken = to.on_stdout() || write_scenario.is_some_and(is_stdout);
+    let stdout_taken = to.on_stdout() || (met && write_scenario.is_some_and(is_stdout));
     emit(to.json, stdout_taken, || json.clone(), || report.to_text())?;
     if let Some(html) = to.html {
         write_html(html, path, &scenario, rvtol_report::Kind::Allocation, &json)?;
@@ -1220,10 +1231,29 @@ pub fn evaluate(
             inputs_path.display()
         ))
     })?;
+    // A heading's unit is the column's: converted into the scenario's unit of that input
+    // (µm into mm), refused when it cannot be (another kind, or a unit rvtol does not know).
+    let mut factor = Vec::with_capacity(position.len());
+    for (column, &i) in scenario.columns.iter().zip(&position) {
+        factor.push(match (&table.columns[i].1, &column.unit) {
+            (Some(given), Some(wanted)) if given != wanted => {
+                rvtol_engine::scenario::units::conversion(given, wanted).ok_or_else(|| {
+                    BadInput(format!(
+                        "{}: column '{} [{given}]' is in {given}, but the input is in {wanted} and {given} does not convert to it (units rvtol knows: {})",
+                        table.at(1),
+                        column.name,
+                        rvtol_engine::scenario::units::known()
+                    ))
+                })?
+            }
+            _ => 1.0,
+        });
+    }
     let mut values = Vec::with_capacity(table.rows.len() * n_inputs);
     for (line, record) in &table.rows {
-        for &i in &position {
-            values.push(table.number(*line, record, i).map_err(BadInput)?);
+        for (&i, &f) in position.iter().zip(&factor) {
+            let value = table.number(*line, record, i).map_err(BadInput)?;
+            values.push(if f == 1.0 { value } else { value * f });
         }
     }
     if values.is_empty() {
@@ -1263,7 +1293,7 @@ const SAMPLE_INDEX: &str = "sample";
 pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()> {
     use rvtol_engine::fit::{fit as fit_normal, fragment, PART_COMPONENTS};
     outputs_ok(
-        &[target("-o", output, Format::Text)],
+        &[target("-o", output, Format::Json)],
         &[("the measurements", path.to_path_buf())],
     )?;
     let table = read_csv(path)?;
@@ -1506,8 +1536,8 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
     inputs.extend(args.check.iter().map(|p| ("the baseline", p.clone())));
     outputs_ok(
         &to.targets(&[
-            target("--baseline", args.baseline.as_deref(), Format::Text),
-            target("--junit", args.junit.as_deref(), Format::Text),
+            target("--baseline", args.baseline.as_deref(), Format::Json),
+            target("--junit", args.junit.as_deref(), Format::Xml),
         ]),
         &inputs,
     )?;

@@ -277,7 +277,8 @@ enum Command {
         /// with the plots.
         #[arg(long, value_name = "PATH")]
         html: Option<PathBuf>,
-        /// Write the scenario with the proposed tolerances to PATH.
+        /// Write the scenario with the proposed tolerances to PATH (only when the allocation
+        /// is met).
         #[arg(long, value_name = "PATH")]
         write_scenario: Option<PathBuf>,
         #[command(flatten)]

@@ -148,8 +148,11 @@ pub struct OutputFile<'a> {
 /// What an [`OutputFile`] receives, as far as its name is concerned.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Format {
-    /// Text of any name (JSON, JUnit XML, a scenario, a baseline); `-` allowed.
-    Text,
+    /// JSON (a report, a scenario, a baseline, a fragment): any name but one of another
+    /// format rvtol writes (`.html`, `.csv`, `.parquet`, `.xml`); `-` allowed.
+    Json,
+    /// JUnit XML: any name but `.json`, `.html`, `.csv`, `.parquet`; `-` allowed.
+    Xml,
     /// An HTML page: `.html` or `.htm`; `-` allowed.
     Html,
     /// A sample table, CSV or Parquet as the name says: `.csv` or `.parquet`; `-` is CSV.
@@ -164,15 +167,28 @@ impl Format {
         match self {
             Format::Html => "an HTML page is written there",
             Format::Table => "the extension chooses the format",
-            Format::Text | Format::Binary => "",
+            Format::Json => "JSON is written there",
+            Format::Xml => "JUnit XML is written there",
+            Format::Binary => "",
         }
     }
 
+    /// The extensions a name must end in (empty: any but [`Format::refused`]).
     fn extensions(self) -> &'static [&'static str] {
         match self {
             Format::Html => &["html", "htm"],
             Format::Table => &["csv", "parquet"],
-            Format::Text | Format::Binary => &[],
+            Format::Json | Format::Xml | Format::Binary => &[],
+        }
+    }
+
+    /// The extensions of the other formats rvtol writes, which a name of this one may not
+    /// end in.
+    fn refused(self) -> &'static [&'static str] {
+        match self {
+            Format::Json => &["html", "htm", "csv", "parquet", "xml"],
+            Format::Xml => &["json", "html", "htm", "csv", "parquet"],
+            Format::Html | Format::Table | Format::Binary => &[],
         }
     }
 }
@@ -207,23 +223,28 @@ pub fn check_targets(targets: &[OutputFile<'_>], inputs: &[Input<'_>]) -> Result
         check_destination(path).map_err(|err| anyhow::anyhow!("{option}: {err}"))?;
         let regular = fs::metadata(path).map_or(true, |m| m.is_file());
         let extensions = format.extensions();
-        if regular && !extensions.is_empty() {
-            let extension = path
-                .extension()
-                .map(|e| e.to_string_lossy().to_lowercase())
-                .unwrap_or_default();
-            if !extensions.contains(&extension.as_str()) {
-                bail!(
-                    "{option}: {}: name it {} ({})",
-                    path.display(),
-                    extensions
-                        .iter()
-                        .map(|e| format!(".{e}"))
-                        .collect::<Vec<_>>()
-                        .join(" or "),
-                    format.what()
-                );
-            }
+        let extension = path
+            .extension()
+            .map(|e| e.to_string_lossy().to_lowercase())
+            .unwrap_or_default();
+        if regular && format.refused().contains(&extension.as_str()) {
+            bail!(
+                "{option}: {}: .{extension} names another format ({}): choose another name",
+                path.display(),
+                format.what()
+            );
+        }
+        if regular && !extensions.is_empty() && !extensions.contains(&extension.as_str()) {
+            bail!(
+                "{option}: {}: name it {} ({})",
+                path.display(),
+                extensions
+                    .iter()
+                    .map(|e| format!(".{e}"))
+                    .collect::<Vec<_>>()
+                    .join(" or "),
+                format.what()
+            );
         }
         let Some(key) = file_key(path) else {
             continue;
