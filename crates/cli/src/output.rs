@@ -274,8 +274,8 @@ pub fn check_targets(targets: &[OutputFile<'_>], inputs: &[Input<'_>]) -> Result
 
 /// What makes two paths one file, for the checks of [`check_targets`]: an existing
 /// regular file's device and inode (links and other spellings included; elsewhere its
-/// canonical path), a new file's folder (resolved) and name. Devices and FIFOs have none: they are written through,
-/// and several outputs may share `/dev/null`.
+/// canonical path), a new file's folder (resolved) and name. Devices and FIFOs have none:
+/// they are written through, and several outputs may share `/dev/null`.
 #[derive(Debug, PartialEq)]
 enum FileKey {
     #[cfg(unix)]
