@@ -105,3 +105,58 @@ fn exact_percentile_intervals_cover_at_the_nominal_rate() {
 fn sketch_percentile_intervals_cover_at_the_nominal_rate() {
     check(1, "sketch");
 }
+
+/// The intervals' ranks at n = 10³ … 10¹² for every reported percentile equal those of an
+/// independent 40-digit computation (`scripts/binomial-reference.py`, which writes
+/// `tests/data/binomial_ranks.csv` with the margin by which its decisive tail sums clear
+/// 2.5 %: every margin is above 2·10⁻⁷, far beyond the 10⁻¹³ accuracy of rvtol's sums, so
+/// the ranks must agree exactly). The library CDF they replaced was off by thousands of
+/// ranks at n = 4·10⁷ (its continued fraction stopped before converging).
+#[test]
+fn interval_ranks_equal_a_high_precision_reference_up_to_a_trillion_values() {
+    use rvtol_engine::stats::binomial_rank_interval;
+    let table = include_str!("data/binomial_ranks.csv");
+    let rank = |cell: &str| (!cell.is_empty()).then(|| cell.parse::<usize>().unwrap());
+    let mut rows = 0;
+    for line in table.lines().skip(1) {
+        let cells: Vec<&str> = line.split(',').collect();
+        let n: usize = cells[0].parse().unwrap();
+        let percent: f64 = cells[1].parse().unwrap();
+        let margin: f64 = cells[4].parse().unwrap();
+        assert!(margin > 1e-9, "{line}: too close to its level to decide");
+        let expected = (rank(cells[2]), rank(cells[3]));
+        assert_eq!(
+            binomial_rank_interval(n, percent / 100.0, 0.95),
+            expected,
+            "n {n}, P{percent}"
+        );
+        rows += 1;
+    }
+    assert_eq!(rows, 13 * PERCENTS.len());
+}
+
+/// End to end at the size where the median's interval was found wrong: 40 samples of
+/// 4·10⁷ uniform values (true median ½), each with its P50 interval from the exact path.
+/// The interval covers with probability at least 95 %, so the covering count is at least
+/// Binomial(40, 0.95); below 38 − 3.5·√(40·0.95·0.05) = 33.2 with probability under
+/// 2·10⁻³ (the broken ranks covered 26 of 40).
+#[test]
+fn median_interval_covers_at_forty_million_values() {
+    use rand::{RngExt, SeedableRng};
+    use rayon::prelude::*;
+    use rvtol_engine::stats::percentiles_type7_with_intervals;
+    let n = 40_000_000;
+    let covered = (0..40u64)
+        .into_par_iter()
+        .filter(|&seed| {
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+            let mut values: Vec<f64> = (0..n).map(|_| rng.random::<f64>()).collect();
+            let found = percentiles_type7_with_intervals(&mut values, &[50.0], 0.95)[0].unwrap();
+            found.lower.unwrap() <= 0.5 && 0.5 < found.upper.unwrap()
+        })
+        .count();
+    assert!(
+        covered >= 34,
+        "{covered} of 40 P50 intervals hold the true median"
+    );
+}

@@ -34,7 +34,7 @@ use statrs::distribution::{ContinuousCDF, Normal};
 use crate::allocation::spec::{Target, TargetFigure};
 use crate::report::escape_markup;
 use crate::run::{
-    check_non_finite, run, Distribution, ReplicateFigures, RunResult, RunSettings,
+    check_non_finite, replicated_sd, run, Distribution, ReplicateFigures, RunResult, RunSettings,
     DEFAULT_EXACT_PERCENTILE_LIMIT,
 };
 use crate::scenario::{OutputInfo, Scenario, ScenarioError};
@@ -403,7 +403,8 @@ pub fn figures_of(
             push(&info.name, "fraction", acc.nonzero as f64 / nf, half, half);
             continue;
         }
-        let (mean, sd) = (acc.moments.mean, acc.moments.sd());
+        let sd = replicated_sd(replicates, o).unwrap_or_else(|| acc.moments.sd());
+        let mean = acc.moments.mean;
         let half = replicate_half(o, &|r| r.mean)
             .unwrap_or_else(|| two_sample * acc.moments.mean_standard_error());
         push(&info.name, "mean", mean, half, half);

@@ -15,7 +15,8 @@ use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
 
 use crate::run::{
-    Distribution, OutputAccumulator, PercentileMethod, ReplicateFigures, RunResult, CHUNK_SIZE,
+    replicated_sd, Distribution, OutputAccumulator, PercentileMethod, ReplicateFigures, RunResult,
+    CHUNK_SIZE,
 };
 use crate::scenario::{OutputInfo, Scenario};
 use crate::stats::quantile_sketch::bucket_representative;
@@ -555,36 +556,43 @@ impl RunReport {
                 let interval = out_of_spec_interval(acc.nonzero, m.n, CONFIDENCE);
                 let samples = result.samples;
                 let defined = |x: f64| if m.n > 0 { x } else { f64::NAN };
+                // A replicated run's sd is unbiased under its design (`ReplicateFigures`).
+                let sd = replicated_sd(&replicates, o).unwrap_or_else(|| m.sd());
                 let replicate_ci95 = replicate_t.filter(|_| !indicator).map(|t| {
-                    // The figure of all rows ± t·s/√R; no interval where a replicate has no
-                    // value.
-                    let around = |center: Option<f64>, values: Vec<f64>| {
-                        let h = t * replicate_standard_error(&values);
-                        match center {
-                            Some(c) if h.is_finite() && c.is_finite() => [Some(c - h), Some(c + h)],
+                    // A figure's replicate estimate ± (t·s/√R + its bias bound), stretched to
+                    // hold the figure of all rows; none where a replicate has no value.
+                    let around = |pooled: Option<f64>, values: Vec<f64>, bias: f64| {
+                        let centre = values.iter().sum::<f64>() / values.len() as f64;
+                        let h = t * replicate_standard_error(&values) + bias;
+                        match pooled {
+                            Some(p) if h.is_finite() && centre.is_finite() && p.is_finite() => {
+                                [Some((centre - h).min(p)), Some((centre + h).max(p))]
+                            }
                             _ => [None, None],
                         }
                     };
-                    let of = |center: f64, figure: fn(&ReplicateFigures) -> f64| {
-                        let [l, u] = around(
-                            Some(center),
-                            replicates.iter().map(|r| figure(&r[o])).collect(),
-                        );
+                    let of = |pooled: f64, figure: fn(&ReplicateFigures) -> f64| {
+                        let values = replicates.iter().map(|r| figure(&r[o])).collect();
+                        let [l, u] = around(Some(pooled), values, 0.0);
                         [l.unwrap_or(f64::NAN), u.unwrap_or(f64::NAN)]
                     };
                     ReplicateIntervals {
                         mean: of(m.mean, |r| r.mean),
-                        sd: of(m.sd(), |r| r.sd),
+                        sd: of(sd, |r| r.sd),
                         percentiles: OrderedIntervals(
                             PERCENTS
                                 .iter()
                                 .enumerate()
                                 .map(|(k, (key, _))| {
-                                    let values = replicates
-                                        .iter()
-                                        .map(|r| r[o].percentiles[k].unwrap_or(f64::NAN))
-                                        .collect();
-                                    (key.to_string(), around(percentiles.get(key), values))
+                                    let read = |figures: &ReplicateFigures| {
+                                        (figures.percentiles[k])
+                                            .zip(figures.percentile_bias_bounds[k])
+                                            .unwrap_or((f64::NAN, f64::NAN))
+                                    };
+                                    let (values, bounds): (Vec<f64>, Vec<f64>) =
+                                        replicates.iter().map(|r| read(&r[o])).unzip();
+                                    let bias = bounds.iter().sum::<f64>() / bounds.len() as f64;
+                                    (key.to_string(), around(percentiles.get(key), values, bias))
                                 })
                                 .collect(),
                         ),
@@ -624,7 +632,7 @@ impl RunReport {
                         }
                     }),
                     mean: defined(m.mean),
-                    sd: defined(m.sd()),
+                    sd: defined(sd),
                     skewness: defined(m.skewness()),
                     excess_kurtosis: defined(m.excess_kurtosis()),
                     min,

@@ -40,7 +40,7 @@ use rvtol_models::{ConditionEffect, Curve, OutputKind};
 
 use crate::evaluate::ChunkEvaluator;
 use crate::scenario::{Scenario, ScenarioError};
-use crate::stats::{percentiles_type7, Moments, QuantileSketch, SpecLimits, PERCENTS};
+use crate::stats::{values_at_ranks, Moments, QuantileSketch, SpecLimits, PERCENTS};
 
 /// Samples per chunk (part of the reproducibility contract: changing it changes results).
 pub const CHUNK_SIZE: usize = 4096;
@@ -269,16 +269,46 @@ impl RunSettings {
 }
 
 /// One replicate's figures of one output, for the replicate intervals.
+///
+/// Each is an estimator that is unbiased, or whose bias is bounded, under the design,
+/// since a replicated design's estimators vary so little that a bias of order 1/n would
+/// otherwise exceed the replicates' standard error and the interval would undercover
+/// (docs/models.md §6, "Replicate intervals"):
+/// - the sd is √(m2/n + V̂), V̂ the sample variance of the R replicate means: E[m2] =
+///   n·σ² − n·Var(x̄) for any design whose points each follow the output's law, so
+///   m2/n + V̂ is unbiased for σ² (the n − 1 divisor of independent rows is not: under a
+///   stratified design Var(x̄) ≪ σ²/n and m2/(n − 1) is σ²·n/(n − 1));
+/// - a percentile is read at two ranks, Hazen's n·p − ½ (unbiased in probability when
+///   the output is a monotone function of one stratified input: the i-th order statistic
+///   then lies uniformly in the i-th stratum) and Weibull's (n + 1)·p − 1 (unbiased for
+///   independent rows); the estimate is their midpoint and half their difference bounds
+///   its bias for any design in between.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ReplicateFigures {
     /// Mean.
     pub mean: f64,
-    /// Standard deviation.
+    /// Standard deviation, unbiased in variance under the design (above).
     pub sd: f64,
-    /// The percentiles of [`PERCENTS`] (exact type 7, or from the sketch).
+    /// The percentiles of [`PERCENTS`]: the midpoint of the Hazen and Weibull estimates
+    /// (exact order statistics), or the sketch's; `None` where either rank falls outside
+    /// the replicate's values.
     pub percentiles: Vec<Option<f64>>,
+    /// Half the difference of the Hazen and Weibull estimates of each percentile (0 from
+    /// the sketch): the bound of the estimate's bias.
+    pub percentile_bias_bounds: Vec<Option<f64>>,
     /// Share of the replicate's rows out of spec.
     pub out_of_spec_fraction: f64,
+}
+
+/// The sd of a replicated run's output `o` from its replicates' figures: √ of the mean of
+/// their unbiased variances ([`ReplicateFigures`]), which is also m2_all/N + V̂/R of all
+/// rows; `None` for a Monte Carlo run (no replicates).
+pub fn replicated_sd(replicates: &[Vec<ReplicateFigures>], o: usize) -> Option<f64> {
+    (!replicates.is_empty()).then(|| {
+        let variance: f64 =
+            replicates.iter().map(|r| r[o].sd * r[o].sd).sum::<f64>() / replicates.len() as f64;
+        variance.sqrt()
+    })
 }
 
 /// How the percentiles of a run were computed.
@@ -1225,7 +1255,7 @@ impl<'a> RunMerger<'a> {
         let mut replicates: Vec<Vec<OutputAccumulator>> =
             self.replicates.into_iter().flatten().collect();
         // Each replicate's figures before its values join the others.
-        let figures: Vec<Vec<ReplicateFigures>> = if self.replicate_moments.is_empty() {
+        let mut figures: Vec<Vec<ReplicateFigures>> = if self.replicate_moments.is_empty() {
             Vec::new()
         } else {
             let points = self.settings.replicate_points();
@@ -1249,6 +1279,7 @@ impl<'a> RunMerger<'a> {
                 })
                 .collect()
         };
+        unbias_replicate_sds(&mut figures);
         let mut replicates = replicates.into_iter();
         let mut outputs = replicates.next().expect("at least one replicate");
         if !figures.is_empty() {
@@ -1281,35 +1312,76 @@ impl<'a> RunMerger<'a> {
     }
 }
 
-/// One replicate's figures of an output from its accumulator and moments (`points` rows).
+/// One replicate's figures of an output from its accumulator and moments (`points` rows);
+/// its sd is √(m2/n) until [`unbias_replicate_sds`] adds the replicate means' variance.
 fn replicate_figures(
     acc: &mut OutputAccumulator,
     moments: &Moments,
     points: u64,
     flagged_conform: bool,
 ) -> ReplicateFigures {
-    let percents: Vec<f64> = PERCENTS.iter().map(|p| p.1).collect();
-    let percentiles = match &mut acc.distribution {
-        Distribution::Values(values) => percentiles_type7(values, &percents),
+    let percents: Vec<f64> = PERCENTS.iter().map(|p| p.1 / 100.0).collect();
+    let (percentiles, percentile_bias_bounds) = match &mut acc.distribution {
+        Distribution::Values(values) => {
+            let n = values.len() as f64;
+            // Hazen's and Weibull's ranks of each percentile, read in one pass.
+            let positions: Vec<f64> = percents
+                .iter()
+                .flat_map(|&p| [n * p - 0.5, (n + 1.0) * p - 1.0])
+                .collect();
+            let read = values_at_ranks(values, &positions);
+            read.chunks(2)
+                .map(|pair| match (pair[0], pair[1]) {
+                    (Some(hazen), Some(weibull)) => (
+                        Some(0.5 * (hazen + weibull)),
+                        Some(0.5 * (hazen - weibull).abs()),
+                    ),
+                    _ => (None, None),
+                })
+                .unzip()
+        }
         Distribution::Sketch {
             sketch,
             center,
             scale,
         } => percents
             .iter()
-            .map(|p| {
-                sketch
-                    .quantile(p / 100.0)
-                    .map(|z| (*center + *scale * z).clamp(moments.min, moments.max))
+            .map(|&p| {
+                let value = sketch
+                    .quantile(p)
+                    .map(|z| (*center + *scale * z).clamp(moments.min, moments.max));
+                (value, value.map(|_| 0.0))
             })
-            .collect(),
-        Distribution::Indicator | Distribution::Dropped => vec![None; percents.len()],
+            .unzip(),
+        Distribution::Indicator | Distribution::Dropped => {
+            (vec![None; percents.len()], vec![None; percents.len()])
+        }
+    };
+    let population_variance = if moments.n > 0 {
+        moments.m2 / moments.n as f64
+    } else {
+        f64::NAN
     };
     ReplicateFigures {
         mean: moments.mean,
-        sd: moments.sd(),
+        sd: population_variance.sqrt(),
         percentiles,
+        percentile_bias_bounds,
         out_of_spec_fraction: acc.out_of_spec(flagged_conform) as f64 / points as f64,
+    }
+}
+
+/// Makes each replicate's sd √(m2/n + V̂), V̂ the sample variance of the replicates'
+/// means of the same output ([`ReplicateFigures`]).
+fn unbias_replicate_sds(figures: &mut [Vec<ReplicateFigures>]) {
+    let outputs = figures.first().map_or(0, Vec::len);
+    for o in 0..outputs {
+        let means: Vec<f64> = figures.iter().map(|r| r[o].mean).collect();
+        let variance_of_means = Moments::from_slice(&means).variance();
+        for replicate in figures.iter_mut() {
+            let sd = &mut replicate[o].sd;
+            *sd = (*sd * *sd + variance_of_means).sqrt();
+        }
     }
 }
 

@@ -10,6 +10,8 @@
 //! no function here assumes anything about its order on entry, except the
 //! `_of_sorted` ones and [`order_statistic_interval`], which take a sorted slice.
 
+use super::binomial::binomial_rank_interval;
+
 /// 0-based position h = (n − 1)·p of percent `percent` (clamped into
 /// [0, 100]) among `count` values; `None` for NaN.
 fn type7_position(count: usize, percent: f64) -> Option<(usize, f64)> {
@@ -133,45 +135,39 @@ fn order_statistic(order_statistics: &[(usize, f64)], rank: usize) -> f64 {
         .map_or(f64::NAN, |index| order_statistics[index].1)
 }
 
-/// The 0-based ranks (l, u) of the distribution-free confidence interval
-/// [X_(l), X_(u)] for the quantile of probability `p` from `n` values, at `confidence`
-/// (e.g. 0.95), from the exact binomial law of B, the count of values below the
-/// quantile (B ~ Binomial(n, p) for a continuous distribution): P(X_(l) ≤ x_p < X_(u)) =
-/// P(l + 1 ≤ B ≤ u) ≥ confidence, with l the largest rank such that P(B ≤ l) ≤ α/2 and u
-/// the smallest such that P(B ≤ u) ≥ 1 − α/2 (α = 1 − confidence; Hahn & Meeker 1991
-/// §5.2). `None` for an end the sample cannot bound (too few values beyond the
-/// percentile: the interval is open on that side).
-pub fn binomial_rank_interval(n: usize, p: f64, confidence: f64) -> (Option<usize>, Option<usize>) {
-    use statrs::distribution::{Binomial, DiscreteCDF};
-    let tail = 0.5 * (1.0 - confidence);
-    let p = p.clamp(0.0, 1.0);
-    let Ok(law) = Binomial::new(p, n as u64) else {
-        return (None, None);
+/// The values at fractional 0-based ranks `positions` of `values` (linear interpolation
+/// between the neighbouring order statistics), from one selection pass; `None` for a
+/// position outside [0, n − 1] or NaN, where the sample has no value to read. The slice is
+/// reordered in place. Type 7 is position (n − 1)·p; a replicated design's figures also
+/// read Hazen's n·p − ½ and Weibull's (n + 1)·p − 1 (run.rs).
+pub fn values_at_ranks(values: &mut [f64], positions: &[f64]) -> Vec<Option<f64>> {
+    let last = values.len() as f64 - 1.0;
+    let split = |position: f64| {
+        (0.0..=last).contains(&position).then(|| {
+            let lower_rank = position.floor();
+            (lower_rank as usize, position - lower_rank)
+        })
     };
-    // Smallest m in [0, n] with P(B ≤ m) ≥ level (P(B ≤ n) = 1), by bisection.
-    let smallest_at_least = |level: f64| -> u64 {
-        let (mut low, mut high) = (0u64, n as u64);
-        while low < high {
-            let middle = low + (high - low) / 2;
-            if law.cdf(middle) >= level {
-                high = middle;
-            } else {
-                low = middle + 1;
-            }
-        }
-        low
-    };
-    let m = smallest_at_least(tail);
-    let lower = if law.cdf(m) <= tail {
-        Some(m)
-    } else {
-        m.checked_sub(1)
-    };
-    let upper = smallest_at_least(1.0 - tail);
-    (
-        lower.map(|r| r as usize).filter(|&r| r < n),
-        Some(upper as usize).filter(|&r| r < n),
-    )
+    let splits: Vec<Option<(usize, f64)>> = positions.iter().map(|&p| split(p)).collect();
+    let ranks: Vec<usize> = splits
+        .iter()
+        .flatten()
+        .flat_map(|&(rank, weight)| std::iter::once(rank).chain((weight > 0.0).then_some(rank + 1)))
+        .collect();
+    let order_statistics = select_ranks(values, ranks);
+    let lookup = |rank: usize| order_statistic(&order_statistics, rank);
+    splits
+        .iter()
+        .map(|split| {
+            split.map(|(rank, weight)| {
+                if weight == 0.0 {
+                    lookup(rank)
+                } else {
+                    interpolate(lookup(rank), lookup(rank + 1), weight)
+                }
+            })
+        })
+        .collect()
 }
 
 /// A type 7 percentile with its distribution-free confidence interval
@@ -265,41 +261,6 @@ pub fn order_statistic_interval(sorted: &[f64], percent: f64, z: f64) -> Option<
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn binomial_ranks_hold_their_coverage_exactly() {
-        // P(l + 1 ≤ B ≤ u) ≥ 95 % with B ~ Binomial(n, p), and neither end can move
-        // inwards without dropping below it (the interval is the shortest of its form).
-        use statrs::distribution::{Binomial, DiscreteCDF};
-        for (n, p) in [
-            (1000, 0.5),
-            (1000, 0.99865),
-            (20_000, 0.00135),
-            (100, 0.5),
-            (7, 0.3),
-        ] {
-            let law = Binomial::new(p, n as u64).unwrap();
-            let cdf = |k: i64| if k < 0 { 0.0 } else { law.cdf(k as u64) };
-            let (l, u) = binomial_rank_interval(n, p, 0.95);
-            let lo = l.map_or(-1, |l| l as i64);
-            let hi = u.map_or(n as i64, |u| u as i64);
-            let coverage = cdf(hi) - cdf(lo);
-            assert!(coverage >= 0.95, "{n} {p}: {coverage}");
-            assert!(
-                cdf(lo) <= 0.025 && cdf(lo + 1) > 0.025 || l.is_none(),
-                "{n} {p}"
-            );
-            assert!(
-                cdf(hi) >= 0.975 && cdf(hi - 1) < 0.975 || u.is_none(),
-                "{n} {p}"
-            );
-        }
-        // n·(1 − p) = 1.35 values expected above P99.865 of 1000: the upper end is open.
-        assert_eq!(binomial_rank_interval(1000, 0.99865, 0.95).1, None);
-        // The normal approximation at p = 0.5, n = 10⁴: ranks 4902 and 5098 (± 98).
-        let (l, u) = binomial_rank_interval(10_000, 0.5, 0.95);
-        assert!((4900..=4903).contains(&l.unwrap()) && (5097..=5100).contains(&u.unwrap()));
-    }
 
     #[test]
     fn percentiles_with_intervals_match_the_plain_ones_and_the_sorted_ranks() {

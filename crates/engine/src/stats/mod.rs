@@ -11,19 +11,21 @@
 //! quantiles), Clopper & Pearson 1934 (exact binomial interval) and
 //! ISO 22514-2 (percentile method for capability indices).
 
+pub mod binomial;
 pub mod capability;
 pub mod exact;
 pub mod histogram;
 pub mod moments;
 pub mod quantile_sketch;
 
+pub use binomial::binomial_rank_interval;
 pub use capability::{
     capability_from_moments, capability_percentile_method, cpk_on_upper_side, cpk_standard_error,
     out_of_spec_interval, MomentCapability, ProportionEstimate, SpecLimits,
 };
 pub use exact::{
-    binomial_rank_interval, order_statistic_interval, percentile_type7, percentile_type7_of_sorted,
-    percentiles_type7, percentiles_type7_with_intervals, PercentileWithInterval,
+    order_statistic_interval, percentile_type7, percentile_type7_of_sorted, percentiles_type7,
+    percentiles_type7_with_intervals, values_at_ranks, PercentileWithInterval,
 };
 /// Percentiles every report gives: the ±1, 2, 3 σ points of a normal law and the median.
 pub const PERCENTS: [(&str, f64); 7] = [
