@@ -18,7 +18,7 @@
 //! overall level carries the margin of 3 + 1.96 standard errors that allocate keeps on purpose,
 //! which the tests take from the report.
 
-mod common;
+use crate::common;
 
 use common::{run_rvtol, workspace_dir, TempScenario};
 use rvtol_tests::SIGMA_BOUND;

@@ -4,7 +4,7 @@
 //! stdout and no panic. Each scenario case is checked with both `rvtol validate` and
 //! `rvtol run --samples 1000 --quiet`, which must fail the same way.
 
-mod common;
+use crate::common;
 
 use std::process::Output;
 

@@ -2,7 +2,7 @@
 //! commands' work, byte-identical JSON reports across thread counts, the report contract
 //! (keys users' scripts rely on), `nominal`, `models`, and atomic report writing.
 
-mod common;
+use crate::common;
 
 use common::{run_rvtol, scenario};
 

@@ -10,7 +10,7 @@
 //! on an off-diagonal entry; the variances are not shrunk. An entry is accepted within
 //! 4.5 standard errors plus that bias (36 entries: a false failure below 36·7·10⁻⁶ per n).
 
-mod common;
+use crate::common;
 
 use common::run_rvtol;
 use nalgebra::DMatrix;

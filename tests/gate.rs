@@ -6,7 +6,7 @@
 //! independent pairs, and detection in each direction; exit codes and JUnit XML through
 //! the binary.
 
-mod common;
+use crate::common;
 
 use common::{run_rvtol, workspace_dir};
 use rvtol_engine::gate::{

@@ -4,7 +4,7 @@
 //! thread bound, the accepted-but-wrong inputs, the exit codes of `check`, extreme values,
 //! and the wording of messages.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};

@@ -3,7 +3,7 @@
 //! pods run, run here with their environment (a directory for the volume, fewer samples),
 //! give the report of one `rvtol run` byte for byte.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::process::Command;

@@ -4,7 +4,7 @@
 //! download another toolchain, so the check reads the dependencies' own `rust-version`
 //! from `cargo metadata` instead of building with an older compiler.
 
-mod common;
+use crate::common;
 
 use std::process::Command;
 

@@ -18,7 +18,7 @@
 //! structure. Each case runs `rvtol run FILE --samples 64 --json - --quiet` and, when that
 //! succeeds, `rvtol nominal FILE --json -`.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};

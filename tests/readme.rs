@@ -31,7 +31,7 @@
 //! the blocks after a deliberate change, run this test with `RVTOL_README_BLESS=1`, and
 //! update the prose that quotes the figures (the diff shows which moved).
 
-mod common;
+use crate::common;
 
 use common::{rvtol_binary, workspace_dir};
 use std::path::{Path, PathBuf};

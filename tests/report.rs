@@ -6,7 +6,7 @@
 //! sensitivity and allocation sections from their JSON; a report of another scenario is
 //! one line of bad input.
 
-mod common;
+use crate::common;
 
 use common::{run_rvtol, scenario, workspace_dir};
 use serde_json::Value;

@@ -4,7 +4,7 @@
 //! support, its unit, its reproducibility and its shards), and parts written in µm and
 //! arcsec, with every refusal naming its JSON path.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

@@ -3,7 +3,7 @@
 //! (including shards with no chunk) and several orders of the partials; and every file a merge
 //! must refuse is refused with one line and exit 2.
 
-mod common;
+use crate::common;
 
 use std::ops::Range;
 use std::path::{Path, PathBuf};
