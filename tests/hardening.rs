@@ -1518,3 +1518,57 @@ fn fit_refuses_more_columns_than_a_fragment_can_hold_before_any_work() {
     assert!(started.elapsed().as_secs_f64() < 10.0);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+// ---------------------------------------------------------------------------------------
+// A long run says how long.
+
+#[test]
+fn a_long_run_says_how_long_it_will_take_even_quiet_and_outside_a_terminal() {
+    let stack = common::scenario("linear-stack-correlated.json");
+    // The threshold (a minute) set low, so that a short run counts as long.
+    let long = |args: &[&str]| {
+        Command::new(rvtol_binary())
+            .args(args)
+            .env("RVTOL_ESTIMATE_THRESHOLD_SECONDS", "0.000001")
+            .output()
+            .expect("start rvtol")
+    };
+    for (command, args) in [
+        ("run", vec!["run", &stack, "--samples", "100000", "--quiet"]),
+        (
+            "sensitivity",
+            vec!["sensitivity", &stack, "--samples", "40000", "--quiet"],
+        ),
+    ] {
+        let out = long(&args);
+        assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+        let stderr = text(&out.stderr);
+        let lines: Vec<&str> = stderr.lines().collect();
+        assert_eq!(lines.len(), 1, "{stderr}");
+        let samples = args[3].parse::<u64>().expect("samples");
+        assert!(
+            lines[0].starts_with(&format!(
+                "{command}: {} samples will take about ",
+                if samples == 100_000 {
+                    "100,000"
+                } else {
+                    "40,000"
+                }
+            )) && lines[0].contains(" s at the pace of the first ")
+                && lines[0].ends_with("; fewer --samples take less"),
+            "{stderr}"
+        );
+    }
+    // A run of less than the threshold says nothing.
+    let short = run_rvtol(&["run", &stack, "--samples", "100000", "--quiet"]);
+    assert_eq!(short.status.code(), Some(0));
+    assert!(short.stderr.is_empty(), "{}", text(&short.stderr));
+    // --help says so.
+    let help = text(&run_rvtol(&["run", "--help"]).stdout);
+    assert!(
+        help.contains(
+            "A run whose samples will take more than a minute says so in one line on stderr"
+        ),
+        "{help}"
+    );
+}
