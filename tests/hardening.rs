@@ -1177,3 +1177,398 @@ fn a_file_that_is_no_baseline_and_a_bad_init_parameter_are_named_as_such() {
         "error: --param pin_count: must be a number, got a string"
     );
 }
+
+// ---------------------------------------------------------------------------------------
+// The memory a job really has: the process's limits, and inputs read within a bound.
+
+/// Runs rvtol under `ulimit -v KIB` (the address-space limit of the process), with `env`.
+fn run_under_address_limit(kib: u64, args: &[&str], env: &[(&str, &str)]) -> Output {
+    Command::new("sh")
+        .arg("-c")
+        .arg("ulimit -v \"$0\" && exec \"$@\"")
+        .arg(kib.to_string())
+        .arg(rvtol_binary())
+        .args(args)
+        .envs(env.iter().copied())
+        .output()
+        .expect("start sh")
+}
+
+#[test]
+fn an_address_space_limit_bounds_the_memory_budget() {
+    let allocation = common::scenario("allocation-linear.json");
+    let hysteresis = common::scenario("rv20e-hysteresis.json");
+    // The requests of the report: each aborted (exit 134) on a failed allocation under
+    // `ulimit -v 6291456` (6 GiB) while the machine had more available.
+    let allocate = one_line(
+        &run_under_address_limit(
+            6_291_456,
+            &[
+                "allocate",
+                &allocation,
+                "--output",
+                "gap_mm",
+                "--target",
+                "sd <= 0.02",
+                "--samples",
+                "1e9",
+                "--quiet",
+            ],
+            &[],
+        ),
+        2,
+    );
+    assert!(
+        allocate.starts_with("error: allocate: needs about 16.1 GB of memory")
+            && allocate.contains(
+                "available (the address-space limit of this process, ulimit -v 6.4 GB, less "
+            )
+            && allocate.ends_with("): ask for fewer --samples"),
+        "{allocate}"
+    );
+    let run = one_line(
+        &run_under_address_limit(
+            6_291_456,
+            &[
+                "run",
+                &hysteresis,
+                "--samples",
+                "2e8",
+                "--exact-percentile-limit",
+                "1e13",
+            ],
+            &[],
+        ),
+        2,
+    );
+    assert!(
+        run.contains("available (the address-space limit of this process, ulimit -v 6.4 GB")
+            && run.ends_with(": lower --exact-percentile-limit (the percentiles then come from the bounded-memory sketch) or ask for fewer --samples"),
+        "{run}"
+    );
+    // --max-memory cannot raise the limit.
+    let raised = one_line(
+        &run_under_address_limit(
+            2_097_152,
+            &[
+                "run",
+                &hysteresis,
+                "--samples",
+                "1e8",
+                "--exact-percentile-limit",
+                "1e13",
+                "--max-memory",
+                "100G",
+            ],
+            &[],
+        ),
+        2,
+    );
+    assert!(
+        raised.contains("worker thread") && raised.contains(", which --max-memory cannot raise)"),
+        "{raised}"
+    );
+    // What fits under the limit runs.
+    let fits = run_under_address_limit(
+        2_097_152,
+        &["run", &hysteresis, "--samples", "1e5", "--quiet"],
+        &[],
+    );
+    assert_eq!(fits.status.code(), Some(0), "{}", text(&fits.stderr));
+}
+
+/// A memory cgroup with a limit, where this machine lets the test make one (cgroup v2
+/// under /sys/fs/cgroup with the memory controller given to its children, or cgroup v1's
+/// memory controller); removed when dropped.
+struct MemoryCgroup {
+    dir: PathBuf,
+}
+
+impl MemoryCgroup {
+    fn new(label: &str, bytes: u64) -> Result<MemoryCgroup, String> {
+        let name = format!("rvtol-hardening-{label}-{}", std::process::id());
+        let unified = Path::new("/sys/fs/cgroup");
+        let mut candidates = Vec::new();
+        if std::fs::read_to_string(unified.join("cgroup.subtree_control"))
+            .is_ok_and(|controllers| controllers.split_whitespace().any(|c| c == "memory"))
+        {
+            candidates.push((unified.join(&name), "memory.max"));
+        }
+        let v1 = Path::new("/sys/fs/cgroup/memory");
+        if v1.join("memory.limit_in_bytes").is_file() {
+            candidates.push((v1.join(&name), "memory.limit_in_bytes"));
+        }
+        let mut failures = Vec::new();
+        for (dir, limit_file) in candidates {
+            let made = std::fs::create_dir(&dir)
+                .and_then(|()| std::fs::write(dir.join(limit_file), bytes.to_string()));
+            match made {
+                Ok(()) => return Ok(MemoryCgroup { dir }),
+                Err(err) => {
+                    let _ = std::fs::remove_dir(&dir);
+                    failures.push(format!("{}: {err}", dir.display()));
+                }
+            }
+        }
+        Err(if failures.is_empty() {
+            "no cgroup v2 with a memory controller for children, nor cgroup v1's memory controller"
+                .to_string()
+        } else {
+            failures.join("; ")
+        })
+    }
+
+    /// Runs rvtol with `args` in this cgroup.
+    fn run(&self, args: &[&str]) -> Output {
+        Command::new("sh")
+            .arg("-c")
+            .arg("echo $$ > \"$0\" && exec \"$@\"")
+            .arg(self.dir.join("cgroup.procs"))
+            .arg(rvtol_binary())
+            .args(args)
+            .output()
+            .expect("start sh")
+    }
+}
+
+impl Drop for MemoryCgroup {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir(&self.dir);
+    }
+}
+
+#[test]
+fn a_cgroup_memory_limit_bounds_the_memory_budget() {
+    // The parsing of the cgroup files is unit-tested in the CLI (limits.rs); here the
+    // binary in a real cgroup, where the machine lets the test make one.
+    let cgroup = match MemoryCgroup::new("budget", 512 << 20) {
+        Ok(cgroup) => cgroup,
+        Err(why) => {
+            println!("note: cgroup part skipped: cannot make a memory cgroup here ({why})");
+            return;
+        }
+    };
+    let hysteresis = common::scenario("rv20e-hysteresis.json");
+    // 1e8 kept values of each output: far beyond 512 MiB (the OOM killer's, without the check).
+    let line = one_line(
+        &cgroup.run(&[
+            "run",
+            &hysteresis,
+            "--samples",
+            "1e8",
+            "--exact-percentile-limit",
+            "1e13",
+        ]),
+        2,
+    );
+    assert!(
+        line.contains("available (the memory limit of this process's cgroup, /sys/fs/cgroup/")
+            && line.contains(" 536.9 MB less ")
+            && line.ends_with(": lower --exact-percentile-limit (the percentiles then come from the bounded-memory sketch) or ask for fewer --samples"),
+        "{line}"
+    );
+    let fits = cgroup.run(&["run", &hysteresis, "--samples", "1e5", "--quiet"]);
+    assert_eq!(fits.status.code(), Some(0), "{}", text(&fits.stderr));
+}
+
+/// The one line of a character device given where a file is read whole.
+fn assert_device_refused(output: &Output, device: &Path) {
+    let line = one_line(output, 2);
+    assert_eq!(
+        line,
+        format!(
+            "error: {}: cannot read: a character device, not a regular file (rvtol reads its inputs whole from regular files, or from a pipe)",
+            device.display()
+        )
+    );
+}
+
+#[cfg(unix)]
+#[test]
+fn a_device_given_as_a_file_to_read_whole_is_refused() {
+    let dir = scratch("device");
+    // A copy of /dev/zero (mknod, as root), else /dev/zero itself: it never ends, and read
+    // whole it took all memory. The commands run under an address-space limit so that
+    // a build without the check aborts instead of filling the machine.
+    let copy = dir.join("zero");
+    let device = match Command::new("mknod")
+        .arg(&copy)
+        .args(["c", "1", "5"])
+        .status()
+    {
+        Ok(status) if status.success() => copy,
+        _ => PathBuf::from("/dev/zero"),
+    };
+    let d = path_arg(&device);
+    let limited = |args: &[&str]| run_under_address_limit(4_194_304, args, &[]);
+    let stack = common::scenario("linear-stack-correlated.json");
+    assert_device_refused(&limited(&["run", d, "--quiet"]), &device);
+    assert_device_refused(&limited(&["validate", d]), &device);
+    assert_device_refused(&limited(&["evaluate", &stack, "--inputs", d]), &device);
+    assert_device_refused(&limited(&["fit", d]), &device);
+    assert_device_refused(&limited(&["merge", d]), &device);
+    assert_device_refused(&limited(&["check", &stack, "--baseline", d]), &device);
+    let page = dir.join("page.html");
+    assert_device_refused(&limited(&["report", d, "-o", path_arg(&page)]), &device);
+    // The data column of an empirical distribution, at its JSON path.
+    let scenario = TempScenario::new(
+        "hardening-device-column",
+        &with("linear-stack-correlated.json", |s| {
+            let variables = s["variables"].as_array_mut().expect("variables");
+            variables[0]["distribution"] =
+                serde_json::json!({"empirical": {"csv": d, "column": "x"}});
+        }),
+    );
+    let line = one_line(&limited(&["validate", path_arg(scenario.path())]), 2);
+    assert!(
+        line.contains("variables[0].distribution.empirical.csv")
+            && line.contains(&format!(
+                "{d}: cannot read: a character device, not a regular file"
+            )),
+        "{line}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn rows_to_evaluate_are_checked_against_the_memory_before_they_are_read() {
+    let dir = scratch("rows");
+    let stack = common::scenario("linear-stack-correlated.json");
+    let rows = dir.join("rows.csv");
+    let written = run_rvtol(&[
+        "run",
+        &stack,
+        "--samples",
+        "50000",
+        "--samples-out",
+        path_arg(&rows),
+        "--quiet",
+    ]);
+    assert_eq!(written.status.code(), Some(0), "{}", text(&written.stderr));
+    let size = std::fs::metadata(&rows).expect("rows").len() as f64;
+    // 10 MB of rows in 64 MiB: the rows, their records, the values, the evaluated table and
+    // its CSV take about five times the file (the report's 1,000,000 rows reached 1.5 GB).
+    let line = one_line(
+        &run_rvtol(&[
+            "evaluate",
+            &stack,
+            "--inputs",
+            path_arg(&rows),
+            "--max-memory",
+            "64M",
+            "-o",
+            path_arg(&dir.join("out.csv")),
+        ]),
+        2,
+    );
+    assert!(
+        line.starts_with("error: evaluate: needs about ")
+            && line.contains(&format!(
+                "(the {:.1} MB of rows of {} read, evaluated and written out, and 64.0 MB for the program and its tables), more than the 67.1 MB available (--max-memory): split the rows into smaller files",
+                size / 1e6,
+                rows.display()
+            )),
+        "{line}"
+    );
+    assert!(!dir.join("out.csv").exists());
+    // Through standard input, whose size is unknown: cut where the rows exceed it.
+    let piped = run_with_stdin(
+        &["evaluate", &stack, "--inputs", "-", "--max-memory", "64M"],
+        &std::fs::read_to_string(&rows).expect("rows"),
+    );
+    let line = one_line(&piped, 2);
+    assert!(
+        line.starts_with("error: standard input: more than ")
+            && line.ends_with("(what the 67.1 MB of memory available (--max-memory) allows for rows read, evaluated and written out; split the rows into smaller files)"),
+        "{line}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn fit_refuses_more_columns_than_a_fragment_can_hold_before_any_work() {
+    let dir = scratch("wide");
+    // The report's file: 3,000 columns of 5 rows took 41 s and 6.2 GB and wrote 480 MB.
+    let columns = 3000;
+    let mut csv = (0..columns)
+        .map(|j| format!("c{j}"))
+        .collect::<Vec<_>>()
+        .join(",");
+    csv.push('\n');
+    for k in 0..5 {
+        let row: Vec<String> = (0..columns)
+            .map(|j| format!("{}", ((k * 7919 + j * 104_729) % 1000) as f64 / 1000.0))
+            .collect();
+        csv.push_str(&row.join(","));
+        csv.push('\n');
+    }
+    let wide = dir.join("wide.csv");
+    std::fs::write(&wide, csv).expect("write");
+    let started = std::time::Instant::now();
+    let out = run_rvtol(&["fit", path_arg(&wide)]);
+    let line = one_line(&out, 2);
+    assert_eq!(
+        line,
+        format!(
+            "error: {}: 3,000 columns to fit, more than the 500 rvtol fit takes (the fragment holds a correlation for every pair of columns, 4,498,500 pairs here): fit the columns that vary together a group at a time (one part with --part, or a file per group)",
+            wide.display()
+        )
+    );
+    assert!(out.stdout.is_empty());
+    assert!(started.elapsed().as_secs_f64() < 10.0);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+// ---------------------------------------------------------------------------------------
+// A long run says how long.
+
+#[test]
+fn a_long_run_says_how_long_it_will_take_even_quiet_and_outside_a_terminal() {
+    let stack = common::scenario("linear-stack-correlated.json");
+    // The threshold (a minute) set low, so that a short run counts as long.
+    let long = |args: &[&str]| {
+        Command::new(rvtol_binary())
+            .args(args)
+            .env("RVTOL_ESTIMATE_THRESHOLD_SECONDS", "0.000001")
+            .output()
+            .expect("start rvtol")
+    };
+    for (command, args) in [
+        ("run", vec!["run", &stack, "--samples", "100000", "--quiet"]),
+        (
+            "sensitivity",
+            vec!["sensitivity", &stack, "--samples", "40000", "--quiet"],
+        ),
+    ] {
+        let out = long(&args);
+        assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+        let stderr = text(&out.stderr);
+        let lines: Vec<&str> = stderr.lines().collect();
+        assert_eq!(lines.len(), 1, "{stderr}");
+        let samples = args[3].parse::<u64>().expect("samples");
+        assert!(
+            lines[0].starts_with(&format!(
+                "{command}: {} samples will take about ",
+                if samples == 100_000 {
+                    "100,000"
+                } else {
+                    "40,000"
+                }
+            )) && lines[0].contains(" s at the pace of the first ")
+                && lines[0].ends_with("; fewer --samples take less"),
+            "{stderr}"
+        );
+    }
+    // A run of less than the threshold says nothing.
+    let short = run_rvtol(&["run", &stack, "--samples", "100000", "--quiet"]);
+    assert_eq!(short.status.code(), Some(0));
+    assert!(short.stderr.is_empty(), "{}", text(&short.stderr));
+    // --help says so.
+    let help = text(&run_rvtol(&["run", "--help"]).stdout);
+    assert!(
+        help.contains(
+            "A run whose samples will take more than a minute says so in one line on stderr"
+        ),
+        "{help}"
+    );
+}

@@ -5,6 +5,8 @@
 use std::collections::BTreeSet;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::OnceLock;
 
 use anyhow::Result;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -14,6 +16,7 @@ use rvtol_engine::allocation::spec::{CostKind, Target};
 use rvtol_engine::allocation::{
     allocate as run_allocation, default_samples, proposal_document, AllocationSettings,
 };
+use rvtol_engine::input_file::{self, ReadLimit};
 use rvtol_engine::memory::{self, MemoryNeed};
 use rvtol_engine::run::{check_non_finite, Sampling};
 use rvtol_engine::sensitivity::{sobol_indices, SensitivitySettings, DEFAULT_ROW_BOOTSTRAP_LIMIT};
@@ -44,14 +47,40 @@ fn shown(path: &Path) -> String {
     }
 }
 
-/// A file's text (standard input's for `-`), or one line saying why it cannot be read.
-fn read_text(path: &Path) -> Result<String> {
-    let text = if is_stdout(path) {
-        std::io::read_to_string(std::io::stdin())
+/// The bound of a scenario, report or baseline read whole: a quarter of the memory this
+/// process may take (a JSON document takes several times its bytes once parsed), worked out
+/// once.
+fn whole_file_limit() -> &'static ReadLimit {
+    static LIMIT: OnceLock<ReadLimit> = OnceLock::new();
+    LIMIT.get_or_init(|| {
+        let threads = crate::limits::cores() as usize;
+        let (budget, source) = memory_budget(None, threads);
+        ReadLimit {
+            bytes: (budget / 4.0) as u64,
+            source: format!(
+                "a quarter of the {} of memory ({source})",
+                rvtol_deviation::human_bytes(budget)
+            ),
+        }
+    })
+}
+
+/// A file's text (standard input's for `-`) of at most `limit.bytes`, or one line saying
+/// why it cannot be read. Every file read whole is read through
+/// [`rvtol_engine::input_file`].
+fn read_text_within(path: &Path, limit: &ReadLimit) -> Result<String> {
+    if is_stdout(path) {
+        input_file::read_standard_input(limit)
     } else {
-        std::fs::read_to_string(path)
-    };
-    text.map_err(|err| BadInput(format!("{}: cannot read: {err}", shown(path))).into())
+        input_file::read_text(path, limit)
+    }
+    .map_err(|message| BadInput(message).into())
+}
+
+/// A scenario's, report's or baseline's text (standard input's for `-`), within
+/// [`whole_file_limit`].
+fn read_text(path: &Path) -> Result<String> {
+    read_text_within(path, whole_file_limit())
 }
 
 /// The name a scenario without `name` gets: its file stem (`scenario` from standard input).
@@ -69,7 +98,7 @@ fn scenario_inputs(path: &Path) -> Vec<(&'static str, PathBuf)> {
         return Vec::new();
     }
     let mut inputs = vec![("the scenario file", path.to_path_buf())];
-    if let Ok(text) = std::fs::read_to_string(path) {
+    if let Ok(text) = input_file::read_text(path, whole_file_limit()) {
         let folder = rvtol_engine::scenario::scenario_folder(path);
         inputs.extend(
             rvtol_engine::scenario::data::data_files(&text, &folder)
@@ -114,7 +143,7 @@ fn target<'a>(
 fn read_scenario_text(path: &Path) -> Result<String> {
     let text = read_text(path)?;
     let folder = rvtol_engine::scenario::scenario_folder(path);
-    match rvtol_engine::scenario::data::inline_data_files(&text, &folder) {
+    match rvtol_engine::scenario::data::inline_data_files(&text, &folder, whole_file_limit()) {
         Ok(inlined) => Ok(inlined.into_owned()),
         Err(err) => Err(bad_scenario(path, err)),
     }
@@ -149,21 +178,120 @@ fn emit(
     }
 }
 
-fn progress_bar(samples: u64, quiet: bool) -> ProgressBar {
-    if quiet || !std::io::stderr().is_terminal() {
-        return ProgressBar::hidden();
+/// Estimated totals at or below this many seconds go unsaid; the environment variable
+/// [`ESTIMATE_THRESHOLD_VARIABLE`] sets another (the tests set it low).
+const ESTIMATE_THRESHOLD_SECONDS: f64 = 60.0;
+
+/// The environment variable that sets the threshold of the wall-time estimate, in seconds
+/// (not documented for users: for the tests).
+const ESTIMATE_THRESHOLD_VARIABLE: &str = "RVTOL_ESTIMATE_THRESHOLD_SECONDS";
+
+/// Seconds after which the estimate is made even when the first chunks of every worker
+/// have not all finished.
+const ESTIMATE_SETTLE_SECONDS: f64 = 5.0;
+
+/// A duration as a person says it: `45 s`, `12 min`, `10 h 12 min`, `3 days 4 h`.
+fn human_duration(seconds: f64) -> String {
+    let seconds = seconds.max(0.0).round() as u64;
+    let (days, hours, minutes) = (seconds / 86_400, seconds / 3_600 % 24, seconds / 60 % 60);
+    if seconds < 90 {
+        format!("{seconds} s")
+    } else if seconds < 90 * 60 {
+        format!("{} min", (seconds + 30) / 60)
+    } else if days == 0 {
+        format!("{} h {minutes} min", seconds / 3_600)
+    } else {
+        format!("{days} day{} {hours} h", if days == 1 { "" } else { "s" })
     }
-    let bar = ProgressBar::with_draw_target(Some(samples), ProgressDrawTarget::stderr());
-    bar.set_style(
-        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} {percent:>3}% {human_pos}/{human_len} samples, eta {eta}")
-            .expect("valid template"),
-    );
-    bar
+}
+
+/// The progress of a command's samples: a bar on a terminal (not with --quiet), and, on
+/// any stderr and with --quiet too, one line estimating the wall time when it will be
+/// long: made once, from the pace of the first chunks (one per worker, or what is done
+/// after a few seconds), and said when the total exceeds a minute. A run outside a
+/// terminal (a batch job) would otherwise run for hours without a word.
+struct Progress {
+    bar: ProgressBar,
+    command: &'static str,
+    started: std::time::Instant,
+    total: u64,
+    done: AtomicU64,
+    estimated: AtomicBool,
+    /// Samples done when the pace is read: the first chunk of every worker.
+    settled: u64,
+    threshold_seconds: f64,
+}
+
+impl Progress {
+    fn new(command: &'static str, samples: u64, quiet: bool, threads: usize) -> Progress {
+        let bar = if quiet || !std::io::stderr().is_terminal() {
+            ProgressBar::hidden()
+        } else {
+            let bar = ProgressBar::with_draw_target(Some(samples), ProgressDrawTarget::stderr());
+            bar.set_style(
+                ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} {percent:>3}% {human_pos}/{human_len} samples, eta {eta}")
+                    .expect("valid template"),
+            );
+            bar
+        };
+        let threshold_seconds = std::env::var(ESTIMATE_THRESHOLD_VARIABLE)
+            .ok()
+            .and_then(|text| text.trim().parse::<f64>().ok())
+            .filter(|seconds| seconds.is_finite())
+            .unwrap_or(ESTIMATE_THRESHOLD_SECONDS);
+        Progress {
+            bar,
+            command,
+            started: std::time::Instant::now(),
+            total: samples,
+            done: AtomicU64::new(0),
+            estimated: AtomicBool::new(false),
+            settled: threads.max(1) as u64 * rvtol_engine::run::CHUNK_SIZE as u64,
+            threshold_seconds,
+        }
+    }
+
+    /// `samples` more are done.
+    fn inc(&self, samples: u64) {
+        self.bar.inc(samples);
+        let done = self.done.fetch_add(samples, Ordering::Relaxed) + samples;
+        if self.estimated.load(Ordering::Relaxed) {
+            return;
+        }
+        let elapsed = self.started.elapsed().as_secs_f64();
+        if done < self.settled && elapsed < ESTIMATE_SETTLE_SECONDS {
+            return;
+        }
+        if self.estimated.swap(true, Ordering::Relaxed) || done >= self.total {
+            return;
+        }
+        let total_seconds = elapsed * self.total as f64 / done as f64;
+        if total_seconds > self.threshold_seconds {
+            let line = format!(
+                "{}: {} samples will take about {} at the pace of the first {}; fewer --samples take less",
+                self.command,
+                rvtol_engine::report::group_thousands(self.total),
+                human_duration(total_seconds),
+                rvtol_engine::report::group_thousands(done)
+            );
+            self.bar.suspend(|| note(&line));
+        }
+    }
+
+    fn finish_and_clear(&self) {
+        self.bar.finish_and_clear();
+    }
 }
 
 /// Refuses a request whose memory need exceeds the budget, with one line.
-fn check_memory(need: MemoryNeed, execution: &Execution, command: &str) -> Result<()> {
-    let (budget, source) = memory_budget(execution.max_memory);
+/// `threads` is the command's worker-thread count (each reserves address space).
+fn check_memory(
+    need: MemoryNeed,
+    execution: &Execution,
+    command: &str,
+    threads: usize,
+) -> Result<()> {
+    let (budget, source) = memory_budget(execution.max_memory, threads);
     need.check(budget, &source)
         .map_err(|message| BadInput(format!("{command}: {message}")).into())
 }
@@ -176,7 +304,7 @@ fn pool_for(
     need: impl FnOnce(usize) -> MemoryNeed,
 ) -> Result<rayon::ThreadPool> {
     let threads = threads(execution.threads)?;
-    check_memory(need(threads), execution, command)?;
+    check_memory(need(threads), execution, command, threads)?;
     thread_pool(threads)
 }
 
@@ -370,7 +498,12 @@ pub fn run(
     let pool = pool_for(execution, "run", |threads| {
         memory::run(&scenario, &settings, threads)
     })?;
-    let bar = progress_bar(settings.samples, execution.quiet);
+    let bar = Progress::new(
+        "run",
+        settings.samples,
+        execution.quiet,
+        pool.current_num_threads(),
+    );
     let started = std::time::Instant::now();
     let result = pool
         .install(|| run_scenario(&scenario, settings, &|n| bar.inc(n)))
@@ -594,7 +727,12 @@ pub fn sensitivity(
     let pool = pool_for(execution, "sensitivity", |threads| {
         memory::sensitivity(&scenario, &settings, threads)
     })?;
-    let bar = progress_bar(args.samples, execution.quiet);
+    let bar = Progress::new(
+        "sensitivity",
+        args.samples,
+        execution.quiet,
+        pool.current_num_threads(),
+    );
     let outputs = pool
         .install(|| sobol_indices(&scenario, settings, &|n| bar.inc(n)))
         .map_err(|err| bad_scenario(path, err))?;
@@ -739,9 +877,11 @@ pub fn sensitivity_shard(
         memory::sensitivity(&scenario, &settings, threads)
     })?;
     let chunks = rvtol_engine::shard_range(settings.chunk_count(), shard, shards);
-    let bar = progress_bar(
+    let bar = Progress::new(
+        "sensitivity",
         settings.samples_before_chunk(chunks.end) - settings.samples_before_chunk(chunks.start),
         execution.quiet,
+        pool.current_num_threads(),
     );
     let sobol = pool
         .install(|| {
@@ -831,7 +971,12 @@ pub fn baseline(
     let pool = pool_for(execution, "baseline", |threads| {
         memory::run(&scenario, &settings, threads)
     })?;
-    let bar = progress_bar(settings.samples, execution.quiet);
+    let bar = Progress::new(
+        "baseline",
+        settings.samples,
+        execution.quiet,
+        pool.current_num_threads(),
+    );
     let baseline = pool
         .install(|| {
             gate::baseline(&scenario, &text, settings, execution.max_non_finite, &|n| {
@@ -875,8 +1020,7 @@ pub fn check(
         &inputs,
     )?;
     let (scenario, text) = read(path)?;
-    let baseline_text = std::fs::read_to_string(baseline_path)
-        .map_err(|err| BadInput(format!("{}: cannot read: {err}", baseline_path.display())))?;
+    let baseline_text = read_text(baseline_path)?;
     let recorded = gate::Baseline::from_json(&baseline_text)
         .map_err(|err| bad_scenario(baseline_path, err))?;
     recorded
@@ -904,7 +1048,12 @@ pub fn check(
     let pool = pool_for(execution, "check", |threads| {
         memory::run(&scenario, &settings, threads)
     })?;
-    let bar = progress_bar(recorded.samples, execution.quiet);
+    let bar = Progress::new(
+        "check",
+        recorded.samples,
+        execution.quiet,
+        pool.current_num_threads(),
+    );
     let report = pool
         .install(|| {
             gate::check_with(
@@ -1165,14 +1314,15 @@ pub fn report(
     ))
 }
 
-/// Reads a CSV table of numbers (the engine's [`CsvTable`]); its error is one line.
-fn read_csv(path: &Path) -> Result<CsvTable<'_>> {
+/// Reads a CSV table of numbers (the engine's [`CsvTable`]) of at most `limit.bytes`; its
+/// error is one line.
+fn read_csv<'a>(path: &'a Path, limit: &ReadLimit) -> Result<CsvTable<'a>> {
     if is_stdout(path) {
-        let text = read_text(path)?;
+        let text = read_text_within(path, limit)?;
         return CsvTable::parse(Path::new("standard input"), &text)
             .map_err(|message| BadInput(message).into());
     }
-    CsvTable::read(path).map_err(|message| BadInput(message).into())
+    CsvTable::read(path, limit).map_err(|message| BadInput(message).into())
 }
 
 /// `rvtol evaluate`: the models on the rows of a CSV.
@@ -1192,7 +1342,32 @@ pub fn evaluate(
     inputs.push(("the input rows", inputs_path.to_path_buf()));
     outputs_ok(&[target("-o", output, Format::Table)], &inputs)?;
     let scenario = load(scenario_path)?;
-    let table = read_csv(inputs_path)?;
+    // What evaluating the rows takes, from the file's size before it is read; a pipe or
+    // standard input is cut where the rows would exceed the memory.
+    let threads = threads(execution.threads)?;
+    if let Some(metadata) = std::fs::metadata(inputs_path)
+        .ok()
+        .filter(|_| !is_stdout(inputs_path))
+    {
+        if metadata.is_file() {
+            let need = memory::table_evaluation(
+                &scenario,
+                metadata.len(),
+                &inputs_path.display().to_string(),
+            );
+            check_memory(need, execution, "evaluate", threads)?;
+        }
+    }
+    let (budget, budget_source) = memory_budget(execution.max_memory, threads);
+    let rows_limit = ReadLimit {
+        bytes: ((budget - memory::BASE_BYTES).max(0.0)
+            / memory::table_evaluation_factor(&scenario)) as u64,
+        source: format!(
+            "what the {} of memory available ({budget_source}) allows for rows read, evaluated and written out; split the rows into smaller files",
+            rvtol_deviation::human_bytes(budget)
+        ),
+    };
+    let table = read_csv(inputs_path, &rows_limit)?;
     let names = table.names();
     let known_other =
         |name: &str| name == SAMPLE_INDEX || scenario.outputs.iter().any(|o| o.name == name);
@@ -1259,7 +1434,7 @@ pub fn evaluate(
     if values.is_empty() {
         return Err(BadInput(format!("{}: no rows", inputs_path.display())).into());
     }
-    let pool = thread_pool(threads(execution.threads)?)?;
+    let pool = thread_pool(threads)?;
     let rows = pool.install(|| rvtol_engine::evaluate::evaluate_rows(&scenario, values));
     match output {
         Some(path) => write_sample_table(path, &scenario, &rows),
@@ -1296,7 +1471,7 @@ pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()>
         &[target("-o", output, Format::Json)],
         &[("the measurements", path.to_path_buf())],
     )?;
-    let table = read_csv(path)?;
+    let table = read_csv(path, whole_file_limit())?;
     let names = table.names();
     // A part's columns in its component order.
     let order: Vec<usize> = match part {
@@ -1447,9 +1622,11 @@ fn build_identity() -> Result<String> {
     use sha2::{Digest, Sha256};
     let exe = std::env::current_exe()
         .map_err(|err| BadInput(format!("cannot find this executable to identify it: {err}")))?;
-    let bytes = std::fs::read(&exe)
-        .map_err(|err| BadInput(format!("{}: cannot read: {err}", exe.display())))?;
-    let digest = Sha256::digest(&bytes);
+    // Hashed as it is read: the executable is never held whole.
+    let cannot = |err: std::io::Error| BadInput(format!("{}: cannot read: {err}", exe.display()));
+    let mut hasher = Sha256::new();
+    std::io::copy(&mut std::fs::File::open(&exe).map_err(cannot)?, &mut hasher).map_err(cannot)?;
+    let digest = hasher.finalize();
     let hex: String = digest[..8].iter().map(|b| format!("{b:02x}")).collect();
     Ok(format!("rvtol {} sha256:{hex}", env!("CARGO_PKG_VERSION")))
 }
@@ -1479,7 +1656,12 @@ pub fn run_shard(
     })?;
     let shard_samples =
         settings.samples_before_chunk(chunks.end) - settings.samples_before_chunk(chunks.start);
-    let bar = progress_bar(shard_samples, execution.quiet);
+    let bar = Progress::new(
+        "run",
+        shard_samples,
+        execution.quiet,
+        pool.current_num_threads(),
+    );
     let partial = pool
         .install(|| rvtol_engine::run_chunks(&scenario, settings, chunks.clone(), &|n| bar.inc(n)))
         .map_err(|err| bad_scenario(scenario_path, err))?;
@@ -1548,10 +1730,22 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
             .any(is_stdout);
     use rvtol_engine::shard;
     let build = build_identity()?;
+    // The shard files are held decoded, about their size each, while the next is read:
+    // together they take at most the memory the merge may use beyond the program's.
+    let (budget, budget_source) = memory_budget(execution.max_memory, threads(execution.threads)?);
+    let shards_limit = ReadLimit {
+        bytes: (budget - memory::BASE_BYTES).max(0.0) as u64,
+        source: format!(
+            "the memory left for the shard files, of the {} available ({budget_source}), less the files read before it",
+            rvtol_deviation::human_bytes(budget)
+        ),
+    };
+    let mut read_so_far = 0u64;
     let mut files = Vec::with_capacity(args.partials.len());
     for path in &args.partials {
-        let bytes = std::fs::read(path)
-            .map_err(|err| BadInput(format!("{}: cannot read: {err}", path.display())))?;
+        let bytes =
+            input_file::read_bytes(path, &shards_limit.less(read_so_far)).map_err(BadInput)?;
+        read_so_far += bytes.len() as u64;
         let file =
             shard::decode(&bytes).map_err(|err| BadInput(format!("{}: {err}", path.display())))?;
         files.push((path.display().to_string(), file));
@@ -1673,6 +1867,7 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
         memory::run(&scenario, &settings, threads),
         execution,
         "merge",
+        threads,
     )?;
     let result = rvtol_engine::merge(&scenario, settings, partials)
         .map_err(|err| bad_scenario(first, err))?;
@@ -1703,8 +1898,7 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
         ));
     }
     if let Some(baseline_path) = &args.check {
-        let baseline_text = std::fs::read_to_string(baseline_path)
-            .map_err(|err| BadInput(format!("{}: cannot read: {err}", baseline_path.display())))?;
+        let baseline_text = read_text(baseline_path)?;
         let recorded = gate::Baseline::from_json(&baseline_text)
             .map_err(|err| bad_scenario(baseline_path, err))?;
         if (recorded.samples, recorded.exact_percentile_limit)

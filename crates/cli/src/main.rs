@@ -1,6 +1,7 @@
 //! `rvtol`: the command-line interface. Parses arguments (clap), calls the engine, prints
 //! the report on stdout and writes report files ([`output`]). Progress goes to stderr, only
-//! when it is a terminal and `--quiet` is not given.
+//! when it is a terminal and `--quiet` is not given; the one-line estimate of a long
+//! command's wall time goes there always.
 //!
 //! Exit codes: 0 success; 1 a check or gate failed; 2 bad input, usage or an environment
 //! that cannot serve the request (memory, an unwritable path). Every error is one line.
@@ -47,7 +48,8 @@ struct Execution {
     /// available on this machine. A request that needs more is refused before it starts.
     #[arg(long, value_name = "SIZE", value_parser = parse_size)]
     max_memory: Option<f64>,
-    /// No progress display.
+    /// No progress display (a command whose samples will take more than a minute still
+    /// says so in one line).
     #[arg(long, short)]
     quiet: bool,
 }
@@ -55,6 +57,10 @@ struct Execution {
 #[derive(Debug, Subcommand)]
 enum Command {
     /// Run the Monte Carlo simulation of a scenario and report its output distributions.
+    ///
+    /// A run whose samples will take more than a minute says so in one line on stderr,
+    /// estimated from the pace of its first chunks (with --quiet and outside a terminal
+    /// too: a batch job learns it in its log).
     Run {
         /// Scenario file (JSON; "-" reads standard input).
         scenario: PathBuf,
@@ -150,6 +156,10 @@ enum Command {
         json: Option<PathBuf>,
     },
     /// Rank the error sources: Sobol' first-order and total indices with 95 % intervals (bootstrap, or from the replicates of an lhs or rqmc design).
+    ///
+    /// A sensitivity analysis whose samples will take more than a minute says so in one line on stderr,
+    /// estimated from the pace of its first chunks (with --quiet and outside a terminal
+    /// too: a batch job learns it in its log).
     Sensitivity {
         /// Scenario file (JSON; "-" reads standard input).
         scenario: PathBuf,
@@ -176,6 +186,10 @@ enum Command {
     },
     /// Record the distribution figures of every output, with the band a re-run may move
     /// within, for `rvtol check`.
+    ///
+    /// A baseline whose samples will take more than a minute says so in one line on stderr,
+    /// estimated from the pace of its first chunks (with --quiet and outside a terminal
+    /// too: a batch job learns it in its log).
     Baseline {
         /// Scenario file (JSON; "-" reads standard input).
         scenario: PathBuf,
@@ -196,6 +210,10 @@ enum Command {
         execution: Execution,
     },
     /// Re-run a scenario and compare it with a baseline: exit 1 when a figure moved.
+    ///
+    /// A check whose samples will take more than a minute says so in one line on stderr,
+    /// estimated from the pace of its first chunks (with --quiet and outside a terminal
+    /// too: a batch job learns it in its log).
     Check {
         /// Scenario file (JSON; "-" reads standard input).
         scenario: PathBuf,

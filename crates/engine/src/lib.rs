@@ -10,6 +10,7 @@ pub mod allocation;
 pub mod evaluate;
 pub mod fit;
 pub mod gate;
+pub mod input_file;
 pub mod memory;
 pub mod report;
 pub mod run;

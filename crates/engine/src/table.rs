@@ -3,7 +3,10 @@
 //! `name [unit]` gives a column's name and unit; every problem is one line naming the
 //! file, the line and the column.
 
+use std::borrow::Cow;
 use std::path::Path;
+
+use crate::input_file::{read_text, ReadLimit};
 
 /// A CSV file of numbers with a header: its columns as (name, unit) from `name [unit]`,
 /// and its rows with their line numbers.
@@ -17,18 +20,22 @@ pub struct CsvTable<'a> {
 }
 
 impl<'a> CsvTable<'a> {
-    /// Reads a CSV file of numbers with a header (no column twice); the error is one line.
-    pub fn read(path: &'a Path) -> Result<CsvTable<'a>, String> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|err| format!("{}: cannot read: {err}", path.display()))?;
+    /// Reads a CSV file of numbers with a header (no column twice), of at most
+    /// `limit.bytes` ([`crate::input_file`]); the error is one line.
+    pub fn read(path: &'a Path, limit: &ReadLimit) -> Result<CsvTable<'a>, String> {
+        let text = read_text(path, limit)?;
         CsvTable::parse(path, &text)
     }
 
     /// [`CsvTable::read`] on a text already read; `path` names it in messages.
     pub fn parse(path: &'a Path, text: &str) -> Result<CsvTable<'a>, String> {
         // Line ends of Windows exports: the reader would count the lines of a CRLF file
-        // one short.
-        let text = text.replace("\r\n", "\n");
+        // one short. (A copy only of a text that has them.)
+        let text = if text.contains('\r') {
+            Cow::Owned(text.replace("\r\n", "\n"))
+        } else {
+            Cow::Borrowed(text)
+        };
         let at = |line: u64| format!("{}: line {line}", path.display());
         let mut reader = csv::ReaderBuilder::new()
             .trim(csv::Trim::All)

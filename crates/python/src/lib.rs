@@ -38,14 +38,15 @@ fn value_error(message: impl std::fmt::Display) -> PyErr {
 /// numbers of the data files it refers to written in (paths relative to the file's
 /// folder, or to the working directory for a dict), as the command line reads it.
 fn scenario_text(source: &Bound<'_, PyAny>) -> PyResult<(String, String)> {
+    use rvtol_engine::input_file::{read_text, ReadLimit};
     use rvtol_engine::scenario::{data::inline_data_files, scenario_folder};
+    let limit = ReadLimit::library();
     if let Ok(path) = source.extract::<std::path::PathBuf>() {
-        let text = std::fs::read_to_string(&path)
-            .map_err(|err| value_error(format!("{}: cannot read: {err}", path.display())))?;
+        let text = read_text(&path, &limit).map_err(value_error)?;
         let name = path
             .file_stem()
             .map_or("scenario".to_string(), |s| s.to_string_lossy().into_owned());
-        let text = inline_data_files(&text, &scenario_folder(&path))
+        let text = inline_data_files(&text, &scenario_folder(&path), &limit)
             .map_err(value_error)?
             .into_owned();
         return Ok((text, name));
@@ -53,7 +54,7 @@ fn scenario_text(source: &Bound<'_, PyAny>) -> PyResult<(String, String)> {
     if source.is_instance_of::<PyDict>() {
         let json = source.py().import("json")?;
         let text: String = json.call_method1("dumps", (source,))?.extract()?;
-        let text = inline_data_files(&text, std::path::Path::new("."))
+        let text = inline_data_files(&text, std::path::Path::new("."), &limit)
             .map_err(value_error)?
             .into_owned();
         return Ok((text, "scenario".to_string()));

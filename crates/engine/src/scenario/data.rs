@@ -19,13 +19,19 @@ use serde_json::Value;
 
 use super::file::parse_value;
 use super::ScenarioError;
+use crate::input_file::ReadLimit;
 use crate::table::CsvTable;
 
 /// The scenario text with every CSV reference of an `empirical` distribution replaced by
 /// the column's numbers; `base` is the folder relative paths start from. An unreadable
 /// file, a missing column or a cell that is not a number is an error at the reference's
-/// JSON path. Empty cells are skipped (columns of different lengths).
-pub fn inline_data_files<'a>(text: &'a str, base: &Path) -> Result<Cow<'a, str>, ScenarioError> {
+/// JSON path. Empty cells are skipped (columns of different lengths). Each file has at
+/// most `limit.bytes` ([`crate::input_file`]).
+pub fn inline_data_files<'a>(
+    text: &'a str,
+    base: &Path,
+    limit: &ReadLimit,
+) -> Result<Cow<'a, str>, ScenarioError> {
     if !text.contains("\"csv\"") {
         return Ok(Cow::Borrowed(text));
     }
@@ -41,7 +47,7 @@ pub fn inline_data_files<'a>(text: &'a str, base: &Path) -> Result<Cow<'a, str>,
                 continue;
             };
             let path = base.join(&file);
-            let table = CsvTable::read(&path)
+            let table = CsvTable::read(&path, limit)
                 .map_err(|message| ScenarioError::new(format!("{at}.csv"), message))?;
             let values = match table.column(&column) {
                 None => {

@@ -22,6 +22,7 @@ use rvtol_deviation::InputSpace;
 use rvtol_models::{ConditionEffect, ErrorModel, OutputKind};
 
 use crate::allocation::spec::{AllocatableSource, Lever};
+use crate::input_file::ReadLimit;
 use crate::stats::SpecLimits;
 
 pub use file::{MAX_ARRAY_MEMBERS, MAX_COVARIANCE, MAX_DEVIATION, MAX_PARAMETER};
@@ -181,12 +182,12 @@ impl Scenario {
 
     /// Reads and validates a scenario file, returning its text too.
     /// The text is the file's with the numbers of the data files it refers to written in
-    /// ([`data::inline_data_files`]).
+    /// ([`data::inline_data_files`]); each file within [`ReadLimit::library`].
     pub fn read(path: &Path) -> Result<(Scenario, String), ScenarioError> {
-        let text = std::fs::read_to_string(path).map_err(|err| {
-            ScenarioError::new("(file)", format!("cannot read {}: {err}", path.display()))
-        })?;
-        let text = data::inline_data_files(&text, &scenario_folder(path))?.into_owned();
+        let limit = ReadLimit::library();
+        let text = crate::input_file::read_text(path, &limit)
+            .map_err(|message| ScenarioError::new("(file)", message))?;
+        let text = data::inline_data_files(&text, &scenario_folder(path), &limit)?.into_owned();
         let fallback_name = path
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
