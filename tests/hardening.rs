@@ -1177,3 +1177,50 @@ fn a_file_that_is_no_baseline_and_a_bad_init_parameter_are_named_as_such() {
         "error: --param pin_count: must be a number, got a string"
     );
 }
+
+#[test]
+fn numbers_beyond_their_range_and_negative_ones_name_their_option() {
+    let scenario = workspace_dir().join("scenarios/linear-stack-correlated.json");
+    let s = path_arg(&scenario);
+    // One above u64::MAX reads as 2⁶⁴, which used to saturate: a run without end, or a
+    // budget of any size.
+    let line = one_line(
+        &run_rvtol(&["run", s, "--samples", "18446744073709551616", "--quiet"]),
+        2,
+    );
+    assert_eq!(
+        line,
+        "error: invalid value '18446744073709551616' for '--samples <SAMPLES>': must be at most 18,446,744,073,709,551,615 (see 'rvtol run --help')"
+    );
+    let line = one_line(
+        &run_rvtol(&["run", s, "--max-memory", "18446744073709551616", "--quiet"]),
+        2,
+    );
+    assert_eq!(
+        line,
+        "error: invalid value '18446744073709551616' for '--max-memory <SIZE>': must be less than 16 EiB (18,446,744,073,709,551,616 bytes) (see 'rvtol run --help')"
+    );
+    // A negative value is the option's value, not another argument.
+    let line = one_line(&run_rvtol(&["run", s, "--max-memory", "-1"]), 2);
+    assert_eq!(
+        line,
+        "error: invalid value '-1' for '--max-memory <SIZE>': must be a positive size such as 512M or 4G (see 'rvtol run --help')"
+    );
+    let line = one_line(
+        &run_rvtol(&["run", s, "--shard", "-1/3", "--partial", "x.part"]),
+        2,
+    );
+    assert!(
+        line.starts_with("error: invalid value '-1/3' for '--shard <K/N>': ")
+            && line.contains("0 <= K < N"),
+        "{line}"
+    );
+    let line = one_line(
+        &run_rvtol(&["sensitivity", s, "--shard", "-1/3", "--partial", "x.part"]),
+        2,
+    );
+    assert!(
+        line.starts_with("error: invalid value '-1/3' for '--shard <K/N>': "),
+        "{line}"
+    );
+}

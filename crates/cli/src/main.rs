@@ -45,7 +45,7 @@ struct Execution {
     max_non_finite: f64,
     /// Memory the command may use (bytes, or with k, M, G, T: `4G`); default: the memory
     /// available on this machine. A request that needs more is refused before it starts.
-    #[arg(long, value_name = "SIZE", value_parser = parse_size)]
+    #[arg(long, value_name = "SIZE", value_parser = parse_size, allow_hyphen_values = true)]
     max_memory: Option<f64>,
     /// No progress display.
     #[arg(long, short)]
@@ -93,7 +93,7 @@ enum Command {
         /// Compute only shard K of N (0 <= K < N, e.g. a job array's task index) and write
         /// its partial result to --partial instead of a report; `rvtol merge` folds the N
         /// partials into the run's report, byte for byte this command's without --shard.
-        #[arg(long, value_name = "K/N", value_parser = parse_shard_arg, requires = "partial", conflicts_with_all = ["json", "html", "samples_out"])]
+        #[arg(long, value_name = "K/N", value_parser = parse_shard_arg, allow_hyphen_values = true, requires = "partial", conflicts_with_all = ["json", "html", "samples_out"])]
         shard: Option<(u64, u64)>,
         /// The shard's partial result file (with --shard).
         #[arg(long, value_name = "FILE", requires = "shard")]
@@ -159,7 +159,7 @@ enum Command {
         /// share of the base samples and of the Shapley permutations) and write them to
         /// --partial instead of a report; `rvtol merge` folds the N partials into the
         /// report, byte for byte this command's without --shard.
-        #[arg(long, value_name = "K/N", value_parser = parse_shard_arg, requires = "partial", conflicts_with_all = ["json", "html"])]
+        #[arg(long, value_name = "K/N", value_parser = parse_shard_arg, allow_hyphen_values = true, requires = "partial", conflicts_with_all = ["json", "html"])]
         shard: Option<(u64, u64)>,
         /// The shard's partial result file (with --shard).
         #[arg(long, value_name = "FILE", requires = "shard")]
