@@ -1178,6 +1178,169 @@ fn a_file_that_is_no_baseline_and_a_bad_init_parameter_are_named_as_such() {
     );
 }
 
+// ---------------------------------------------------------------------------------------
+// Shard files: the shard count bounded, impossible statistics refused by file name.
+
+/// Rewrites a shard file with `change` applied to its decoded header and statistics, its
+/// checksum recomputed as rvtol computes it (a file that passes the checksum).
+fn rewritten_shard(
+    from: &Path,
+    to: &Path,
+    change: impl FnOnce(&mut rvtol_engine::shard::ShardHeader, &mut rvtol_engine::run::RunPartial),
+) {
+    use rvtol_engine::shard::{decode, encode, ShardContent};
+    let mut file = decode(&std::fs::read(from).expect("read shard")).expect("decode shard");
+    let ShardContent::Run(partial) = &mut file.content else {
+        panic!("a run's shard");
+    };
+    change(&mut file.header, partial);
+    std::fs::write(to, encode(&file.header, &file.content)).expect("write shard");
+}
+
+/// Writes shard `k` of `n` of the RV-20E hysteresis run of 20,000 samples (5 chunks).
+fn hysteresis_shard(k: u64, n: u64, to: &Path) {
+    let scenario = workspace_dir().join("scenarios/rv20e-hysteresis.json");
+    let shard = format!("{k}/{n}");
+    let out = run_rvtol(&[
+        "run",
+        path_arg(&scenario),
+        "--samples",
+        "20000",
+        "--quiet",
+        "--shard",
+        &shard,
+        "--partial",
+        path_arg(to),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+}
+
+#[test]
+fn a_shard_count_beyond_the_bound_is_refused_and_merge_holds_nothing_per_declared_shard() {
+    let dir = scratch("shard-count");
+    let scenario = workspace_dir().join("scenarios/rv20e-hysteresis.json");
+    let part = dir.join("z.part");
+    for shard in ["0/18446744073709551615", "0/100000000", "0/100001"] {
+        let line = one_line(
+            &run_rvtol(&[
+                "run",
+                path_arg(&scenario),
+                "--samples",
+                "20000",
+                "--quiet",
+                "--shard",
+                shard,
+                "--partial",
+                path_arg(&part),
+            ]),
+            2,
+        );
+        assert!(
+            line.contains("'--shard <K/N>'") && line.contains("N must be at most 100,000 shards"),
+            "{line}"
+        );
+        assert!(!part.exists());
+    }
+    // A file that declares such a count anyway (its checksum recomputed) is refused by
+    // name, by merge and by merge --missing alike, without reserving memory per shard.
+    let real = dir.join("real.part");
+    hysteresis_shard(0, 2, &real);
+    for shards in [u64::MAX, 100_000_000] {
+        rewritten_shard(&real, &part, |header, _| header.shards = shards);
+        for args in [vec!["merge", "--missing"], vec!["merge"]] {
+            let mut args = args;
+            args.push(path_arg(&part));
+            let line = one_line(&run_rvtol(&args), 2);
+            assert!(
+                line.starts_with(&format!("error: {}: damaged: ", path_arg(&part)))
+                    && line.contains("more than the 100,000 a run may have"),
+                "{args:?}: {line}"
+            );
+        }
+    }
+    // The largest count: the missing shards are listed as ranges.
+    let last = dir.join("last.part");
+    hysteresis_shard(5, 100_000, &last);
+    let out = run_rvtol(&["merge", "--missing", path_arg(&last)]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert_eq!(text(&out.stdout), "0-4,6-99999\n");
+    let line = one_line(&run_rvtol(&["merge", path_arg(&last)]), 2);
+    assert!(
+        line.starts_with("error: shards 0-4,6-99999 of 100000 have no file"),
+        "{line}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn impossible_statistics_in_a_re_checksummed_shard_file_are_refused_naming_it() {
+    use rvtol_engine::run::Distribution;
+    let dir = scratch("shard-statistics");
+    let (first, second) = (dir.join("0.part"), dir.join("1.part"));
+    hysteresis_shard(0, 2, &first);
+    hysteresis_shard(1, 2, &second);
+    let bad = dir.join("bad.part");
+    type Change = Box<dyn FnOnce(&mut rvtol_engine::run::RunPartial)>;
+    let cases: Vec<(&str, Change, &str)> = vec![
+        (
+            "a NaN chunk mean",
+            Box::new(|p| p.chunk_moments[0].1[0].mean = f64::NAN),
+            "output 0: its mean is NaN",
+        ),
+        (
+            "n = 2^63",
+            Box::new(|p| p.chunk_moments[0].1[0].n = 1 << 63),
+            "n = 9,223,372,036,854,775,808 values in a chunk of 4096 rows",
+        ),
+        (
+            "min above max",
+            Box::new(|p| {
+                let m = &mut p.chunk_moments[0].1[0];
+                std::mem::swap(&mut m.min, &mut m.max);
+            }),
+            "above max",
+        ),
+        (
+            "a NaN value",
+            Box::new(|p| {
+                let Distribution::Values(values) = &mut p.replicates[0].1[0].distribution else {
+                    panic!("exact percentiles keep the values");
+                };
+                values[7] = f64::NAN;
+            }),
+            "value 7 is NaN",
+        ),
+        (
+            "more samples counted than rows",
+            Box::new(|p| p.replicates[0].1[0].excluded += 1),
+            "excluded samples in",
+        ),
+        (
+            "a duplicated chunk index",
+            Box::new(|p| p.chunk_moments[1].0 = p.chunk_moments[0].0),
+            "appears twice",
+        ),
+    ];
+    for (label, change, needle) in cases {
+        rewritten_shard(&second, &bad, |_, partial| change(partial));
+        for args in [
+            vec!["merge", path_arg(&first), path_arg(&bad)],
+            vec!["merge", "--missing", path_arg(&first), path_arg(&bad)],
+        ] {
+            let line = one_line(&run_rvtol(&args), 2);
+            assert!(
+                line.starts_with(&format!("error: {}: damaged: ", path_arg(&bad)))
+                    && line.contains(needle),
+                "{label}: {line}"
+            );
+        }
+    }
+    // The untouched pair merges.
+    let out = run_rvtol(&["merge", path_arg(&first), path_arg(&second), "--json", "-"]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn numbers_beyond_their_range_and_negative_ones_name_their_option() {
     let scenario = workspace_dir().join("scenarios/linear-stack-correlated.json");

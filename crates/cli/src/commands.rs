@@ -1557,23 +1557,24 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
         files.push((path.display().to_string(), file));
     }
     let assembly = shard::assemble(files, &build).map_err(BadInput)?;
+    let missing_count = assembly.missing_count();
     let header = assembly.header;
     if args.missing {
         return if assembly.missing.is_empty() {
             Ok(())
         } else {
-            print(&format!("{}\n", shard::index_list(&assembly.missing)))
+            print(&format!("{}\n", shard::range_list(&assembly.missing)))
         };
     }
     if !assembly.missing.is_empty() {
-        let (noun, verb) = if assembly.missing.len() == 1 {
+        let (noun, verb) = if missing_count == 1 {
             ("shard", "has")
         } else {
             ("shards", "have")
         };
         return Err(BadInput(format!(
             "{noun} {} of {} {verb} no file: run them (rvtol {} SCENARIO --shard K/{} --partial FILE) and merge again; merge --missing lists them",
-            shard::index_list(&assembly.missing),
+            shard::range_list(&assembly.missing),
             header.shards,
             header.command.name(),
             header.shards
