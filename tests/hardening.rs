@@ -1387,3 +1387,122 @@ fn numbers_beyond_their_range_and_negative_ones_name_their_option() {
         "{line}"
     );
 }
+
+// ---------------------------------------------------------------------------------------
+// Messages, round 2.
+
+#[test]
+fn rvtol_alone_prints_a_short_usage() {
+    let out = run_rvtol::<&str>(&[]);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = text(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(stderr.lines().count() <= 4, "{stderr}");
+    assert!(stderr.contains("rvtol --help"), "{stderr}");
+    assert!(
+        stderr.contains("run, merge, nominal, sensitivity, baseline, check"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn standard_input_is_read_once_and_a_baseline_may_come_from_it() {
+    let dir = scratch("stdin-once");
+    let scenario = workspace_dir().join("scenarios/linear-stack-correlated.json");
+    let s = path_arg(&scenario);
+    let baseline = dir.join("b.json");
+    let out = run_rvtol(&[
+        "baseline",
+        s,
+        "--samples",
+        "1000",
+        "--quiet",
+        "-o",
+        path_arg(&baseline),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let recorded = std::fs::read_to_string(&baseline).expect("read");
+    // The baseline on standard input: the same check as from its file.
+    let from_file = run_rvtol(&["check", s, "--baseline", path_arg(&baseline), "-q"]);
+    let from_stdin = run_with_stdin(&["check", s, "--baseline", "-", "-q"], &recorded);
+    assert_eq!(
+        from_stdin.status.code(),
+        Some(0),
+        "{}",
+        text(&from_stdin.stderr)
+    );
+    assert_eq!(from_stdin.stdout, from_file.stdout);
+    // Both the scenario and the baseline cannot be.
+    let text_in = std::fs::read_to_string(&scenario).expect("read");
+    let line = one_line(
+        &run_with_stdin(&["check", "-", "--baseline", "-"], &text_in),
+        2,
+    );
+    assert!(
+        line.contains("--baseline: standard input ('-') already gives the scenario"),
+        "{line}"
+    );
+    // Nor two reports.
+    let report = dir.join("r.json");
+    let out = run_rvtol(&[
+        "run",
+        s,
+        "--samples",
+        "1000",
+        "--quiet",
+        "--json",
+        path_arg(&report),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let json = std::fs::read_to_string(&report).expect("read");
+    let page = dir.join("page.html");
+    let line = one_line(
+        &run_with_stdin(&["report", "-", "-", "-o", path_arg(&page)], &json),
+        2,
+    );
+    assert!(
+        line.contains("standard input ('-') can be read once"),
+        "{line}"
+    );
+    assert!(!page.exists());
+    let out = run_with_stdin(&["report", "-", "-o", path_arg(&page)], &json);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_parquet_file_as_csv_input_is_named_as_such() {
+    let dir = scratch("parquet-inputs");
+    let scenario = workspace_dir().join("scenarios/linear-stack-correlated.json");
+    let s = path_arg(&scenario);
+    let rows = dir.join("rows.parquet");
+    let out = run_rvtol(&[
+        "run",
+        s,
+        "--samples",
+        "10",
+        "--quiet",
+        "--samples-out",
+        path_arg(&rows),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let line = one_line(&run_rvtol(&["evaluate", s, "--inputs", path_arg(&rows)]), 2);
+    assert!(
+        line.starts_with(&format!(
+            "error: --inputs: {} is a Parquet file; rows are read from CSV only",
+            path_arg(&rows)
+        )),
+        "{line}"
+    );
+    let binary = dir.join("rows.csv");
+    std::fs::write(&binary, [0xffu8, 0xfe, 0x00, 0x41]).expect("write");
+    let line = one_line(
+        &run_rvtol(&["evaluate", s, "--inputs", path_arg(&binary)]),
+        2,
+    );
+    assert!(
+        line.contains("--inputs: ") && line.contains("is not a CSV file"),
+        "{line}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -874,9 +874,14 @@ pub fn check(
         ],
         &inputs,
     )?;
+    if is_stdout(path) && is_stdout(baseline_path) {
+        return Err(BadInput(
+            "--baseline: standard input ('-') already gives the scenario, and it can be read once: name the baseline's file".into(),
+        )
+        .into());
+    }
     let (scenario, text) = read(path)?;
-    let baseline_text = std::fs::read_to_string(baseline_path)
-        .map_err(|err| BadInput(format!("{}: cannot read: {err}", baseline_path.display())))?;
+    let baseline_text = read_text(baseline_path)?;
     let recorded = gate::Baseline::from_json(&baseline_text)
         .map_err(|err| bad_scenario(baseline_path, err))?;
     recorded
@@ -1083,6 +1088,14 @@ pub fn report(
         inputs.extend(scenario_inputs(path));
     }
     outputs_ok(&[target("-o", Some(output), Format::Html)], &inputs)?;
+    let on_stdin = files.iter().filter(|f| is_stdout(f)).count()
+        + scenario_path.is_some_and(is_stdout) as usize;
+    if on_stdin > 1 {
+        return Err(BadInput(
+            "standard input ('-') can be read once: give at most one of the reports and the scenario as '-', the others as files".into(),
+        )
+        .into());
+    }
     let scenario_of = |v: &serde_json::Value| v["scenario"].as_str().unwrap_or("").to_string();
     let mut found: Vec<(Kind, serde_json::Value, &Path)> = Vec::new();
     for file in files {
@@ -1166,13 +1179,35 @@ pub fn report(
 }
 
 /// Reads a CSV table of numbers (the engine's [`CsvTable`]); its error is one line.
-fn read_csv(path: &Path) -> Result<CsvTable<'_>> {
-    if is_stdout(path) {
-        let text = read_text(path)?;
-        return CsvTable::parse(Path::new("standard input"), &text)
-            .map_err(|message| BadInput(message).into());
+/// `option` names where the file was given (`--inputs`, `MEASUREMENTS`) when it is no CSV
+/// text: a Parquet file (`run --samples-out` writes those too) or other binary data.
+fn read_csv<'a>(path: &'a Path, option: &str) -> Result<CsvTable<'a>> {
+    let bytes = if is_stdout(path) {
+        let mut bytes = Vec::new();
+        std::io::Read::read_to_end(&mut std::io::stdin(), &mut bytes).map(|_| bytes)
+    } else {
+        std::fs::read(path)
     }
-    CsvTable::read(path).map_err(|message| BadInput(message).into())
+    .map_err(|err| BadInput(format!("{}: cannot read: {err}", shown(path))))?;
+    let text = String::from_utf8(bytes).map_err(|err| {
+        BadInput(if err.as_bytes().starts_with(b"PAR1") {
+            format!(
+                "{option}: {} is a Parquet file; rows are read from CSV only (`rvtol run --samples-out FILE.csv` writes them as CSV)",
+                shown(path)
+            )
+        } else {
+            format!(
+                "{option}: {} is not a CSV file (its bytes are not UTF-8 text)",
+                shown(path)
+            )
+        })
+    })?;
+    let name = if is_stdout(path) {
+        Path::new("standard input")
+    } else {
+        path
+    };
+    CsvTable::parse(name, &text).map_err(|message| BadInput(message).into())
 }
 
 /// `rvtol evaluate`: the models on the rows of a CSV.
@@ -1192,7 +1227,7 @@ pub fn evaluate(
     inputs.push(("the input rows", inputs_path.to_path_buf()));
     outputs_ok(&[target("-o", output, Format::Table)], &inputs)?;
     let scenario = load(scenario_path)?;
-    let table = read_csv(inputs_path)?;
+    let table = read_csv(inputs_path, "--inputs")?;
     let names = table.names();
     let known_other =
         |name: &str| name == SAMPLE_INDEX || scenario.outputs.iter().any(|o| o.name == name);
@@ -1296,7 +1331,7 @@ pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()>
         &[target("-o", output, Format::Json)],
         &[("the measurements", path.to_path_buf())],
     )?;
-    let table = read_csv(path)?;
+    let table = read_csv(path, "MEASUREMENTS")?;
     let names = table.names();
     // A part's columns in its component order.
     let order: Vec<usize> = match part {
@@ -1704,8 +1739,7 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
         ));
     }
     if let Some(baseline_path) = &args.check {
-        let baseline_text = std::fs::read_to_string(baseline_path)
-            .map_err(|err| BadInput(format!("{}: cannot read: {err}", baseline_path.display())))?;
+        let baseline_text = read_text(baseline_path)?;
         let recorded = gate::Baseline::from_json(&baseline_text)
             .map_err(|err| bad_scenario(baseline_path, err))?;
         if (recorded.samples, recorded.exact_percentile_limit)

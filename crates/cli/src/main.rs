@@ -607,12 +607,27 @@ impl Cli {
     }
 }
 
+/// What `rvtol` alone prints: a few lines, the commands and where their help is.
+fn short_usage() -> String {
+    format!(
+        "usage: rvtol <COMMAND> [ARGUMENTS]\ncommands: {}\n'rvtol --help' says what each does, 'rvtol <COMMAND> --help' its options",
+        Cli::command_names().join(", ")
+    )
+}
+
 fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(err) => {
             use clap::error::ErrorKind;
             return match err.kind() {
+                // `rvtol` alone: the commands and where to read more, not the whole help.
+                ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+                    if std::env::args_os().len() <= 1 =>
+                {
+                    output::note(&short_usage());
+                    ExitCode::from(2)
+                }
                 ErrorKind::DisplayHelp
                 | ErrorKind::DisplayVersion
                 | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
