@@ -1406,6 +1406,64 @@ fn rvtol_alone_prints_a_short_usage() {
 }
 
 #[test]
+fn init_parameter_messages_show_numbers_as_written_or_rounded() {
+    let line = one_line(
+        &run_rvtol(&["init", "geometric_hysteresis", "--param", "pin_count=1e300"]),
+        2,
+    );
+    assert_eq!(
+        line,
+        "error: --param pin_count: must be a positive whole number, got 1e300"
+    );
+    let line = one_line(
+        &run_rvtol(&[
+            "init",
+            "geometric_hysteresis",
+            "--param",
+            "pin_count=1e-300",
+        ]),
+        2,
+    );
+    assert!(line.ends_with("got 1e-300"), "{line}");
+    // Numbers rvtol derives have four significant digits.
+    let line = one_line(
+        &run_rvtol(&[
+            "init",
+            "cycloid_pin_contact",
+            "--param",
+            "eccentricity_mm=1e300",
+        ]),
+        2,
+    );
+    assert_eq!(
+        line,
+        "error: --param eccentricity_mm: K1 = e·z_p/r_p = 5.229e299 must be below 1 (a curtate cycloid)"
+    );
+    let line = one_line(
+        &run_rvtol(&[
+            "init",
+            "cycloid_pin_contact",
+            "--param",
+            "pin_radius_mm=1e300",
+        ]),
+        2,
+    );
+    assert!(line.ends_with("r_p·sin(π/z_p) = 6.002"), "{line}");
+    for (model, param) in [
+        ("torsion_curve", "needle_roller_diameter_mm=-1e300"),
+        ("geometric_hysteresis", "eccentricity_mm=1e300"),
+        ("crank_elastic_error", "disc_torque_balance=1e300"),
+    ] {
+        let line = one_line(&run_rvtol(&["init", model, "--param", param]), 2);
+        assert!(line.len() < 250, "{line}");
+        assert!(
+            !line.contains("0000000000"),
+            "{model} {param}: a number in full: {line}"
+        );
+    }
+}
+
+#[test]
 fn standard_input_is_read_once_and_a_baseline_may_come_from_it() {
     let dir = scratch("stdin-once");
     let scenario = workspace_dir().join("scenarios/linear-stack-correlated.json");
@@ -1505,4 +1563,34 @@ fn a_parquet_file_as_csv_input_is_named_as_such() {
         "{line}"
     );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn an_indefinite_correlation_is_called_a_correlation_with_a_rounded_eigenvalue() {
+    // Three correlations that cannot hold together: eigenvalue 1 − 1.8 = −0.8.
+    let contents = with("linear-stack-correlated.json", |s| {
+        s["correlations"] = serde_json::json!([
+            { "between": ["bearing_width", "spacer_width"], "rho": 0.9 },
+            { "between": ["bearing_width", "bore_depth"], "rho": 0.9 },
+            { "between": ["spacer_width", "bore_depth"], "rho": -0.9 }
+        ]);
+    });
+    assert_refused(
+        "hardening-correlations-indefinite",
+        &contents,
+        &["correlations (joint correlation of variables[0], variables[1], variables[2]): correlation is not positive semi-definite (smallest eigenvalue -0.8)"],
+    );
+    // A part's correlation matrix, likewise (with its own ±0.3 of the tilts).
+    let contents = with("linear-stack-correlated.json", |s| {
+        let correlation = &mut s["parts"][0]["correlation"];
+        for (i, j, rho) in [(0, 1, 0.9), (0, 2, 0.9), (1, 2, -0.9)] {
+            correlation[i][j] = Value::from(rho);
+            correlation[j][i] = Value::from(rho);
+        }
+    });
+    assert_refused(
+        "hardening-part-correlation-indefinite",
+        &contents,
+        &["parts[0].correlation: correlation is not positive semi-definite (smallest eigenvalue -0.8329)"],
+    );
 }
