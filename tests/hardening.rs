@@ -1566,6 +1566,42 @@ fn a_parquet_file_as_csv_input_is_named_as_such() {
 }
 
 #[test]
+fn a_change_too_large_for_a_percentage_is_never_inf() {
+    let dir = scratch("huge-factor");
+    let scenario = workspace_dir().join("scenarios/allocation-linear.json");
+    let report = dir.join("allocation.json");
+    let out = run_rvtol(&[
+        "allocate",
+        path_arg(&scenario),
+        "--output",
+        "gap_mm",
+        "--target",
+        "p99.865 <= 1",
+        "--samples",
+        "20000",
+        "--quiet",
+        "--json",
+        path_arg(&report),
+    ]);
+    assert!(
+        out.status.code().is_some_and(|c| c <= 1),
+        "{}",
+        text(&out.stderr)
+    );
+    let mut allocation: Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).expect("read")).expect("json");
+    allocation["sources"][0]["factor"] = Value::from(1e308);
+    std::fs::write(&report, allocation.to_string()).expect("write");
+    let page = dir.join("page.html");
+    let out = run_rvtol(&["report", path_arg(&report), "-o", path_arg(&page)]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let html = std::fs::read_to_string(&page).expect("read");
+    assert!(!html.contains("inf %"), "an inf percentage on the page");
+    assert!(html.contains("×1.0000e308"), "the factor itself");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn an_indefinite_correlation_is_called_a_correlation_with_a_rounded_eigenvalue() {
     // Three correlations that cannot hold together: eigenvalue 1 − 1.8 = −0.8.
     let contents = with("linear-stack-correlated.json", |s| {
