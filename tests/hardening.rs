@@ -1630,3 +1630,66 @@ fn an_indefinite_correlation_is_called_a_correlation_with_a_rounded_eigenvalue()
         &["parts[0].correlation: correlation is not positive semi-definite (smallest eigenvalue -0.8329)"],
     );
 }
+
+#[test]
+fn the_greek_mu_is_read_as_the_micro_sign_in_units() {
+    // The carrier in µm and µrad, the bore depth in µm, written with either letter.
+    let micro = |mu: char| {
+        with("linear-stack-correlated.json", |s| {
+            let part = &mut s["parts"][0];
+            part["units"] = serde_json::json!({
+                "translation": format!("{mu}m"),
+                "rotation": format!("{mu}rad"),
+            });
+            part["mean"] = serde_json::json!([0.0, 0.0, 2.0, 0.0, 0.0, 0.0]);
+            part["sd"] = serde_json::json!([3.0, 3.0, 2.0, 100.0, 100.0, 0.0]);
+        })
+    };
+    let mut reports = Vec::new();
+    for (label, mu) in [("micro-sign", '\u{b5}'), ("greek-mu", '\u{3bc}')] {
+        let file = TempScenario::new(&format!("hardening-{label}"), &micro(mu));
+        let out = run_rvtol(&[
+            "run",
+            path_arg(file.path()),
+            "--samples",
+            "2000",
+            "--quiet",
+            "--json",
+            "-",
+        ]);
+        assert_eq!(out.status.code(), Some(0), "{label}: {}", text(&out.stderr));
+        reports.push(out.stdout);
+    }
+    assert_eq!(reports[0], reports[1], "µ and μ give one run");
+    // A variable in μm bound to an input in mm is converted as one in µm.
+    let hysteresis = |unit: &str| {
+        with("rv20e-hysteresis.json", |s| {
+            let variables = s["variables"].as_array_mut().expect("variables");
+            let v = variables
+                .iter_mut()
+                .find(|v| v["name"] == "pin_circle_radius_error")
+                .expect("the pin circle radius error");
+            v["unit"] = Value::from(unit);
+            v["distribution"] = serde_json::json!({
+                "tolerance_band": { "lower": -10.0, "upper": 10.0, "cp": 1.0 }
+            });
+        })
+    };
+    let mut means = Vec::new();
+    for unit in ["\u{b5}m", "\u{3bc}m"] {
+        let file = TempScenario::new("hardening-mu-variable", &hysteresis(unit));
+        let out = run_rvtol(&[
+            "run",
+            path_arg(file.path()),
+            "--samples",
+            "2000",
+            "--quiet",
+            "--json",
+            "-",
+        ]);
+        assert_eq!(out.status.code(), Some(0), "{unit}: {}", text(&out.stderr));
+        let report: Value = serde_json::from_slice(&out.stdout).expect("report");
+        means.push(report["outputs"][0]["mean"].clone());
+    }
+    assert_eq!(means[0], means[1]);
+}
