@@ -1572,3 +1572,519 @@ fn a_long_run_says_how_long_it_will_take_even_quiet_and_outside_a_terminal() {
         "{help}"
     );
 }
+
+// ---------------------------------------------------------------------------------------
+// Shard files: the shard count bounded, impossible statistics refused by file name.
+
+/// Rewrites a shard file with `change` applied to its decoded header and statistics, its
+/// checksum recomputed as rvtol computes it (a file that passes the checksum).
+fn rewritten_shard(
+    from: &Path,
+    to: &Path,
+    change: impl FnOnce(&mut rvtol_engine::shard::ShardHeader, &mut rvtol_engine::run::RunPartial),
+) {
+    use rvtol_engine::shard::{decode, encode, ShardContent};
+    let mut file = decode(&std::fs::read(from).expect("read shard")).expect("decode shard");
+    let ShardContent::Run(partial) = &mut file.content else {
+        panic!("a run's shard");
+    };
+    change(&mut file.header, partial);
+    std::fs::write(to, encode(&file.header, &file.content)).expect("write shard");
+}
+
+/// Writes shard `k` of `n` of the RV-20E hysteresis run of 20,000 samples (5 chunks).
+fn hysteresis_shard(k: u64, n: u64, to: &Path) {
+    let scenario = workspace_dir().join("scenarios/rv20e-hysteresis.json");
+    let shard = format!("{k}/{n}");
+    let out = run_rvtol(&[
+        "run",
+        path_arg(&scenario),
+        "--samples",
+        "20000",
+        "--quiet",
+        "--shard",
+        &shard,
+        "--partial",
+        path_arg(to),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+}
+
+#[test]
+fn a_shard_count_beyond_the_bound_is_refused_and_merge_holds_nothing_per_declared_shard() {
+    let dir = scratch("shard-count");
+    let scenario = workspace_dir().join("scenarios/rv20e-hysteresis.json");
+    let part = dir.join("z.part");
+    for shard in ["0/18446744073709551615", "0/100000000", "0/100001"] {
+        let line = one_line(
+            &run_rvtol(&[
+                "run",
+                path_arg(&scenario),
+                "--samples",
+                "20000",
+                "--quiet",
+                "--shard",
+                shard,
+                "--partial",
+                path_arg(&part),
+            ]),
+            2,
+        );
+        assert!(
+            line.contains("'--shard <K/N>'") && line.contains("N must be at most 100,000 shards"),
+            "{line}"
+        );
+        assert!(!part.exists());
+    }
+    // A file that declares such a count anyway (its checksum recomputed) is refused by
+    // name, by merge and by merge --missing alike, without reserving memory per shard.
+    let real = dir.join("real.part");
+    hysteresis_shard(0, 2, &real);
+    for shards in [u64::MAX, 100_000_000] {
+        rewritten_shard(&real, &part, |header, _| header.shards = shards);
+        for args in [vec!["merge", "--missing"], vec!["merge"]] {
+            let mut args = args;
+            args.push(path_arg(&part));
+            let line = one_line(&run_rvtol(&args), 2);
+            assert!(
+                line.starts_with(&format!("error: {}: damaged: ", path_arg(&part)))
+                    && line.contains("more than the 100,000 a run may have"),
+                "{args:?}: {line}"
+            );
+        }
+    }
+    // The largest count: the missing shards are listed as ranges.
+    let last = dir.join("last.part");
+    hysteresis_shard(5, 100_000, &last);
+    let out = run_rvtol(&["merge", "--missing", path_arg(&last)]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert_eq!(text(&out.stdout), "0-4,6-99999\n");
+    let line = one_line(&run_rvtol(&["merge", path_arg(&last)]), 2);
+    assert!(
+        line.starts_with("error: shards 0-4,6-99999 of 100000 have no file"),
+        "{line}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn impossible_statistics_in_a_re_checksummed_shard_file_are_refused_naming_it() {
+    use rvtol_engine::run::Distribution;
+    let dir = scratch("shard-statistics");
+    let (first, second) = (dir.join("0.part"), dir.join("1.part"));
+    hysteresis_shard(0, 2, &first);
+    hysteresis_shard(1, 2, &second);
+    let bad = dir.join("bad.part");
+    type Change = Box<dyn FnOnce(&mut rvtol_engine::run::RunPartial)>;
+    let cases: Vec<(&str, Change, &str)> = vec![
+        (
+            "a NaN chunk mean",
+            Box::new(|p| p.chunk_moments[0].1[0].mean = f64::NAN),
+            "output 0: its mean is NaN",
+        ),
+        (
+            "n = 2^63",
+            Box::new(|p| p.chunk_moments[0].1[0].n = 1 << 63),
+            "n = 9,223,372,036,854,775,808 values in a chunk of 4096 rows",
+        ),
+        (
+            "min above max",
+            Box::new(|p| {
+                let m = &mut p.chunk_moments[0].1[0];
+                std::mem::swap(&mut m.min, &mut m.max);
+            }),
+            "above max",
+        ),
+        (
+            "a NaN value",
+            Box::new(|p| {
+                let Distribution::Values(values) = &mut p.replicates[0].1[0].distribution else {
+                    panic!("exact percentiles keep the values");
+                };
+                values[7] = f64::NAN;
+            }),
+            "value 7 is NaN",
+        ),
+        (
+            "more samples counted than rows",
+            Box::new(|p| p.replicates[0].1[0].excluded += 1),
+            "excluded samples in",
+        ),
+        (
+            "a duplicated chunk index",
+            Box::new(|p| p.chunk_moments[1].0 = p.chunk_moments[0].0),
+            "appears twice",
+        ),
+    ];
+    for (label, change, needle) in cases {
+        rewritten_shard(&second, &bad, |_, partial| change(partial));
+        for args in [
+            vec!["merge", path_arg(&first), path_arg(&bad)],
+            vec!["merge", "--missing", path_arg(&first), path_arg(&bad)],
+        ] {
+            let line = one_line(&run_rvtol(&args), 2);
+            assert!(
+                line.starts_with(&format!("error: {}: damaged: ", path_arg(&bad)))
+                    && line.contains(needle),
+                "{label}: {line}"
+            );
+        }
+    }
+    // The untouched pair merges.
+    let out = run_rvtol(&["merge", path_arg(&first), path_arg(&second), "--json", "-"]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn numbers_beyond_their_range_and_negative_ones_name_their_option() {
+    let scenario = workspace_dir().join("scenarios/linear-stack-correlated.json");
+    let s = path_arg(&scenario);
+    // One above u64::MAX reads as 2⁶⁴, which used to saturate: a run without end, or a
+    // budget of any size.
+    let line = one_line(
+        &run_rvtol(&["run", s, "--samples", "18446744073709551616", "--quiet"]),
+        2,
+    );
+    assert_eq!(
+        line,
+        "error: invalid value '18446744073709551616' for '--samples <SAMPLES>': must be at most 18,446,744,073,709,551,615 (see 'rvtol run --help')"
+    );
+    let line = one_line(
+        &run_rvtol(&["run", s, "--max-memory", "18446744073709551616", "--quiet"]),
+        2,
+    );
+    assert_eq!(
+        line,
+        "error: invalid value '18446744073709551616' for '--max-memory <SIZE>': must be less than 16 EiB (18,446,744,073,709,551,616 bytes) (see 'rvtol run --help')"
+    );
+    // A negative value is the option's value, not another argument.
+    let line = one_line(&run_rvtol(&["run", s, "--max-memory", "-1"]), 2);
+    assert_eq!(
+        line,
+        "error: invalid value '-1' for '--max-memory <SIZE>': must be a positive size such as 512M or 4G (see 'rvtol run --help')"
+    );
+    let line = one_line(
+        &run_rvtol(&["run", s, "--shard", "-1/3", "--partial", "x.part"]),
+        2,
+    );
+    assert!(
+        line.starts_with("error: invalid value '-1/3' for '--shard <K/N>': ")
+            && line.contains("0 <= K < N"),
+        "{line}"
+    );
+    let line = one_line(
+        &run_rvtol(&["sensitivity", s, "--shard", "-1/3", "--partial", "x.part"]),
+        2,
+    );
+    assert!(
+        line.starts_with("error: invalid value '-1/3' for '--shard <K/N>': "),
+        "{line}"
+    );
+}
+
+// ---------------------------------------------------------------------------------------
+// Messages, round 2.
+
+#[test]
+fn rvtol_alone_prints_a_short_usage() {
+    let out = run_rvtol::<&str>(&[]);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = text(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(stderr.lines().count() <= 4, "{stderr}");
+    assert!(stderr.contains("rvtol --help"), "{stderr}");
+    assert!(
+        stderr.contains("run, merge, nominal, sensitivity, baseline, check"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn init_parameter_messages_show_numbers_as_written_or_rounded() {
+    let line = one_line(
+        &run_rvtol(&["init", "geometric_hysteresis", "--param", "pin_count=1e300"]),
+        2,
+    );
+    assert_eq!(
+        line,
+        "error: --param pin_count: must be a positive whole number, got 1e300"
+    );
+    let line = one_line(
+        &run_rvtol(&[
+            "init",
+            "geometric_hysteresis",
+            "--param",
+            "pin_count=1e-300",
+        ]),
+        2,
+    );
+    assert!(line.ends_with("got 1e-300"), "{line}");
+    // Numbers rvtol derives have four significant digits.
+    let line = one_line(
+        &run_rvtol(&[
+            "init",
+            "cycloid_pin_contact",
+            "--param",
+            "eccentricity_mm=1e300",
+        ]),
+        2,
+    );
+    assert_eq!(
+        line,
+        "error: --param eccentricity_mm: K1 = e·z_p/r_p = 5.229e299 must be below 1 (a curtate cycloid)"
+    );
+    let line = one_line(
+        &run_rvtol(&[
+            "init",
+            "cycloid_pin_contact",
+            "--param",
+            "pin_radius_mm=1e300",
+        ]),
+        2,
+    );
+    assert!(line.ends_with("r_p·sin(π/z_p) = 6.002"), "{line}");
+    for (model, param) in [
+        ("torsion_curve", "needle_roller_diameter_mm=-1e300"),
+        ("geometric_hysteresis", "eccentricity_mm=1e300"),
+        ("crank_elastic_error", "disc_torque_balance=1e300"),
+    ] {
+        let line = one_line(&run_rvtol(&["init", model, "--param", param]), 2);
+        assert!(line.len() < 250, "{line}");
+        assert!(
+            !line.contains("0000000000"),
+            "{model} {param}: a number in full: {line}"
+        );
+    }
+}
+
+#[test]
+fn standard_input_is_read_once_and_a_baseline_may_come_from_it() {
+    let dir = scratch("stdin-once");
+    let scenario = workspace_dir().join("scenarios/linear-stack-correlated.json");
+    let s = path_arg(&scenario);
+    let baseline = dir.join("b.json");
+    let out = run_rvtol(&[
+        "baseline",
+        s,
+        "--samples",
+        "1000",
+        "--quiet",
+        "-o",
+        path_arg(&baseline),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let recorded = std::fs::read_to_string(&baseline).expect("read");
+    // The baseline on standard input: the same check as from its file.
+    let from_file = run_rvtol(&["check", s, "--baseline", path_arg(&baseline), "-q"]);
+    let from_stdin = run_with_stdin(&["check", s, "--baseline", "-", "-q"], &recorded);
+    assert_eq!(
+        from_stdin.status.code(),
+        Some(0),
+        "{}",
+        text(&from_stdin.stderr)
+    );
+    assert_eq!(from_stdin.stdout, from_file.stdout);
+    // Both the scenario and the baseline cannot be.
+    let text_in = std::fs::read_to_string(&scenario).expect("read");
+    let line = one_line(
+        &run_with_stdin(&["check", "-", "--baseline", "-"], &text_in),
+        2,
+    );
+    assert!(
+        line.contains("--baseline: standard input ('-') already gives the scenario"),
+        "{line}"
+    );
+    // Nor two reports.
+    let report = dir.join("r.json");
+    let out = run_rvtol(&[
+        "run",
+        s,
+        "--samples",
+        "1000",
+        "--quiet",
+        "--json",
+        path_arg(&report),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let json = std::fs::read_to_string(&report).expect("read");
+    let page = dir.join("page.html");
+    let line = one_line(
+        &run_with_stdin(&["report", "-", "-", "-o", path_arg(&page)], &json),
+        2,
+    );
+    assert!(
+        line.contains("standard input ('-') can be read once"),
+        "{line}"
+    );
+    assert!(!page.exists());
+    let out = run_with_stdin(&["report", "-", "-o", path_arg(&page)], &json);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_parquet_file_as_csv_input_is_named_as_such() {
+    let dir = scratch("parquet-inputs");
+    let scenario = workspace_dir().join("scenarios/linear-stack-correlated.json");
+    let s = path_arg(&scenario);
+    let rows = dir.join("rows.parquet");
+    let out = run_rvtol(&[
+        "run",
+        s,
+        "--samples",
+        "10",
+        "--quiet",
+        "--samples-out",
+        path_arg(&rows),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let line = one_line(&run_rvtol(&["evaluate", s, "--inputs", path_arg(&rows)]), 2);
+    assert!(
+        line.starts_with(&format!(
+            "error: --inputs: {} is a Parquet file; rows are read from CSV only",
+            path_arg(&rows)
+        )),
+        "{line}"
+    );
+    let binary = dir.join("rows.csv");
+    std::fs::write(&binary, [0xffu8, 0xfe, 0x00, 0x41]).expect("write");
+    let line = one_line(
+        &run_rvtol(&["evaluate", s, "--inputs", path_arg(&binary)]),
+        2,
+    );
+    assert!(
+        line.contains("--inputs: ") && line.contains("is not a CSV file"),
+        "{line}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_change_too_large_for_a_percentage_is_never_inf() {
+    let dir = scratch("huge-factor");
+    let scenario = workspace_dir().join("scenarios/allocation-linear.json");
+    let report = dir.join("allocation.json");
+    let out = run_rvtol(&[
+        "allocate",
+        path_arg(&scenario),
+        "--output",
+        "gap_mm",
+        "--target",
+        "p99.865 <= 1",
+        "--samples",
+        "20000",
+        "--quiet",
+        "--json",
+        path_arg(&report),
+    ]);
+    assert!(
+        out.status.code().is_some_and(|c| c <= 1),
+        "{}",
+        text(&out.stderr)
+    );
+    let mut allocation: Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).expect("read")).expect("json");
+    allocation["sources"][0]["factor"] = Value::from(1e308);
+    std::fs::write(&report, allocation.to_string()).expect("write");
+    let page = dir.join("page.html");
+    let out = run_rvtol(&["report", path_arg(&report), "-o", path_arg(&page)]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let html = std::fs::read_to_string(&page).expect("read");
+    assert!(!html.contains("inf %"), "an inf percentage on the page");
+    assert!(html.contains("×1.0000e308"), "the factor itself");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn an_indefinite_correlation_is_called_a_correlation_with_a_rounded_eigenvalue() {
+    // Three correlations that cannot hold together: eigenvalue 1 − 1.8 = −0.8.
+    let contents = with("linear-stack-correlated.json", |s| {
+        s["correlations"] = serde_json::json!([
+            { "between": ["bearing_width", "spacer_width"], "rho": 0.9 },
+            { "between": ["bearing_width", "bore_depth"], "rho": 0.9 },
+            { "between": ["spacer_width", "bore_depth"], "rho": -0.9 }
+        ]);
+    });
+    assert_refused(
+        "hardening-correlations-indefinite",
+        &contents,
+        &["correlations (joint correlation of variables[0], variables[1], variables[2]): correlation is not positive semi-definite (smallest eigenvalue -0.8)"],
+    );
+    // A part's correlation matrix, likewise (with its own ±0.3 of the tilts).
+    let contents = with("linear-stack-correlated.json", |s| {
+        let correlation = &mut s["parts"][0]["correlation"];
+        for (i, j, rho) in [(0, 1, 0.9), (0, 2, 0.9), (1, 2, -0.9)] {
+            correlation[i][j] = Value::from(rho);
+            correlation[j][i] = Value::from(rho);
+        }
+    });
+    assert_refused(
+        "hardening-part-correlation-indefinite",
+        &contents,
+        &["parts[0].correlation: correlation is not positive semi-definite (smallest eigenvalue -0.8329)"],
+    );
+}
+
+#[test]
+fn the_greek_mu_is_read_as_the_micro_sign_in_units() {
+    // The carrier in µm and µrad, the bore depth in µm, written with either letter.
+    let micro = |mu: char| {
+        with("linear-stack-correlated.json", |s| {
+            let part = &mut s["parts"][0];
+            part["units"] = serde_json::json!({
+                "translation": format!("{mu}m"),
+                "rotation": format!("{mu}rad"),
+            });
+            part["mean"] = serde_json::json!([0.0, 0.0, 2.0, 0.0, 0.0, 0.0]);
+            part["sd"] = serde_json::json!([3.0, 3.0, 2.0, 100.0, 100.0, 0.0]);
+        })
+    };
+    let mut reports = Vec::new();
+    for (label, mu) in [("micro-sign", '\u{b5}'), ("greek-mu", '\u{3bc}')] {
+        let file = TempScenario::new(&format!("hardening-{label}"), &micro(mu));
+        let out = run_rvtol(&[
+            "run",
+            path_arg(file.path()),
+            "--samples",
+            "2000",
+            "--quiet",
+            "--json",
+            "-",
+        ]);
+        assert_eq!(out.status.code(), Some(0), "{label}: {}", text(&out.stderr));
+        reports.push(out.stdout);
+    }
+    assert_eq!(reports[0], reports[1], "µ and μ give one run");
+    // A variable in μm bound to an input in mm is converted as one in µm.
+    let hysteresis = |unit: &str| {
+        with("rv20e-hysteresis.json", |s| {
+            let variables = s["variables"].as_array_mut().expect("variables");
+            let v = variables
+                .iter_mut()
+                .find(|v| v["name"] == "pin_circle_radius_error")
+                .expect("the pin circle radius error");
+            v["unit"] = Value::from(unit);
+            v["distribution"] = serde_json::json!({
+                "tolerance_band": { "lower": -10.0, "upper": 10.0, "cp": 1.0 }
+            });
+        })
+    };
+    let mut means = Vec::new();
+    for unit in ["\u{b5}m", "\u{3bc}m"] {
+        let file = TempScenario::new("hardening-mu-variable", &hysteresis(unit));
+        let out = run_rvtol(&[
+            "run",
+            path_arg(file.path()),
+            "--samples",
+            "2000",
+            "--quiet",
+            "--json",
+            "-",
+        ]);
+        assert_eq!(out.status.code(), Some(0), "{unit}: {}", text(&out.stderr));
+        let report: Value = serde_json::from_slice(&out.stdout).expect("report");
+        means.push(report["outputs"][0]["mean"].clone());
+    }
+    assert_eq!(means[0], means[1]);
+}

@@ -1019,6 +1019,12 @@ pub fn check(
         ],
         &inputs,
     )?;
+    if is_stdout(path) && is_stdout(baseline_path) {
+        return Err(BadInput(
+            "--baseline: standard input ('-') already gives the scenario, and it can be read once: name the baseline's file".into(),
+        )
+        .into());
+    }
     let (scenario, text) = read(path)?;
     let baseline_text = read_text(baseline_path)?;
     let recorded = gate::Baseline::from_json(&baseline_text)
@@ -1232,6 +1238,14 @@ pub fn report(
         inputs.extend(scenario_inputs(path));
     }
     outputs_ok(&[target("-o", Some(output), Format::Html)], &inputs)?;
+    let on_stdin = files.iter().filter(|f| is_stdout(f)).count()
+        + scenario_path.is_some_and(is_stdout) as usize;
+    if on_stdin > 1 {
+        return Err(BadInput(
+            "standard input ('-') can be read once: give at most one of the reports and the scenario as '-', the others as files".into(),
+        )
+        .into());
+    }
     let scenario_of = |v: &serde_json::Value| v["scenario"].as_str().unwrap_or("").to_string();
     let mut found: Vec<(Kind, serde_json::Value, &Path)> = Vec::new();
     for file in files {
@@ -1315,14 +1329,35 @@ pub fn report(
 }
 
 /// Reads a CSV table of numbers (the engine's [`CsvTable`]) of at most `limit.bytes`; its
-/// error is one line.
-fn read_csv<'a>(path: &'a Path, limit: &ReadLimit) -> Result<CsvTable<'a>> {
-    if is_stdout(path) {
-        let text = read_text_within(path, limit)?;
-        return CsvTable::parse(Path::new("standard input"), &text)
-            .map_err(|message| BadInput(message).into());
+/// error is one line. `option` names where the file was given (`--inputs`,
+/// `MEASUREMENTS`) when it is no CSV text: a Parquet file (`run --samples-out` writes
+/// those too) or other binary data.
+fn read_csv<'a>(path: &'a Path, limit: &ReadLimit, option: &str) -> Result<CsvTable<'a>> {
+    let bytes = if is_stdout(path) {
+        input_file::read_standard_input_bytes(limit)
+    } else {
+        input_file::read_bytes(path, limit)
     }
-    CsvTable::read(path, limit).map_err(|message| BadInput(message).into())
+    .map_err(BadInput)?;
+    let text = String::from_utf8(bytes).map_err(|err| {
+        BadInput(if err.as_bytes().starts_with(b"PAR1") {
+            format!(
+                "{option}: {} is a Parquet file; rows are read from CSV only (`rvtol run --samples-out FILE.csv` writes them as CSV)",
+                shown(path)
+            )
+        } else {
+            format!(
+                "{option}: {} is not a CSV file (its bytes are not UTF-8 text)",
+                shown(path)
+            )
+        })
+    })?;
+    let name = if is_stdout(path) {
+        Path::new("standard input")
+    } else {
+        path
+    };
+    CsvTable::parse(name, &text).map_err(|message| BadInput(message).into())
 }
 
 /// `rvtol evaluate`: the models on the rows of a CSV.
@@ -1367,7 +1402,7 @@ pub fn evaluate(
             rvtol_deviation::human_bytes(budget)
         ),
     };
-    let table = read_csv(inputs_path, &rows_limit)?;
+    let table = read_csv(inputs_path, &rows_limit, "--inputs")?;
     let names = table.names();
     let known_other =
         |name: &str| name == SAMPLE_INDEX || scenario.outputs.iter().any(|o| o.name == name);
@@ -1471,7 +1506,7 @@ pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()>
         &[target("-o", output, Format::Json)],
         &[("the measurements", path.to_path_buf())],
     )?;
-    let table = read_csv(path, whole_file_limit())?;
+    let table = read_csv(path, whole_file_limit(), "MEASUREMENTS")?;
     let names = table.names();
     // A part's columns in its component order.
     let order: Vec<usize> = match part {
@@ -1751,23 +1786,24 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
         files.push((path.display().to_string(), file));
     }
     let assembly = shard::assemble(files, &build).map_err(BadInput)?;
+    let missing_count = assembly.missing_count();
     let header = assembly.header;
     if args.missing {
         return if assembly.missing.is_empty() {
             Ok(())
         } else {
-            print(&format!("{}\n", shard::index_list(&assembly.missing)))
+            print(&format!("{}\n", shard::range_list(&assembly.missing)))
         };
     }
     if !assembly.missing.is_empty() {
-        let (noun, verb) = if assembly.missing.len() == 1 {
+        let (noun, verb) = if missing_count == 1 {
             ("shard", "has")
         } else {
             ("shards", "have")
         };
         return Err(BadInput(format!(
             "{noun} {} of {} {verb} no file: run them (rvtol {} SCENARIO --shard K/{} --partial FILE) and merge again; merge --missing lists them",
-            shard::index_list(&assembly.missing),
+            shard::range_list(&assembly.missing),
             header.shards,
             header.command.name(),
             header.shards

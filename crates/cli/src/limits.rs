@@ -23,8 +23,10 @@ pub fn parse_count(text: &str) -> Result<u64, String> {
             let x: f64 = cleaned
                 .parse()
                 .map_err(|_| "must be a whole number of at least 1".to_string())?;
-            if !(x.is_finite() && x.fract() == 0.0 && x >= 1.0 && x <= u64::MAX as f64) {
-                return Err(if x.is_finite() && x > u64::MAX as f64 {
+            // `u64::MAX as f64` is 2⁶⁴, one more than the largest count: a value that
+            // reaches it would saturate to u64::MAX rather than be refused.
+            if !(x.is_finite() && x.fract() == 0.0 && x >= 1.0 && x < u64::MAX as f64) {
+                return Err(if x.is_finite() && x >= u64::MAX as f64 {
                     format!(
                         "must be at most {}",
                         rvtol_engine::report::group_thousands(u64::MAX)
@@ -86,11 +88,16 @@ pub fn parse_size(text: &str) -> Result<f64, String> {
         .trim()
         .parse()
         .map_err(|_| "must be a size such as 512M, 4G or 1073741824".to_string())?;
-    if value.is_finite() && value > 0.0 {
-        Ok(value * factor)
-    } else {
-        Err("must be a positive size such as 512M or 4G".to_string())
+    if !(value.is_finite() && value > 0.0) {
+        return Err("must be a positive size such as 512M or 4G".to_string());
     }
+    // The budget is compared with byte counts that are u64: a size beyond them (2⁶⁴ bytes,
+    // 16 EiB) is no budget any machine has, and would not read back as what was written.
+    let bytes = value * factor;
+    if bytes >= u64::MAX as f64 {
+        return Err("must be less than 16 EiB (18,446,744,073,709,551,616 bytes)".to_string());
+    }
+    Ok(bytes)
 }
 
 /// Cores of this machine (1 when it cannot tell).
@@ -451,6 +458,19 @@ mod tests {
             parse_count("1e30"),
             Err("must be at most 18,446,744,073,709,551,615".to_string())
         );
+        // One above u64::MAX reads as the f64 2⁶⁴, which `as u64` would saturate.
+        for beyond in [
+            "18446744073709551616",
+            "18446744073709551617",
+            "1.8446744073709552e19",
+        ] {
+            assert_eq!(
+                parse_count(beyond),
+                Err("must be at most 18,446,744,073,709,551,615".to_string()),
+                "{beyond}"
+            );
+        }
+        assert_eq!(parse_count("18446744073709551615"), Ok(u64::MAX));
     }
 
     #[test]
@@ -477,6 +497,13 @@ mod tests {
         assert_eq!(parse_size("1000"), Ok(1000.0));
         assert!(parse_size("4X").is_err());
         assert!(parse_size("-1G").is_err());
+        for beyond in ["18446744073709551616", "16777216T", "17179869184G"] {
+            assert_eq!(
+                parse_size(beyond),
+                Err("must be less than 16 EiB (18,446,744,073,709,551,616 bytes)".to_string()),
+                "{beyond}"
+            );
+        }
     }
 
     #[test]

@@ -46,7 +46,7 @@ struct Execution {
     max_non_finite: f64,
     /// Memory the command may use (bytes, or with k, M, G, T: `4G`); default: the memory
     /// available on this machine. A request that needs more is refused before it starts.
-    #[arg(long, value_name = "SIZE", value_parser = parse_size)]
+    #[arg(long, value_name = "SIZE", value_parser = parse_size, allow_hyphen_values = true)]
     max_memory: Option<f64>,
     /// No progress display (a command whose samples will take more than a minute still
     /// says so in one line).
@@ -99,7 +99,7 @@ enum Command {
         /// Compute only shard K of N (0 <= K < N, e.g. a job array's task index) and write
         /// its partial result to --partial instead of a report; `rvtol merge` folds the N
         /// partials into the run's report, byte for byte this command's without --shard.
-        #[arg(long, value_name = "K/N", value_parser = parse_shard_arg, requires = "partial", conflicts_with_all = ["json", "html", "samples_out"])]
+        #[arg(long, value_name = "K/N", value_parser = parse_shard_arg, allow_hyphen_values = true, requires = "partial", conflicts_with_all = ["json", "html", "samples_out"])]
         shard: Option<(u64, u64)>,
         /// The shard's partial result file (with --shard).
         #[arg(long, value_name = "FILE", requires = "shard")]
@@ -169,7 +169,7 @@ enum Command {
         /// share of the base samples and of the Shapley permutations) and write them to
         /// --partial instead of a report; `rvtol merge` folds the N partials into the
         /// report, byte for byte this command's without --shard.
-        #[arg(long, value_name = "K/N", value_parser = parse_shard_arg, requires = "partial", conflicts_with_all = ["json", "html"])]
+        #[arg(long, value_name = "K/N", value_parser = parse_shard_arg, allow_hyphen_values = true, requires = "partial", conflicts_with_all = ["json", "html"])]
         shard: Option<(u64, u64)>,
         /// The shard's partial result file (with --shard).
         #[arg(long, value_name = "FILE", requires = "shard")]
@@ -625,12 +625,27 @@ impl Cli {
     }
 }
 
+/// What `rvtol` alone prints: a few lines, the commands and where their help is.
+fn short_usage() -> String {
+    format!(
+        "usage: rvtol <COMMAND> [ARGUMENTS]\ncommands: {}\n'rvtol --help' says what each does, 'rvtol <COMMAND> --help' its options",
+        Cli::command_names().join(", ")
+    )
+}
+
 fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(err) => {
             use clap::error::ErrorKind;
             return match err.kind() {
+                // `rvtol` alone: the commands and where to read more, not the whole help.
+                ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+                    if std::env::args_os().len() <= 1 =>
+                {
+                    output::note(&short_usage());
+                    ExitCode::from(2)
+                }
                 ErrorKind::DisplayHelp
                 | ErrorKind::DisplayVersion
                 | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {

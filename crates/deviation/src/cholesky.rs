@@ -10,7 +10,7 @@
 
 use nalgebra::{DMatrix, SymmetricEigen};
 
-use crate::error::DeviationError;
+use crate::error::{DeviationError, MatrixKind};
 
 /// The factor L of A = L·Lᵀ, stored row-major (n rows, `rank` columns), rows in the
 /// original variable order.
@@ -68,6 +68,7 @@ pub fn factorise_covariance(
     if residual > allowed {
         return Err(DeviationError::Indefinite {
             path: path.to_string(),
+            matrix: MatrixKind::Covariance,
             smallest_eigenvalue: (n <= EIGENVALUE_MESSAGE_LIMIT)
                 .then(|| smallest_eigenvalue(matrix)),
         });

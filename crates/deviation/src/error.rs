@@ -1,7 +1,7 @@
 //! Errors of the deviation model. Each names the JSON path of the offending value, as
 //! handed in by the caller, so that a user can find it in the scenario file.
 
-use crate::shown::Shown;
+use crate::shown::{Rounded, Shown};
 use thiserror::Error;
 
 /// A deviation specification that cannot be sampled.
@@ -39,15 +39,18 @@ pub enum DeviationError {
         /// Entry (col, row).
         lower: f64,
     },
-    /// A covariance (or correlation) matrix has a negative eigenvalue.
-    #[error("{path}: covariance is not positive semi-definite{}", match smallest_eigenvalue {
-        Some(value) => format!(" (smallest eigenvalue {value:e})"),
+    /// A covariance or correlation matrix has a negative eigenvalue.
+    #[error("{path}: {matrix} is not positive semi-definite{}", match smallest_eigenvalue {
+        Some(value) => format!(" (smallest eigenvalue {})", Rounded(*value)),
         None => String::new(),
     })]
     Indefinite {
         /// JSON path of the matrix.
         path: String,
-        /// Its smallest eigenvalue, when the matrix is small enough to compute it.
+        /// What the user wrote: a covariance or correlations.
+        matrix: MatrixKind,
+        /// Its smallest eigenvalue (of the correlation matrix for correlations), when the
+        /// matrix is small enough to compute it.
         smallest_eigenvalue: Option<f64>,
     },
     /// Any other invalid value, with the reason.
@@ -58,6 +61,24 @@ pub enum DeviationError {
         /// What is wrong.
         reason: String,
     },
+}
+
+/// The kind of matrix a definiteness message names: the one the scenario gives.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MatrixKind {
+    /// A covariance matrix.
+    Covariance,
+    /// A correlation matrix, or correlations between columns.
+    Correlation,
+}
+
+impl std::fmt::Display for MatrixKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            MatrixKind::Covariance => "covariance",
+            MatrixKind::Correlation => "correlation",
+        })
+    }
 }
 
 impl DeviationError {

@@ -31,9 +31,9 @@ use std::collections::{BTreeMap, BTreeSet};
 use nalgebra::{DMatrix, DVector};
 use rand::{Rng, SeedableRng};
 
-use crate::cholesky::{factorise_covariance, pivoted_cholesky};
+use crate::cholesky::{factorise_covariance, pivoted_cholesky, smallest_eigenvalue};
 use crate::constraint::{LinearInequality, TiltConstraint};
-use crate::error::DeviationError;
+use crate::error::{DeviationError, MatrixKind};
 use crate::normal::{Ziggurat, ZigguratScratch};
 use crate::part::PartSpec;
 use crate::scalar::ScalarDistribution;
@@ -355,17 +355,22 @@ impl InputSpaceBuilder {
             let factor = match &matrix {
                 Some(sub) => {
                     factorise_covariance(correlations_path, sub).map_err(|err| match err {
+                        // The user wrote correlations: the message names them, with the
+                        // smallest eigenvalue of the joint correlation matrix (a covariance
+                        // scaled by its standard deviations keeps its signs of eigenvalues).
                         DeviationError::Indefinite {
-                            smallest_eigenvalue,
+                            smallest_eigenvalue: computed,
                             ..
                         } => DeviationError::Indefinite {
                             path: format!(
-                                "{correlations_path} (joint covariance of {})",
+                                "{correlations_path} (joint correlation of {})",
                                 joint_labels(
                                     members.iter().map(|&g| self.gaussian[g].label.as_str())
                                 )
                             ),
-                            smallest_eigenvalue,
+                            matrix: MatrixKind::Correlation,
+                            smallest_eigenvalue: computed
+                                .map(|_| smallest_eigenvalue(&correlation_of(sub))),
                         },
                         other => other,
                     })?
@@ -412,6 +417,21 @@ impl InputSpaceBuilder {
         space.quasi = quasi::QuasiLayout::new(&space);
         Ok(space)
     }
+}
+
+/// The correlation matrix of a covariance: each entry over the standard deviations of its
+/// row and column (a column of zero variance keeps its zero row and column).
+fn correlation_of(covariance: &DMatrix<f64>) -> DMatrix<f64> {
+    let sd: Vec<f64> = (0..covariance.nrows())
+        .map(|i| covariance[(i, i)].max(0.0).sqrt())
+        .collect();
+    DMatrix::from_fn(covariance.nrows(), covariance.ncols(), |i, j| {
+        if sd[i] > 0.0 && sd[j] > 0.0 {
+            covariance[(i, j)] / (sd[i] * sd[j])
+        } else {
+            0.0
+        }
+    })
 }
 
 /// The labels of a correlated group for a message: all of them up to 8, else the first
@@ -1361,8 +1381,10 @@ mod tests {
             DeviationError::Indefinite {
                 path,
                 smallest_eigenvalue,
+                matrix,
             } => {
-                assert!(path.starts_with("correlations (joint covariance of variables[0]"));
+                assert_eq!(matrix, MatrixKind::Correlation);
+                assert!(path.starts_with("correlations (joint correlation of variables[0]"));
                 assert!(path.ends_with(&format!("and {} more)", n - 8)), "{path}");
                 assert_eq!(smallest_eigenvalue, None);
             }
@@ -1419,8 +1441,10 @@ mod tests {
             DeviationError::Indefinite {
                 path,
                 smallest_eigenvalue,
+                matrix,
             } => {
-                assert!(path.starts_with("correlations (joint covariance of variables[0]"));
+                assert_eq!(matrix, MatrixKind::Correlation);
+                assert!(path.starts_with("correlations (joint correlation of variables[0]"));
                 assert!((smallest_eigenvalue.unwrap() - (1.0 - 1.8)).abs() < 1e-12);
             }
             other => panic!("expected Indefinite, got {other}"),

@@ -22,7 +22,7 @@ use nalgebra::DMatrix;
 
 use crate::cholesky::smallest_eigenvalue;
 use crate::constraint::TiltConstraint;
-use crate::error::DeviationError;
+use crate::error::{DeviationError, MatrixKind};
 
 /// Names of the six components, in order, as used in scenario bindings
 /// (`"input_shaft.du"`), with their units.
@@ -105,7 +105,7 @@ impl PartSpec {
             }
         }
         let matrix = DMatrix::from_fn(6, 6, |i, j| correlation[i][j]);
-        check_covariance(&corr_path, &matrix)?;
+        check_matrix(&corr_path, &matrix, MatrixKind::Correlation)?;
         let mut covariance = [[0.0; 6]; 6];
         for i in 0..6 {
             for j in 0..6 {
@@ -176,6 +176,11 @@ impl PartSpec {
 /// the matrix's largest diagonal; definiteness allows a smallest eigenvalue down to
 /// −1e-12 · (largest diagonal), i.e. rounding only.
 pub fn check_covariance(path: &str, matrix: &DMatrix<f64>) -> Result<(), DeviationError> {
+    check_matrix(path, matrix, MatrixKind::Covariance)
+}
+
+/// [`check_covariance`] of a matrix the scenario gives as `kind`, which its message names.
+fn check_matrix(path: &str, matrix: &DMatrix<f64>, kind: MatrixKind) -> Result<(), DeviationError> {
     let n = matrix.nrows();
     for i in 0..n {
         for j in 0..n {
@@ -208,6 +213,7 @@ pub fn check_covariance(path: &str, matrix: &DMatrix<f64>) -> Result<(), Deviati
     if smallest < -1e-12 * scale.max(f64::MIN_POSITIVE) {
         return Err(DeviationError::Indefinite {
             path: path.to_string(),
+            matrix: kind,
             smallest_eigenvalue: Some(smallest),
         });
     }
@@ -260,7 +266,9 @@ mod tests {
             DeviationError::Indefinite {
                 path,
                 smallest_eigenvalue,
+                matrix,
             } => {
+                assert_eq!(matrix, MatrixKind::Covariance);
                 assert_eq!(path, "parts[0].covariance");
                 assert!((smallest_eigenvalue.unwrap() + 1.0).abs() < 1e-12);
             }

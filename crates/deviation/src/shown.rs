@@ -24,6 +24,24 @@ impl fmt::Display for Shown {
     }
 }
 
+/// A number rvtol computed, shown in a message to four significant digits in the form of
+/// [`Shown`] (`5.021`, `7.692e299`, `-0.4562`): a value the user wrote is shown as written
+/// ([`Shown`]); one derived from it carries no more digits than a person reads.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Rounded(pub f64);
+
+impl fmt::Display for Rounded {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let x = self.0;
+        if !x.is_finite() || x == 0.0 {
+            return Shown(x).fmt(f);
+        }
+        // Four significant digits in exponent form read back as the rounded value.
+        let rounded: f64 = format!("{x:.3e}").parse().unwrap_or(x);
+        Shown(rounded).fmt(f)
+    }
+}
+
 /// A byte count with a decimal unit: `512 B`, `3.2 GB`.
 pub fn human_bytes(bytes: f64) -> String {
     const UNITS: [&str; 7] = ["B", "kB", "MB", "GB", "TB", "PB", "EB"];
@@ -83,6 +101,18 @@ mod tests {
         assert_eq!(Shown(1234567.0).to_string(), "1.234567e6");
         assert_eq!(Shown(f64::NAN).to_string(), "NaN");
         assert_eq!(Shown(f64::NEG_INFINITY).to_string(), "-inf");
+    }
+
+    #[test]
+    fn computed_numbers_have_four_significant_digits() {
+        assert_eq!(Rounded(5.021382126582076).to_string(), "5.021");
+        assert_eq!(Rounded(7.692307692307693e299).to_string(), "7.692e299");
+        assert_eq!(Rounded(-0.4562305898749055).to_string(), "-0.4562");
+        assert_eq!(Rounded(-1.2877736398384065e-5).to_string(), "-1.288e-5");
+        assert_eq!(Rounded(10.5).to_string(), "10.5");
+        assert_eq!(Rounded(123456.7).to_string(), "123500");
+        assert_eq!(Rounded(0.0).to_string(), "0");
+        assert_eq!(Rounded(f64::INFINITY).to_string(), "inf");
     }
 
     #[test]

@@ -143,12 +143,18 @@ pub fn read_text(path: &Path, limit: &ReadLimit) -> Result<String, String> {
 /// The text of standard input, at most `limit.bytes`; one line naming standard input
 /// otherwise.
 pub fn read_standard_input(limit: &ReadLimit) -> Result<String, String> {
+    text_of(read_standard_input_bytes(limit)?, "standard input")
+}
+
+/// The bytes of standard input, at most `limit.bytes`; one line naming standard input
+/// otherwise.
+pub fn read_standard_input_bytes(limit: &ReadLimit) -> Result<Vec<u8>, String> {
     let shown = Path::new("standard input");
     let stdin = std::io::stdin().lock();
     match read_within(stdin, limit.bytes, None)
         .map_err(|err| format!("standard input: cannot read: {err}"))?
     {
-        Ok(bytes) => text_of(bytes, "standard input"),
+        Ok(bytes) => Ok(bytes),
         Err(read) => Err(limit.refusal(shown, read, true)),
     }
 }

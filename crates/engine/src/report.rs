@@ -1077,6 +1077,27 @@ pub fn format_sig(x: f64) -> String {
     format!("{x:.decimals$}")
 }
 
+/// The change a ratio `factor` (new / old) makes, as a signed percentage (`+100.0 %`,
+/// `-12.5 %`; `+1.0000e8 %` beyond a million percent); a factor too large for its
+/// percentage to be a number reads as the factor (`×1.0000e308`), and one that is no
+/// number as `n/a`: a table never shows `inf %`.
+pub fn format_change(factor: f64) -> String {
+    let percent = (factor - 1.0) * 100.0;
+    if !factor.is_finite() {
+        "n/a".into()
+    } else if !percent.is_finite() {
+        format!("×{}", format_sig(factor))
+    } else if percent.abs() < 1e6 {
+        format!("{percent:+.1} %")
+    } else {
+        format!(
+            "{}{} %",
+            if percent > 0.0 { "+" } else { "" },
+            format_sig(percent)
+        )
+    }
+}
+
 /// A ppm figure for the text report: [`format_sig`], except that a whole million (every
 /// sample out of spec) stays a plain number beside its neighbours (`1000000`, not
 /// `1.0000e6`).

@@ -29,7 +29,10 @@ pub use rvtol_deviation::index_list;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
+use std::collections::BTreeMap;
 use std::ops::Range;
+
+use crate::report::group_thousands;
 
 use crate::run::{
     shard_range, Distribution, OutputAccumulator, PercentileMethod, RunPartial, RunSettings,
@@ -223,7 +226,12 @@ pub struct ShardFile {
     pub digest: [u8; 32],
 }
 
-/// Parses `K/N` (0 ≤ K < N): a shard's index and the shard count.
+/// Most shards of one run or analysis: a job array's largest size in practice (a
+/// Kubernetes Indexed Job takes up to 100,000 completions), far beyond what any run needs
+/// (a shard of one chunk each is already 4,096 samples per job).
+pub const MAX_SHARDS: u64 = 100_000;
+
+/// Parses `K/N` (0 ≤ K < N ≤ [`MAX_SHARDS`]): a shard's index and the shard count.
 pub fn parse_shard(text: &str) -> Result<(u64, u64), String> {
     let usage = || format!("'{text}' is not K/N with 0 <= K < N (shard K of N, counted from 0)");
     let (k, n) = text.split_once('/').ok_or_else(usage)?;
@@ -231,6 +239,12 @@ pub fn parse_shard(text: &str) -> Result<(u64, u64), String> {
         k.trim().parse().map_err(|_| usage())?,
         n.trim().parse().map_err(|_| usage())?,
     );
+    if n > MAX_SHARDS {
+        return Err(format!(
+            "N must be at most {} shards",
+            group_thousands(MAX_SHARDS)
+        ));
+    }
     if k >= n {
         return Err(usage());
     }
@@ -434,7 +448,11 @@ pub fn decode(bytes: &[u8]) -> Result<ShardFile, String> {
     header.command.sampling()?;
     let [first, end] = header.chunks;
     let content = match input.u8()? {
-        0 => ShardContent::Run(read_run(&mut input, first..end)?),
+        0 => {
+            let partial = read_run(&mut input, first..end)?;
+            check_run_statistics(&header.command, &partial).map_err(|what| damaged(&what))?;
+            ShardContent::Run(partial)
+        }
         1 => {
             let sobol = read_sobol(&mut input, first..end)?;
             let shapley = match input.u8()? {
@@ -467,6 +485,234 @@ pub fn decode(bytes: &[u8]) -> Result<ShardFile, String> {
 
 fn damaged(what: &str) -> String {
     format!("damaged: {what}")
+}
+
+/// Checks what a run's statistics are whatever produced them, so that a file whose checksum
+/// was recomputed over impossible numbers is refused by name rather than merged into a
+/// report: its chunks within the run and each once, in order; per chunk and output, no
+/// more values than the chunk's rows and, where there are values, finite moments with
+/// non-negative even sums and min ≤ max (none: the empty summary); per replicate and
+/// output, the finite, non-finite and excluded samples adding up to its rows, every other
+/// count within them, and no NaN among the values kept. The error says what is wrong.
+fn check_run_statistics(command: &ShardCommand, partial: &RunPartial) -> Result<(), String> {
+    let sampling = command.sampling()?;
+    let samples = command.samples();
+    let chunk_count = sampling.chunk_count(samples);
+    let chunks = &partial.chunks;
+    if chunks.start > chunks.end || chunks.end > chunk_count {
+        return Err(format!(
+            "chunks {}..{} of a run of {chunk_count} chunks",
+            chunks.start, chunks.end
+        ));
+    }
+    if let PercentileMethod::Sketch { relative_accuracy } = partial.percentile_method {
+        if !(relative_accuracy > 0.0 && relative_accuracy < 1.0) {
+            return Err(format!(
+                "a sketch's relative accuracy of {}",
+                rvtol_deviation::Shown(relative_accuracy)
+            ));
+        }
+    }
+    for (group, &(candidates, accepted)) in partial.constraint_counts.groups.iter().enumerate() {
+        if accepted > candidates {
+            return Err(format!(
+                "constraint group {group}: {accepted} rows accepted of {candidates} candidates"
+            ));
+        }
+    }
+    // Rows and finite values (per output) of each replicate the chunks belong to.
+    let mut tally: BTreeMap<u64, (u128, Vec<u128>)> = BTreeMap::new();
+    let outputs = partial
+        .chunk_moments
+        .first()
+        .map(|(_, moments)| moments.len());
+    for (position, (chunk, moments)) in partial.chunk_moments.iter().enumerate() {
+        let expected = chunks.start + position as u64;
+        if *chunk != expected {
+            let seen = partial.chunk_moments[..position]
+                .iter()
+                .any(|(c, _)| c == chunk);
+            return Err(if seen {
+                format!("chunk {chunk} appears twice")
+            } else {
+                format!("chunk {chunk} where chunk {expected} belongs")
+            });
+        }
+        if Some(moments.len()) != outputs {
+            return Err(format!(
+                "chunk {chunk} has {} outputs, chunk {} {}",
+                moments.len(),
+                chunks.start,
+                outputs.unwrap_or(0)
+            ));
+        }
+        let (replicate, _, _, rows) = sampling.chunk_rows(samples, *chunk);
+        let (replicate_rows, finite) = tally
+            .entry(replicate)
+            .or_insert_with(|| (0, vec![0; moments.len()]));
+        *replicate_rows += rows as u128;
+        for (output, (m, finite)) in moments.iter().zip(finite.iter_mut()).enumerate() {
+            check_moments(m, rows as u64)
+                .map_err(|what| format!("chunk {chunk}, output {output}: {what}"))?;
+            *finite += m.n as u128;
+        }
+    }
+    if partial.chunk_moments.len() as u64 != chunks.end - chunks.start {
+        return Err(format!(
+            "moments of {} chunks for chunks {}..{}",
+            partial.chunk_moments.len(),
+            chunks.start,
+            chunks.end
+        ));
+    }
+    let present: Vec<u64> = partial.replicates.iter().map(|(r, _)| *r).collect();
+    let expected: Vec<u64> = tally.keys().copied().collect();
+    if present != expected {
+        return Err(format!(
+            "counts of replicates {} for chunks of replicates {}",
+            index_list(&present),
+            index_list(&expected)
+        ));
+    }
+    for (replicate, accumulators) in &partial.replicates {
+        let (rows, finite) = &tally[replicate];
+        if accumulators.len() != finite.len() {
+            return Err(format!(
+                "replicate {replicate} counts {} outputs, the chunks {}",
+                accumulators.len(),
+                finite.len()
+            ));
+        }
+        for (output, (acc, &finite)) in accumulators.iter().zip(finite).enumerate() {
+            check_counts(acc, *rows, finite, samples)
+                .map_err(|what| format!("replicate {replicate}, output {output}: {what}"))?;
+        }
+    }
+    Ok(())
+}
+
+/// One chunk's moments of one output, of a chunk of `rows` rows.
+fn check_moments(m: &Moments, rows: u64) -> Result<(), String> {
+    if m.n > rows {
+        return Err(format!(
+            "n = {} values in a chunk of {rows} rows",
+            group_thousands(m.n)
+        ));
+    }
+    if m.n == 0 {
+        return if *m == Moments::new() {
+            Ok(())
+        } else {
+            Err("moments of no values".into())
+        };
+    }
+    for (name, value) in [
+        ("mean", m.mean),
+        ("m2", m.m2),
+        ("m3", m.m3),
+        ("m4", m.m4),
+        ("min", m.min),
+        ("max", m.max),
+    ] {
+        if !value.is_finite() {
+            return Err(format!(
+                "its {name} is {} (n = {})",
+                rvtol_deviation::Shown(value),
+                m.n
+            ));
+        }
+    }
+    if m.m2 < 0.0 || m.m4 < 0.0 {
+        return Err("a negative sum of even powers".into());
+    }
+    if m.min > m.max {
+        return Err(format!(
+            "min {} above max {}",
+            rvtol_deviation::Shown(m.min),
+            rvtol_deviation::Shown(m.max)
+        ));
+    }
+    Ok(())
+}
+
+/// One replicate's counts of one output over `rows` rows, `finite` of them finite values
+/// (per the chunks' moments), in a run of `samples` samples.
+fn check_counts(
+    acc: &OutputAccumulator,
+    rows: u128,
+    finite: u128,
+    samples: u64,
+) -> Result<(), String> {
+    let wide = |count: u64| count as u128;
+    let indicator = matches!(acc.distribution, Distribution::Indicator);
+    if indicator {
+        if finite != 0 || wide(acc.non_finite) + wide(acc.nonzero) > rows {
+            return Err(format!(
+                "{} events and {} non-finite samples in {rows} rows",
+                acc.nonzero, acc.non_finite
+            ));
+        }
+    } else if finite + wide(acc.non_finite) + wide(acc.excluded) != rows {
+        return Err(format!(
+            "{finite} finite, {} non-finite and {} excluded samples in {rows} rows",
+            acc.non_finite, acc.excluded
+        ));
+    }
+    if wide(acc.below_lower) + wide(acc.above_upper) > finite
+        || acc.flagged_within_spec > acc.flagged
+        || wide(acc.flagged) > rows
+    {
+        return Err(format!(
+            "{} below and {} above the limits, {} flagged ({} within the limits) of {finite} finite values in {rows} rows",
+            acc.below_lower, acc.above_upper, acc.flagged, acc.flagged_within_spec
+        ));
+    }
+    match acc.first_non_finite {
+        Some(first) if acc.non_finite == 0 || first >= samples => {
+            return Err(format!(
+                "a first non-finite sample {first} of {} non-finite in {samples} samples",
+                acc.non_finite
+            ));
+        }
+        None if acc.non_finite > 0 => {
+            return Err(format!(
+                "{} non-finite samples without the first",
+                acc.non_finite
+            ));
+        }
+        _ => {}
+    }
+    match &acc.distribution {
+        Distribution::Values(values) => {
+            if values.len() as u128 != finite {
+                return Err(format!("{} values kept of {finite} finite", values.len()));
+            }
+            if let Some(position) = values.iter().position(|v| v.is_nan()) {
+                return Err(format!("value {position} is NaN"));
+            }
+        }
+        Distribution::Sketch {
+            sketch,
+            center,
+            scale,
+        } => {
+            if !(center.is_finite() && scale.is_finite() && *scale > 0.0) {
+                return Err(format!(
+                    "a sketch centred at {} with scale {}",
+                    rvtol_deviation::Shown(*center),
+                    rvtol_deviation::Shown(*scale)
+                ));
+            }
+            if wide(sketch.count()) > finite {
+                return Err(format!(
+                    "a sketch of {} values of {finite} finite",
+                    sketch.count()
+                ));
+            }
+        }
+        Distribution::Indicator | Distribution::Dropped => {}
+    }
+    Ok(())
 }
 
 fn read_run(input: &mut Reader, chunks: Range<u64>) -> Result<RunPartial, String> {
@@ -665,8 +911,19 @@ pub struct Assembly {
     pub header: ShardHeader,
     /// One file per shard present, by shard index.
     pub shards: Vec<ShardFile>,
-    /// Shard indices with no file.
-    pub missing: Vec<u64>,
+    /// Shard indices with no file, as increasing ranges (worked out from the files present:
+    /// nothing is held per declared shard).
+    pub missing: Vec<Range<u64>>,
+}
+
+impl Assembly {
+    /// How many shards have no file.
+    pub fn missing_count(&self) -> u64 {
+        self.missing
+            .iter()
+            .map(|range| range.end - range.start)
+            .sum()
+    }
 }
 
 /// Checks shard files (each with the name to quote) for one run or analysis computed by
@@ -679,7 +936,9 @@ pub fn assemble(files: Vec<(String, ShardFile)>, build: &str) -> Result<Assembly
         return Err("no shard files given".into());
     };
     let run = first.header.clone();
-    let mut slots: Vec<Option<(String, ShardFile)>> = Vec::new();
+    // By shard index, the files given only: a shard count is checked against MAX_SHARDS,
+    // but nothing here is held per declared shard.
+    let mut slots: BTreeMap<u64, (String, ShardFile)> = BTreeMap::new();
     for (name, file) in std::iter::once((first_name.clone(), first)).chain(files) {
         let h = &file.header;
         let differs = |what: &str, details: String| {
@@ -720,17 +979,21 @@ pub fn assemble(files: Vec<(String, ShardFile)>, build: &str) -> Result<Assembly
                 format!("{} against {}", h.shards, run.shards),
             );
         }
+        if h.shards > MAX_SHARDS {
+            return Err(format!(
+                "{name}: damaged: {} shards, more than the {} a run may have",
+                group_thousands(h.shards),
+                group_thousands(MAX_SHARDS)
+            ));
+        }
         if h.shard >= h.shards || !covers_its_ranges(&file) {
             return Err(format!(
                 "{name}: damaged: shard {}/{} does not cover what that shard computes",
                 h.shard, h.shards
             ));
         }
-        let k = h.shard as usize;
-        if slots.len() < h.shards as usize {
-            slots.resize_with(h.shards as usize, || None);
-        }
-        match &slots[k] {
+        let k = h.shard;
+        match slots.get(&k) {
             Some((other, earlier)) if earlier.digest != file.digest => {
                 return Err(format!(
                     "{name}: shard {k}/{} is also in {other} with different content: keep one of them",
@@ -738,20 +1001,40 @@ pub fn assemble(files: Vec<(String, ShardFile)>, build: &str) -> Result<Assembly
                 ));
             }
             Some(_) => {}
-            None => slots[k] = Some((name, file)),
+            None => {
+                slots.insert(k, (name, file));
+            }
         }
     }
-    let missing = slots
-        .iter()
-        .enumerate()
-        .filter(|(_, slot)| slot.is_none())
-        .map(|(k, _)| k as u64)
-        .collect();
+    // The gaps between the shards present, and after the last one.
+    let mut missing = Vec::new();
+    let mut next = 0;
+    for &k in slots.keys().chain(std::iter::once(&run.shards)) {
+        if k > next {
+            missing.push(next..k);
+        }
+        next = k + 1;
+    }
     Ok(Assembly {
         header: run,
-        shards: slots.into_iter().flatten().map(|(_, file)| file).collect(),
+        shards: slots.into_values().map(|(_, file)| file).collect(),
         missing,
     })
+}
+
+/// Ranges of indices as a person (and Slurm's `--array`) writes them: `0,2-5,9` (a range of
+/// three or more as `a-b`, as [`index_list`] writes its indices).
+pub fn range_list(ranges: &[Range<u64>]) -> String {
+    let mut parts = Vec::new();
+    for range in ranges.iter().filter(|range| range.end > range.start) {
+        let last = range.end - 1;
+        match last - range.start {
+            0 => parts.push(range.start.to_string()),
+            1 => parts.push(format!("{},{last}", range.start)),
+            _ => parts.push(format!("{}-{last}", range.start)),
+        }
+    }
+    parts.join(",")
 }
 
 /// The settings of a command as the refusal quotes them.
@@ -889,6 +1172,75 @@ mod tests {
         assert!(parse_shard("4/4").is_err());
         assert!(parse_shard("1").is_err());
         assert!(parse_shard("-1/4").is_err());
+        assert_eq!(parse_shard("99999/100000"), Ok((99_999, 100_000)));
+        for beyond in ["0/100001", "0/18446744073709551615"] {
+            assert!(
+                parse_shard(beyond)
+                    .unwrap_err()
+                    .ends_with("N must be at most 100,000 shards"),
+                "{beyond}"
+            );
+        }
+    }
+
+    /// Shard `shard` of `shards` of a run of one sample (one chunk, in the last shard): a
+    /// shard with no chunk unless it is the last.
+    fn shard_of_one_sample(shard: u64, shards: u64) -> ShardFile {
+        let command = ShardCommand::Run {
+            samples: 1,
+            seed: 1,
+            exact_percentile_limit: 1,
+            sampling: "mc".into(),
+            replicates: 1,
+        };
+        let chunks = shard_range(command.chunk_count(), shard, shards);
+        assert!(chunks.is_empty());
+        ShardFile {
+            header: ShardHeader {
+                rvtol_version: "test".into(),
+                build: "test".into(),
+                scenario_fallback_name: "test".into(),
+                scenario_file: String::new(),
+                command,
+                shard,
+                shards,
+                chunks: [chunks.start, chunks.end],
+            },
+            content: ShardContent::Run(RunPartial {
+                chunks,
+                percentile_method: PercentileMethod::Exact,
+                constraint_counts: ConstraintCounts { groups: Vec::new() },
+                chunk_moments: Vec::new(),
+                replicates: Vec::new(),
+            }),
+            digest: [shard as u8; 32],
+        }
+    }
+
+    #[test]
+    fn missing_shards_are_the_ranges_the_files_leave_out() {
+        let files = vec![
+            ("seven".to_string(), shard_of_one_sample(7, MAX_SHARDS)),
+            ("five".to_string(), shard_of_one_sample(5, MAX_SHARDS)),
+        ];
+        let assembly = assemble(files, "test").unwrap();
+        assert_eq!(assembly.missing, vec![0..5, 6..7, 8..MAX_SHARDS]);
+        assert_eq!(assembly.missing_count(), MAX_SHARDS - 2);
+        assert_eq!(range_list(&assembly.missing), "0-4,6,8-99999");
+        assert_eq!(range_list(&[0..2, 3..4, 9..12]), "0,1,3,9-11");
+        assert_eq!(range_list(&[]), "");
+        // A file declaring more shards than a run may have is refused, whatever it holds.
+        for shards in [MAX_SHARDS + 1, u64::MAX] {
+            let err = assemble(
+                vec![("huge".to_string(), shard_of_one_sample(0, shards))],
+                "test",
+            )
+            .unwrap_err();
+            assert!(
+                err.starts_with("huge: damaged: ") && err.contains("more than the 100,000"),
+                "{err}"
+            );
+        }
     }
 
     #[test]

@@ -47,7 +47,9 @@ impl<'a> CsvTable<'a> {
             .map(|heading| match heading.rsplit_once(" [") {
                 Some((name, unit)) if unit.ends_with(']') => (
                     name.to_string(),
-                    Some(unit.trim_end_matches(']').to_string()),
+                    Some(crate::scenario::units::canonical(
+                        unit.trim_end_matches(']'),
+                    )),
                 ),
                 _ => (heading.to_string(), None),
             })

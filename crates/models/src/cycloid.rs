@@ -5,7 +5,7 @@
 //! place both the contact and the transmission-error model take them from.
 
 use crate::{ModelError, ModelParams};
-use rvtol_deviation::Shown;
+use rvtol_deviation::{Rounded, Shown};
 
 /// A checked cycloid–pin stage.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -56,7 +56,7 @@ impl CycloidStage {
                 "eccentricity_mm",
                 format!(
                     "K1 = e·z_p/r_p = {} must be below 1 (a curtate cycloid)",
-                    stage.k1()
+                    Rounded(stage.k1())
                 ),
             ));
         }
@@ -80,7 +80,7 @@ impl CycloidStage {
                     Shown(pin_radius),
                     Shown(self.pin_circle_radius),
                     self.pins,
-                    Shown(gap_limit)
+                    Rounded(gap_limit)
                 ),
             ));
         }

@@ -84,7 +84,7 @@
 //! `pin_class` reports the class fitted (0 = smallest pins), so the report's histogram of
 //! it is the class usage. K = 1 is no fitting: c_0 = 0 and d = δr_rp.
 
-use rvtol_deviation::{point_displacement, Shown};
+use rvtol_deviation::{point_displacement, Rounded, Shown};
 
 use crate::{
     ConditionEffect, ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputCondition,
@@ -435,7 +435,7 @@ impl GeometricHysteresis {
                 "eccentricity_mm",
                 format!(
                     "e·z_p/r_p = {} disagrees with curtate_ratio K1 = {} by more than {} %: the eccentricity, pin count and pin-circle radius do not make one stage",
-                    Shown(geometric_k1),
+                    Rounded(geometric_k1),
                     Shown(curtate_ratio),
                     100.0 * CURTATE_RATIO_AGREEMENT
                 ),

@@ -111,7 +111,10 @@ impl ModelParams {
     pub fn flag(&self, key: &str, default: bool) -> Result<bool, ModelError> {
         let value = self.number(key, Some(if default { 1.0 } else { 0.0 }))?;
         if value != 0.0 && value != 1.0 {
-            return Err(ModelError::new(key, format!("must be 0 or 1, got {value}")));
+            return Err(ModelError::new(
+                key,
+                format!("must be 0 or 1, got {}", Shown(value)),
+            ));
         }
         Ok(value == 1.0)
     }
@@ -124,7 +127,7 @@ impl ModelParams {
         } else {
             Err(ModelError::new(
                 key,
-                format!("must be a positive whole number, got {value}"),
+                format!("must be a positive whole number, got {}", Shown(value)),
             ))
         }
     }

@@ -23,6 +23,7 @@ use crate::{
     ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputKind, OutputSpec, ParamSpec,
     ParamValue,
 };
+use rvtol_deviation::Shown;
 
 /// The Ishigami function.
 #[derive(Debug, Clone)]
@@ -160,7 +161,7 @@ impl SobolG {
             if !(a.is_finite() && *a >= 0.0) {
                 return Err(ModelError::new(
                     format!("coefficients.{name}"),
-                    format!("must be a finite number ≥ 0, got {a}"),
+                    format!("must be a finite number ≥ 0, got {}", Shown(*a)),
                 ));
             }
             coefficients.push(*a);

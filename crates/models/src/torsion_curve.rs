@@ -89,6 +89,7 @@ use crate::{
     Curve, CurveStyle, ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputKind,
     OutputSpec, ParamSpec, Series, ARCMIN_PER_RAD,
 };
+use rvtol_deviation::{Rounded, Shown};
 
 /// Inputs of 000 (`geometric_hysteresis`), in its order, come first.
 const HYSTERESIS_INPUTS: usize = 18;
@@ -565,7 +566,11 @@ impl TorsionCurve {
         if spacing >= span {
             return Err(ModelError::new(
                 "crank_eccentric_spacing_mm",
-                format!("must be below crank_support_span_mm ({span}), got {spacing}"),
+                format!(
+                    "must be below crank_support_span_mm ({}), got {}",
+                    Shown(span),
+                    Shown(spacing)
+                ),
             ));
         }
         let shaft = CrankShaft::new(journal_diameter, span, spacing, youngs, poisson);
@@ -573,7 +578,7 @@ impl TorsionCurve {
         if !(0.0..45.0).contains(&contact_angle) {
             return Err(ModelError::new(
                 "support_contact_angle_deg",
-                format!("must lie in [0, 45), got {contact_angle}"),
+                format!("must lie in [0, 45), got {}", Shown(contact_angle)),
             ));
         }
         let support = RollerRow {
@@ -610,7 +615,7 @@ impl TorsionCurve {
             } else {
                 Err(ModelError::new(
                     key,
-                    format!("must lie in [0, 0.5), got {value}"),
+                    format!("must lie in [0, 0.5), got {}", Shown(value)),
                 ))
             }
         };
@@ -629,7 +634,9 @@ impl TorsionCurve {
             return Err(ModelError::new(
                 "needle_roller_diameter_mm",
                 format!(
-                    "the disc's bore (crank_journal_diameter_mm/2 + needle_roller_diameter_mm = {bore_radius} mm) must lie inside the pin circle, {rim_distance} mm beyond the crank circle"
+                    "the disc's bore (crank_journal_diameter_mm/2 + needle_roller_diameter_mm = {} mm) must lie inside the pin circle, {} mm beyond the crank circle",
+                    Rounded(bore_radius),
+                    Rounded(rim_distance)
                 ),
             ));
         }

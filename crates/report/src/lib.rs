@@ -754,7 +754,11 @@ fn allocation_section(report: &Value) -> Result<String, ReportError> {
         .map(|v| BarRow {
             name: s(v, "source").unwrap_or("?").to_string(),
             values: vec![(
-                f(v, "factor").map_or(f64::NAN, |factor| (factor - 1.0) * 100.0),
+                // A change too large to draw (a factor of 1e308) is left out, as a missing one.
+                f(v, "factor")
+                    .map(|factor| (factor - 1.0) * 100.0)
+                    .filter(|change| change.is_finite())
+                    .unwrap_or(f64::NAN),
                 None,
             )],
         })
@@ -841,11 +845,7 @@ fn allocation_section(report: &Value) -> Result<String, ReportError> {
             escape(s(v, "unit").unwrap_or("")),
             number(f(v, "current")),
             number(f(v, "proposed")),
-            format!(
-                "{:+.1} %",
-                f(v, "factor").map_or(f64::NAN, |x| (x - 1.0) * 100.0)
-            )
-            .replace("NaN", "n/a"),
+            rvtol_engine::report::format_change(f(v, "factor").unwrap_or(f64::NAN)),
             format!("{} .. {}", number(lo), number(hi)),
             number(f(v, "current_cost")),
             number(f(v, "proposed_cost")),

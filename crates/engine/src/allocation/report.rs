@@ -5,7 +5,7 @@
 use serde::Serialize;
 
 use super::{Allocation, Evaluation, MARGIN_Z};
-use crate::report::format_sig;
+use crate::report::{format_change, format_sig};
 
 /// One source's row.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -307,7 +307,7 @@ impl AllocationReport {
                 unit(&s.unit),
                 format_sig(s.current),
                 format_sig(s.proposed),
-                format!("{:+.1} %", (s.factor - 1.0) * 100.0),
+                format_change(s.factor),
                 format!("{} .. {}", format_sig(s.bounds[0]), format_sig(s.bounds[1])),
                 s.current_cost.map_or("n/a".into(), format_sig),
                 format_sig(s.proposed_cost),
@@ -345,10 +345,7 @@ impl AllocationReport {
             format_sig(self.proposed_cost)
         ));
         if let Some(now) = self.current_cost {
-            out.push_str(&format!(
-                " ({:+.1} %)",
-                (self.proposed_cost / now - 1.0) * 100.0
-            ));
+            out.push_str(&format!(" ({})", format_change(self.proposed_cost / now)));
         }
         out.push('\n');
         if !self.levers.is_empty() {

@@ -87,11 +87,11 @@ pub(super) struct PartFile {
 #[serde(deny_unknown_fields)]
 pub(super) struct PartUnitsFile {
     /// Unit of du, dv, dw: a length (`mm`, `µm`, `um`, `m`).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "unit_name")]
     pub(super) translation: Option<String>,
     /// Unit of dalpha, dbeta, dgamma: an angle (`rad`, `mrad`, `µrad`, `urad`, `deg`,
     /// `arcmin`, `arcsec`).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "unit_name")]
     pub(super) rotation: Option<String>,
 }
 
@@ -108,7 +108,7 @@ pub(super) struct ToleranceBandFile {
 #[serde(deny_unknown_fields)]
 pub(super) struct VariableFile {
     pub(super) name: String,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "unit_name")]
     pub(super) unit: Option<String>,
     /// Documentation for the reader of the file; not used by the run.
     #[serde(default)]
@@ -119,6 +119,13 @@ pub(super) struct VariableFile {
     #[serde(default)]
     pub(super) count: Option<u64>,
     pub(super) distribution: DistributionFile,
+}
+
+/// A unit as written, with the Greek letter mu read as the micro sign
+/// ([`super::units::canonical`]).
+fn unit_name<'de, D: Deserializer<'de>>(deserializer: D) -> Result<Option<String>, D::Error> {
+    let unit: Option<String> = Deserialize::deserialize(deserializer)?;
+    Ok(unit.map(|unit| super::units::canonical(&unit)))
 }
 
 /// Largest number of members of a variable array (`variables[i].count`).

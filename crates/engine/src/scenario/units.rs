@@ -26,6 +26,18 @@ const UNITS: &[(&str, &str, f64)] = &[
     ("arcsec", "angle", PI / 648_000.0),
 ];
 
+/// The Greek small letter mu (U+03BC), which keyboards and editors give as often as the
+/// micro sign (U+00B5) that the unit names here use.
+const GREEK_MU: char = '\u{3bc}';
+/// The micro sign (U+00B5).
+const MICRO_SIGN: char = '\u{b5}';
+
+/// A unit as rvtol names it: `μm` and `μrad` written with the Greek letter mu are the same
+/// units as `µm` and `µrad` with the micro sign, and are read as those.
+pub fn canonical(unit: &str) -> String {
+    unit.replace(GREEK_MU, &MICRO_SIGN.to_string())
+}
+
 /// The known units, for messages: `lengths mm, µm, um, m; angles rad, …`.
 pub fn known() -> String {
     ["length", "angle"]
@@ -76,6 +88,11 @@ mod tests {
         assert!((conversion("arcsec", "arcmin").unwrap() * 60.0 - 1.0).abs() < 1e-15);
         assert_eq!(conversion("mm", "mm"), None);
         assert_eq!(conversion("µm", "rad"), None);
+        // The Greek letter mu is read as the micro sign.
+        assert_eq!(canonical("\u{3bc}m"), "\u{b5}m");
+        assert_eq!(canonical("\u{3bc}rad"), "µrad");
+        assert_eq!(canonical("µm"), "µm");
+        assert_eq!(canonical("mm"), "mm");
         assert_eq!(conversion("N", "mm"), None);
         assert_eq!(
             known(),
