@@ -1177,3 +1177,172 @@ fn a_file_that_is_no_baseline_and_a_bad_init_parameter_are_named_as_such() {
         "error: --param pin_count: must be a number, got a string"
     );
 }
+
+// ---------------------------------------------------------------------------------------
+// A failing command replaces none of its outputs.
+
+/// The files of `dir` whose names mark a report's temporary (`.NAME.rvtol-tmp-PID`).
+fn temporaries(dir: &Path) -> Vec<String> {
+    std::fs::read_dir(dir)
+        .expect("read the folder")
+        .flatten()
+        .map(|entry| entry.file_name().to_string_lossy().into_owned())
+        .filter(|name| name.contains(".rvtol-tmp-"))
+        .collect()
+}
+
+#[test]
+fn a_failing_run_merge_or_sensitivity_replaces_none_of_its_outputs() {
+    let dir = scratch("staged");
+    let scenario = dir.join("nan.json");
+    std::fs::write(&scenario, torsion_with_zero_stiffness()).expect("write");
+    let s = path_arg(&scenario);
+    let (json, html, csv) = (dir.join("r.json"), dir.join("r.html"), dir.join("r.csv"));
+    let old = |path: &Path| std::fs::write(path, "old\n").expect("write");
+    let untouched = |args: &[&str]| {
+        for path in [&json, &html, &csv] {
+            assert_eq!(
+                std::fs::read_to_string(path).expect("read"),
+                "old\n",
+                "{args:?}: {} was replaced by a failing command",
+                path.display()
+            );
+        }
+        assert!(temporaries(&dir).is_empty(), "{:?}", temporaries(&dir));
+    };
+    for path in [&json, &html, &csv] {
+        old(path);
+    }
+    let (j, h, c) = (path_arg(&json), path_arg(&html), path_arg(&csv));
+    // Every sample is lost, more than the allowed 0 %: the run fails, its table still says
+    // what was lost, and no file is replaced.
+    let args = [
+        "run",
+        s,
+        "--samples",
+        "300",
+        "--quiet",
+        "--json",
+        j,
+        "--html",
+        h,
+        "--samples-out",
+        c,
+    ];
+    let out = run_rvtol(&args);
+    assert!(one_line(&out, 2).contains("is not finite for 300 of 300 samples"));
+    assert!(text(&out.stdout).contains("lost data: 300 of 300 samples"));
+    untouched(&args);
+    // The merge of its shards fails alike.
+    let shards: Vec<PathBuf> = (0..2).map(|k| dir.join(format!("p{k}.bin"))).collect();
+    for (k, shard) in shards.iter().enumerate() {
+        let out = run_rvtol(&[
+            "run",
+            s,
+            "--samples",
+            "300",
+            "--quiet",
+            "--shard",
+            &format!("{k}/2"),
+            "--partial",
+            path_arg(shard),
+        ]);
+        assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    }
+    let args = [
+        "merge",
+        path_arg(&shards[0]),
+        path_arg(&shards[1]),
+        "--quiet",
+        "--json",
+        j,
+        "--html",
+        h,
+    ];
+    let out = run_rvtol(&args);
+    assert!(one_line(&out, 2).contains("is not finite for 300 of 300 samples"));
+    untouched(&args);
+    // A sensitivity analysis that loses 2 % of its rows (the stiffness error drawn from
+    // N(0, 0.5)), more than the allowed 0 %.
+    std::fs::write(
+        &scenario,
+        with("rv20e-torsion.json", |s| {
+            let variables = s["variables"].as_array_mut().expect("variables");
+            let v = variables
+                .iter_mut()
+                .find(|v| v["name"] == "crank_bearing_stiffness_error")
+                .expect("the stiffness error variable");
+            v["distribution"] = serde_json::json!({ "normal": { "mean": 0.0, "sd": 0.5 } });
+        }),
+    )
+    .expect("write");
+    let args = [
+        "sensitivity",
+        s,
+        "--samples",
+        "256",
+        "--bootstrap",
+        "10",
+        "--quiet",
+        "--json",
+        j,
+        "--html",
+        h,
+    ];
+    let out = run_rvtol(&args);
+    assert!(one_line(&out, 2).contains("rows with non-finite model values"));
+    untouched(&args);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_page_leaves_out_a_nominal_curve_the_model_cannot_draw_and_says_why() {
+    // The stiffness error's mean at −1: the nominal design has no stiffness, its torsion
+    // curve is NaN, and about half of the samples are lost, within the allowed 90 %.
+    let dir = scratch("nan-page");
+    let scenario = dir.join("half.json");
+    std::fs::write(
+        &scenario,
+        with("rv20e-torsion.json", |s| {
+            let variables = s["variables"].as_array_mut().expect("variables");
+            let v = variables
+                .iter_mut()
+                .find(|v| v["name"] == "crank_bearing_stiffness_error")
+                .expect("the stiffness error variable");
+            v["distribution"]["normal"]["mean"] = Value::from(-1.0);
+        }),
+    )
+    .expect("write");
+    let (json, html) = (dir.join("r.json"), dir.join("r.html"));
+    let out = run_rvtol(&[
+        "run",
+        path_arg(&scenario),
+        "--samples",
+        "1000",
+        "--quiet",
+        "--max-non-finite",
+        "0.9",
+        "--json",
+        path_arg(&json),
+        "--html",
+        path_arg(&html),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let page = std::fs::read_to_string(&html).expect("the page");
+    assert!(
+        page.contains("Not drawn: models[0] (torsion_curve): curve torsion_curve")
+            && page.contains("at the nominal point"),
+        "the page says which curve is left out and why"
+    );
+    let note_start = page.find("Not drawn:").expect("the note");
+    let note_end = note_start + page[note_start..].find("</p>").expect("the note's end");
+    let outside = format!("{}{}", &page[..note_start], &page[note_end..]);
+    assert!(
+        !outside.contains("NaN"),
+        "no NaN drawn or tabulated on the page"
+    );
+    let report: Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).expect("the report")).expect("JSON");
+    assert!(report["outputs"][0]["non_finite"].as_u64().unwrap_or(0) > 0);
+    let _ = std::fs::remove_dir_all(&dir);
+}
