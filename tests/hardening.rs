@@ -1346,3 +1346,79 @@ fn a_page_leaves_out_a_nominal_curve_the_model_cannot_draw_and_says_why() {
     assert!(report["outputs"][0]["non_finite"].as_u64().unwrap_or(0) > 0);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn evaluate_counts_the_rows_it_cannot_evaluate_and_fails_beyond_the_allowed_share() {
+    let dir = scratch("evaluate-nan");
+    let scenario = workspace_dir().join("scenarios/rv20e-torsion.json");
+    let s = path_arg(&scenario);
+    let rows = dir.join("rows.csv");
+    let out = run_rvtol(&[
+        "run",
+        s,
+        "--samples",
+        "2",
+        "--quiet",
+        "--samples-out",
+        path_arg(&rows),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    // The crank bearing stiffness error of the first row at −1: no stiffness, NaN outputs.
+    let written = std::fs::read_to_string(&rows).expect("rows");
+    let mut lines: Vec<String> = written.lines().map(String::from).collect();
+    let column = lines[0]
+        .split(',')
+        .position(|h| h.starts_with("crank_bearing_stiffness_error"))
+        .expect("the stiffness error column");
+    let mut cells: Vec<String> = lines[1].split(',').map(String::from).collect();
+    cells[column] = "-1".into();
+    lines[1] = cells.join(",");
+    let bad = dir.join("bad.csv");
+    std::fs::write(&bad, lines.join("\n") + "\n").expect("write");
+    let table = dir.join("out.csv");
+    std::fs::write(&table, "old\n").expect("write");
+    for allowed in [None, Some("0")] {
+        let mut args = vec![
+            "evaluate",
+            s,
+            "--inputs",
+            path_arg(&bad),
+            "-o",
+            path_arg(&table),
+        ];
+        args.extend(allowed.iter().flat_map(|a| ["--max-non-finite", *a]));
+        let line = one_line(&run_rvtol(&args), 2);
+        assert!(
+            line.contains("models[0] (torsion_curve): lost_motion_arcmin is not finite for 1 of 2 rows (50.000 %, first in ")
+                && line.contains("bad.csv: line 2), more than the allowed 0 %"),
+            "{args:?}: {line}"
+        );
+        assert_eq!(std::fs::read_to_string(&table).expect("read"), "old\n");
+    }
+    // To standard output: nothing printed.
+    let out = run_rvtol(&["evaluate", s, "--inputs", path_arg(&bad)]);
+    one_line(&out, 2);
+    assert!(out.stdout.is_empty(), "{}", text(&out.stdout));
+    // Allowed: written, and reported on standard error.
+    let out = run_rvtol(&[
+        "evaluate",
+        s,
+        "--inputs",
+        path_arg(&bad),
+        "-o",
+        path_arg(&table),
+        "--max-non-finite",
+        "0.5",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let stderr = text(&out.stderr);
+    assert!(
+        stderr.contains(
+            "warning: models[0] (torsion_curve): lost_motion_arcmin is not finite for 1 of 2 rows"
+        ),
+        "{stderr}"
+    );
+    let written = std::fs::read_to_string(&table).expect("read");
+    assert_eq!(written.lines().count(), 3, "{written}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

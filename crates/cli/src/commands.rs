@@ -1315,6 +1315,19 @@ pub fn evaluate(
     }
     let pool = thread_pool(threads(execution.threads)?)?;
     let rows = pool.install(|| rvtol_engine::evaluate::evaluate_rows(&scenario, values));
+    // Rows the models could not evaluate are lost data, as a run's samples: counted and
+    // reported, and beyond --max-non-finite a failure that writes no table.
+    let row = |r: usize| table.at(table.rows[r].0);
+    rvtol_engine::evaluate::check_non_finite_rows(&scenario, &rows, execution.max_non_finite, &row)
+        .map_err(|err| bad_scenario(scenario_path, err))?;
+    let lost = rvtol_engine::evaluate::non_finite_rows(&scenario, &rows);
+    for (o, line) in rvtol_engine::evaluate::non_finite_lines(&scenario, &rows, &lost, &row) {
+        note(&format!(
+            "warning: {}: {line}, within the allowed {} % (--max-non-finite): written as NaN",
+            rvtol_engine::run::model_of_output(&scenario, o),
+            rvtol_deviation::Shown(100.0 * execution.max_non_finite)
+        ));
+    }
     match output {
         Some(path) => write_bytes(path, &sample_table_bytes(path, &scenario, &rows)?),
         None => print(&rvtol_engine::report::sample_csv(&scenario, &rows)),
