@@ -1358,7 +1358,10 @@ const SAMPLE_INDEX: &str = "sample";
 
 /// `rvtol fit`: a normal model of measured parts, as a scenario fragment.
 pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()> {
-    use rvtol_engine::fit::{fit as fit_normal, fragment, PART_COMPONENTS};
+    use rvtol_engine::fit::{check_fragment, fit as fit_normal, fragment, PART_COMPONENTS};
+    // Diagnostics go to standard error once the fragment is written: a refused fit says
+    // only why.
+    let mut notes: Vec<String> = Vec::new();
     outputs_ok(
         &[target("-o", output, Format::Json)],
         &[("the measurements", path.to_path_buf())],
@@ -1395,7 +1398,7 @@ pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()>
                 } else {
                     ignored.join(", ")
                 };
-                note(&format!(
+                notes.push(format!(
                     "{}: fitting {name}.du … {name}.dgamma; other columns left out: {shown}",
                     path.display(),
                 ));
@@ -1485,8 +1488,25 @@ pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()>
         |f| f.to_string_lossy().into_owned(),
     );
     let value = fragment(&fitted, part, &units, &source);
+    // What is printed must validate when pasted into a scenario.
+    let headings: Vec<String> = order
+        .iter()
+        .map(|&i| match &table.columns[i] {
+            (name, Some(unit)) => format!("{name} [{unit}]"),
+            (name, None) => name.clone(),
+        })
+        .collect();
+    check_fragment(&fitted, &value, part, &headings)
+        .map_err(|message| BadInput(format!("{}: {message}", path.display())))?;
     let text = serde_json::to_string_pretty(&value).expect("a fragment serialises") + "\n";
+    match output {
+        Some(out) => write_report(out, &text)?,
+        None => print(&text)?,
+    }
     // The diagnostics where a person reads them; the fragment stays clean for a pipe.
+    for line in notes {
+        note(&line);
+    }
     note(&rvtol_engine::fit::summary(&fitted, &source));
     let doubtful: Vec<&str> = fitted
         .names
@@ -1501,10 +1521,7 @@ pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()>
             doubtful.join(", ")
         ));
     }
-    match output {
-        Some(out) => write_report(out, &text),
-        None => print(&text),
-    }
+    Ok(())
 }
 
 /// This build's identity in shard files: the version and the SHA-256 of the executable.
