@@ -714,3 +714,54 @@ fn elastic_with_a_torque_that_engages_no_pin() {
         &["engages no pin"],
     );
 }
+
+/// `rvtol init` checks its parameters as `validate` checks a scenario's: every parameter of
+/// every model at an absurd value (1e308, outside every range a scenario accepts) or given
+/// as a non-number is refused with one line naming `--param`, and nothing is written.
+#[test]
+fn init_refuses_every_parameter_validate_would_refuse() {
+    let dir = std::env::temp_dir().join(format!("rvtol-bad-init-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("dir");
+    let skeleton = dir.join("skeleton.json");
+    let out = skeleton.to_str().expect("utf-8 path");
+    let mut cases = 0;
+    for entry in rvtol_models::all() {
+        for spec in entry.params {
+            for value in ["1e308", "-1e308", "abc"] {
+                let param = format!("{}={value}", spec.name);
+                let what = format!("init {} --param {param}", entry.name);
+                let output = run_rvtol(&["init", entry.name, "--param", &param, "-o", out]);
+                assert_one_line_error(&what, &output, &["error: --param "]);
+                assert!(!skeleton.exists(), "{what}: a skeleton was written");
+                cases += 1;
+            }
+        }
+    }
+    assert!(cases > 100, "{cases} cases");
+    // The one named in the issue: a parameter the physical reading does not read is still
+    // the model's number.
+    let output = run_rvtol(&[
+        "init",
+        "transmission_error",
+        "--param",
+        "output_pin_circle_radius_mm=abc",
+    ]);
+    assert_one_line_error(
+        "output_pin_circle_radius_mm=abc",
+        &output,
+        &["error: --param output_pin_circle_radius_mm: must be a number, got a string"],
+    );
+    let output = run_rvtol(&[
+        "init",
+        "geometric_hysteresis",
+        "--param",
+        "center_distance_mm=1e308",
+    ]);
+    assert_one_line_error(
+        "center_distance_mm=1e308",
+        &output,
+        &["error: --param center_distance_mm: 1e308 is outside ±"],
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -340,7 +340,8 @@ fn the_sample_index_of_a_samples_file_is_not_fitted() {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("dir");
     let samples = dir.join("s.csv");
-    let scenario = common::workspace_dir().join("scenarios/linear-stack-correlated.json");
+    // A scenario of variables only: a part's columns (`carrier.du`) are fitted with --part.
+    let scenario = common::workspace_dir().join("scenarios/allocation-linear.json");
     let out = run_rvtol(&[
         "run",
         scenario.to_str().unwrap(),
@@ -371,6 +372,123 @@ fn the_sample_index_of_a_samples_file_is_not_fitted() {
         .map(|v| v["name"].as_str().expect("name"))
         .collect();
     assert!(!names.contains(&"sample"), "{names:?}");
-    assert!(names.contains(&"bore_depth"), "{names:?}");
+    assert!(names.contains(&"x1"), "{names:?}");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The one stderr line of a refused `fit` (exit 2, nothing on stdout, no panic).
+fn refused(out: &std::process::Output) -> String {
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        out.stdout.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    let line = stderr.strip_suffix('\n').unwrap_or(&stderr);
+    assert!(
+        !line.contains('\n') && line.starts_with("error: "),
+        "one line: {stderr}"
+    );
+    line.to_string()
+}
+
+#[test]
+fn what_fit_prints_validates_or_it_refuses_naming_the_column() {
+    let dir = std::env::temp_dir().join(format!("rvtol-fit-valid-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("dir");
+    let file = dir.join("m.csv");
+    let fit_of = |text: &str, part: Option<&str>| {
+        std::fs::write(&file, text).expect("write");
+        let mut args = vec!["fit", file.to_str().unwrap()];
+        args.extend(part.iter().flat_map(|p| ["--part", *p]));
+        run_rvtol(&args)
+    };
+    let six = "du,dv,dw,dalpha,dbeta,dgamma";
+    for (text, part, needle) in [
+        (
+            "a,b\n1e200,1\n2,2\n3,1\n",
+            None,
+            "column 'a': its values are too large for a mean and a variance",
+        ),
+        (
+            "a,b\n1e7,1\n2e7,2\n3e7,1\n",
+            None,
+            "column 'a': fitted distribution.normal.mean: 2e7 is outside ±1e6",
+        ),
+        (
+            ",b\n1,2\n2,1\n3,3\n",
+            None,
+            "column 1 (no heading): a variable needs a name",
+        ),
+        (
+            "a,b c\n1,2\n2,1\n3,3\n",
+            None,
+            "column 'b c': \"b c\" is not a variable name",
+        ),
+        (
+            "a,d.e\n1,2\n2,1\n3,3\n",
+            None,
+            "column 'd.e': \"d.e\" is not a variable name",
+        ),
+        (
+            "a,carrier.du [mm]\n1,2\n2,1\n3,3\n",
+            None,
+            "(a part's component: fit the part with --part carrier)",
+        ),
+        (
+            "a [furlong],b\n1,2\n2,1\n3,3\n",
+            None,
+            "column 'a [furlong]': \"furlong\" is not a unit rvtol knows",
+        ),
+        (
+            "du [furlong],dv [furlong],dw [furlong],dalpha,dbeta,dgamma\n1,0,0,0,0,0\n2,1,0,0,0,0\n0,0,1,1,0,0\n",
+            Some("c"),
+            "column 'du [furlong]': unit: \"furlong\" is not a unit of length rvtol knows",
+        ),
+        (
+            &format!("{six}\n1e7,0,0,0,0,0\n2e7,1,0,0,0,0\n0,0,1,1,0,0\n"),
+            Some("c"),
+            "column 'du': fitted mean[0]: 1e7 is outside ±1e6",
+        ),
+    ] {
+        let line = refused(&fit_of(text, part));
+        assert!(line.contains(needle), "{text:?}: {line}");
+    }
+    // A refused fit prints no diagnostics before its error (the columns left out of a
+    // part), and none after.
+    let line = refused(&fit_of(
+        "serial,carrier.du,carrier.dv,carrier.dw,carrier.dalpha,carrier.dbeta,carrier.dgamma\n1,0,0,0,0,0,x\n2,1,0,0,0,0,0\n",
+        Some("carrier"),
+    ));
+    assert!(line.contains("not a finite number: 'x'"), "{line}");
+    // What it prints, pasted into a scenario, validates: variables in µm and a ratio.
+    let out = fit_of(
+        "gap [µm],ratio [1],plain\n1,0.5,3\n2,0.25,1\n4,0.75,2\n3,0.5,5\n",
+        None,
+    );
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let mut scenario: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    scenario["models"] = serde_json::json!([{
+        "model": "linear_stack",
+        "params": { "coefficients": { "a": 1.0 } },
+        "inputs": { "a": "plain" }
+    }]);
+    let pasted = dir.join("pasted.json");
+    std::fs::write(&pasted, scenario.to_string()).expect("write");
+    let out = run_rvtol(&["validate", pasted.to_str().unwrap()]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    std::fs::remove_dir_all(&dir).ok();
 }

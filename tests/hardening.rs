@@ -2088,3 +2088,248 @@ fn the_greek_mu_is_read_as_the_micro_sign_in_units() {
     }
     assert_eq!(means[0], means[1]);
 }
+
+// ---------------------------------------------------------------------------------------
+// A failing command replaces none of its outputs.
+
+/// The files of `dir` whose names mark a report's temporary (`.NAME.rvtol-tmp-PID`).
+fn temporaries(dir: &Path) -> Vec<String> {
+    std::fs::read_dir(dir)
+        .expect("read the folder")
+        .flatten()
+        .map(|entry| entry.file_name().to_string_lossy().into_owned())
+        .filter(|name| name.contains(".rvtol-tmp-"))
+        .collect()
+}
+
+#[test]
+fn a_failing_run_merge_or_sensitivity_replaces_none_of_its_outputs() {
+    let dir = scratch("staged");
+    let scenario = dir.join("nan.json");
+    std::fs::write(&scenario, torsion_with_zero_stiffness()).expect("write");
+    let s = path_arg(&scenario);
+    let (json, html, csv) = (dir.join("r.json"), dir.join("r.html"), dir.join("r.csv"));
+    let old = |path: &Path| std::fs::write(path, "old\n").expect("write");
+    let untouched = |args: &[&str]| {
+        for path in [&json, &html, &csv] {
+            assert_eq!(
+                std::fs::read_to_string(path).expect("read"),
+                "old\n",
+                "{args:?}: {} was replaced by a failing command",
+                path.display()
+            );
+        }
+        assert!(temporaries(&dir).is_empty(), "{:?}", temporaries(&dir));
+    };
+    for path in [&json, &html, &csv] {
+        old(path);
+    }
+    let (j, h, c) = (path_arg(&json), path_arg(&html), path_arg(&csv));
+    // Every sample is lost, more than the allowed 0 %: the run fails, its table still says
+    // what was lost, and no file is replaced.
+    let args = [
+        "run",
+        s,
+        "--samples",
+        "300",
+        "--quiet",
+        "--json",
+        j,
+        "--html",
+        h,
+        "--samples-out",
+        c,
+    ];
+    let out = run_rvtol(&args);
+    assert!(one_line(&out, 2).contains("is not finite for 300 of 300 samples"));
+    assert!(text(&out.stdout).contains("lost data: 300 of 300 samples"));
+    untouched(&args);
+    // The merge of its shards fails alike.
+    let shards: Vec<PathBuf> = (0..2).map(|k| dir.join(format!("p{k}.bin"))).collect();
+    for (k, shard) in shards.iter().enumerate() {
+        let out = run_rvtol(&[
+            "run",
+            s,
+            "--samples",
+            "300",
+            "--quiet",
+            "--shard",
+            &format!("{k}/2"),
+            "--partial",
+            path_arg(shard),
+        ]);
+        assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    }
+    let args = [
+        "merge",
+        path_arg(&shards[0]),
+        path_arg(&shards[1]),
+        "--quiet",
+        "--json",
+        j,
+        "--html",
+        h,
+    ];
+    let out = run_rvtol(&args);
+    assert!(one_line(&out, 2).contains("is not finite for 300 of 300 samples"));
+    untouched(&args);
+    // A sensitivity analysis that loses 2 % of its rows (the stiffness error drawn from
+    // N(0, 0.5)), more than the allowed 0 %.
+    std::fs::write(
+        &scenario,
+        with("rv20e-torsion.json", |s| {
+            let variables = s["variables"].as_array_mut().expect("variables");
+            let v = variables
+                .iter_mut()
+                .find(|v| v["name"] == "crank_bearing_stiffness_error")
+                .expect("the stiffness error variable");
+            v["distribution"] = serde_json::json!({ "normal": { "mean": 0.0, "sd": 0.5 } });
+        }),
+    )
+    .expect("write");
+    let args = [
+        "sensitivity",
+        s,
+        "--samples",
+        "256",
+        "--bootstrap",
+        "10",
+        "--quiet",
+        "--json",
+        j,
+        "--html",
+        h,
+    ];
+    let out = run_rvtol(&args);
+    assert!(one_line(&out, 2).contains("rows with non-finite model values"));
+    untouched(&args);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_page_leaves_out_a_nominal_curve_the_model_cannot_draw_and_says_why() {
+    // The stiffness error's mean at −1: the nominal design has no stiffness, its torsion
+    // curve is NaN, and about half of the samples are lost, within the allowed 90 %.
+    let dir = scratch("nan-page");
+    let scenario = dir.join("half.json");
+    std::fs::write(
+        &scenario,
+        with("rv20e-torsion.json", |s| {
+            let variables = s["variables"].as_array_mut().expect("variables");
+            let v = variables
+                .iter_mut()
+                .find(|v| v["name"] == "crank_bearing_stiffness_error")
+                .expect("the stiffness error variable");
+            v["distribution"]["normal"]["mean"] = Value::from(-1.0);
+        }),
+    )
+    .expect("write");
+    let (json, html) = (dir.join("r.json"), dir.join("r.html"));
+    let out = run_rvtol(&[
+        "run",
+        path_arg(&scenario),
+        "--samples",
+        "1000",
+        "--quiet",
+        "--max-non-finite",
+        "0.9",
+        "--json",
+        path_arg(&json),
+        "--html",
+        path_arg(&html),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let page = std::fs::read_to_string(&html).expect("the page");
+    assert!(
+        page.contains("Not drawn: models[0] (torsion_curve): curve torsion_curve")
+            && page.contains("at the nominal point"),
+        "the page says which curve is left out and why"
+    );
+    let note_start = page.find("Not drawn:").expect("the note");
+    let note_end = note_start + page[note_start..].find("</p>").expect("the note's end");
+    let outside = format!("{}{}", &page[..note_start], &page[note_end..]);
+    assert!(
+        !outside.contains("NaN"),
+        "no NaN drawn or tabulated on the page"
+    );
+    let report: Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).expect("the report")).expect("JSON");
+    assert!(report["outputs"][0]["non_finite"].as_u64().unwrap_or(0) > 0);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn evaluate_counts_the_rows_it_cannot_evaluate_and_fails_beyond_the_allowed_share() {
+    let dir = scratch("evaluate-nan");
+    let scenario = workspace_dir().join("scenarios/rv20e-torsion.json");
+    let s = path_arg(&scenario);
+    let rows = dir.join("rows.csv");
+    let out = run_rvtol(&[
+        "run",
+        s,
+        "--samples",
+        "2",
+        "--quiet",
+        "--samples-out",
+        path_arg(&rows),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    // The crank bearing stiffness error of the first row at −1: no stiffness, NaN outputs.
+    let written = std::fs::read_to_string(&rows).expect("rows");
+    let mut lines: Vec<String> = written.lines().map(String::from).collect();
+    let column = lines[0]
+        .split(',')
+        .position(|h| h.starts_with("crank_bearing_stiffness_error"))
+        .expect("the stiffness error column");
+    let mut cells: Vec<String> = lines[1].split(',').map(String::from).collect();
+    cells[column] = "-1".into();
+    lines[1] = cells.join(",");
+    let bad = dir.join("bad.csv");
+    std::fs::write(&bad, lines.join("\n") + "\n").expect("write");
+    let table = dir.join("out.csv");
+    std::fs::write(&table, "old\n").expect("write");
+    for allowed in [None, Some("0")] {
+        let mut args = vec![
+            "evaluate",
+            s,
+            "--inputs",
+            path_arg(&bad),
+            "-o",
+            path_arg(&table),
+        ];
+        args.extend(allowed.iter().flat_map(|a| ["--max-non-finite", *a]));
+        let line = one_line(&run_rvtol(&args), 2);
+        assert!(
+            line.contains("models[0] (torsion_curve): lost_motion_arcmin is not finite for 1 of 2 rows (50.000 %, first in ")
+                && line.contains("bad.csv: line 2), more than the allowed 0 %"),
+            "{args:?}: {line}"
+        );
+        assert_eq!(std::fs::read_to_string(&table).expect("read"), "old\n");
+    }
+    // To standard output: nothing printed.
+    let out = run_rvtol(&["evaluate", s, "--inputs", path_arg(&bad)]);
+    one_line(&out, 2);
+    assert!(out.stdout.is_empty(), "{}", text(&out.stdout));
+    // Allowed: written, and reported on standard error.
+    let out = run_rvtol(&[
+        "evaluate",
+        s,
+        "--inputs",
+        path_arg(&bad),
+        "-o",
+        path_arg(&table),
+        "--max-non-finite",
+        "0.5",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let stderr = text(&out.stderr);
+    assert!(
+        stderr.contains(
+            "warning: models[0] (torsion_curve): lost_motion_arcmin is not finite for 1 of 2 rows"
+        ),
+        "{stderr}"
+    );
+    let written = std::fs::read_to_string(&table).expect("read");
+    assert_eq!(written.lines().count(), 3, "{written}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

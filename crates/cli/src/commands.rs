@@ -31,6 +31,7 @@ use rvtol_engine::{
 use crate::limits::{memory_budget, parse_count, parse_sampling, parse_seed, thread_pool, threads};
 use crate::output::{
     check_targets, is_stdout, note, print, write_bytes, write_report, Format, Input, OutputFile,
+    StagedOutputs,
 };
 use crate::{BadInput, Execution, Failed};
 
@@ -168,14 +169,26 @@ fn emit(
     json: impl FnOnce() -> String,
     text: impl FnOnce() -> String,
 ) -> Result<()> {
+    let mut staged = StagedOutputs::new();
+    stage_report(&mut staged, json_path, stdout_taken, json, text)?;
+    staged.commit()
+}
+
+/// [`emit`] into a command's staged outputs, replaced with the others at its end.
+fn stage_report(
+    staged: &mut StagedOutputs,
+    json_path: Option<&Path>,
+    stdout_taken: bool,
+    json: impl FnOnce() -> String,
+    text: impl FnOnce() -> String,
+) -> Result<()> {
     if let Some(path) = json_path {
-        write_report(path, &json())?;
+        staged.add(path, &json())?;
     }
-    if stdout_taken {
-        Ok(())
-    } else {
-        print(&text())
+    if !stdout_taken {
+        staged.add_stdout(&text());
     }
+    Ok(())
 }
 
 /// Estimated totals at or below this many seconds go unsaid; the environment variable
@@ -372,33 +385,37 @@ fn command_line() -> String {
         .join(" ")
 }
 
-/// The nominal curves of the scenario's models, for a page.
-fn page_curves(
-    scenario_path: &Path,
-    scenario: &Scenario,
-) -> Result<Vec<(String, Vec<rvtol_models::Curve>)>> {
-    Ok(nominal_curves(scenario)
-        .map_err(|err| bad_scenario(scenario_path, err))?
-        .into_iter()
-        .map(|(model, curves)| (model.to_string(), curves))
-        .collect())
+/// The nominal curves of the scenario's models, for a page, and a note for each model whose
+/// curves are left out because the model cannot draw them at the nominal point (a point
+/// that is not finite): the page says so instead of failing, as the run's report counts
+/// the samples the model could not evaluate.
+fn page_curves(scenario: &Scenario) -> (Vec<(String, Vec<rvtol_models::Curve>)>, Vec<String>) {
+    let mut curves = Vec::new();
+    let mut left_out = Vec::new();
+    for (model, drawn) in rvtol_engine::run::nominal_curves_per_model(scenario) {
+        match drawn {
+            Ok(drawn) => curves.push((model.to_string(), drawn)),
+            Err(err) => left_out.push(format!("{err}; its curves are left out")),
+        }
+    }
+    (curves, left_out)
 }
 
-/// Writes the HTML page of one command's JSON report (`kind` says which) to `path`, with
-/// the nominal curves of the scenario's models for a run.
-fn write_html(
+/// The HTML page of one command's JSON report (`kind` says which) for `path`, with the
+/// nominal curves of the scenario's models for a run.
+fn html_page(
     path: &Path,
     scenario_path: &Path,
     scenario: &Scenario,
     kind: rvtol_report::Kind,
     json: &str,
-) -> Result<()> {
+) -> Result<String> {
     use rvtol_report::Kind;
     let value = parsed(json);
-    let curves = if kind == Kind::Run {
-        page_curves(scenario_path, scenario)?
+    let (curves, curves_left_out) = if kind == Kind::Run {
+        page_curves(scenario)
     } else {
-        Vec::new()
+        (Vec::new(), Vec::new())
     };
     let record = rvtol_report::Record {
         scenario: scenario.name.clone(),
@@ -407,15 +424,15 @@ fn write_html(
         command: Some(command_line()),
         version: env!("CARGO_PKG_VERSION").to_string(),
     };
-    let page = rvtol_report::render(&rvtol_report::Report {
+    rvtol_report::render(&rvtol_report::Report {
         record,
         run: (kind == Kind::Run).then_some(&value),
         sensitivity: (kind == Kind::Sensitivity).then_some(&value),
         allocation: (kind == Kind::Allocation).then_some(&value),
         curves: &curves,
+        curves_left_out: &curves_left_out,
     })
-    .map_err(|err| BadInput(format!("{}: {err}", path.display())))?;
-    write_report(path, &page)
+    .map_err(|err| BadInput(format!("{}: {err}", path.display())).into())
 }
 
 fn parsed(json: &str) -> serde_json::Value {
@@ -513,27 +530,36 @@ pub fn run(
     let failure = non_finite_failure(scenario_path, &scenario, &result, execution);
     let report = pool.install(|| RunReport::new(&scenario, result));
     let json = report.to_json();
-    emit(
+    let mut staged = StagedOutputs::new();
+    stage_report(
+        &mut staged,
         to.json,
         to.on_stdout(),
         || json.clone(),
         || report.to_text(),
     )?;
+    if failure.is_err() {
+        // The report shows what was lost; no file is replaced by a failed run.
+        staged.print_only()?;
+        return failure;
+    }
     if let Some(path) = to.samples {
         let table = pool
             .install(|| rvtol_engine::sample_table(&scenario, settings))
             .map_err(|err| bad_scenario(scenario_path, err))?;
-        write_sample_table(path, &scenario, &table)?;
+        staged.add_bytes(path, &sample_table_bytes(path, &scenario, &table)?)?;
     }
     if let Some(html) = to.html {
-        write_html(
+        let page = html_page(
             html,
             scenario_path,
             &scenario,
             rvtol_report::Kind::Run,
             &json,
         )?;
+        staged.add(html, &page)?;
     }
+    staged.commit()?;
     if !execution.quiet && std::io::stderr().is_terminal() {
         note(&format!(
             "{} samples in {:.2} s ({:.1} ns per sample)",
@@ -542,7 +568,7 @@ pub fn run(
             elapsed.as_secs_f64() * 1e9 / settings.samples as f64
         ));
     }
-    failure
+    Ok(())
 }
 
 pub fn nominal(scenario_path: &Path, json: Option<&Path>) -> Result<()> {
@@ -592,14 +618,15 @@ pub fn curve(scenario_path: &Path, out_dir: &Path) -> Result<()> {
         ))
     })?;
     let mut lines = String::new();
+    let mut staged = StagedOutputs::new();
     for (model, curves) in drawn {
         for curve in curves {
             let stem = out_dir.join(&curve.name);
             let (csv, svg) = (stem.with_extension("csv"), stem.with_extension("svg"));
             let drawn = rvtol_report::curve_svg(&curve)
                 .map_err(|err| BadInput(format!("{}: {err}", svg.display())))?;
-            write_report(&csv, &rvtol_report::curve_csv(&curve))?;
-            write_report(&svg, &drawn)?;
+            staged.add(&csv, &rvtol_report::curve_csv(&curve))?;
+            staged.add(&svg, &drawn)?;
             lines.push_str(&format!(
                 "{model}: {} -> {}, {}\n",
                 curve.title,
@@ -608,7 +635,8 @@ pub fn curve(scenario_path: &Path, out_dir: &Path) -> Result<()> {
             ));
         }
     }
-    print(&lines)
+    staged.add_stdout(&lines);
+    staged.commit()
 }
 
 pub fn init(model: &str, params: &[String], output: Option<&Path>) -> Result<()> {
@@ -829,15 +857,14 @@ fn finish_sensitivity(
         .install(|| SensitivityReport::complete(scenario, settings, outputs, shapley))
         .map_err(|err| bad_scenario(path, err))?;
     let json = report.to_json();
-    emit(
+    let mut staged = StagedOutputs::new();
+    stage_report(
+        &mut staged,
         to.json,
         to.on_stdout(),
         || json.clone(),
         || report.to_text(),
     )?;
-    if let Some(html) = to.html {
-        write_html(html, path, scenario, rvtol_report::Kind::Sensitivity, &json)?;
-    }
     let lost: Vec<String> = report
         .outputs
         .iter()
@@ -847,8 +874,14 @@ fn finish_sensitivity(
         .map(|o| format!("{} ({} rows)", o.name, o.non_finite_rows))
         .collect();
     if lost.is_empty() {
-        Ok(())
+        if let Some(html) = to.html {
+            let page = html_page(html, path, scenario, rvtol_report::Kind::Sensitivity, &json)?;
+            staged.add(html, &page)?;
+        }
+        staged.commit()
     } else {
+        // The report shows what was lost; no file is replaced by a failed analysis.
+        staged.print_only()?;
         Err(BadInput(format!(
             "{}: rows with non-finite model values were left out of the indices of {}, more than the allowed share {} of the base samples; narrow the distributions to the models' domain, or accept a share with --max-non-finite",
             path.display(),
@@ -1074,11 +1107,20 @@ pub fn check(
         })
         .map_err(|err| bad_scenario(path, err))?;
     bar.finish_and_clear();
+    // A check's verdict, passed or failed, is its result: both reports are written.
+    let mut staged = StagedOutputs::new();
     if let Some(junit) = junit {
-        write_report(junit, &report.to_junit())?;
+        staged.add(junit, &report.to_junit())?;
     }
     let stdout_taken = [junit, json].into_iter().flatten().any(is_stdout);
-    emit(json, stdout_taken, || report.to_json(), || report.to_text())?;
+    stage_report(
+        &mut staged,
+        json,
+        stdout_taken,
+        || report.to_json(),
+        || report.to_text(),
+    )?;
+    staged.commit()?;
     if report.passed {
         Ok(())
     } else {
@@ -1160,11 +1202,13 @@ pub fn allocate(
     // Only a verified proposal becomes a scenario: a file that exists after a failed
     // allocation would pass for an answer.
     let met = allocation.status() == "met";
+    // An allocation's verdict, met or not, is its result: its reports are written.
+    let mut staged = StagedOutputs::new();
     if let Some(proposal) = write_scenario {
         if met {
             let document =
                 proposal_document(&text, &allocation).map_err(|err| bad_scenario(path, err))?;
-            write_report(proposal, &document)?;
+            staged.add(proposal, &document)?;
         } else {
             note(&format!(
                 "--write-scenario: nothing written to {}: the allocation is {}",
@@ -1176,10 +1220,18 @@ pub fn allocate(
     let report = AllocationReport::new(&allocation);
     let json = report.to_json();
     let stdout_taken = to.on_stdout() || (met && write_scenario.is_some_and(is_stdout));
-    emit(to.json, stdout_taken, || json.clone(), || report.to_text())?;
+    stage_report(
+        &mut staged,
+        to.json,
+        stdout_taken,
+        || json.clone(),
+        || report.to_text(),
+    )?;
     if let Some(html) = to.html {
-        write_html(html, path, &scenario, rvtol_report::Kind::Allocation, &json)?;
+        let page = html_page(html, path, &scenario, rvtol_report::Kind::Allocation, &json)?;
+        staged.add(html, &page)?;
     }
+    staged.commit()?;
     match allocation.status() {
         "met" => Ok(()),
         status => Err(Failed(format!("allocation {status}")).into()),
@@ -1286,6 +1338,7 @@ pub fn report(
         .ok_or_else(|| BadInput("no report given".into()))?;
     let mut description = None;
     let mut curves = Vec::new();
+    let mut curves_left_out = Vec::new();
     if let Some(path) = scenario_path {
         let scenario = load(path)?;
         if scenario.name != name {
@@ -1297,7 +1350,7 @@ pub fn report(
             .into());
         }
         description = Some(scenario.description.clone()).filter(|d| !d.is_empty());
-        curves = page_curves(path, &scenario)?;
+        (curves, curves_left_out) = page_curves(&scenario);
     }
     let get = |kind: Kind| found.iter().find(|(k, _, _)| *k == kind).map(|(_, v, _)| v);
     let record = rvtol_report::Record {
@@ -1313,6 +1366,7 @@ pub fn report(
         sensitivity: get(Kind::Sensitivity),
         allocation: get(Kind::Allocation),
         curves: &curves,
+        curves_left_out: &curves_left_out,
     })
     .map_err(|err| BadInput(format!("{}: {err}", output.display())))?;
     write_report(output, &page)?;
@@ -1471,27 +1525,40 @@ pub fn evaluate(
     }
     let pool = thread_pool(threads)?;
     let rows = pool.install(|| rvtol_engine::evaluate::evaluate_rows(&scenario, values));
+    // Rows the models could not evaluate are lost data, as a run's samples: counted and
+    // reported, and beyond --max-non-finite a failure that writes no table.
+    let row = |r: usize| table.at(table.rows[r].0);
+    rvtol_engine::evaluate::check_non_finite_rows(&scenario, &rows, execution.max_non_finite, &row)
+        .map_err(|err| bad_scenario(scenario_path, err))?;
+    let lost = rvtol_engine::evaluate::non_finite_rows(&scenario, &rows);
+    for (o, line) in rvtol_engine::evaluate::non_finite_lines(&scenario, &rows, &lost, &row) {
+        note(&format!(
+            "warning: {}: {line}, within the allowed {} % (--max-non-finite): written as NaN",
+            rvtol_engine::run::model_of_output(&scenario, o),
+            rvtol_deviation::Shown(100.0 * execution.max_non_finite)
+        ));
+    }
     match output {
-        Some(path) => write_sample_table(path, &scenario, &rows),
+        Some(path) => write_bytes(path, &sample_table_bytes(path, &scenario, &rows)?),
         None => print(&rvtol_engine::report::sample_csv(&scenario, &rows)),
     }
 }
 
-/// Writes a sample table to `path`: Parquet when its name ends in `.parquet`, else CSV.
-fn write_sample_table(
+/// A sample table as the file `path` takes it: Parquet when its name ends in `.parquet`,
+/// else CSV.
+fn sample_table_bytes(
     path: &Path,
     scenario: &Scenario,
     table: &rvtol_engine::SampleTable,
-) -> Result<()> {
+) -> Result<Vec<u8>> {
     let parquet = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("parquet"));
     if parquet {
-        let bytes = rvtol_engine::report::sample_parquet(scenario, table)
-            .map_err(|err| BadInput(format!("{}: {err}", path.display())))?;
-        write_bytes(path, &bytes)
+        rvtol_engine::report::sample_parquet(scenario, table)
+            .map_err(|err| BadInput(format!("{}: {err}", path.display())).into())
     } else {
-        write_report(path, &rvtol_engine::report::sample_csv(scenario, table))
+        Ok(rvtol_engine::report::sample_csv(scenario, table).into_bytes())
     }
 }
 
@@ -1501,7 +1568,10 @@ const SAMPLE_INDEX: &str = "sample";
 
 /// `rvtol fit`: a normal model of measured parts, as a scenario fragment.
 pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()> {
-    use rvtol_engine::fit::{fit as fit_normal, fragment, PART_COMPONENTS};
+    use rvtol_engine::fit::{check_fragment, fit as fit_normal, fragment, PART_COMPONENTS};
+    // Diagnostics go to standard error once the fragment is written: a refused fit says
+    // only why.
+    let mut notes: Vec<String> = Vec::new();
     outputs_ok(
         &[target("-o", output, Format::Json)],
         &[("the measurements", path.to_path_buf())],
@@ -1538,7 +1608,7 @@ pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()>
                 } else {
                     ignored.join(", ")
                 };
-                note(&format!(
+                notes.push(format!(
                     "{}: fitting {name}.du … {name}.dgamma; other columns left out: {shown}",
                     path.display(),
                 ));
@@ -1628,8 +1698,25 @@ pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()>
         |f| f.to_string_lossy().into_owned(),
     );
     let value = fragment(&fitted, part, &units, &source);
+    // What is printed must validate when pasted into a scenario.
+    let headings: Vec<String> = order
+        .iter()
+        .map(|&i| match &table.columns[i] {
+            (name, Some(unit)) => format!("{name} [{unit}]"),
+            (name, None) => name.clone(),
+        })
+        .collect();
+    check_fragment(&fitted, &value, part, &headings)
+        .map_err(|message| BadInput(format!("{}: {message}", path.display())))?;
     let text = serde_json::to_string_pretty(&value).expect("a fragment serialises") + "\n";
+    match output {
+        Some(out) => write_report(out, &text)?,
+        None => print(&text)?,
+    }
     // The diagnostics where a person reads them; the fragment stays clean for a pipe.
+    for line in notes {
+        note(&line);
+    }
     note(&rvtol_engine::fit::summary(&fitted, &source));
     let doubtful: Vec<&str> = fitted
         .names
@@ -1644,10 +1731,7 @@ pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()>
             doubtful.join(", ")
         ));
     }
-    match output {
-        Some(out) => write_report(out, &text),
-        None => print(&text),
-    }
+    Ok(())
 }
 
 /// This build's identity in shard files: the version and the SHA-256 of the executable.
@@ -1974,15 +2058,18 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
                 )
             })
             .map_err(|err| bad_scenario(baseline_path, err))?;
+        let mut staged = StagedOutputs::new();
         if let Some(junit) = &args.junit {
-            write_report(junit, &report.to_junit())?;
+            staged.add(junit, &report.to_junit())?;
         }
-        emit(
+        stage_report(
+            &mut staged,
             to.json,
             stdout_taken,
             || report.to_json(),
             || report.to_text(),
         )?;
+        staged.commit()?;
         return if report.passed {
             Ok(())
         } else {
@@ -1995,14 +2082,22 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
     let failure = non_finite_failure(first, &scenario, &result, execution);
     let report = pool.install(|| RunReport::new(&scenario, result));
     let json = report.to_json();
-    emit(
+    let mut staged = StagedOutputs::new();
+    stage_report(
+        &mut staged,
         to.json,
         to.on_stdout(),
         || json.clone(),
         || report.to_text(),
     )?;
-    if let Some(html) = to.html {
-        write_html(html, &source, &scenario, rvtol_report::Kind::Run, &json)?;
+    if failure.is_err() {
+        // The report shows what was lost; no file is replaced by a failed merge.
+        staged.print_only()?;
+        return failure;
     }
-    failure
+    if let Some(html) = to.html {
+        let page = html_page(html, &source, &scenario, rvtol_report::Kind::Run, &json)?;
+        staged.add(html, &page)?;
+    }
+    staged.commit()
 }

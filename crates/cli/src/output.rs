@@ -18,6 +18,10 @@
 //! two outputs on one file, two on standard output, a name whose extension says another
 //! format than the one written.
 //!
+//! A command with several outputs (`run --json --html --samples-out`, `merge`, `check`,
+//! `allocate`, `curve`) stages them ([`StagedOutputs`]) and replaces them together only
+//! once everything has succeeded: a command that fails replaces none of its outputs.
+//!
 //! Temporary files are named `.NAME.rvtol-tmp-PID`; one left by a killed run is removed by
 //! the next write to the same path once its process is gone (checked through /proc where
 //! there is one).
@@ -42,38 +46,179 @@ pub fn write_report(path: &Path, contents: &str) -> Result<()> {
 
 /// Writes `contents` to `path` as [`write_report`] does (a binary file: a shard's partial).
 pub fn write_bytes(path: &Path, contents: &[u8]) -> Result<()> {
-    if is_stdout(path) {
-        return print_bytes(contents);
+    let mut staged = StagedOutputs::new();
+    staged.add_bytes(path, contents)?;
+    staged.commit()
+}
+
+/// The outputs of one command, written together when it has succeeded: each file's text
+/// goes to a temporary file beside it as soon as it is made ([`StagedOutputs::add`]), and
+/// only [`StagedOutputs::commit`] renames them over their paths, one after the other with
+/// nothing left that can fail for want of space, writes through to devices and FIFOs and
+/// prints what goes to standard output. A command that fails before it commits (an error
+/// returned with `?`, the staged outputs dropped) leaves every file it was pointed at as
+/// it was: dropping removes the temporaries.
+///
+/// A command whose report explains its own failure (samples lost to non-finite values
+/// beyond `--max-non-finite`) ends with [`StagedOutputs::print_only`]: standard output,
+/// which replaces nothing, still shows the report; the files stay as they were.
+#[derive(Default)]
+pub struct StagedOutputs {
+    pending: Vec<Pending>,
+}
+
+/// One output of a [`StagedOutputs`], waiting for the commit.
+enum Pending {
+    /// A regular file's new text, in `temporary` beside `target` (the path the user named
+    /// with its links followed).
+    Replace { temporary: PathBuf, target: PathBuf },
+    /// A device or a FIFO, written through (it cannot be replaced, nor its writing staged).
+    Through {
+        path: PathBuf,
+        shown: PathBuf,
+        contents: Vec<u8>,
+    },
+    /// Standard output.
+    Stdout(Vec<u8>),
+}
+
+impl StagedOutputs {
+    /// Nothing staged yet.
+    pub fn new() -> StagedOutputs {
+        StagedOutputs::default()
     }
-    // A path that ends on a device or FIFO through the kernel's own link resolution is
-    // written through as it stands: `/dev/stdout` when standard output is a pipe links to
-    // `/proc/self/fd/1`, whose link text (`pipe:[…]`) names no path to follow by hand.
-    if let Ok(metadata) = fs::metadata(path) {
-        let kind = metadata.file_type();
-        if !kind.is_file() && !kind.is_dir() && !is_socket(&kind) {
-            return write_through(path, contents)
-                .with_context(|| format!("cannot write {}", path.display()));
+
+    /// Stages `contents` for `path` (`-`: standard output).
+    pub fn add(&mut self, path: &Path, contents: &str) -> Result<()> {
+        self.add_bytes(path, contents.as_bytes())
+    }
+
+    /// Stages text for standard output (a command's table).
+    pub fn add_stdout(&mut self, text: &str) {
+        self.pending.push(Pending::Stdout(text.as_bytes().to_vec()));
+    }
+
+    /// [`StagedOutputs::add`] for bytes: a regular file's temporary is written and synced
+    /// now, so that a full disk or a folder that refuses it fails the command before any
+    /// output is replaced.
+    pub fn add_bytes(&mut self, path: &Path, contents: &[u8]) -> Result<()> {
+        if is_stdout(path) {
+            self.pending.push(Pending::Stdout(contents.to_vec()));
+            return Ok(());
         }
-    }
-    let target = resolve_links(path)?;
-    match fs::metadata(&target) {
-        Ok(metadata) => {
+        let through = |target: &Path| Pending::Through {
+            path: target.to_path_buf(),
+            shown: path.to_path_buf(),
+            contents: contents.to_vec(),
+        };
+        // A path that ends on a device or FIFO through the kernel's own link resolution is
+        // written through as it stands: `/dev/stdout` when standard output is a pipe links
+        // to `/proc/self/fd/1`, whose link text (`pipe:[…]`) names no path to follow by
+        // hand.
+        if let Ok(metadata) = fs::metadata(path) {
             let kind = metadata.file_type();
-            if kind.is_file() {
-                replace_atomically(&target, contents, Some(metadata.permissions()))
-            } else if kind.is_dir() {
-                bail!("cannot write {}: it is a directory", path.display())
-            } else if is_socket(&kind) {
-                bail!("cannot write {}: it is a socket", path.display())
-            } else {
-                write_through(&target, contents)
-                    .with_context(|| format!("cannot write {}", path.display()))
+            if !kind.is_file() && !kind.is_dir() && !is_socket(&kind) {
+                self.pending.push(through(path));
+                return Ok(());
             }
         }
-        Err(err) if err.kind() == io::ErrorKind::NotFound => {
-            replace_atomically(&target, contents, None)
+        let target = resolve_links(path)?;
+        let permissions = match fs::metadata(&target) {
+            Ok(metadata) => {
+                let kind = metadata.file_type();
+                if kind.is_file() {
+                    Some(metadata.permissions())
+                } else if kind.is_dir() {
+                    bail!("cannot write {}: it is a directory", path.display())
+                } else if is_socket(&kind) {
+                    bail!("cannot write {}: it is a socket", path.display())
+                } else {
+                    self.pending.push(through(&target));
+                    return Ok(());
+                }
+            }
+            Err(err) if err.kind() == io::ErrorKind::NotFound => None,
+            Err(err) => {
+                return Err(err).with_context(|| format!("cannot write {}", path.display()))
+            }
+        };
+        let temporary = stage_file(&target, contents, permissions)?;
+        // The same file staged twice (two spellings of one path): the last text wins, and
+        // its temporary, of the same name, already holds it.
+        self.pending.retain(
+            |p| !matches!(p, Pending::Replace { temporary: other, .. } if *other == temporary),
+        );
+        self.pending.push(Pending::Replace { temporary, target });
+        Ok(())
+    }
+
+    /// Replaces every staged file, writes to the devices and FIFOs, then prints what goes
+    /// to standard output.
+    pub fn commit(mut self) -> Result<()> {
+        let pending = std::mem::take(&mut self.pending);
+        let mut stdout = Vec::new();
+        let mut through = Vec::new();
+        let mut renames = Vec::new();
+        for entry in pending {
+            match entry {
+                Pending::Replace { temporary, target } => renames.push((temporary, target)),
+                Pending::Through {
+                    path,
+                    shown,
+                    contents,
+                } => through.push((path, shown, contents)),
+                Pending::Stdout(contents) => stdout.push(contents),
+            }
         }
-        Err(err) => Err(err).with_context(|| format!("cannot write {}", path.display())),
+        let mut failed = None;
+        for (temporary, target) in &renames {
+            if failed.is_some() {
+                let _ = fs::remove_file(temporary);
+                continue;
+            }
+            if let Err(err) = rename_into_place(temporary, target) {
+                let _ = fs::remove_file(temporary);
+                failed = Some(err);
+            }
+        }
+        if let Some(err) = failed {
+            return Err(err);
+        }
+        for (path, shown, contents) in through {
+            write_through(&path, &contents)
+                .with_context(|| format!("cannot write {}", shown.display()))?;
+        }
+        for contents in stdout {
+            print_bytes(&contents)?;
+        }
+        Ok(())
+    }
+
+    /// The end of a command whose report explains its failure: what goes to standard
+    /// output is printed, every file stays as it was (its temporary removed).
+    pub fn print_only(mut self) -> Result<()> {
+        let pending = std::mem::take(&mut self.pending);
+        for entry in pending {
+            match entry {
+                Pending::Replace { temporary, .. } => {
+                    let _ = fs::remove_file(temporary);
+                }
+                Pending::Through { .. } => {}
+                Pending::Stdout(contents) => print_bytes(&contents)?,
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Drop for StagedOutputs {
+    /// A command that did not commit replaces nothing: its temporaries go.
+    fn drop(&mut self) {
+        for entry in &self.pending {
+            if let Pending::Replace { temporary, .. } = entry {
+                let _ = fs::remove_file(temporary);
+            }
+        }
     }
 }
 
@@ -366,13 +511,14 @@ fn temporary_prefix(name: &OsString) -> String {
     format!(".{}.rvtol-tmp-", name.to_string_lossy())
 }
 
-/// Replaces (or creates) the regular file `path` through a temporary file and a rename;
-/// the new file gets `permissions` when given (those of the file it replaces).
-fn replace_atomically(
+/// Writes `contents` into the temporary file that will replace (or create) the regular
+/// file `path` ([`rename_into_place`]), synced; it gets `permissions` when given (those of
+/// the file it replaces). Its path, or the error (nothing left behind).
+fn stage_file(
     path: &Path,
     contents: &[u8],
     permissions: Option<fs::Permissions>,
-) -> Result<()> {
+) -> Result<PathBuf> {
     let (directory, name) = split(path)?;
     remove_stale_temporaries(&directory, &name);
     let temporary = directory.join(format!("{}{}", temporary_prefix(&name), std::process::id()));
@@ -386,18 +532,25 @@ fn replace_atomically(
             file.set_permissions(permissions)?;
         }
         file.write_all(contents)?;
-        file.sync_all()?;
-        fs::rename(&temporary, path)?;
-        // Make the rename itself durable; a directory that cannot be synced is no error.
-        if let Ok(dir) = File::open(&directory) {
-            let _ = dir.sync_all();
-        }
-        Ok(())
+        file.sync_all()
     })();
-    if result.is_err() {
-        let _ = fs::remove_file(&temporary);
+    match result {
+        Ok(()) => Ok(temporary),
+        Err(err) => {
+            let _ = fs::remove_file(&temporary);
+            Err(err).with_context(|| format!("cannot write {}", path.display()))
+        }
     }
-    result.with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// Renames the staged `temporary` over `path`, and makes the rename durable (a directory
+/// that cannot be synced is no error).
+fn rename_into_place(temporary: &Path, path: &Path) -> Result<()> {
+    fs::rename(temporary, path).with_context(|| format!("cannot write {}", path.display()))?;
+    if let Ok(dir) = File::open(split(path)?.0) {
+        let _ = dir.sync_all();
+    }
+    Ok(())
 }
 
 /// Removes temporary files of earlier writes to `name` in `directory` whose process is
@@ -475,6 +628,48 @@ mod tests {
             other.exists(),
             "a temporary of another report is left alone"
         );
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn staged_outputs_replace_all_their_files_on_commit_and_none_when_dropped() {
+        let dir = scratch("staged");
+        let (a, b) = (dir.join("a.json"), dir.join("b.html"));
+        fs::write(&a, "old a").unwrap();
+        fs::write(&b, "old b").unwrap();
+        let mut staged = StagedOutputs::new();
+        staged.add(&a, "new a").unwrap();
+        staged.add(&b, "new b").unwrap();
+        assert_eq!(
+            fs::read_to_string(&a).unwrap(),
+            "old a",
+            "nothing before the commit"
+        );
+        drop(staged);
+        assert_eq!(fs::read_to_string(&a).unwrap(), "old a");
+        assert_eq!(fs::read_to_string(&b).unwrap(), "old b");
+        let names = |dir: &Path| -> Vec<String> {
+            let mut names: Vec<String> = fs::read_dir(dir)
+                .unwrap()
+                .flatten()
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .collect();
+            names.sort();
+            names
+        };
+        assert_eq!(names(&dir), ["a.json", "b.html"], "no temporary left");
+        let mut staged = StagedOutputs::new();
+        staged.add(&a, "new a").unwrap();
+        staged.add(&b, "new b").unwrap();
+        staged.commit().unwrap();
+        assert_eq!(fs::read_to_string(&a).unwrap(), "new a");
+        assert_eq!(fs::read_to_string(&b).unwrap(), "new b");
+        assert_eq!(names(&dir), ["a.json", "b.html"]);
+        let mut staged = StagedOutputs::new();
+        staged.add(&a, "newer a").unwrap();
+        staged.print_only().unwrap();
+        assert_eq!(fs::read_to_string(&a).unwrap(), "new a");
+        assert_eq!(names(&dir), ["a.json", "b.html"]);
         fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -5,12 +5,16 @@
 //! Shared by the Monte Carlo run (column-major blocks straight from the sampler) and the
 //! sensitivity analyses (row-major rows, transposed here); owns its scratch buffers, so
 //! the hot loop does not allocate (for models of up to [`STACK_INPUTS`] inputs; beyond,
-//! one small buffer of slices per block).
+//! one small buffer of slices per block). Rows whose outputs are not finite are counted
+//! per output and checked against the allowed share as a run's samples are
+//! ([`check_non_finite_rows`]).
 //!
 //! [`ErrorModel::evaluate_columns`]: rvtol_models::ErrorModel::evaluate_columns
 
-use crate::run::CHUNK_SIZE;
-use crate::scenario::{Binding, Scenario};
+use rvtol_models::ConditionEffect;
+
+use crate::run::{model_of_output, CHUNK_SIZE};
+use crate::scenario::{Binding, Scenario, ScenarioError};
 
 /// Model inputs whose slices are gathered on the stack (larger models use one heap
 /// buffer per block).
@@ -147,5 +151,134 @@ pub fn evaluate_rows(scenario: &Scenario, inputs: Vec<f64>) -> crate::SampleTabl
         n_outputs,
         inputs,
         outputs: blocks.concat(),
+    }
+}
+
+/// The rows of one output whose value is not finite although its indicator does not
+/// exclude them: lost data, as a run counts it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct NonFiniteRows {
+    /// How many.
+    pub count: usize,
+    /// The first (row index), if any.
+    pub first: Option<usize>,
+}
+
+/// Per output of `scenario`, the rows of `table` whose value is not finite (a row its
+/// output's [`ConditionEffect::Excluded`] indicator flags has no value and is not counted).
+pub fn non_finite_rows(scenario: &Scenario, table: &crate::SampleTable) -> Vec<NonFiniteRows> {
+    let n = table.n_outputs;
+    (0..n)
+        .map(|o| {
+            let mut lost = NonFiniteRows::default();
+            for r in 0..table.rows {
+                let row = &table.outputs[r * n..(r + 1) * n];
+                let excluded = match scenario.outputs[o].condition {
+                    Some((k, ConditionEffect::Excluded)) => row[k].is_finite() && row[k] != 0.0,
+                    _ => false,
+                };
+                if !excluded && !row[o].is_finite() {
+                    lost.count += 1;
+                    lost.first.get_or_insert(r);
+                }
+            }
+            lost
+        })
+        .collect()
+}
+
+/// One line per output that lost rows, for standard error: `OUTPUT is not finite for K of
+/// N rows (S %, first in ROW)`, `row` naming a row index as the caller's file has it.
+pub fn non_finite_lines(
+    scenario: &Scenario,
+    table: &crate::SampleTable,
+    lost: &[NonFiniteRows],
+    row: &dyn Fn(usize) -> String,
+) -> Vec<(usize, String)> {
+    lost.iter()
+        .enumerate()
+        .filter(|(_, l)| l.count > 0)
+        .map(|(o, l)| {
+            (
+                o,
+                format!(
+                    "{} is not finite for {} of {} rows ({} %, first in {})",
+                    scenario.outputs[o].name,
+                    crate::report::group_thousands(l.count as u64),
+                    crate::report::group_thousands(table.rows as u64),
+                    crate::report::format_sig(100.0 * l.count as f64 / table.rows as f64),
+                    row(l.first.unwrap_or(0))
+                ),
+            )
+        })
+        .collect()
+}
+
+/// As a run's [`crate::run::check_non_finite`], for given rows: the first output that lost
+/// more than `max_share` of the rows to non-finite values is an error naming its model's
+/// JSON path, the count, the share and the first such row (`row` names it).
+pub fn check_non_finite_rows(
+    scenario: &Scenario,
+    table: &crate::SampleTable,
+    max_share: f64,
+    row: &dyn Fn(usize) -> String,
+) -> Result<(), ScenarioError> {
+    let lost = non_finite_rows(scenario, table);
+    for (o, line) in non_finite_lines(scenario, table, &lost, row) {
+        let share = lost[o].count as f64 / table.rows as f64;
+        if share > max_share {
+            return Err(ScenarioError::new(
+                model_of_output(scenario, o),
+                format!(
+                    "{line}, more than the allowed {} %: the model cannot evaluate these inputs; correct the rows, or accept a share with --max-non-finite",
+                    rvtol_deviation::Shown(100.0 * max_share)
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A stack y = x with x given: one row NaN-free, one whose value overflows to inf.
+    fn stack() -> Scenario {
+        Scenario::from_json(
+            r#"{
+                "variables": [ { "name": "x", "distribution": { "normal": { "mean": 0, "sd": 1 } } } ],
+                "models": [ { "model": "linear_stack",
+                              "params": { "output": "y", "coefficients": { "x": 1e12 } },
+                              "inputs": { "x": "x" } } ]
+            }"#,
+            "stack",
+        )
+        .expect("a valid scenario")
+    }
+
+    #[test]
+    fn lost_rows_are_counted_and_fail_beyond_the_allowed_share() {
+        let scenario = stack();
+        let table = evaluate_rows(&scenario, vec![1.0, 1e300, 2.0, 1e300]);
+        let lost = non_finite_rows(&scenario, &table);
+        assert_eq!(
+            lost,
+            [NonFiniteRows {
+                count: 2,
+                first: Some(1)
+            }]
+        );
+        let row = |r: usize| format!("row {r}");
+        let err = check_non_finite_rows(&scenario, &table, 0.0, &row).unwrap_err();
+        assert_eq!(err.path, "models[0] (linear_stack)");
+        assert!(
+            err.message
+                .starts_with("y is not finite for 2 of 4 rows (50.000 %, first in row 1), more than the allowed 0 %"),
+            "{}",
+            err.message
+        );
+        assert!(check_non_finite_rows(&scenario, &table, 0.5, &row).is_ok());
+        assert!(check_non_finite_rows(&scenario, &table, 0.49, &row).is_err());
     }
 }

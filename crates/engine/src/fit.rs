@@ -19,8 +19,14 @@
 //!   b₁,p (n·b₁,p/6 ~ χ² with p(p + 1)(p + 2)/6 degrees of freedom) and kurtosis b₂,p
 //!   ((b₂,p − p(p + 2))/√(8p(p + 2)/n) ~ N(0, 1), two-sided), when the sample covariance is
 //!   non-singular and at most [`MARDIA_MAX_PARTS`] parts are given.
+//! - What is printed validates ([`check_fragment`]): the fragment, pasted into a scenario,
+//!   loads as `rvtol validate` loads it, or the fit is refused with one line naming the
+//!   column (its heading) the problem comes from: a heading that is no variable name, a
+//!   unit rvtol does not know, values too large for a variance or for a scenario's range.
 
 use nalgebra::{DMatrix, SymmetricEigen};
+
+use crate::scenario::{units, Scenario};
 use serde_json::{json, Value};
 use statrs::distribution::{ChiSquared, ContinuousCDF, Normal};
 
@@ -369,6 +375,186 @@ pub fn fragment(fit: &Fit, part: Option<&str>, units: &[Option<String>], source:
         }
     }
     json!({ "variables": variables, "correlations": correlations })
+}
+
+/// Units a fitted variable may carry: those a scenario converts (lengths, angles) and `1`
+/// (a ratio), the units the models' inputs take.
+fn unit_known(unit: &str) -> bool {
+    unit == "1" || units::is_known(unit)
+}
+
+/// Checks that `fragment` (of [`fragment`], for `fit` and `part`) is what a scenario takes:
+/// every fitted figure finite, every variable name and unit valid, and the fragment, pasted
+/// into a scenario beside a model that reads none of it, loading as `rvtol validate` loads
+/// a scenario. The error is one line naming the column by its heading (`headings`, in the
+/// fit's column order, as the file writes them: `name [unit]`).
+pub fn check_fragment(
+    fit: &Fit,
+    fragment: &Value,
+    part: Option<&str>,
+    headings: &[String],
+) -> Result<(), String> {
+    let p = fit.names.len();
+    let column = |i: usize| match headings.get(i) {
+        Some(h) if !h.is_empty() => format!("column '{h}'"),
+        _ => format!("column {} (no heading)", i + 1),
+    };
+    for i in 0..p {
+        if !(fit.mean[i].is_finite() && fit.cov(i, i).is_finite()) {
+            return Err(format!(
+                "{}: its values are too large for a mean and a variance (they overflow): give them in a smaller unit",
+                column(i)
+            ));
+        }
+    }
+    for i in 0..p {
+        for j in i + 1..p {
+            if !fit.cov(i, j).is_finite() {
+                return Err(format!(
+                    "{} and {}: their covariance is not a finite number: give the values in a smaller unit",
+                    column(i),
+                    column(j)
+                ));
+            }
+        }
+    }
+    if part.is_none() {
+        for (i, variable) in fragment["variables"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .enumerate()
+        {
+            let name = variable["name"].as_str().unwrap_or("");
+            if name.is_empty() {
+                return Err(format!(
+                    "{}: a variable needs a name: head the column with one",
+                    column(i)
+                ));
+            }
+            if !name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+            {
+                let hint = match name.split_once('.') {
+                    Some((part, component)) if PART_COMPONENTS.contains(&component) => {
+                        format!(" (a part's component: fit the part with --part {part})")
+                    }
+                    _ => String::new(),
+                };
+                return Err(format!(
+                    "{}: {name:?} is not a variable name: use only letters, digits, '_' and '-'{hint}",
+                    column(i)
+                ));
+            }
+            if let Some(unit) = variable["unit"].as_str() {
+                if !unit_known(unit) {
+                    return Err(format!(
+                        "{}: {unit:?} is not a unit rvtol knows ({}; 1 for a ratio): head the column with one of them, or none",
+                        column(i),
+                        units::known()
+                    ));
+                }
+            }
+        }
+    }
+    // The fragment in a scenario whose one model binds a constant: it must load.
+    let mut scenario = fragment.clone();
+    scenario["name"] = json!("rvtol-fit-check");
+    scenario["models"] = json!([{
+        "model": "linear_stack",
+        "params": { "output": "rvtol-fit-check", "coefficients": { "x": 0.0 } },
+        "inputs": { "x": 0.0 }
+    }]);
+    let Err(err) = Scenario::from_json(&scenario.to_string(), "rvtol-fit-check") else {
+        return Ok(());
+    };
+    // The problem's JSON path names the column it comes from.
+    let indexed = |prefix: &str| -> Option<(usize, String)> {
+        let rest = err.path.strip_prefix(prefix)?;
+        let (index, rest) = rest.split_once(']')?;
+        Some((
+            index.parse().ok()?,
+            rest.trim_start_matches('.').to_string(),
+        ))
+    };
+    let located = if let Some((i, what)) = indexed("variables[") {
+        format!("{}: fitted {what}", column(i))
+    } else if let Some((k, _)) = indexed("correlations[") {
+        let pair = &fragment["correlations"][k]["between"];
+        let position = |end: usize| {
+            let name = pair[end].as_str().unwrap_or("");
+            fit.names.iter().position(|n| n == name).unwrap_or(p)
+        };
+        format!(
+            "{} and {}: fitted correlation",
+            column(position(0)),
+            column(position(1))
+        )
+    } else if let Some(rest) = err.path.strip_prefix("parts[0].") {
+        let index = |key: &str| {
+            rest.strip_prefix(key)
+                .and_then(|r| r.strip_prefix('['))
+                .and_then(|r| r.split(']').next())
+                .and_then(|i| i.parse::<usize>().ok())
+        };
+        match (index("mean"), index("covariance")) {
+            (Some(i), _) | (_, Some(i)) if i < p => format!("{}: fitted {rest}", column(i)),
+            _ if rest == "units.translation" => format!("{}: unit", column(0)),
+            _ if rest == "units.rotation" => format!("{}: unit", column(3)),
+            _ => format!("part {}: fitted {rest}", part.unwrap_or("")),
+        }
+    } else {
+        format!("the fitted fragment: {}", err.path)
+    };
+    Err(format!("{located}: {}", err.message))
+}
+
+#[cfg(test)]
+mod fragment_tests {
+    use super::*;
+
+    fn checked(names: &[&str], units: &[Option<&str>], rows: &[Vec<f64>]) -> Result<(), String> {
+        let names: Vec<String> = names.iter().map(|n| n.to_string()).collect();
+        let units: Vec<Option<String>> = units.iter().map(|u| u.map(String::from)).collect();
+        let headings: Vec<String> = names
+            .iter()
+            .zip(&units)
+            .map(|(n, u)| match u {
+                Some(u) => format!("{n} [{u}]"),
+                None => n.clone(),
+            })
+            .collect();
+        let fitted = fit(&names, rows).expect("a fit");
+        check_fragment(
+            &fitted,
+            &fragment(&fitted, None, &units, "m.csv"),
+            None,
+            &headings,
+        )
+    }
+
+    #[test]
+    fn a_fragment_a_scenario_would_refuse_is_refused_naming_the_column() {
+        let rows = vec![vec![1.0, 2.0], vec![2.0, 1.0], vec![3.0, 3.0]];
+        assert!(checked(&["a", "b"], &[Some("µm"), Some("1")], &rows).is_ok());
+        let err = checked(&["a", "b c"], &[None, None], &rows).unwrap_err();
+        assert!(
+            err.starts_with("column 'b c': \"b c\" is not a variable name"),
+            "{err}"
+        );
+        let err = checked(&["a", "b"], &[Some("furlong"), None], &rows).unwrap_err();
+        assert!(
+            err.starts_with("column 'a [furlong]': \"furlong\" is not a unit"),
+            "{err}"
+        );
+        let huge = vec![vec![1e200, 1.0], vec![2.0, 2.0], vec![3.0, 1.0]];
+        let err = checked(&["a", "b"], &[None, None], &huge).unwrap_err();
+        assert!(
+            err.starts_with("column 'a': its values are too large"),
+            "{err}"
+        );
+    }
 }
 
 #[cfg(test)]

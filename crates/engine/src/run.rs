@@ -1576,33 +1576,52 @@ pub fn nominal(scenario: &Scenario) -> Result<Vec<Option<f64>>, ScenarioError> {
 pub fn nominal_curves(
     scenario: &Scenario,
 ) -> Result<Vec<(&'static str, Vec<Curve>)>, ScenarioError> {
+    nominal_curves_per_model(scenario)
+        .into_iter()
+        .map(|(name, curves)| curves.map(|curves| (name, curves)))
+        .collect()
+}
+
+/// [`nominal_curves`] model by model: each model that draws curves with its curves, or the
+/// error naming its first point that is not finite (a page leaves that model's curves out
+/// and says why; the others are drawn).
+pub fn nominal_curves_per_model(
+    scenario: &Scenario,
+) -> Vec<(&'static str, Result<Vec<Curve>, ScenarioError>)> {
     let row = scenario.input_space.mean_row();
     let mut drawn = Vec::new();
     for (i, bound) in scenario.models.iter().enumerate() {
         let curves = bound.model.curves(&bound.inputs_of_row(&row));
-        for curve in &curves {
-            for series in &curve.series {
-                if let Some(&(x, y)) = series
+        if curves.is_empty() {
+            continue;
+        }
+        let broken = curves.iter().find_map(|curve| {
+            curve.series.iter().find_map(|series| {
+                series
                     .points
                     .iter()
                     .find(|(x, y)| !(x.is_finite() && y.is_finite()))
-                {
-                    return Err(ScenarioError::new(
-                        format!("models[{i}] ({})", bound.model.name()),
-                        format!(
-                            "curve {} ({}) has a point that is not finite ({}, {}) at the nominal point: the model cannot evaluate the scenario's nominal design",
-                            curve.name,
-                            series.label,
-                            rvtol_deviation::Shown(x),
-                            rvtol_deviation::Shown(y)
-                        ),
-                    ));
-                }
-            }
-        }
-        if !curves.is_empty() {
-            drawn.push((bound.model.name(), curves));
-        }
+                    .map(|&(x, y)| {
+                        ScenarioError::new(
+                            format!("models[{i}] ({})", bound.model.name()),
+                            format!(
+                                "curve {} ({}) has a point that is not finite ({}, {}) at the nominal point: the model cannot evaluate the scenario's nominal design",
+                                curve.name,
+                                series.label,
+                                rvtol_deviation::Shown(x),
+                                rvtol_deviation::Shown(y)
+                            ),
+                        )
+                    })
+            })
+        });
+        drawn.push((
+            bound.model.name(),
+            match broken {
+                Some(err) => Err(err),
+                None => Ok(curves),
+            },
+        ));
     }
-    Ok(drawn)
+    drawn
 }

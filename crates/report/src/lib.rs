@@ -49,6 +49,9 @@ pub struct Report<'a> {
     pub allocation: Option<&'a Value>,
     /// Model name and its curves with every deviation at its mean.
     pub curves: &'a [(String, Vec<Curve>)],
+    /// Why a model's curves are not drawn (a point that is not finite at the nominal
+    /// design), one sentence per model: the page says so where the curves would be.
+    pub curves_left_out: &'a [String],
 }
 
 /// Why a page could not be made, in one line.
@@ -183,8 +186,8 @@ pub fn render(report: &Report) -> Result<String, ReportError> {
         sections.push_str(&allocation_section(allocation)?);
         nav.push(("allocation".into(), "Allocation".into()));
     }
-    if !report.curves.is_empty() {
-        sections.push_str(&curves_section(report.curves)?);
+    if !report.curves.is_empty() || !report.curves_left_out.is_empty() {
+        sections.push_str(&curves_section(report.curves, report.curves_left_out)?);
         nav.push(("curves".into(), "Model curves".into()));
     }
     body.push_str(&format!(
@@ -948,11 +951,20 @@ fn allocation_section(report: &Value) -> Result<String, ReportError> {
     Ok(out)
 }
 
-fn curves_section(curves: &[(String, Vec<Curve>)]) -> Result<String, ReportError> {
+fn curves_section(
+    curves: &[(String, Vec<Curve>)],
+    left_out: &[String],
+) -> Result<String, ReportError> {
     let mut out = String::from(
         "<section id=\"curves\">\n<h2>Model curves</h2>\n<p class=\"note\">Every deviation at its mean \
          (the nominal assembly of the scenario).</p>\n",
     );
+    for why in left_out {
+        out.push_str(&format!(
+            "<p class=\"note\">Not drawn: {}.</p>\n",
+            escape(why)
+        ));
+    }
     for (model, list) in curves {
         out.push_str(&format!(
             "<h3>{}</h3>\n<div class=\"pair\">\n",

@@ -3,6 +3,11 @@
 //! default), and every input is bound to a variable of its own name and unit, at the
 //! example's design value (zero for a deviation) with zero spread: a placeholder the user
 //! replaces with the design's tolerances (scenarios/README.md lists the distributions).
+//!
+//! What `init` writes must validate: the given parameters are checked as `validate`
+//! checks a scenario's (the skeleton is loaded before it is returned, and a parameter
+//! the model takes as a number must be one even where this model's reading does not read
+//! it), each problem named by its `params.KEY` path.
 
 use rvtol_models::ParamValue;
 use serde_json::{json, Map, Value};
@@ -26,6 +31,28 @@ pub fn skeleton_with(name: &str, given: &Map<String, Value>) -> Result<String, S
     };
     let mut example = (entry.example_params)();
     if !given.is_empty() {
+        // A parameter the model takes as a number (the example gives one, or it has a
+        // default) given as something else: a reading that does not read it would carry
+        // it through unchecked.
+        for (key, value) in given {
+            let numeric = match example.entries().find(|(k, _)| k == key) {
+                Some((_, value)) => matches!(value, ParamValue::Number(_)),
+                None => entry
+                    .params
+                    .iter()
+                    .any(|spec| spec.name == key && spec.default.is_some()),
+            };
+            if numeric && !value.is_number() {
+                return Err(format!(
+                    "params.{key}: must be a number, got {}",
+                    if value.is_string() {
+                        "a string"
+                    } else {
+                        "something else"
+                    }
+                ));
+            }
+        }
         let given = super::compile::model_params("params", given).map_err(|err| err.to_string())?;
         for (key, value) in given.entries() {
             example.insert(key.to_string(), value.clone());
@@ -136,5 +163,47 @@ pub fn skeleton_with(name: &str, given: &Map<String, Value>) -> Result<String, S
     });
     let mut text = serde_json::to_string_pretty(&scenario).expect("a JSON value serialises");
     text.push('\n');
+    // The skeleton as `validate` takes it: the ranges every scenario's numbers must keep
+    // (a parameter of 1e308 builds a model but is no scenario's).
+    super::Scenario::from_json(&text, name).map_err(|err| {
+        match err.path.strip_prefix("models[0].") {
+            Some(path) if path.starts_with("params") => format!("{path}: {}", err.message),
+            _ => format!(
+                "the skeleton of these parameters does not validate: {}",
+                err
+            ),
+        }
+    })?;
     Ok(text)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_parameter_validate_would_refuse_is_refused_naming_it() {
+        for entry in rvtol_models::all() {
+            assert!(skeleton(entry.name).is_ok(), "{}", entry.name);
+            for spec in entry.params {
+                let mut given = Map::new();
+                given.insert(spec.name.to_string(), json!(1e308));
+                let err = skeleton_with(entry.name, &given).unwrap_err();
+                // This parameter, or another the model checks it against (a stage's
+                // eccentricity against its pin-circle radius).
+                assert!(
+                    err.starts_with("params.") && !err.contains('\n'),
+                    "{} {}: {err}",
+                    entry.name,
+                    spec.name
+                );
+            }
+        }
+        let mut given = Map::new();
+        given.insert("output_pin_circle_radius_mm".into(), json!("abc"));
+        assert_eq!(
+            skeleton_with("transmission_error", &given).unwrap_err(),
+            "params.output_pin_circle_radius_mm: must be a number, got a string"
+        );
+    }
 }
