@@ -14,6 +14,9 @@ trap 'rm -rf "$work"' EXIT
 python3 -m venv "$work/build"
 "$work/build/bin/pip" install -q --disable-pip-version-check -r crates/python/requirements-build.txt
 "$work/build/bin/maturin" build --release --locked --quiet -m crates/python/Cargo.toml -o "$work/wheels"
+# The wheel is tagged for any x86-64 CPU: its module must hold no instruction beyond the
+# baseline outside the dependencies' run-time dispatched functions.
+python3 scripts/check-baseline.py "$work"/wheels/rvtol-*.whl
 
 python3 -m venv "$work/test"
 "$work/test/bin/pip" install -q --disable-pip-version-check "$work"/wheels/rvtol-*.whl \
