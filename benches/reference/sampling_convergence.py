@@ -49,11 +49,17 @@ def half_widths(report, output, method):
             "P99.865": 0.5 * (pct["99.865"][1] - pct["99.865"][0]),
         }
     r = o["replicate_ci95"]
+
+    def half(interval):
+        # No replicate interval (a percentile beyond a replicate's outermost ranks): NaN,
+        # which leaves the rung out of that figure's fit.
+        return math.nan if None in interval else 0.5 * (interval[1] - interval[0])
+
     return {
-        "mean": 0.5 * (r["mean"][1] - r["mean"][0]),
-        "sd": 0.5 * (r["sd"][1] - r["sd"][0]),
-        "P50": 0.5 * (r["percentiles"]["50"][1] - r["percentiles"]["50"][0]),
-        "P99.865": 0.5 * (r["percentiles"]["99.865"][1] - r["percentiles"]["99.865"][0]),
+        "mean": half(r["mean"]),
+        "sd": half(r["sd"]),
+        "P50": half(r["percentiles"]["50"]),
+        "P99.865": half(r["percentiles"]["99.865"]),
     }
 
 
