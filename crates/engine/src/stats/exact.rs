@@ -71,30 +71,32 @@ pub fn percentile_type7(sorted_or_unsorted: &mut [f64], percent: f64) -> Option<
 /// O(n·k) at worst for k percentiles and close to O(n·log k) in practice.
 pub fn percentiles_type7(values: &mut [f64], percents: &[f64]) -> Vec<Option<f64>> {
     let count = values.len();
-    let positions: Vec<Option<(usize, f64)>> = percents
+    let splits: Vec<Option<(usize, f64)>> = percents
         .iter()
         .map(|&percent| type7_position(count, percent))
         .collect();
+    values_at_splits(values, &splits)
+}
 
-    let ranks: Vec<usize> = positions
+/// The value at each (lower rank, weight) of `splits`, interpolated linearly towards the
+/// next rank, from one selection pass; `None` where the split is `None`.
+fn values_at_splits(values: &mut [f64], splits: &[Option<(usize, f64)>]) -> Vec<Option<f64>> {
+    let ranks: Vec<usize> = splits
         .iter()
         .flatten()
-        .flat_map(|&(lower_rank, weight)| {
-            let upper_rank = (weight > 0.0).then_some(lower_rank + 1);
-            std::iter::once(lower_rank).chain(upper_rank)
-        })
+        .flat_map(|&(rank, weight)| std::iter::once(rank).chain((weight > 0.0).then_some(rank + 1)))
         .collect();
     let order_statistics = select_ranks(values, ranks);
     let lookup = |rank: usize| order_statistic(&order_statistics, rank);
-    positions
+    splits
         .iter()
-        .map(|position| {
-            position.map(|(lower_rank, weight)| {
-                let lower = lookup(lower_rank);
+        .map(|split| {
+            split.map(|(rank, weight)| {
+                let lower = lookup(rank);
                 if weight == 0.0 {
                     lower
                 } else {
-                    interpolate(lower, lookup(lower_rank + 1), weight)
+                    interpolate(lower, lookup(rank + 1), weight)
                 }
             })
         })
@@ -149,25 +151,7 @@ pub fn values_at_ranks(values: &mut [f64], positions: &[f64]) -> Vec<Option<f64>
         })
     };
     let splits: Vec<Option<(usize, f64)>> = positions.iter().map(|&p| split(p)).collect();
-    let ranks: Vec<usize> = splits
-        .iter()
-        .flatten()
-        .flat_map(|&(rank, weight)| std::iter::once(rank).chain((weight > 0.0).then_some(rank + 1)))
-        .collect();
-    let order_statistics = select_ranks(values, ranks);
-    let lookup = |rank: usize| order_statistic(&order_statistics, rank);
-    splits
-        .iter()
-        .map(|split| {
-            split.map(|(rank, weight)| {
-                if weight == 0.0 {
-                    lookup(rank)
-                } else {
-                    interpolate(lookup(rank), lookup(rank + 1), weight)
-                }
-            })
-        })
-        .collect()
+    values_at_splits(values, &splits)
 }
 
 /// A type 7 percentile with its distribution-free confidence interval
@@ -279,6 +263,21 @@ mod tests {
             assert_eq!(b.lower, l.map(|r| sorted[r]), "{p}");
             assert_eq!(b.upper, u.map(|r| sorted[r]), "{p}");
         }
+    }
+
+    #[test]
+    fn values_at_ranks_read_type7_positions_bit_for_bit_and_nothing_outside() {
+        let values: Vec<f64> = (0..257).map(|i| ((i * 97) % 257) as f64 * 0.3).collect();
+        let percents = [0.0, 0.135, 15.866, 50.0, 99.865, 100.0];
+        let positions: Vec<f64> = percents.iter().map(|p| 256.0 * (p / 100.0)).collect();
+        let by_rank = values_at_ranks(&mut values.clone(), &positions);
+        let by_type7 = percentiles_type7(&mut values.clone(), &percents);
+        for ((p, a), b) in percents.iter().zip(&by_rank).zip(&by_type7) {
+            assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits), "{p}");
+        }
+        // Hazen's rank of P0.135 among 257 values is 257·0.00135 − ½ < 0: no value.
+        let outside = values_at_ranks(&mut values.clone(), &[-0.153, 256.5, f64::NAN]);
+        assert_eq!(outside, vec![None, None, None]);
     }
 
     #[test]
