@@ -196,13 +196,15 @@ fn model_rows(scenario: &Scenario, rows: usize) -> Vec<Vec<f64>> {
         .collect()
 }
 
-/// Time per sample of each physical model (targets: contact ≤ 20 µs, transmission error
+/// Time per sample of each physical model (targets: contact and the geometric lost motion
+/// with its preload ≤ 20 µs, transmission error
 /// with its curve and order amplitudes ≤ 100 µs); the torsion curve on each of its three scenarios (the
 /// RV-20E's nominal is preloaded, the others are not: one more load case per row).
 fn models(c: &mut Criterion) {
     let mut group = c.benchmark_group("model_per_sample");
     for (file, rows, label) in [
         ("rv20e-hysteresis.json", 4096, "geometric_hysteresis"),
+        ("rv20e-lost-motion.json", 256, "rv_lost_motion"),
         ("rv80e-contact.json", 256, "cycloid_pin_contact"),
         ("rv40e-elastic.json", 256, "crank_elastic_error"),
         ("rv40e-transmission.json", 16, "transmission_error"),

@@ -13,6 +13,7 @@ mod fit;
 mod gate;
 mod hardening;
 mod kubernetes;
+mod lost_motion;
 mod msrv;
 mod mutation;
 mod percentile_intervals;

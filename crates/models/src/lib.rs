@@ -13,6 +13,7 @@ mod cycloid_pin_contact;
 mod geometric_hysteresis;
 mod linear_stack;
 mod params;
+mod reducer;
 mod spectrum;
 mod stiffness;
 mod test_functions;
@@ -24,6 +25,7 @@ pub use cycloid_pin_contact::{ContactSolution, CycloidPinContact};
 pub use geometric_hysteresis::{tilt_from_deflection, GeometricHysteresis};
 pub use linear_stack::LinearStack;
 pub use params::{ModelError, ModelParams, ParamValue};
+pub use reducer::RvLostMotion;
 pub use spectrum::{OrderDft, RealFft};
 pub use stiffness::{
     line_contact_approach, Carrier, ChainTerms, CrankShaft, CrankSide, InvoluteStage, RollerRow,
@@ -233,6 +235,7 @@ pub struct ModelEntry {
 pub fn all() -> &'static [ModelEntry] {
     &[
         geometric_hysteresis::ENTRY,
+        reducer::ENTRY,
         cycloid_pin_contact::ENTRY,
         crank_elastic_error::ENTRY,
         torsion_curve::ENTRY,

@@ -288,6 +288,8 @@ pub(super) struct Exact {
     pub involute: f64,
     /// Per disc κ·C_d, rad.
     pub crank: [f64; 2],
+    /// Per disc its window [κ·(C_d − L_d), κ·(C_d + K_d)], rad.
+    pub windows: [(f64, f64); 2],
 }
 
 impl TransmissionError {
@@ -663,7 +665,17 @@ impl TransmissionError {
             branch,
             involute,
             crank: [ph.kappa * offsets[0], ph.kappa * offsets[1]],
+            windows,
         }
+    }
+
+    /// Both discs' windows [lower, upper] at the output angle Θ (rad), from the whole
+    /// geometry pin by pin: what `rv_lost_motion` finds on the same deviations (one
+    /// geometry for both). None for 002's literal one-disc reading.
+    pub fn disc_windows(&self, inputs: &[f64], theta: f64) -> Option<[(f64, f64); 2]> {
+        self.physical.as_ref()?;
+        let terms = self.row_terms(inputs);
+        Some(self.exact(inputs, &terms, theta).windows)
     }
 
     /// The value of one contact branch at Θ (a lower bound of TE there), or None where

@@ -1,0 +1,414 @@
+//! The reducer as one definition (teeth, pin circle, pins, eccentricity, the design
+//! modification as generating amounts, cranks, disc face width, friction, rated torque),
+//! its derived quantities (ratio i, λ, K1), and the fixed grid on which
+//! `rv_lost_motion` looks at the two discs over one output revolution: M = q·z_p output
+//! angles, the pin angles φ they produce, each with its factors (docs/models.md §14).
+//!
+//! Frames (those of `transmission_error`'s physical reading, docs/models.md §12.1): output
+//! angle Θ; the eccentric of disc 1 points at χ = −z_p·Θ in the carrier (disc frame =
+//! carrier frame: the disc translates against the carrier), that of disc 2 at χ + π; pin i
+//! (0-based) sits at φ = 2π·i/z_p + z_c·Θ (+ π on disc 2) from its disc's eccentric.
+//!
+//! The grid. With Θ_k = 2π·k/M and M = q·z_p, φ = 2π·(q·i + z_c·k)/M + d·π takes only the
+//! 2M values π·j/M, so every factor is tabulated once per j (a `Slot`), and z_p·Θ_k =
+//! 2π·k/q takes q values.
+
+use std::f64::consts::PI;
+
+use crate::cycloid::CycloidStage;
+use crate::{ModelError, ModelParams};
+use rvtol_deviation::Shown;
+
+/// Most cranks of a reducer.
+pub(crate) const MAX_CRANKS: usize = 3;
+/// Palmgren's line-contact constant (mm, N): δ = 3.84·10⁻⁵·F^0.9/L^0.8, two contacts in
+/// series per pin (disc–pin, pin–housing); the same law as `cycloid_pin_contact`.
+pub(crate) const PALMGREN: f64 = 3.84e-5;
+pub(crate) const CONTACTS_PER_PIN: f64 = 2.0;
+
+/// The reducer, checked once.
+#[derive(Debug, Clone)]
+pub(crate) struct Reducer {
+    pub stage: CycloidStage,
+    /// r_rp, mm.
+    pub pin_radius: f64,
+    /// Design modification, generating amounts (mm): equidistant Δr_rp, shift Δr_p.
+    pub equidistant: f64,
+    pub shift: f64,
+    /// i = 1 + (z2/z1)·z_p (000 Eq. 4).
+    pub ratio: f64,
+    /// λ = (z_c/z_p)·(1 − 1/i): a disc's turn against the pins at the output.
+    pub lambda: f64,
+    /// a0, the sun–planet centre distance = the crank circle radius a_w (the planets ride
+    /// on the cranks), mm.
+    pub center_distance: f64,
+    /// r1, mm; α, rad; the sun mesh's axial place on the input shaft, mm.
+    pub sun_pitch_radius: f64,
+    pub pressure_angle: f64,
+    pub sun_position: f64,
+    /// m, 2 or 3.
+    pub cranks: usize,
+    /// L, mm.
+    pub face_width: f64,
+    /// μ at the pins.
+    pub pin_friction: f64,
+    /// T_r, N·m.
+    pub rated_torque: f64,
+    /// r_m, the circle on which a cumulative pitch deviation is measured, mm.
+    pub pitch_radius: f64,
+}
+
+impl Reducer {
+    /// Reads the reducer's parameters (keys as in the module's `PARAMS`).
+    pub fn from_params(params: &ModelParams) -> Result<Self, ModelError> {
+        let sun_teeth = params.count("sun_teeth", None)? as f64;
+        let planet_teeth = params.count("planet_teeth", None)? as f64;
+        let stage = CycloidStage::from_params(params, 200)?;
+        let pin_radius = params.positive("pin_radius_mm", None)?;
+        stage.check_pin_radius("pin_radius_mm", pin_radius)?;
+        let equidistant = params.number("equidistant_modification_mm", None)?;
+        let shift = params.number("shift_modification_mm", None)?;
+        for (key, value) in [
+            ("equidistant_modification_mm", equidistant),
+            ("shift_modification_mm", shift),
+        ] {
+            if value.abs() >= 0.5 * pin_radius {
+                return Err(ModelError::new(
+                    key,
+                    format!(
+                        "a modification of {} mm is not a small correction of pins of radius {} mm",
+                        Shown(value),
+                        Shown(pin_radius)
+                    ),
+                ));
+            }
+        }
+        let pressure_angle_deg = params.number("pressure_angle_deg", Some(20.0))?;
+        if !(pressure_angle_deg > 0.0 && pressure_angle_deg < 90.0) {
+            return Err(ModelError::new(
+                "pressure_angle_deg",
+                format!("must lie in (0, 90), got {}", Shown(pressure_angle_deg)),
+            ));
+        }
+        let cranks = params.count("crank_count", Some(2.0))? as usize;
+        if !(2..=MAX_CRANKS).contains(&cranks) {
+            return Err(ModelError::new(
+                "crank_count",
+                format!("must be 2 or 3, got {cranks}"),
+            ));
+        }
+        let pin_friction = params.number("pin_friction_coefficient", Some(0.0))?;
+        if !(0.0..1.0).contains(&pin_friction) {
+            return Err(ModelError::new(
+                "pin_friction_coefficient",
+                format!("must lie in [0, 1), got {}", Shown(pin_friction)),
+            ));
+        }
+        let pin_circle = stage.pin_circle_radius;
+        let pitch_radius =
+            params.positive("pitch_measuring_radius_mm", Some(pin_circle - pin_radius))?;
+        let ratio = 1.0 + planet_teeth * stage.pins as f64 / sun_teeth;
+        Ok(Reducer {
+            lambda: stage.teeth as f64 / stage.pins as f64 * (1.0 - 1.0 / ratio),
+            stage,
+            pin_radius,
+            equidistant,
+            shift,
+            ratio,
+            center_distance: params.positive("center_distance_mm", None)?,
+            sun_pitch_radius: params.positive("sun_pitch_radius_mm", None)?,
+            pressure_angle: pressure_angle_deg.to_radians(),
+            sun_position: params.number("sun_gear_axial_position_mm", Some(0.0))?,
+            cranks,
+            face_width: params.positive("disc_face_width_mm", None)?,
+            pin_friction,
+            rated_torque: params.positive("rated_torque_nm", None)?,
+            pitch_radius,
+        })
+    }
+
+    /// e·z_c, mm: the lever of the pitch point about the disc centre.
+    pub fn pitch_lever(&self) -> f64 {
+        self.stage.eccentricity * self.stage.teeth as f64
+    }
+
+    /// The pin contact's approach δ(F) = 2·3.84·10⁻⁵·F^0.9/L^0.8, mm.
+    pub fn approach(&self, force: f64) -> f64 {
+        CONTACTS_PER_PIN * PALMGREN * force.powf(0.9) / self.face_width.powf(0.8)
+    }
+
+    /// The force F with δ(F) = `approach`, N.
+    pub fn force_at(&self, approach: f64) -> f64 {
+        (approach * self.face_width.powf(0.8) / (CONTACTS_PER_PIN * PALMGREN)).powf(1.0 / 0.9)
+    }
+}
+
+/// A pin angle φ of the grid with its factors (docs/models.md §10, §14).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Slot {
+    /// l = e·z_c·sin φ/S, mm (signed: > 0 on the drive flank).
+    pub lever: f64,
+    /// 1/|l|, 1/mm.
+    pub inverse_lever: f64,
+    /// Factors of the equidistant and shift amounts (003's standard form), of an outward
+    /// pin displacement, of the disc's displacement along its eccentric, of a tangential
+    /// pin displacement.
+    pub equidistant: f64,
+    pub shift: f64,
+    pub radial: f64,
+    pub eccentric: f64,
+    pub tangential: f64,
+    /// cos and sin of the pin's polar angle about the disc centre, from the eccentric.
+    pub polar: (f64, f64),
+    /// h, the arm of the contact's tangent about the disc centre (the pin's slip per radian
+    /// of the disc's turn against the housing), mm.
+    pub slip_arm: f64,
+    /// The design modification's clearance g0, mm.
+    pub design_gap: f64,
+}
+
+/// A pin of one disc at one output angle: its slot and its index.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Entry {
+    pub slot: u32,
+    pub pin: u32,
+}
+
+/// The output angles of the grid with what each needs.
+#[derive(Debug, Clone)]
+pub(crate) struct Grid {
+    /// q, points per pin pitch; M = q·z_p.
+    pub per_pin: usize,
+    pub points: usize,
+    /// The 2M slots, slot j at φ = π·j/M.
+    pub slots: Vec<Slot>,
+    /// Per point k and disc d (index 2k + d): its drive-flank pins and its coast-flank pins,
+    /// each sorted by the design ratio g0/|l| (smallest first).
+    pub drive: Vec<Vec<Entry>>,
+    pub coast: Vec<Vec<Entry>>,
+    /// Per point and disc: the pins on the eccentric's line (no lever: they hold no turn,
+    /// but an overlap there loads them radially).
+    pub radial: Vec<Vec<Entry>>,
+    /// Per point k: (sin, cos) of z_p·Θ_k.
+    pub turn: Vec<(f64, f64)>,
+    /// Per point k and disc d: the needle rows' lever, the largest shift of the window (disc
+    /// angle, rad) per mm of the bore centres' free radius (docs/models.md §14.3).
+    pub needle_lever: Vec<f64>,
+    /// (sin, cos) of each crank's place β_k on the crank circle.
+    pub crank_angles: Vec<(f64, f64)>,
+    /// The slots as columns for the windows' scan.
+    pub columns: Columns,
+}
+
+/// The 2M slots as columns grouped by residue: the slots of one grid point and disc are
+/// j = r + 2q·m (m = 0..z_p) for one r = j mod 2q, so column entry r·z_p + m holds slot j,
+/// and a point's pins read one contiguous run of z_p entries (rotated by a whole number of
+/// pins). `inverse_lever` is 1/l, signed, and 0 where the lever is below the floor.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Columns {
+    pub design_gap: Vec<f64>,
+    pub equidistant: Vec<f64>,
+    pub shift: Vec<f64>,
+    pub radial: Vec<f64>,
+    pub tangential: Vec<f64>,
+    pub eccentric: Vec<f64>,
+    pub inverse_lever: Vec<f64>,
+    pub polar_cos: Vec<f64>,
+    pub polar_sin: Vec<f64>,
+}
+
+impl Columns {
+    fn new(slots: &[Slot], per_pin: usize, pins: usize, floor: f64) -> Columns {
+        let mut columns = Columns::default();
+        for r in 0..2 * per_pin {
+            for m in 0..pins {
+                let s = &slots[r + 2 * per_pin * m];
+                columns.design_gap.push(s.design_gap);
+                columns.equidistant.push(s.equidistant);
+                columns.shift.push(s.shift);
+                columns.radial.push(s.radial);
+                columns.tangential.push(s.tangential);
+                columns.eccentric.push(s.eccentric);
+                columns.inverse_lever.push(if s.lever.abs() > floor {
+                    1.0 / s.lever
+                } else {
+                    0.0
+                });
+                columns.polar_cos.push(s.polar.0);
+                columns.polar_sin.push(s.polar.1);
+            }
+        }
+        columns
+    }
+}
+
+impl Grid {
+    /// The grid of `reducer` with q = `per_pin` points per pin pitch.
+    pub fn new(reducer: &Reducer, per_pin: usize) -> Grid {
+        let stage = &reducer.stage;
+        let (zp, zc) = (stage.pins, stage.teeth);
+        let points = per_pin * zp;
+        let slots: Vec<Slot> = (0..2 * points)
+            .map(|j| slot(reducer, PI * j as f64 / points as f64))
+            .collect();
+        let crank_angles: Vec<(f64, f64)> = (0..reducer.cranks)
+            .map(|k| (2.0 * PI * k as f64 / reducer.cranks as f64).sin_cos())
+            .collect();
+        let (mut drive, mut coast, mut radial) = (Vec::new(), Vec::new(), Vec::new());
+        let mut needle_lever = Vec::new();
+        for k in 0..points {
+            for d in 0..2 {
+                let (mut ahead, mut behind, mut still) = (Vec::new(), Vec::new(), Vec::new());
+                for pin in 0..zp {
+                    let j = (2 * (per_pin * pin + zc * k) + d * points) % (2 * points);
+                    let entry = Entry {
+                        slot: j as u32,
+                        pin: pin as u32,
+                    };
+                    let s = &slots[j];
+                    if s.lever > LEVER_FLOOR * stage.eccentricity {
+                        ahead.push(entry);
+                    } else if s.lever < -LEVER_FLOOR * stage.eccentricity {
+                        behind.push(entry);
+                    } else {
+                        still.push(entry);
+                    }
+                }
+                let ratio = |e: &Entry| {
+                    let s = &slots[e.slot as usize];
+                    s.design_gap * s.inverse_lever
+                };
+                ahead.sort_by(|a, b| ratio(a).total_cmp(&ratio(b)));
+                behind.sort_by(|a, b| ratio(a).total_cmp(&ratio(b)));
+                drive.push(ahead);
+                coast.push(behind);
+                radial.push(still);
+                // The eccentric of disc d at χ = −z_p·Θ_k (+π), its across direction χ + π/2.
+                let across =
+                    -(zp as f64) * 2.0 * PI * k as f64 / points as f64 + d as f64 * PI + 0.5 * PI;
+                needle_lever.push(needle_lever_at(
+                    across.sin_cos(),
+                    &crank_angles,
+                    reducer.center_distance,
+                    reducer.pitch_lever(),
+                ));
+            }
+        }
+        let turn = (0..points)
+            .map(|k| (2.0 * PI * (k % per_pin) as f64 / per_pin as f64).sin_cos())
+            .collect();
+        let columns = Columns::new(&slots, per_pin, zp, LEVER_FLOOR * stage.eccentricity);
+        Grid {
+            per_pin,
+            points,
+            columns,
+            slots,
+            drive,
+            coast,
+            radial,
+            turn,
+            needle_lever,
+            crank_angles,
+        }
+    }
+}
+
+/// Levers below this fraction of e (pins within about 1e-12 rad of φ = 0 or π) hold no
+/// turn of the disc and are left out of the windows, as in `transmission_error`.
+const LEVER_FLOOR: f64 = 1e-12;
+
+/// The slot at φ.
+fn slot(reducer: &Reducer, phi: f64) -> Slot {
+    let stage = &reducer.stage;
+    let (sin, cos) = phi.sin_cos();
+    let f = stage.pin_factors_at(sin, cos);
+    let k1 = stage.k1();
+    let s = (1.0 + k1 * k1 - 2.0 * k1 * cos).sqrt();
+    let (r_p, e) = (stage.pin_circle_radius, stage.eccentricity);
+    let polar = (r_p * sin).atan2(r_p * cos - e).sin_cos();
+    Slot {
+        lever: f.lever,
+        inverse_lever: 1.0 / f.lever.abs(),
+        equidistant: f.equidistant,
+        shift: f.shift,
+        radial: f.radial,
+        eccentric: f.eccentric,
+        tangential: f.tangential,
+        polar: (polar.1, polar.0),
+        slip_arm: ((r_p * (k1 * cos - 1.0) - e * (k1 - cos)) / s + reducer.pin_radius).abs(),
+        design_gap: reducer.equidistant * f.equidistant + reducer.shift * f.shift,
+    }
+}
+
+/// The needle rows' lever for one disc whose across-the-eccentric direction is `across`
+/// (sin, cos) in the carrier: with every bore centre free to move within a circle of radius
+/// 1 about its eccentric's centre, the largest t·ŷ/(e·z_c) + ρ over the disc's translations
+/// t and turns ρ against the carrier that keep every bore within its circle (bore k at a_w
+/// on the crank circle moves by t + ρ·a_w·ĵ_k, ĵ_k its tangent). A translation across the
+/// eccentric turns the window like a turn of t/(e·z_c) (every pin normal passes through the
+/// pitch point, e·z_c from the disc centre), a turn against the carrier like itself.
+/// Concave in u = ρ·a_w: golden-section search, with the largest ŷ·t over the intersection
+/// of the circles (centres −u·ĵ_k) from its candidate points.
+pub(crate) fn needle_lever_at(
+    across: (f64, f64),
+    cranks: &[(f64, f64)],
+    crank_radius: f64,
+    pitch_lever: f64,
+) -> f64 {
+    let y = (across.1, across.0);
+    let value = |u: f64| {
+        let centres: Vec<(f64, f64)> = cranks.iter().map(|&(sb, cb)| (u * sb, -u * cb)).collect();
+        largest_along(y, &centres) / pitch_lever + u / crank_radius
+    };
+    let (mut lo, mut hi) = (-1.0_f64, 1.0_f64);
+    let golden = 0.5 * (5.0_f64.sqrt() - 1.0);
+    let (mut a, mut b) = (hi - golden * (hi - lo), lo + golden * (hi - lo));
+    let (mut fa, mut fb) = (value(a), value(b));
+    for _ in 0..200 {
+        if fa < fb {
+            lo = a;
+            (a, fa) = (b, fb);
+            b = lo + golden * (hi - lo);
+            fb = value(b);
+        } else {
+            hi = b;
+            (b, fb) = (a, fa);
+            a = hi - golden * (hi - lo);
+            fa = value(a);
+        }
+    }
+    fa.max(fb)
+}
+
+/// The largest y·t over the intersection of unit circles about `centres` (−∞ when empty):
+/// the optimum is a circle's own extreme point inside every other circle, or a point where
+/// two circles cross.
+fn largest_along(y: (f64, f64), centres: &[(f64, f64)]) -> f64 {
+    let inside = |p: (f64, f64)| {
+        centres
+            .iter()
+            .all(|c| (p.0 - c.0).hypot(p.1 - c.1) <= 1.0 + 1e-12)
+    };
+    let mut best = f64::NEG_INFINITY;
+    let mut consider = |p: (f64, f64)| {
+        if inside(p) {
+            best = best.max(y.0 * p.0 + y.1 * p.1);
+        }
+    };
+    for (i, a) in centres.iter().enumerate() {
+        consider((a.0 + y.0, a.1 + y.1));
+        for b in &centres[i + 1..] {
+            let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+            let gap = dx.hypot(dy);
+            if gap > 2.0 || gap == 0.0 {
+                continue;
+            }
+            let half = (1.0 - 0.25 * gap * gap).max(0.0).sqrt();
+            let mid = (a.0 + 0.5 * dx, a.1 + 0.5 * dy);
+            let normal = (-dy / gap, dx / gap);
+            consider((mid.0 + half * normal.0, mid.1 + half * normal.1));
+            consider((mid.0 - half * normal.0, mid.1 - half * normal.1));
+        }
+    }
+    best
+}

@@ -1,0 +1,326 @@
+//! `rv_lost_motion`: the lost motion and the preload of an RV reducer from its geometry,
+//! pin by pin and disc by disc (docs/models.md §14). The reducer is one definition
+//! (`geometry.rs`); the deviations act through it at the two discs' pins over one output
+//! revolution (`windows.rs`); an assembly whose flanks overlap is judged by the forces and
+//! the drag its preload makes (`preload.rs`).
+//!
+//! ```text
+//! lost motion at Θ_k   LM_k = max(0, W_k) + max(0, Δφ12')
+//!   W_k = min_d upper_d(Θ_k) − max_d lower_d(Θ_k)  the two discs' common window (windows.rs)
+//!   Δφ12' = −(E_ws + E_wi)/(2·r1·i·cos α')·10800/π, cos α' = a0·cos α·cos β/(a0 + a1)
+//!                                                    (000 Eq. 5, 12; β, a1 from 001 Eq. 5–8)
+//! outputs              worst = max_k LM_k, mean = Σ_k LM_k/M over Θ_k = 2π·k/M, M = q·z_p
+//! least                min_k LM_k
+//! preload              at the Θ_k of the narrowest window, when it is negative: the
+//!                      zero-torque balance of both discs (preload.rs): the largest approach
+//!                      of a pin contact (the overlap a flank takes up), the largest pin
+//!                      force F_max(0), the no-load torque T_0 at the input
+//! preload class        free: min_k W_k ≥ 0 and Δφ12' ≥ 0
+//!                      over-preloaded: F_max(0) > limit, overlap > limit, T_0 > limit, or
+//!                      Δφ12' < 0 (a jammed gear mesh has no allowance)
+//!                      preloaded within the limit otherwise
+//! default limit        the largest pin force at rated torque of the design (preload.rs)
+//! ```
+//! `lost_motion_arcmin` and its mean are non-conforming when the assembly is
+//! over-preloaded; a preload within the limit is a design state and conforms.
+//!
+//! q (`positions_per_pin`, default 4): the windows change with the pins' place against the
+//! pitch point, which repeats every pin pitch; q points per pitch find the worst window of
+//! the RV-20E's design to 0.1 % of the play (tests: the worst play converges in q).
+
+mod geometry;
+mod layout;
+mod preload;
+mod windows;
+
+use rvtol_deviation::{point_displacement, Shown};
+
+use crate::{
+    ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputSpec, ParamSpec,
+    ARCMIN_PER_RAD,
+};
+use geometry::{Grid, Reducer};
+use layout::Layout;
+use preload::{DiscPins, Preload};
+use windows::{disc_window, offset_and_shift, pin_gap, row_terms, turned_pitch, RowTerms};
+
+const PARAMS: &[ParamSpec] = &[
+    ParamSpec { name: "sun_teeth", unit: "1", description: "z1, sun teeth", default: None },
+    ParamSpec { name: "planet_teeth", unit: "1", description: "z2, planet teeth", default: None },
+    ParamSpec { name: "cycloid_teeth", unit: "1", description: "z_c, disc teeth (z_p − 1)", default: None },
+    ParamSpec { name: "pin_count", unit: "1", description: "z_p, pins", default: None },
+    ParamSpec { name: "pin_circle_radius_mm", unit: "mm", description: "r_p, pin centre circle radius", default: None },
+    ParamSpec { name: "pin_radius_mm", unit: "mm", description: "r_rp, pin radius", default: None },
+    ParamSpec { name: "eccentricity_mm", unit: "mm", description: "e, eccentricity (K1 = e·z_p/r_p is derived)", default: None },
+    ParamSpec { name: "equidistant_modification_mm", unit: "mm", description: "Δr_rp, the design's equidistant amount (generating pin radius minus r_rp; positive: clearance)", default: None },
+    ParamSpec { name: "shift_modification_mm", unit: "mm", description: "Δr_p, the design's shift amount (generating pin circle minus r_p; positive: less clearance)", default: None },
+    ParamSpec { name: "pressure_angle_deg", unit: "deg", description: "α of the involute stage", default: Some(20.0) },
+    ParamSpec { name: "center_distance_mm", unit: "mm", description: "a0, sun–planet centre distance = the crank circle radius", default: None },
+    ParamSpec { name: "sun_pitch_radius_mm", unit: "mm", description: "r1, sun pitch radius (000 Eq. 5)", default: None },
+    ParamSpec { name: "sun_gear_axial_position_mm", unit: "mm", description: "z of the sun mesh from the input shaft's deviation reference point", default: Some(0.0) },
+    ParamSpec { name: "crank_count", unit: "1", description: "m, cranks (2 or 3) on the crank circle, evenly spaced", default: Some(2.0) },
+    ParamSpec { name: "disc_face_width_mm", unit: "mm", description: "L, the disc's face width (the pin contacts' length)", default: None },
+    ParamSpec { name: "pin_friction_coefficient", unit: "1", description: "μ at the pin contacts, for the no-load torque", default: Some(0.0) },
+    ParamSpec { name: "rated_torque_nm", unit: "N·m", description: "T_r, rated output torque (sets the default preload limit)", default: None },
+    ParamSpec { name: "pitch_measuring_radius_mm", unit: "mm", description: "r_m, the circle on which the cumulative pitch deviation is measured (default r_p − r_rp)", default: None },
+    ParamSpec { name: "positions_per_pin", unit: "1", description: "q, output angles per pin pitch (M = q·z_p over a revolution)", default: Some(4.0) },
+    ParamSpec { name: "preload_limit_pin_force_n", unit: "N", description: "largest pin force at zero torque allowed (default: the largest pin force at rated torque of the design)", default: None },
+    ParamSpec { name: "preload_limit_overlap_um", unit: "µm", description: "largest overlap per flank allowed (default: no limit on it)", default: None },
+    ParamSpec { name: "preload_limit_no_load_torque_nm", unit: "N·m", description: "largest no-load torque at the input allowed (default: no limit on it)", default: None },
+];
+
+/// Most points per pin pitch.
+const MAX_PER_PIN: u32 = 64;
+
+/// Registry entry.
+pub const ENTRY: ModelEntry = ModelEntry {
+    name: "rv_lost_motion",
+    summary: "lost motion and preload of an RV reducer from its geometry: two discs, pin by pin, over one output revolution, with the preload's pin forces and no-load torque (000 Eq. 5, 12; 003; docs/models.md §14)",
+    params: PARAMS,
+    build: |params| Ok(Box::new(RvLostMotion::from_params(params)?)),
+    example_params: RvLostMotion::rv20e_params,
+    example_inputs: &[
+        ("common_normal_upper_deviation_mm", 0.0035),
+        ("common_normal_lower_deviation_mm", -0.0309),
+    ],
+};
+
+/// The limits of the preload class.
+#[derive(Debug, Clone, Copy)]
+struct Limits {
+    pin_force: f64,
+    overlap_um: f64,
+    no_load_torque: f64,
+}
+
+/// The model with its reducer and grid.
+#[derive(Debug, Clone)]
+pub struct RvLostMotion {
+    reducer: Reducer,
+    grid: Grid,
+    layout: Layout,
+    limits: Limits,
+    /// 10800/π / (2·r1·i·a0·cos α).
+    involute_scale: f64,
+    inputs: Vec<InputSpec>,
+    outputs: Vec<OutputSpec>,
+}
+
+impl RvLostMotion {
+    /// The RV-20E of document 000 (Table 8, Table 9's design modification; K1 derived),
+    /// with the pins, face width and rated torque of the shipped torsion scenario.
+    pub fn rv20e_params() -> ModelParams {
+        ModelParams::new()
+            .with_number("sun_teeth", 12.0)
+            .with_number("planet_teeth", 42.0)
+            .with_number("cycloid_teeth", 39.0)
+            .with_number("pin_count", 40.0)
+            .with_number("pin_circle_radius_mm", 52.0)
+            .with_number("pin_radius_mm", 2.0)
+            .with_number("eccentricity_mm", 0.9)
+            .with_number("equidistant_modification_mm", -0.010)
+            .with_number("shift_modification_mm", -0.012)
+            .with_number("center_distance_mm", 27.5)
+            .with_number("sun_pitch_radius_mm", 13.5)
+            .with_number("disc_face_width_mm", 8.0)
+            .with_number("pin_friction_coefficient", 0.02)
+            .with_number("rated_torque_nm", 167.0)
+    }
+
+    /// Builds the model, checking every parameter once.
+    pub fn from_params(params: &ModelParams) -> Result<Self, ModelError> {
+        let reducer = Reducer::from_params(params)?;
+        let per_pin = params.count("positions_per_pin", Some(4.0))?;
+        if per_pin > MAX_PER_PIN {
+            return Err(ModelError::new(
+                "positions_per_pin",
+                format!("must be at most {MAX_PER_PIN}, got {per_pin}"),
+            ));
+        }
+        let grid = Grid::new(&reducer, per_pin as usize);
+        let limit = |key: &str, default: f64| -> Result<f64, ModelError> {
+            let value = params.number(key, Some(default))?;
+            if value < 0.0 {
+                return Err(ModelError::new(
+                    key,
+                    format!("must not be negative, got {}", Shown(value)),
+                ));
+            }
+            Ok(value)
+        };
+        let rated = preload::rated_pin_force(&reducer, &grid);
+        let limits = Limits {
+            pin_force: limit("preload_limit_pin_force_n", rated)?,
+            overlap_um: limit("preload_limit_overlap_um", f64::INFINITY)?,
+            no_load_torque: limit("preload_limit_no_load_torque_nm", f64::INFINITY)?,
+        };
+        params.reject_unknown(&PARAMS.iter().map(|p| p.name).collect::<Vec<_>>())?;
+        let involute_scale = ARCMIN_PER_RAD
+            / (2.0
+                * reducer.sun_pitch_radius
+                * reducer.ratio
+                * reducer.center_distance
+                * reducer.pressure_angle.cos());
+        let layout = Layout::new(reducer.cranks);
+        Ok(RvLostMotion {
+            inputs: layout::inputs(reducer.cranks, reducer.stage.pins),
+            outputs: layout::outputs(),
+            layout,
+            grid,
+            limits,
+            involute_scale,
+            reducer,
+        })
+    }
+
+    /// The largest pin force at rated torque of the design, N (the default limit).
+    pub fn rated_pin_force(&self) -> f64 {
+        preload::rated_pin_force(&self.reducer, &self.grid)
+    }
+
+    /// M = q·z_p, the output angles over a revolution.
+    pub fn points(&self) -> usize {
+        self.grid.points
+    }
+
+    /// The index of the input named `name`.
+    pub fn input_index(&self, name: &str) -> Option<usize> {
+        self.inputs.iter().position(|i| i.name == name)
+    }
+
+    /// λ.
+    pub fn lambda(&self) -> f64 {
+        self.reducer.lambda
+    }
+
+    /// Both discs' windows at grid point k, output angles (rad): [(lower, upper); 2].
+    pub fn disc_windows(&self, x: &[f64], k: usize) -> [(f64, f64); 2] {
+        let terms = row_terms(&self.reducer, &self.grid, &self.layout, x);
+        [0, 1].map(|d| {
+            disc_window(&self.reducer, &self.grid, &self.layout, &terms, x, k, d)
+                .ends(self.reducer.lambda)
+        })
+    }
+
+    /// The common window's width W_k (rad at the output) at every grid point.
+    pub fn window_widths(&self, x: &[f64]) -> Vec<f64> {
+        let terms = row_terms(&self.reducer, &self.grid, &self.layout, x);
+        (0..self.grid.points)
+            .map(|k| self.width(&terms, x, k))
+            .collect()
+    }
+
+    fn width(&self, terms: &RowTerms, x: &[f64], k: usize) -> f64 {
+        let lambda = self.reducer.lambda;
+        let (lo0, up0) =
+            disc_window(&self.reducer, &self.grid, &self.layout, terms, x, k, 0).ends(lambda);
+        let (lo1, up1) =
+            disc_window(&self.reducer, &self.grid, &self.layout, terms, x, k, 1).ends(lambda);
+        up0.min(up1) - lo0.max(lo1)
+    }
+
+    /// The revolution: the widest common window, the mean of max(0, W) and the least W
+    /// over the M points, the narrowest W and where it is.
+    fn scan_revolution(&self, terms: &RowTerms, x: &[f64]) -> (f64, f64, f64, (f64, usize)) {
+        let (mut widest, mut sum, mut narrowest) = (f64::NEG_INFINITY, 0.0, (f64::INFINITY, 0));
+        for k in 0..self.grid.points {
+            let w = self.width(terms, x, k);
+            widest = widest.max(w);
+            sum += w.max(0.0);
+            if w < narrowest.0 {
+                narrowest = (w, k);
+            }
+        }
+        (
+            widest,
+            sum / self.grid.points as f64,
+            narrowest.0,
+            narrowest,
+        )
+    }
+
+    /// Δφ12', arcmin (000 Eq. 5, 12).
+    fn involute(&self, x: &[f64]) -> f64 {
+        let s = self.layout.shaft;
+        let shaft = [x[s], x[s + 1], 0.0, x[s + 2], x[s + 3], 0.0];
+        let at_sun = point_displacement(&shaft, [0.0, 0.0, self.reducer.sun_position]);
+        let a1 = at_sun[0].hypot(at_sun[1]);
+        let cos_beta = x[s + 2].hypot(x[s + 3]).cos();
+        let (ws, wi) = self.layout.common_normal;
+        -(x[ws] + x[wi]) * self.involute_scale * (self.reducer.center_distance + a1) / cos_beta
+    }
+
+    /// Both discs' pins at grid point k, every pin, for the preload's balance.
+    fn pins_at(&self, terms: &RowTerms, x: &[f64], k: usize) -> [DiscPins; 2] {
+        [0, 1].map(|d| {
+            let turn = self.grid.turn[k];
+            let (offset, shift) = offset_and_shift(&self.reducer, terms, d, turn);
+            let pitch = turned_pitch(terms, d, turn);
+            let index = 2 * k + d;
+            let slack = self.grid.needle_lever[index] * terms.needle_radius;
+            let mut pins = DiscPins::new(offset, slack);
+            for list in [
+                &self.grid.drive[index],
+                &self.grid.coast[index],
+                &self.grid.radial[index],
+            ] {
+                for &entry in list {
+                    let s = &self.grid.slots[entry.slot as usize];
+                    let at = self.layout.pins + entry.pin as usize;
+                    let count = self.reducer.stage.pins;
+                    let errors = (x[at], x[at + count], x[at + 2 * count]);
+                    let (gap, epsilon) = pin_gap(s, terms, d, errors, shift, pitch);
+                    pins.push(gap - s.lever * epsilon, s.lever, s.slip_arm);
+                }
+            }
+            pins
+        })
+    }
+}
+
+impl ErrorModel for RvLostMotion {
+    fn name(&self) -> &'static str {
+        ENTRY.name
+    }
+
+    fn inputs(&self) -> &[InputSpec] {
+        &self.inputs
+    }
+
+    fn outputs(&self) -> &[OutputSpec] {
+        &self.outputs
+    }
+
+    fn evaluate(&self, x: &[f64], out: &mut [f64]) {
+        if x.iter().any(|v| !v.is_finite()) {
+            out.iter_mut().for_each(|o| *o = f64::NAN);
+            return;
+        }
+        let terms = row_terms(&self.reducer, &self.grid, &self.layout, x);
+        let (widest, sum, least, (narrowest, at)) = self.scan_revolution(&terms, x);
+        let involute = self.involute(x) + 0.0;
+        let free_involute = involute.max(0.0);
+        let preload = if narrowest < 0.0 {
+            preload::zero_torque(&self.reducer, &self.pins_at(&terms, x, at))
+        } else {
+            Preload::NONE
+        };
+        let preloaded = narrowest < 0.0 || involute < 0.0;
+        let over = involute < 0.0
+            || preload.pin_force > self.limits.pin_force
+            || preload.overlap_um > self.limits.overlap_um
+            || preload.no_load_torque > self.limits.no_load_torque;
+        out[0] = widest.max(0.0) * ARCMIN_PER_RAD + free_involute;
+        out[1] = sum * ARCMIN_PER_RAD + free_involute;
+        out[2] = least.max(0.0) * ARCMIN_PER_RAD + free_involute;
+        out[3] = involute;
+        out[4] = preload.overlap_um;
+        out[5] = preload.pin_force;
+        out[6] = preload.no_load_torque;
+        out[7] = f64::from(u8::from(preloaded));
+        out[8] = f64::from(u8::from(over));
+    }
+}
+
+#[cfg(test)]
+mod tests;

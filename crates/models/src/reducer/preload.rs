@@ -1,0 +1,285 @@
+//! Preload judged by its physics (docs/models.md §14.5): where the two discs' windows fail
+//! to overlap, the flanks are squeezed at zero torque. At the output angle of the largest
+//! overlap, the discs settle where their pins' moments balance:
+//! ```text
+//! disc d turned by y_d against its pins: pin i deforms by d_i = l_i·y_d − g_i (> 0: loaded)
+//! moment (per unit contact stiffness)  T_d(y) = Σ_i max(0, l_i·y − g_i)·l_i   (increasing)
+//! with the output at u = Θ/λ:          x_d = u − C_d, and the needle rows' slack s_d lets
+//!                                      the disc take any y in [x_d − s_d, x_d + s_d] free
+//! balance at zero output torque        Σ_d τ_d(u) = 0,  τ_d = T_d(y_d) at the y_d of least |T_d|
+//! contact law (two Palmgren line contacts per pin, as cycloid_pin_contact):
+//!                                      δ(F) = 2·3.84·10⁻⁵·F^0.9/L^0.8
+//! largest pin force                    F_max = δ⁻¹(max_i d_i),  K = F_max/max_i d_i (secant)
+//! no-load torque at the input          T_0 = μ·Σ_i K·d_i·h_i / i
+//! ```
+//! The balance is taken with the secant stiffness of the most loaded pin for every pin (as
+//! the contact model's zero-torque solution), so it fixes the y_d whatever K. h_i is the
+//! arm of the contact's tangent about the disc centre: a pin slips by h_i per radian of the
+//! disc's turn against the housing, which turns once per output turn while the input turns
+//! i times. Left out of T_0: the friction of the crank bearings, support and main bearings
+//! and seals under the preload's forces.
+
+use super::geometry::{Grid, Reducer};
+
+/// Most pins of a disc (the stage's own limit).
+pub(crate) const MAX_PINS: usize = 200;
+
+/// One disc's pins at one output angle: gap (the pitch's turn folded in), lever and slip
+/// arm, held on the stack (the model allocates nothing per sample).
+#[derive(Debug, Clone)]
+pub(crate) struct DiscPins {
+    gaps: [f64; MAX_PINS],
+    levers: [f64; MAX_PINS],
+    arms: [f64; MAX_PINS],
+    len: usize,
+    /// C_d and the slack s_d, rad (disc angles).
+    pub offset: f64,
+    pub slack: f64,
+}
+
+impl DiscPins {
+    /// No pins yet.
+    pub fn new(offset: f64, slack: f64) -> DiscPins {
+        DiscPins {
+            gaps: [0.0; MAX_PINS],
+            levers: [0.0; MAX_PINS],
+            arms: [0.0; MAX_PINS],
+            len: 0,
+            offset,
+            slack,
+        }
+    }
+
+    /// Adds a pin.
+    pub fn push(&mut self, gap: f64, lever: f64, arm: f64) {
+        self.gaps[self.len] = gap;
+        self.levers[self.len] = lever;
+        self.arms[self.len] = arm;
+        self.len += 1;
+    }
+
+    fn gaps(&self) -> &[f64] {
+        &self.gaps[..self.len]
+    }
+
+    fn levers(&self) -> &[f64] {
+        &self.levers[..self.len]
+    }
+
+    /// T_d(y), mm² (per unit stiffness: N·mm per N/mm).
+    fn moment(&self, y: f64) -> f64 {
+        let mut sum = 0.0;
+        for (g, l) in self.gaps().iter().zip(self.levers()) {
+            let d = l * y - g;
+            if d > 0.0 {
+                sum += d * l;
+            }
+        }
+        sum
+    }
+
+    /// The disc's turn y in [x − s, x + s] where |T_d| is least, and T_d there.
+    fn settle(&self, x: f64) -> (f64, f64) {
+        let (lo, hi) = (x - self.slack, x + self.slack);
+        let (t_lo, t_hi) = (self.moment(lo), self.moment(hi));
+        if t_lo >= 0.0 {
+            (lo, t_lo)
+        } else if t_hi <= 0.0 {
+            (hi, t_hi)
+        } else {
+            let y = root(|y| self.moment(y), lo, hi);
+            (y, 0.0)
+        }
+    }
+
+    /// The smallest g/l over the drive flank (its lag L_d), rad.
+    fn lag(&self) -> f64 {
+        self.gaps()
+            .iter()
+            .zip(self.levers())
+            .filter(|(_, l)| **l > 0.0)
+            .map(|(g, l)| g / l)
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// The smallest g/|l| over the coast flank (its lead K_d), rad.
+    fn lead(&self) -> f64 {
+        self.gaps()
+            .iter()
+            .zip(self.levers())
+            .filter(|(_, l)| **l < 0.0)
+            .map(|(g, l)| -g / l)
+            .fold(f64::INFINITY, f64::min)
+    }
+}
+
+/// The preload of an assembly at one output angle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Preload {
+    /// The largest approach of a pin contact at zero torque (the overlap a flank takes up),
+    /// µm.
+    pub overlap_um: f64,
+    /// The largest pin force at zero torque, N.
+    pub pin_force: f64,
+    /// The no-load torque at the input, N·m.
+    pub no_load_torque: f64,
+}
+
+impl Preload {
+    /// No preload.
+    pub const NONE: Preload = Preload {
+        overlap_um: 0.0,
+        pin_force: 0.0,
+        no_load_torque: 0.0,
+    };
+}
+
+/// The zero-torque balance of the two discs.
+pub(crate) fn zero_torque(reducer: &Reducer, discs: &[DiscPins; 2]) -> Preload {
+    // Σ_d τ_d(u) rises with u; beyond these ends every disc pushes one way.
+    let lo = discs
+        .iter()
+        .map(|p| p.offset - p.slack - p.lead())
+        .fold(f64::INFINITY, f64::min);
+    let hi = discs
+        .iter()
+        .map(|p| p.offset + p.slack + p.lag())
+        .fold(f64::NEG_INFINITY, f64::max);
+    let total = |u: f64| discs.iter().map(|p| p.settle(u - p.offset).1).sum::<f64>();
+    let margin = 1e-9 * (hi - lo).abs().max(1e-12);
+    let u = if lo.is_finite() && hi.is_finite() {
+        root(total, lo - margin, hi + margin)
+    } else {
+        f64::NAN
+    };
+    let turns = [
+        discs[0].settle(u - discs[0].offset).0,
+        discs[1].settle(u - discs[1].offset).0,
+    ];
+    let largest = discs
+        .iter()
+        .zip(turns)
+        .flat_map(|(p, y)| p.gaps().iter().zip(p.levers()).map(move |(g, l)| l * y - g))
+        .fold(0.0_f64, f64::max);
+    if largest <= 0.0 {
+        return Preload::NONE;
+    }
+    let pin_force = reducer.force_at(largest);
+    let stiffness = pin_force / largest;
+    let mut drag = 0.0;
+    for (p, y) in discs.iter().zip(turns) {
+        for ((g, l), h) in p.gaps().iter().zip(p.levers()).zip(&p.arms[..p.len]) {
+            let d = l * y - g;
+            if d > 0.0 {
+                drag += stiffness * d * h;
+            }
+        }
+    }
+    Preload {
+        overlap_um: 1000.0 * largest,
+        pin_force,
+        no_load_torque: reducer.pin_friction * drag / reducer.ratio / 1000.0,
+    }
+}
+
+/// The largest pin force at rated torque of the design's profile brought to zero play (no
+/// deviations; the pins' radius changed until the window closes: neither play nor
+/// preload, which a limit taken from a preloaded design's own rated forces would not be),
+/// one disc carrying half of λ·T_r, over one pin pitch of the grid, N: the default preload
+/// limit. The secant stiffness K = F_max/δ(F_max) is iterated to its fixed point, as the
+/// contact model does (Li Lixing's method).
+pub(crate) fn rated_pin_force(reducer: &Reducer, grid: &Grid) -> f64 {
+    let disc_torque = 0.5 * reducer.lambda * reducer.rated_torque * 1000.0;
+    let mut largest: f64 = 0.0;
+    for k in 0..grid.per_pin {
+        let mut pins = design_pins(grid, k);
+        // The play with every gap changed by c rises with c: close it.
+        let play = |c: f64| {
+            let mut moved = pins.clone();
+            moved.gaps[..moved.len].iter_mut().for_each(|g| *g += c);
+            moved.lag() + moved.lead()
+        };
+        let scale = pins.gaps().iter().fold(1e-6_f64, |a, g| a.max(g.abs()));
+        let closing = root(play, -4.0 * scale, 4.0 * scale);
+        let len = pins.len;
+        pins.gaps[..len].iter_mut().for_each(|g| *g += closing);
+        let lo = pins.lag().min(-pins.lead());
+        let mut force = 4.0 * disc_torque / (reducer.stage.pins as f64 * reducer.pitch_lever());
+        for _ in 0..200 {
+            let stiffness = force / reducer.approach(force);
+            let target = disc_torque / stiffness;
+            let hi = lo.abs() + 1.0;
+            let y = root(|y| target - pins.moment(y), lo - 1.0, hi);
+            let deformation = pins
+                .gaps()
+                .iter()
+                .zip(pins.levers())
+                .map(|(g, l)| l * y - g)
+                .fold(0.0_f64, f64::max);
+            let next = stiffness * deformation;
+            let settled = (next - force).abs() <= 1e-12 * next;
+            force = next;
+            if settled {
+                break;
+            }
+        }
+        largest = largest.max(force);
+    }
+    largest
+}
+
+/// Disc 1's pins at grid point k with the design gaps only.
+fn design_pins(grid: &Grid, k: usize) -> DiscPins {
+    let mut pins = DiscPins::new(0.0, 0.0);
+    for list in [&grid.drive[2 * k], &grid.coast[2 * k]] {
+        for entry in list {
+            let s = &grid.slots[entry.slot as usize];
+            pins.push(s.design_gap, s.lever, s.slip_arm);
+        }
+    }
+    pins
+}
+
+/// A root of f on [lo, hi] where f(lo) ≥ 0 ≥ f(hi) (or the reverse) by the Illinois
+/// variant of regula falsi, to 1e-15 of the bracket: f here is monotone and piecewise
+/// linear, where it converges in a few steps.
+pub(crate) fn root(f: impl Fn(f64) -> f64, mut lo: f64, mut hi: f64) -> f64 {
+    let (mut f_lo, mut f_hi) = (f(lo), f(hi));
+    if f_lo == 0.0 {
+        return lo;
+    }
+    if f_hi == 0.0 {
+        return hi;
+    }
+    if f_lo.signum() == f_hi.signum() || !(f_lo.is_finite() && f_hi.is_finite()) {
+        return f64::NAN;
+    }
+    let tolerance = 1e-15 * (hi - lo).abs().max(lo.abs().max(hi.abs()));
+    let mut side = 0;
+    for _ in 0..200 {
+        let mid = (lo * f_hi - hi * f_lo) / (f_hi - f_lo);
+        let mid = if mid > lo.min(hi) && mid < lo.max(hi) {
+            mid
+        } else {
+            0.5 * (lo + hi)
+        };
+        let f_mid = f(mid);
+        if f_mid == 0.0 || (hi - lo).abs() <= tolerance {
+            return mid;
+        }
+        if f_mid.signum() == f_hi.signum() {
+            (hi, f_hi) = (mid, f_mid);
+            if side == -1 {
+                f_lo *= 0.5;
+            }
+            side = -1;
+        } else {
+            (lo, f_lo) = (mid, f_mid);
+            if side == 1 {
+                f_hi *= 0.5;
+            }
+            side = 1;
+        }
+    }
+    0.5 * (lo + hi)
+}

@@ -1,0 +1,348 @@
+//! The clearance windows of the two discs, pin by pin, at the grid's output angles
+//! (docs/models.md §14.2–14.4).
+//!
+//! Per disc d at output angle Θ (lengths mm, angles rad):
+//! ```text
+//! gap of pin i   g_i = Δr_rp·f_e + Δr_p·f_s                      design modification (003)
+//!                    + δΔr_rp·f_e + δΔr_p·f_s + δ_n,d               modification errors
+//!                    + (δr_p + δr_i)·f_r + δt_i·f_t − δr_rp − δρ_i   pin circle, pin i, radii
+//!                    + δJ/2 + T_d,x·f_x − l_i·ε_d(ϑ_i)              groove, disc shift, pitch
+//! disc shift     T_d = mean_k q_kd + σ_d·R(z_p·Θ)·(mean_k B_k + r_d)  (eccentric frame)
+//! four-bar turn  ρ_d = Σ_k t_k·(q_kd + R(…)·B_k)/(m·a_w)
+//! crank offset   C_d = −T_d,y/(e·z_c) − ρ_d
+//! pitch          ε_d(ϑ) = (F_p,d/2)·cos(ϑ − ϕ_p,d)/r_m,  ϑ_i = polar_i − z_p·Θ + d·π
+//! window         [λ·(C_d − K_d − h_d·u/2), λ·(C_d + L_d + h_d·u/2)]
+//!                L_d = min_{l_i>0} g_i/l_i,  K_d = min_{l_i<0} g_i/|l_i|
+//!                (the output turned counter-clockwise by δθ with the input locked turns
+//!                the disc counter-clockwise past its mesh by δθ/λ, which closes the gaps
+//!                of the pins with l_i > 0: they bound the upper end; docs/models.md §14.2)
+//! output window  the intersection over d; its width W(Θ) (negative: the flanks overlap)
+//! ```
+//! with f_e … f_t the pin factors of `cycloid.rs`, q_kd the eccentric error (along,
+//! across), B_k crank k's axis in the carrier, r_d disc d's runout vector (half the radial
+//! runout F_r,d at its phase), u the needle rows' radial internal clearance (the bore
+//! centre moves within u/2) and h_d the needle lever of `geometry.rs`.
+//!
+//! Only the pins that can set a window are evaluated: with G_d a bound on every pin's gap
+//! change from the deviations (every factor is at most 2 in size), pin i can set L_d only
+//! if g0_i/|l_i| − G_d/|l_i| − |ε|max lies below the smallest ratio found so far; the
+//! pins are visited in order of their design ratio g0_i/|l_i|. The result is exact.
+
+use super::geometry::{Grid, Reducer, Slot};
+use super::layout::Layout;
+
+/// What a row contributes, reduced once per row.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct RowTerms {
+    /// δΔr_rp, δΔr_p, δr_p.
+    pub equidistant_error: f64,
+    pub shift_error: f64,
+    pub pin_circle_error: f64,
+    /// Per disc: the gap every pin of the disc shares (−δr_rp + δJ/2 + δ_n,d), mm.
+    pub common: [f64; 2],
+    /// Per disc: the mean eccentric error (along, across), eccentric frame.
+    pub eccentric: [(f64, f64); 2],
+    /// Per disc: mean crank axis plus runout, carrier frame.
+    pub carried: [(f64, f64); 2],
+    /// Per disc: Σ_k t_k·R(−z_pΘ)·q_kd = p1·cos z_pΘ + p2·sin z_pΘ, and Σ_k t_k·B_k.
+    pub p1: [f64; 2],
+    pub p2: [f64; 2],
+    pub rho_const: [f64; 2],
+    /// Per disc: (F_p/2)/r_m·(cos ϕ_p, sin ϕ_p), rad.
+    pub pitch: [(f64, f64); 2],
+    /// u/2, the bore centres' free radius, mm.
+    pub needle_radius: f64,
+    /// Per disc: a bound on |gap change| of any pin from everything but the pitch, mm, and
+    /// the pitch's largest turn, rad.
+    pub bound: [f64; 2],
+    pub pitch_bound: [f64; 2],
+}
+
+/// One disc's window at one output angle, disc angles (rad) before the factor λ.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct DiscWindow {
+    /// C_d.
+    pub offset: f64,
+    /// L_d and K_d.
+    pub lag: f64,
+    pub lead: f64,
+    /// h_d·u/2.
+    pub slack: f64,
+}
+
+impl DiscWindow {
+    /// Lower and upper end at the output, rad: the l < 0 pins bound the lower end, the
+    /// l > 0 pins the upper.
+    pub fn ends(&self, lambda: f64) -> (f64, f64) {
+        (
+            lambda * (self.offset - self.lead - self.slack),
+            lambda * (self.offset + self.lag + self.slack),
+        )
+    }
+}
+
+/// Reduces a row (finite inputs) to its terms.
+pub(crate) fn row_terms(reducer: &Reducer, grid: &Grid, layout: &Layout, x: &[f64]) -> RowTerms {
+    let m = reducer.cranks;
+    let mut terms = RowTerms {
+        equidistant_error: x[layout.equidistant_error],
+        shift_error: x[layout.shift_error],
+        pin_circle_error: x[layout.pin_circle_error],
+        needle_radius: 0.5 * x[layout.needle_clearance],
+        ..RowTerms::default()
+    };
+    let pins = reducer.stage.pins;
+    let (radial, tangential, radii) = (
+        &x[layout.pins..layout.pins + pins],
+        &x[layout.pins + pins..layout.pins + 2 * pins],
+        &x[layout.pins + 2 * pins..layout.pins + 3 * pins],
+    );
+    let pin_bound = radial
+        .iter()
+        .zip(tangential)
+        .zip(radii)
+        .fold(0.0_f64, |a, ((r, t), s)| a.max(r.abs() + t.abs() + s.abs()));
+    let mean = 1.0 / m as f64;
+    for d in 0..2 {
+        let disc = layout.disc(d);
+        let (runout, runout_phase) = (0.5 * x[disc + 1], x[disc + 2]);
+        let (pitch, pitch_phase) = (0.5 * x[disc + 3] / reducer.pitch_radius, x[disc + 4]);
+        terms.common[d] =
+            -x[layout.pin_radius_error] + 0.5 * x[layout.pin_hole_clearance] + x[disc];
+        let (sr, cr) = runout_phase.sin_cos();
+        terms.carried[d] = (runout * cr, runout * sr);
+        let (sp, cp) = pitch_phase.sin_cos();
+        terms.pitch[d] = (pitch * cp, pitch * sp);
+        terms.pitch_bound[d] = pitch.abs();
+    }
+    for (k, &(sb, cb)) in grid.crank_angles.iter().enumerate() {
+        let crank = layout.crank(k);
+        let (b_r, b_t) = (x[crank], x[crank + 1]);
+        let bore = (b_r * cb - b_t * sb, b_r * sb + b_t * cb);
+        for d in 0..2 {
+            terms.carried[d].0 += bore.0 * mean;
+            terms.carried[d].1 += bore.1 * mean;
+            terms.rho_const[d] += b_t;
+            let (qx, qy) = (x[crank + 2 + 2 * d], x[crank + 3 + 2 * d]);
+            terms.eccentric[d].0 += qx * mean;
+            terms.eccentric[d].1 += qy * mean;
+            terms.p1[d] += -sb * qx + cb * qy;
+            terms.p2[d] += -sb * qy - cb * qx;
+        }
+    }
+    for d in 0..2 {
+        let along = terms.eccentric[d].0.abs() + terms.carried[d].0.hypot(terms.carried[d].1);
+        terms.bound[d] = 2.0 * (terms.equidistant_error.abs() + terms.shift_error.abs())
+            + terms.pin_circle_error.abs()
+            + x[layout.pin_radius_error].abs()
+            + 0.5 * x[layout.pin_hole_clearance].abs()
+            + x[layout.disc(d)].abs()
+            + pin_bound
+            + along;
+    }
+    terms
+}
+
+/// C_d and T_d,x of disc d at a point whose z_p·Θ has (sin, cos) `turn`.
+pub(crate) fn offset_and_shift(
+    reducer: &Reducer,
+    terms: &RowTerms,
+    d: usize,
+    (s, c): (f64, f64),
+) -> (f64, f64) {
+    let sigma = if d == 0 { 1.0 } else { -1.0 };
+    let (vx, vy) = terms.carried[d];
+    let along = terms.eccentric[d].0 + sigma * (vx * c - vy * s);
+    let across = terms.eccentric[d].1 + sigma * (vx * s + vy * c);
+    let rho = (sigma * (terms.p1[d] * c + terms.p2[d] * s) + terms.rho_const[d])
+        / (reducer.cranks as f64 * reducer.center_distance);
+    (-across / reducer.pitch_lever() - rho, along)
+}
+
+/// The gap of one pin (mm) at `slot`, with the pitch's turn ε at it (rad): `pin` holds the
+/// pin's (radial, tangential, radius) errors, `shift` the disc's T_d,x.
+#[inline(always)]
+pub(crate) fn pin_gap(
+    s: &Slot,
+    terms: &RowTerms,
+    d: usize,
+    (radial, tangential, radius): (f64, f64, f64),
+    shift: f64,
+    pitch: (f64, f64),
+) -> (f64, f64) {
+    let gap = s.design_gap
+        + terms.equidistant_error * s.equidistant
+        + terms.shift_error * s.shift
+        + (terms.pin_circle_error + radial) * s.radial
+        + tangential * s.tangential
+        + shift * s.eccentric
+        + terms.common[d]
+        - radius;
+    // ε at the pin's polar angle ϑ = polar − z_p·Θ + d·π: pitch holds the turned phase.
+    let epsilon = pitch.0 * s.polar.0 + pitch.1 * s.polar.1;
+    (gap, epsilon)
+}
+
+/// The window of disc d at grid point k: every pin, read from the grid's columns (one
+/// contiguous run of z_p entries, in two pieces where the pins wrap round), in a loop
+/// without branches that the compiler vectorises. For each pin, t = g_i/l_i − ε_i (signed
+/// l): L_d = min t over l_i > 0, K_d = −max t over l_i < 0.
+pub(crate) fn disc_window(
+    reducer: &Reducer,
+    grid: &Grid,
+    layout: &Layout,
+    terms: &RowTerms,
+    x: &[f64],
+    k: usize,
+    d: usize,
+) -> DiscWindow {
+    let turn = grid.turn[k];
+    let (offset, shift) = offset_and_shift(reducer, terms, d, turn);
+    let pitch = turned_pitch(terms, d, turn);
+    let pins = reducer.stage.pins;
+    let q = grid.per_pin;
+    let c = (2 * reducer.stage.teeth * k + d * grid.points) % (2 * grid.points);
+    let (residue, start) = (c % (2 * q), c / (2 * q));
+    let base = residue * pins;
+    let coefficients = Coefficients {
+        equidistant: terms.equidistant_error,
+        shift: terms.shift_error,
+        pin_circle: terms.pin_circle_error,
+        common: terms.common[d],
+        along: shift,
+        pitch,
+    };
+    let pin_columns = (
+        &x[layout.pins..layout.pins + pins],
+        &x[layout.pins + pins..layout.pins + 2 * pins],
+        &x[layout.pins + 2 * pins..layout.pins + 3 * pins],
+    );
+    // Pins [0, z_p − start) sit at m = start.., pins [z_p − start, z_p) at m = 0...
+    let split = pins - start;
+    let (lag_a, coast_a) = scan(
+        &grid.columns,
+        base + start..base + pins,
+        (
+            &pin_columns.0[..split],
+            &pin_columns.1[..split],
+            &pin_columns.2[..split],
+        ),
+        &coefficients,
+    );
+    let (lag_b, coast_b) = scan(
+        &grid.columns,
+        base..base + start,
+        (
+            &pin_columns.0[split..],
+            &pin_columns.1[split..],
+            &pin_columns.2[split..],
+        ),
+        &coefficients,
+    );
+    DiscWindow {
+        offset,
+        lag: lag_a.min(lag_b),
+        lead: -coast_a.max(coast_b),
+        slack: grid.needle_lever[2 * k + d] * terms.needle_radius,
+    }
+}
+
+/// What a point and disc add to every pin's gap.
+struct Coefficients {
+    equidistant: f64,
+    shift: f64,
+    pin_circle: f64,
+    common: f64,
+    along: f64,
+    pitch: (f64, f64),
+}
+
+/// min t over the drive pins and max t over the coast pins of one run of columns, kept in
+/// four lanes so that the loop compiles to packed instructions. Exactly the minimum and
+/// maximum: the order of the comparisons does not change them.
+#[inline(always)]
+fn scan(
+    columns: &super::geometry::Columns,
+    run: std::ops::Range<usize>,
+    (radial, tangential, radius): (&[f64], &[f64], &[f64]),
+    k: &Coefficients,
+) -> (f64, f64) {
+    let n = run.len();
+    let (g0, fe, fs) = (
+        &columns.design_gap[run.clone()],
+        &columns.equidistant[run.clone()],
+        &columns.shift[run.clone()],
+    );
+    let (fr, ft, fx) = (
+        &columns.radial[run.clone()],
+        &columns.tangential[run.clone()],
+        &columns.eccentric[run.clone()],
+    );
+    let (inverse, cp, sp) = (
+        &columns.inverse_lever[run.clone()],
+        &columns.polar_cos[run.clone()],
+        &columns.polar_sin[run],
+    );
+    let (radial, tangential, radius) = (&radial[..n], &tangential[..n], &radius[..n]);
+    // Every slice is n long: the checks below let the compiler drop the indexing checks.
+    assert!(
+        [g0, fe, fs, fr, ft, fx, inverse, cp, sp, radial, tangential, radius]
+            .iter()
+            .all(|column| column.len() == n)
+    );
+    // g_i/l_i − ε_i (a macro: the compiler left a closure out of line).
+    macro_rules! ratio {
+        ($i:expr) => {{
+            let i = $i;
+            let gap = g0[i]
+                + k.equidistant * fe[i]
+                + k.shift * fs[i]
+                + (k.pin_circle + radial[i]) * fr[i]
+                + tangential[i] * ft[i]
+                + k.along * fx[i]
+                + (k.common - radius[i]);
+            gap * inverse[i] - (k.pitch.0 * cp[i] + k.pitch.1 * sp[i])
+        }};
+    }
+    let (mut low, mut high) = ([f64::INFINITY; 4], [f64::NEG_INFINITY; 4]);
+    let whole = n / 4 * 4;
+    for start in (0..whole).step_by(4) {
+        for lane in 0..4 {
+            let i = start + lane;
+            let r = ratio!(i);
+            let d = if inverse[i] > 0.0 { r } else { f64::INFINITY };
+            let c = if inverse[i] < 0.0 {
+                r
+            } else {
+                f64::NEG_INFINITY
+            };
+            low[lane] = if d < low[lane] { d } else { low[lane] };
+            high[lane] = if c > high[lane] { c } else { high[lane] };
+        }
+    }
+    for i in whole..n {
+        let r = ratio!(i);
+        if inverse[i] > 0.0 && r < low[0] {
+            low[0] = r;
+        }
+        if inverse[i] < 0.0 && r > high[0] {
+            high[0] = r;
+        }
+    }
+    let lag = low
+        .iter()
+        .fold(f64::INFINITY, |a, &v| if v < a { v } else { a });
+    let lead = high
+        .iter()
+        .fold(f64::NEG_INFINITY, |a, &v| if v > a { v } else { a });
+    (lag, lead)
+}
+
+/// ε's (cos, sin) coefficients on the polar angle: (F_p/2)/r_m·(cos, sin) of ϕ_p + z_p·Θ − d·π.
+pub(crate) fn turned_pitch(terms: &RowTerms, d: usize, (s, c): (f64, f64)) -> (f64, f64) {
+    let sigma = if d == 0 { 1.0 } else { -1.0 };
+    let (a, b) = terms.pitch[d];
+    // cos(ϑ − ϕ) with ϑ = polar − z_pΘ + dπ: = cos(polar − (ϕ + z_pΘ − dπ)).
+    let (pc, ps) = (a * c - b * s, a * s + b * c);
+    (sigma * pc, sigma * ps)
+}
