@@ -72,6 +72,8 @@ DEFAULT_SCENARIO = os.path.join(
 )
 
 # geometric_hysteresis inputs in the model's order; x[2..12] carry Eq. 16's coefficients.
+# The 19th, fit_measurement_error_mm, acts only with selective fitting, which this reference
+# does not implement (Hysteresis refuses pin_classes > 1), so it is not read.
 INPUTS = [
     "common_normal_upper_deviation_mm", "common_normal_lower_deviation_mm",
     "equidistant_modification_mm", "shift_modification_mm",

@@ -48,5 +48,7 @@ pub use inverse_normal::standard_normal_inverse;
 pub use normal::{Ziggurat, ZigguratScratch};
 pub use part::{check_covariance, PartSpec, SixDof};
 pub use points::{PointSet, SamplingMethod, MAX_SOBOL_DIMENSIONS};
-pub use scalar::{unit_scale, ScalarDistribution, FOLDED_QUANTILE, RAYLEIGH_QUANTILE};
+pub use scalar::{
+    standard_normal_mass, unit_scale, ScalarDistribution, FOLDED_QUANTILE, RAYLEIGH_QUANTILE,
+};
 pub use shown::{human_bytes, index_list, Rounded, Shown};

@@ -133,8 +133,9 @@ fn standard_normal_density(x: f64) -> f64 {
     (-0.5 * x * x).exp() / (2.0 * std::f64::consts::PI).sqrt()
 }
 
-/// Φ(b) − Φ(a), from the upper tails when a > 0 to keep precision far out.
-fn standard_normal_mass(a: f64, b: f64) -> f64 {
+/// Φ(b) − Φ(a) of the standard normal law, from the upper tails when a > 0 to keep
+/// precision far out.
+pub fn standard_normal_mass(a: f64, b: f64) -> f64 {
     if a > 0.0 {
         standard_normal_upper_tail(a) - standard_normal_upper_tail(b)
     } else {

@@ -83,6 +83,27 @@
 //! class are), which the fitter cannot see; the fitted pin radius error is c_k + d.
 //! `pin_class` reports the class fitted (0 = smallest pins), so the report's histogram of
 //! it is the class usage. K = 1 is no fitting: c_0 = 0 and d = δr_rp.
+//!
+//! The fitter measures. The input `fit_measurement_error_mm` ε_m is the error of its
+//! measurement of the stage clearance per flank along the contact normal, in the disc frame:
+//! a clearance m per flank along every normal lets the disc turn m/(e·zc) each way at the
+//! pitch point (the lever e·zc, docs/models.md §2.6), so it predicts a stage clearance
+//! ε_m·2/(e·zc)·λ·10800/π arcmin too large, the coefficient of an equidistant change
+//! (Eq. 16's δΔr_rp term; λ = 1 in the document_000 reading). The fitter chooses the class
+//! from the clearance it measured; the assembly gets the true clearance with that class's
+//! pins. Without fitting the input has no effect.
+//!
+//! The stock (`pin_stock_rule`). Pins come from production, δr_rp ~ N(0, σ²) with σ =
+//! `pin_production_sd_mm`, so class k makes up s_k = Φ((c_k + w/2)/σ) − Φ((c_k − w/2)/σ)
+//! of them. With "nearest_in_stock" (the default) the stock holds a batch of B assemblies'
+//! pins (`pin_stock_batch`), and a class is stocked when a batch is expected to hold one
+//! assembly's pins of it or more, B·s_k ≥ 1; the fitter takes, among the stocked classes,
+//! the one that brings its measured clearance closest to the window, which is the stocked
+//! class nearest the one it wanted (the distance is convex in the class centre, and the
+//! stocked classes, the shares of a centred normal law being unimodal, are contiguous).
+//! A pure function of one assembly's inputs cannot deplete a stocked class (that needs the
+//! other assemblies' demand): docs/models.md §2.5 compares the usage with the supply. With
+//! "unlimited" every class is always at hand.
 
 use rvtol_deviation::{point_displacement, Rounded, Shown};
 
@@ -188,6 +209,11 @@ const INPUTS: &[(&str, &str, &str)] = &[
         "rad",
         "input shaft tilt Δβ about y (001), gives β",
     ),
+    (
+        "fit_measurement_error_mm",
+        "mm",
+        "ε_m, error of the fitter's measurement of the cycloid-stage clearance per flank along the normal (selective fitting only; docs/models.md §2.5)",
+    ),
 ];
 
 const OUTPUTS: &[(&str, &str, &str, OutputKind)] = &[
@@ -244,6 +270,8 @@ const OUTPUTS: &[(&str, &str, &str, OutputKind)] = &[
 /// The outputs of the model, in order, with selective fitting (a model that embeds this one
 /// sizes its buffer with it); without fitting the last, `pin_class`, is left out.
 pub const OUTPUT_COUNT: usize = 8;
+/// The model's inputs: 000's eighteen, then the fitter's measuring error.
+pub const INPUT_COUNT: usize = 19;
 
 const PARAMS: &[ParamSpec] = &[
     ParamSpec {
@@ -342,7 +370,28 @@ const PARAMS: &[ParamSpec] = &[
         description: "upper end of the window (needed when K > 1)",
         default: Some(0.0),
     },
+    ParamSpec {
+        name: "pin_stock_rule",
+        unit: "",
+        description: "\"nearest_in_stock\" (default: the fitter takes the stocked class nearest the one it wants) or \"unlimited\" (every class always at hand)",
+        default: None,
+    },
+    ParamSpec {
+        name: "pin_production_sd_mm",
+        unit: "mm",
+        description: "σ of the pin radius in production, whose normal law gives each class's share of the stock (needed when K > 1 with \"nearest_in_stock\"; the pin_radius_error variable's σ)",
+        default: None,
+    },
+    ParamSpec {
+        name: "pin_stock_batch",
+        unit: "1",
+        description: "B, assemblies' worth of pins in a production batch: a class is stocked when B·share ≥ 1",
+        default: Some(DEFAULT_STOCK_BATCH),
+    },
 ];
+
+/// Assemblies' worth of pins in a production batch when a scenario does not say.
+const DEFAULT_STOCK_BATCH: f64 = 100.0;
 
 /// Most pin classes of selective fitting.
 pub const MAX_PIN_CLASSES: u32 = 16;
@@ -382,6 +431,12 @@ pub struct GeometricHysteresis {
     class_centres: Vec<f64>,
     class_width: f64,
     fit_window: (f64, f64),
+    /// Each class's share of production (empty without a production law).
+    class_supply: Vec<f64>,
+    /// The stocked classes, first and last (every class with "unlimited").
+    stocked: (usize, usize),
+    /// Arcmin of predicted clearance per mm of measuring error: 2/(e·zc)·λ·10800/π.
+    measurement_coefficient: f64,
     inputs: Vec<InputSpec>,
     outputs: Vec<OutputSpec>,
 }
@@ -497,6 +552,7 @@ impl GeometricHysteresis {
         let class_centres: Vec<f64> = (0..classes)
             .map(|k| (k as f64 - 0.5 * (classes as f64 - 1.0)) * class_width)
             .collect();
+        let (class_supply, stocked) = stock(params, &class_centres, class_width)?;
         params.reject_unknown(&PARAMS.iter().map(|p| p.name).collect::<Vec<_>>())?;
         // 000 Eq. 4.
         let ratio = 1.0
@@ -521,6 +577,10 @@ impl GeometricHysteresis {
             class_centres,
             class_width,
             fit_window: window,
+            class_supply,
+            stocked,
+            // A clearance ε_m per flank along every normal: the equidistant term's 2/(e·zc).
+            measurement_coefficient: 2.0 * per_ezc_out,
             involute_scale: ARCMIN_PER_RAD
                 / (2.0
                     * sun_pitch_radius
@@ -577,6 +637,89 @@ impl GeometricHysteresis {
     pub fn ratio(&self) -> f64 {
         self.ratio
     }
+
+    /// Each pin class's share of production, s_k = Φ((c_k + w/2)/σ) − Φ((c_k − w/2)/σ)
+    /// (empty without selective fitting or with the "unlimited" stock, which has no law).
+    pub fn class_supply(&self) -> &[f64] {
+        &self.class_supply
+    }
+
+    /// The stocked pin classes, first and last (all of them with the "unlimited" stock).
+    pub fn stocked_classes(&self) -> std::ops::RangeInclusive<usize> {
+        self.stocked.0..=self.stocked.1
+    }
+}
+
+/// The stock of selective fitting: each class's share of production and the first and last
+/// stocked classes (module comment). Checks `pin_stock_rule`, `pin_production_sd_mm` and
+/// `pin_stock_batch` whenever they are given; the law is needed only when K > 1 with
+/// "nearest_in_stock".
+fn stock(
+    params: &ModelParams,
+    centres: &[f64],
+    width: f64,
+) -> Result<(Vec<f64>, (usize, usize)), ModelError> {
+    let limited = match params.text("pin_stock_rule", "nearest_in_stock")?.as_str() {
+        "nearest_in_stock" => true,
+        "unlimited" => false,
+        other => {
+            return Err(ModelError::new(
+                "pin_stock_rule",
+                format!("must be \"nearest_in_stock\" or \"unlimited\", got {other:?}"),
+            ))
+        }
+    };
+    let given_sd = params
+        .entries()
+        .any(|(key, _)| key == "pin_production_sd_mm");
+    let sd = params.number("pin_production_sd_mm", Some(0.0))?;
+    if given_sd && sd <= 0.0 {
+        return Err(ModelError::new(
+            "pin_production_sd_mm",
+            format!("must be positive, got {}", Shown(sd)),
+        ));
+    }
+    let batch = params.count("pin_stock_batch", Some(DEFAULT_STOCK_BATCH))?;
+    let every = (0, centres.len() - 1);
+    if centres.len() == 1 || !limited {
+        return Ok((Vec::new(), every));
+    }
+    if !given_sd {
+        return Err(ModelError::new(
+            "pin_production_sd_mm",
+            format!(
+                "selective fitting with {} classes and pin_stock_rule \"nearest_in_stock\" (the default) needs the σ of the pin radius in production, whose law gives each class's share of the stock (the pin_radius_error variable's σ); or set pin_stock_rule to \"unlimited\"",
+                centres.len()
+            ),
+        ));
+    }
+    let supply: Vec<f64> = centres
+        .iter()
+        .map(|&c| {
+            rvtol_deviation::standard_normal_mass((c - 0.5 * width) / sd, (c + 0.5 * width) / sd)
+        })
+        .collect();
+    // A batch of B assemblies' pins holds B·s_k assemblies' worth of class k.
+    let is_stocked = |share: f64| f64::from(batch) * share >= 1.0;
+    match (
+        supply.iter().position(|&s| is_stocked(s)),
+        supply.iter().rposition(|&s| is_stocked(s)),
+    ) {
+        (Some(first), Some(last)) => Ok((supply, (first, last))),
+        _ => {
+            let largest = supply.iter().cloned().fold(0.0, f64::max);
+            Err(ModelError::new(
+                "pin_stock_batch",
+                format!(
+                    "no pin class is stocked: the largest class holds {} of production (σ = {} mm, classes of {} mm), less than one assembly's pins in a batch of {batch}; a batch of {} or more stocks it",
+                    Rounded(largest),
+                    Shown(sd),
+                    Shown(width),
+                    Rounded((1.0 / largest).ceil())
+                ),
+            ))
+        }
+    }
 }
 
 impl ErrorModel for GeometricHysteresis {
@@ -594,7 +737,7 @@ impl ErrorModel for GeometricHysteresis {
 
     #[inline]
     fn evaluate(&self, x: &[f64], out: &mut [f64]) {
-        let x: &[f64; N_INPUTS] = x[..N_INPUTS].try_into().expect("18 inputs");
+        let x: &[f64; N_INPUTS] = x[..N_INPUTS].try_into().expect("19 inputs");
         let n_out = self.outputs.len();
         out[..n_out].copy_from_slice(&self.row::<true>(x, exact_tilt)[..n_out]);
     }
@@ -633,7 +776,7 @@ impl ErrorModel for GeometricHysteresis {
 }
 
 /// Inputs and outputs of the model.
-const N_INPUTS: usize = 18;
+const N_INPUTS: usize = INPUT_COUNT;
 const N_OUTPUTS: usize = OUTPUT_COUNT;
 /// β² below which cos β and 1/cos β are taken from their series (β = 1e-3 rad).
 const TILT_SERIES_LIMIT: f64 = 1e-6;
@@ -744,13 +887,18 @@ impl GeometricHysteresis {
         let k_n = self.kn_equidistant * mod_equidistant + self.kn_shift * mod_shift;
         cycloid -= 2.0 * ARCMIN_PER_RAD * k_n * eccentricity_err;
 
-        // Selective fitting: the class whose centre brings the clearance the fitter sees
-        // closest to the window; the pins' place within their class, d, unseen.
+        // Selective fitting: the stocked class whose centre brings the clearance the fitter
+        // measured (true + its error) closest to the window; the assembly gets the true
+        // clearance with those pins, whose place within their class, d, it cannot see.
         if FIT && self.class_centres.len() > 1 {
             let pin_coefficient = self.cycloid_coefficients[3];
             let without_pins = cycloid - pin_coefficient * x[5];
             let within_class = x[5] - self.class_width * (x[5] / self.class_width).round();
-            let (class, centre) = self.fit(without_pins);
+            let measured = without_pins + self.measurement_coefficient * x[18];
+            let (class, centre) = self.fit(measured);
+            // 0·measured is ±0 for a finite measurement (the sum keeps the centre's bits: no
+            // centre is −0) and NaN for a non-finite one, which the clearance then carries.
+            let centre = centre + 0.0 * measured;
             cycloid = without_pins + pin_coefficient * (centre + within_class);
             fitted_class = class;
         }
@@ -772,17 +920,18 @@ impl GeometricHysteresis {
     }
 
     /// The pin class fitted to an assembly whose cycloid-stage clearance with pins of the
-    /// nominal radius would be `seen` arcmin, and its centre on the pin radius: the class
-    /// minimising the distance of the clearance to the fit window, ties (inside the window)
-    /// broken towards the window's centre.
+    /// nominal radius the fitter measures as `seen` arcmin, and its centre on the pin
+    /// radius: among the stocked classes, the one minimising the distance of the clearance
+    /// to the fit window, ties (inside the window) broken towards the window's centre.
     #[inline(always)]
     fn fit(&self, seen: f64) -> (f64, f64) {
         let (lower, upper) = self.fit_window;
         let middle = 0.5 * (lower + upper);
         let coefficient = self.cycloid_coefficients[3];
-        let (mut best_class, mut best_centre) = (0.0, self.class_centres[0]);
+        let (first, last) = self.stocked;
+        let (mut best_class, mut best_centre) = (first as f64, self.class_centres[first]);
         let mut best = f64::INFINITY;
-        for (k, &centre) in self.class_centres.iter().enumerate() {
+        for (k, &centre) in self.class_centres[..=last].iter().enumerate().skip(first) {
             let clearance = seen + coefficient * centre;
             let outside = (lower - clearance).max(clearance - upper).max(0.0);
             // Distance first; within the window the distance from its centre, scaled so
@@ -848,7 +997,7 @@ mod tests {
         // output by λ. Compared on the change each error makes from the design point.
         let lambda = 39.0 / 40.0 * (1.0 - 1.0 / 141.0);
         let (document, physical) = (model(), physical());
-        let eval_with = |m: &GeometricHysteresis, x: &[f64; 18]| {
+        let eval_with = |m: &GeometricHysteresis, x: &[f64; INPUT_COUNT]| {
             let mut out = [0.0; OUTPUT_COUNT];
             m.evaluate(x, &mut out);
             out[2]
@@ -877,8 +1026,8 @@ mod tests {
 
     /// Table 9 of document 000 with every manufacturing error (δ-term) at its mean, zero,
     /// and an ideal input shaft.
-    fn table9_nominal() -> [f64; 18] {
-        let mut x = [0.0; 18];
+    fn table9_nominal() -> [f64; INPUT_COUNT] {
+        let mut x = [0.0; INPUT_COUNT];
         x[0] = 0.0035; // E_ws
         x[1] = -0.0309; // E_wi
         x[2] = -0.010; // Δr_rp
@@ -887,22 +1036,284 @@ mod tests {
         x
     }
 
-    fn eval(x: &[f64; 18]) -> [f64; OUTPUT_COUNT] {
+    fn eval(x: &[f64; INPUT_COUNT]) -> [f64; OUTPUT_COUNT] {
         let mut out = [0.0; OUTPUT_COUNT];
         model().evaluate(x, &mut out);
         out
     }
 
-    /// The RV-20E with K pin classes of width w and the fit window [lower, upper].
+    /// The RV-20E (document_000 reading) with K pin classes of width w, the fit window
+    /// [lower, upper] and every class always at hand (the fitter of before the stock).
     fn fitted(classes: f64, width: f64, window: (f64, f64)) -> GeometricHysteresis {
         GeometricHysteresis::from_params(
             &document_params()
                 .with_number("pin_classes", classes)
                 .with_number("pin_class_width_mm", width)
                 .with_number("fit_window_lower_arcmin", window.0)
-                .with_number("fit_window_upper_arcmin", window.1),
+                .with_number("fit_window_upper_arcmin", window.1)
+                .with("pin_stock_rule", ParamValue::Text("unlimited".into())),
         )
         .unwrap()
+    }
+
+    /// scenarios/rv20e-selective-fitting.json's fitting: the physical reading, 12 classes
+    /// of 1.5 µm, window 0.2–0.4 arcmin, with the given stock rule and the parameters of
+    /// its production law (σ = 0.004/3 mm: the ±0.004 band at Cp 1 of the pin variable).
+    fn shop(rule: &str, extra: &[(&str, f64)]) -> GeometricHysteresis {
+        let mut params = GeometricHysteresis::rv20e_params()
+            .with_number("pin_classes", 12.0)
+            .with_number("pin_class_width_mm", 0.0015)
+            .with_number("fit_window_lower_arcmin", 0.2)
+            .with_number("fit_window_upper_arcmin", 0.4)
+            .with("pin_stock_rule", ParamValue::Text(rule.into()));
+        for &(key, value) in extra {
+            params = params.with_number(key, value);
+        }
+        GeometricHysteresis::from_params(&params).unwrap()
+    }
+
+    /// The rows of [`fitting_digest`]: the pin circle error, the pin's production deviation
+    /// and the cumulative pitch error swept across their Table 9 ranges, δJ and δe varied.
+    fn fitting_grid() -> Vec<[f64; INPUT_COUNT]> {
+        let mut rows = Vec::new();
+        for i in 0..21 {
+            for j in 0..17 {
+                for k in 0..5 {
+                    let mut x = table9_nominal();
+                    x[4] = -0.010 + 0.001 * i as f64;
+                    x[5] = -0.004 + 0.0005 * j as f64;
+                    x[9] = 0.005 * k as f64;
+                    x[6] = 0.0005 * ((i + k) % 4) as f64;
+                    x[12] = 0.001 * ((j + k) % 5) as f64 - 0.002;
+                    rows.push(x);
+                }
+            }
+        }
+        rows
+    }
+
+    /// FNV-1a over the bits of every output of each model on [`fitting_grid`], and the sum
+    /// of the classes fitted.
+    fn fitting_digest(models: &[GeometricHysteresis]) -> (u64, f64) {
+        let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
+        let mut classes = 0.0;
+        for model in models {
+            for x in fitting_grid() {
+                let mut out = [0.0; OUTPUT_COUNT];
+                model.evaluate(&x, &mut out);
+                classes += out[7];
+                for value in out {
+                    for byte in value.to_bits().to_le_bytes() {
+                        hash = (hash ^ u64::from(byte)).wrapping_mul(0x100_0000_01b3);
+                    }
+                }
+            }
+        }
+        (hash, classes)
+    }
+
+    #[test]
+    fn without_measuring_error_and_with_unlimited_stock_the_fit_is_the_former_one() {
+        // The digest of every output bit and the sum of the classes over the 1,785 rows of
+        // the grid, for three fittings (both readings, 4, 5 and 12 classes), were recorded
+        // with the fitter of commit 149699c, which had neither the measuring error nor the
+        // stock: the same rows (the measuring error 0) with "unlimited" give them back.
+        let models = [
+            fitted(4.0, 0.002, (0.0, 0.1)),
+            fitted(5.0, 0.002, (0.1, 0.3)),
+            shop("unlimited", &[]),
+        ];
+        assert_eq!(fitting_digest(&models), (0x7e71_e283_f01b_ad33, 7786.0));
+    }
+
+    #[test]
+    fn a_measuring_error_moves_the_class_as_the_clearance_it_adds() {
+        // Hand calculation (physical reading, design point; a production deviation of 0, a
+        // multiple of w, puts the pin at its class centre, d = 0): the
+        // stage clearance is B − g·c_k with B = λ·2(−0.010 + s·0.012)/(e·zc)·10800/π =
+        // −0.31712 arcmin and g = 2λ/(e·zc)·10800/π = 189.631 arcmin/mm (λ = 0.968085,
+        // e·zc = 35.1 mm), the class centres c_k = (k − 5.5)·1.5 µm. Class 3 (−3.75 µm)
+        // gives 0.39400 arcmin, inside 0.2–0.4; class 4 (−2.25 µm) 0.10955. A measuring
+        // error ε_m adds g·ε_m to what the fitter sees: +0.5 µm shows class 3 as 0.48881
+        // (0.089 beyond the window) and class 4 as 0.20436 (inside), so it fits class 4
+        // and the assembly gets 0.10955; −0.5 µm shows class 3 as 0.29918, the window's
+        // middle nearly, and class 3 stays; +1.5 µm (one class width) moves the fit one class.
+        let model = shop("unlimited", &[]);
+        let lambda = 39.0 / 40.0 * (1.0 - 1.0 / 141.0);
+        let g = 2.0 * lambda / (0.9 * 39.0) * ARCMIN_PER_RAD;
+        assert!((g - 189.631).abs() < 5e-4, "{g}");
+        let class_of = |error: f64| {
+            let mut x = table9_nominal();
+            x[INPUT_COUNT - 1] = error;
+            let mut out = [0.0; OUTPUT_COUNT];
+            model.evaluate(&x, &mut out);
+            (out[7], out[2])
+        };
+        let (class, clearance) = class_of(0.0);
+        assert_eq!(class, 3.0);
+        assert!((clearance - 0.39400).abs() < 5e-6, "{clearance}");
+        let (class, clearance) = class_of(0.0005);
+        assert_eq!(class, 4.0);
+        assert!((clearance - 0.10955).abs() < 5e-6, "{clearance}");
+        assert_eq!(class_of(-0.0005).0, 3.0);
+        // One class width of error is one class: the error enters as a pin radius does.
+        for (i, x) in fitting_grid().iter().enumerate().step_by(7) {
+            let mut seen = *x;
+            seen[INPUT_COUNT - 1] = 0.0015;
+            let (mut a, mut b) = ([0.0; OUTPUT_COUNT], [0.0; OUTPUT_COUNT]);
+            model.evaluate(x, &mut a);
+            model.evaluate(&seen, &mut b);
+            if a[7] < 11.0 && a[7] > 0.0 {
+                assert_eq!(b[7], a[7] + 1.0, "row {i}");
+            }
+        }
+    }
+
+    #[test]
+    fn the_stock_holds_the_classes_production_makes_and_the_fitter_takes_the_nearest() {
+        // Supply: class k holds Φ((c_k + w/2)/σ) − Φ((c_k − w/2)/σ) of production, σ =
+        // 4/3 µm, w = 1.5 µm: Φ(1.125) − Φ(0) = 0.3697055 for the two middle classes,
+        // Φ(3.375) − Φ(2.25) = 0.0118554 for classes 3 and 8 (mpmath's ncdf at 30 digits:
+        // 0.369705482863191 and 0.011855394200770; the erfc rvtol uses is good to about
+        // 1e-11, hence the bound 1e-10). A batch of
+        // 100 assemblies' pins holds 1.19 sets of classes 3 and 8 and 0.037 of classes 2
+        // and 9: classes 3..=8 are stocked. The smallest batch stocking class 3 is
+        // ⌈1/0.0118554⌉ = 85.
+        let limited = shop("nearest_in_stock", &[("pin_production_sd_mm", 0.004 / 3.0)]);
+        let supply = limited.class_supply();
+        assert_eq!(supply.len(), 12);
+        for (k, share) in [
+            (5, 0.369_705_482_863_191),
+            (6, 0.369_705_482_863_191),
+            (3, 0.011_855_394_200_770),
+            (8, 0.011_855_394_200_770),
+        ] {
+            assert!(
+                (supply[k] - share).abs() < 1e-10,
+                "class {k}: {}",
+                supply[k]
+            );
+        }
+        assert_eq!(limited.stocked_classes(), 3..=8);
+        for (batch, stocked) in [(84.0, 4..=7), (85.0, 3..=8)] {
+            let model = shop(
+                "nearest_in_stock",
+                &[
+                    ("pin_production_sd_mm", 0.004 / 3.0),
+                    ("pin_stock_batch", batch),
+                ],
+            );
+            assert_eq!(model.stocked_classes(), stocked, "batch {batch}");
+        }
+        // A class wanted and stocked is fitted; one not stocked gives way to the nearest
+        // stocked class. The grid's rows, and
+        // the same with the pin circle 12 µm larger (+1.6 arcmin, 5.6 classes), want classes
+        // from 0 to 11, measuring errors included.
+        let unlimited = shop("unlimited", &[]);
+        let mut wanted = [0usize; 12];
+        let grid = fitting_grid();
+        let wider = grid.iter().map(|x| {
+            let mut x = *x;
+            x[4] += 0.012;
+            x
+        });
+        for (i, x) in grid.iter().copied().chain(wider).enumerate() {
+            let mut x = x;
+            x[INPUT_COUNT - 1] = 0.0005 * ((i % 5) as f64 - 2.0);
+            let (mut free, mut held) = ([0.0; OUTPUT_COUNT], [0.0; OUTPUT_COUNT]);
+            unlimited.evaluate(&x, &mut free);
+            limited.evaluate(&x, &mut held);
+            let want = free[7] as usize;
+            wanted[want] += 1;
+            assert_eq!(held[7], want.clamp(3, 8) as f64, "row {i}");
+        }
+        assert!(wanted.iter().all(|&n| n > 0), "{wanted:?}");
+    }
+
+    #[test]
+    fn without_fitting_the_measuring_error_and_the_stock_do_nothing() {
+        let plain = physical();
+        let single = GeometricHysteresis::from_params(
+            &GeometricHysteresis::rv20e_params()
+                .with_number("pin_production_sd_mm", 0.004 / 3.0)
+                .with_number("pin_stock_batch", 5.0),
+        )
+        .unwrap();
+        assert_eq!(single.outputs().len(), OUTPUT_COUNT - 1);
+        for x in fitting_grid().iter().step_by(11) {
+            let mut measured = *x;
+            measured[INPUT_COUNT - 1] = 0.003;
+            let (mut a, mut b) = ([0.0; OUTPUT_COUNT], [0.0; OUTPUT_COUNT]);
+            plain.evaluate(x, &mut a);
+            single.evaluate(&measured, &mut b);
+            assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits));
+        }
+    }
+
+    #[test]
+    fn a_non_finite_measurement_gives_a_non_finite_clearance() {
+        let model = shop("unlimited", &[]);
+        for error in [f64::NAN, f64::INFINITY] {
+            let mut x = table9_nominal();
+            x[INPUT_COUNT - 1] = error;
+            let mut out = [0.0; OUTPUT_COUNT];
+            model.evaluate(&x, &mut out);
+            assert!(out[2].is_nan(), "{error}: {out:?}");
+        }
+    }
+
+    #[test]
+    fn bad_stock_parameters_name_their_key() {
+        let fitting = || {
+            GeometricHysteresis::rv20e_params()
+                .with_number("pin_classes", 12.0)
+                .with_number("pin_class_width_mm", 0.0015)
+                .with_number("fit_window_upper_arcmin", 0.4)
+        };
+        for (key, params, says) in [
+            (
+                "pin_production_sd_mm",
+                fitting(),
+                "or set pin_stock_rule to \"unlimited\"",
+            ),
+            (
+                "pin_production_sd_mm",
+                fitting().with_number("pin_production_sd_mm", 0.0),
+                "must be positive, got 0",
+            ),
+            (
+                "pin_production_sd_mm",
+                GeometricHysteresis::rv20e_params().with_number("pin_production_sd_mm", -0.001),
+                "must be positive",
+            ),
+            (
+                "pin_stock_rule",
+                fitting().with("pin_stock_rule", ParamValue::Text("first_come".into())),
+                "must be \"nearest_in_stock\" or \"unlimited\", got \"first_come\"",
+            ),
+            (
+                "pin_stock_rule",
+                fitting().with_number("pin_stock_rule", 1.0),
+                "must be a string",
+            ),
+            (
+                "pin_stock_batch",
+                fitting()
+                    .with_number("pin_production_sd_mm", 0.001)
+                    .with_number("pin_stock_batch", 2.5),
+                "positive whole number",
+            ),
+            (
+                // σ = 1 mm spreads production over ±3 mm: no 1.5 µm class holds 1 %.
+                "pin_stock_batch",
+                fitting().with_number("pin_production_sd_mm", 1.0),
+                "no pin class is stocked",
+            ),
+        ] {
+            let err = GeometricHysteresis::from_params(&params).err().unwrap();
+            assert_eq!(err.key, key, "{err}");
+            assert!(err.to_string().contains(says), "{err}");
+        }
     }
 
     #[test]
@@ -1133,9 +1544,10 @@ mod tests {
         // differs from the cosine, and β = 1e-3 rad, just past the limit), one with a NaN
         // tilt (redone) and one with a NaN clearance (NaN outputs either way).
         // Each reading, with and without selective fitting (the column loop is compiled
-        // with and without the fitter).
+        // with and without the fitter), the fitter's stock unlimited and limited, and
+        // measuring errors of −0.5, 0 and 0.5 µm.
         let n = 67;
-        let mut rows: Vec<[f64; 18]> = (0..n)
+        let mut rows: Vec<[f64; INPUT_COUNT]> = (0..n)
             .map(|r| {
                 let mut x = table9_nominal();
                 for (i, value) in x.iter_mut().enumerate().skip(4) {
@@ -1143,6 +1555,7 @@ mod tests {
                 }
                 x[16] = 1e-5 * ((r % 7) as f64 - 3.0);
                 x[17] = 2e-5 * ((r % 5) as f64 - 2.0);
+                x[18] = 5e-4 * ((r % 3) as f64 - 1.0);
                 x
             })
             .collect();
@@ -1152,11 +1565,16 @@ mod tests {
         rows[41][17] = 0.0;
         rows[50][13] = f64::NAN;
         rows[60][17] = f64::NAN;
-        let columns: Vec<Vec<f64>> = (0..18)
+        let columns: Vec<Vec<f64>> = (0..INPUT_COUNT)
             .map(|i| rows.iter().map(|x| x[i]).collect())
             .collect();
         let inputs: Vec<&[f64]> = columns.iter().map(Vec::as_slice).collect();
-        for model in [model(), physical(), fitted(5.0, 0.002, (0.1, 0.3))] {
+        for model in [
+            model(),
+            physical(),
+            fitted(5.0, 0.002, (0.1, 0.3)),
+            shop("nearest_in_stock", &[("pin_production_sd_mm", 0.004 / 3.0)]),
+        ] {
             let mut outputs = vec![0.0; model.outputs().len() * n];
             model.evaluate_columns(&inputs, &mut outputs);
             for (r, x) in rows.iter().enumerate() {

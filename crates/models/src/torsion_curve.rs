@@ -91,7 +91,9 @@ use crate::{
 };
 use rvtol_deviation::{Rounded, Shown};
 
-/// Inputs of 000 (`geometric_hysteresis`), in its order, come first.
+/// Inputs of 000 (`geometric_hysteresis`), in its order, come first: its eighteen, without
+/// the fitter's measuring error (the torsion curve takes the pins as drawn, one class, where
+/// that input has no effect; the embedded model gets 0 for it).
 const HYSTERESIS_INPUTS: usize = 18;
 /// Positions of 000's inputs that shape the profile.
 const EQUIDISTANT: usize = 2;
@@ -668,8 +670,7 @@ impl TorsionCurve {
             involute_compliance: involute
                 .output_compliance(hysteresis.ratio(), shaft.torsional_rigidity),
         };
-        let inputs = hysteresis
-            .inputs()
+        let inputs = hysteresis.inputs()[..HYSTERESIS_INPUTS]
             .iter()
             .cloned()
             .chain(
@@ -724,15 +725,17 @@ impl TorsionCurve {
     /// 000's outputs for a row: [hysteresis, involute, cycloid, crank, interference, …]
     /// (`geometric_hysteresis`'s order).
     fn hysteresis_outputs(&self, x: &[f64]) -> [f64; geometric_hysteresis::OUTPUT_COUNT] {
+        let mut row = [0.0; geometric_hysteresis::INPUT_COUNT];
+        row[..HYSTERESIS_INPUTS].copy_from_slice(&x[..HYSTERESIS_INPUTS]);
         let mut out = [0.0; geometric_hysteresis::OUTPUT_COUNT];
-        self.hysteresis.evaluate(&x[..HYSTERESIS_INPUTS], &mut out);
+        self.hysteresis.evaluate(&row, &mut out);
         out
     }
 
     /// The contact row of the one profile (module comment): (T, Δr_rp', Δr_p', δr_p,
     /// δr_rp, δe, 0) with 000's modification errors added and δ_eq for δJ, ΔF_r, δt, ΔF_p.
     fn profile_row(&self, x: &[f64]) -> [f64; 7] {
-        let mut others = [0.0; HYSTERESIS_INPUTS];
+        let mut others = [0.0; geometric_hysteresis::INPUT_COUNT];
         for i in OTHER_TERMS {
             others[i] = x[i];
         }
@@ -1003,6 +1006,13 @@ mod tests {
 
     use super::*;
 
+    /// 000's row of a torsion row: its first 18 inputs and no measuring error.
+    fn hysteresis_row(x: &[f64]) -> [f64; geometric_hysteresis::INPUT_COUNT] {
+        let mut row = [0.0; geometric_hysteresis::INPUT_COUNT];
+        row[..HYSTERESIS_INPUTS].copy_from_slice(&x[..HYSTERESIS_INPUTS]);
+        row
+    }
+
     fn rv20e() -> TorsionCurve {
         TorsionCurve::from_params(&TorsionCurve::rv20e_params()).unwrap()
     }
@@ -1074,7 +1084,7 @@ mod tests {
         let reference =
             GeometricHysteresis::from_params(&GeometricHysteresis::rv20e_params()).unwrap();
         let mut stages = [0.0; geometric_hysteresis::OUTPUT_COUNT];
-        reference.evaluate(&with_play()[..18], &mut stages);
+        reference.evaluate(&hysteresis_row(&with_play()), &mut stages);
         let others = (stages[1] + stages[3]) / ARCMIN_PER_RAD;
         let play = model.free_play(&with_play()).unwrap() / ARCMIN_PER_RAD - others;
         let expected = continuous(0.010, -0.008);
@@ -1104,7 +1114,7 @@ mod tests {
         .unwrap();
         for x in [nominal(), perturbed()] {
             let mut expected = [0.0; geometric_hysteresis::OUTPUT_COUNT];
-            reference.evaluate(&x[..18], &mut expected);
+            reference.evaluate(&hysteresis_row(&x), &mut expected);
             assert_eq!(eval(&model, &x)[3], expected[0]);
         }
         let c = eval(&model, &nominal())[3];
