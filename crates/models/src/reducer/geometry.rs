@@ -212,15 +212,36 @@ pub(crate) struct Columns {
     pub radial: Vec<f64>,
     pub tangential: Vec<f64>,
     pub eccentric: Vec<f64>,
+    pub lever: Vec<f64>,
     pub inverse_lever: Vec<f64>,
     pub polar_cos: Vec<f64>,
     pub polar_sin: Vec<f64>,
+    /// Per residue r: the entries m with a positive lever (the drive flank, φ in (0, π))
+    /// and those with a negative one, each one range (φ grows with m from below 2π/z_p).
+    pub drive: Vec<std::ops::Range<usize>>,
+    pub coast: Vec<std::ops::Range<usize>>,
 }
 
 impl Columns {
     fn new(slots: &[Slot], per_pin: usize, pins: usize, floor: f64) -> Columns {
         let mut columns = Columns::default();
         for r in 0..2 * per_pin {
+            let run = |positive: bool| {
+                let inside = |m: usize| {
+                    let lever = slots[r + 2 * per_pin * m].lever;
+                    if positive {
+                        lever > floor
+                    } else {
+                        lever < -floor
+                    }
+                };
+                let first = (0..pins).find(|&m| inside(m)).unwrap_or(pins);
+                let end = (first..pins).find(|&m| !inside(m)).unwrap_or(pins);
+                debug_assert!((end..pins).all(|m| !inside(m)));
+                first..end
+            };
+            columns.drive.push(run(true));
+            columns.coast.push(run(false));
             for m in 0..pins {
                 let s = &slots[r + 2 * per_pin * m];
                 columns.design_gap.push(s.design_gap);
@@ -229,6 +250,7 @@ impl Columns {
                 columns.radial.push(s.radial);
                 columns.tangential.push(s.tangential);
                 columns.eccentric.push(s.eccentric);
+                columns.lever.push(s.lever);
                 columns.inverse_lever.push(if s.lever.abs() > floor {
                     1.0 / s.lever
                 } else {

@@ -42,7 +42,9 @@ use crate::{
 use geometry::{Grid, Reducer};
 use layout::Layout;
 use preload::{DiscPins, Preload};
-use windows::{disc_window, offset_and_shift, pin_gap, row_terms, turned_pitch, RowTerms};
+use windows::{
+    disc_window, offset_and_shift, pin_gap, row_terms, turned_pitch, RowTable, RowTerms,
+};
 
 const PARAMS: &[ParamSpec] = &[
     ParamSpec { name: "sun_teeth", unit: "1", description: "z1, sun teeth", default: None },
@@ -84,6 +86,11 @@ pub const ENTRY: ModelEntry = ModelEntry {
         ("common_normal_lower_deviation_mm", -0.0309),
     ],
 };
+
+thread_local! {
+    /// Each thread's row table (the model allocates nothing per sample once it has grown).
+    static TABLE: std::cell::RefCell<RowTable> = std::cell::RefCell::new(RowTable::default());
+}
 
 /// The limits of the preload class.
 #[derive(Debug, Clone, Copy)]
@@ -205,26 +212,27 @@ impl RvLostMotion {
     /// The common window's width W_k (rad at the output) at every grid point.
     pub fn window_widths(&self, x: &[f64]) -> Vec<f64> {
         let terms = row_terms(&self.reducer, &self.grid, &self.layout, x);
+        let mut table = RowTable::default();
+        table.fill(&self.reducer, &self.grid, &self.layout, &terms, x);
         (0..self.grid.points)
-            .map(|k| self.width(&terms, x, k))
+            .map(|k| self.width(&table, x, k))
             .collect()
     }
 
-    fn width(&self, terms: &RowTerms, x: &[f64], k: usize) -> f64 {
-        let lambda = self.reducer.lambda;
-        let (lo0, up0) =
-            disc_window(&self.reducer, &self.grid, &self.layout, terms, x, k, 0).ends(lambda);
-        let (lo1, up1) =
-            disc_window(&self.reducer, &self.grid, &self.layout, terms, x, k, 1).ends(lambda);
+    /// W_k from the row's table.
+    #[inline(always)]
+    fn width(&self, table: &RowTable, x: &[f64], k: usize) -> f64 {
+        let ends = |d| table.ends(&self.reducer, &self.grid, &self.layout, x, k, d);
+        let ((lo0, up0), (lo1, up1)) = (ends(0), ends(1));
         up0.min(up1) - lo0.max(lo1)
     }
 
     /// The revolution: the widest common window, the mean of max(0, W) and the least W
     /// over the M points, the narrowest W and where it is.
-    fn scan_revolution(&self, terms: &RowTerms, x: &[f64]) -> (f64, f64, f64, (f64, usize)) {
+    fn scan_revolution(&self, table: &RowTable, x: &[f64]) -> (f64, f64, f64, (f64, usize)) {
         let (mut widest, mut sum, mut narrowest) = (f64::NEG_INFINITY, 0.0, (f64::INFINITY, 0));
         for k in 0..self.grid.points {
-            let w = self.width(terms, x, k);
+            let w = self.width(table, x, k);
             widest = widest.max(w);
             sum += w.max(0.0);
             if w < narrowest.0 {
@@ -297,7 +305,11 @@ impl ErrorModel for RvLostMotion {
             return;
         }
         let terms = row_terms(&self.reducer, &self.grid, &self.layout, x);
-        let (widest, sum, least, (narrowest, at)) = self.scan_revolution(&terms, x);
+        let (widest, sum, least, (narrowest, at)) = TABLE.with(|table| {
+            let mut table = table.borrow_mut();
+            table.fill(&self.reducer, &self.grid, &self.layout, &terms, x);
+            self.scan_revolution(&table, x)
+        });
         let involute = self.involute(x) + 0.0;
         let free_involute = involute.max(0.0);
         let preload = if narrowest < 0.0 {

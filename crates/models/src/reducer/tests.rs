@@ -527,3 +527,37 @@ fn the_no_load_torque_is_the_pin_friction_of_the_preload() {
     assert!((outs[2][6] / outs[1][6] - 2.0).abs() < 1e-12);
     assert_eq!(outs[0][5], outs[2][5]);
 }
+
+#[test]
+fn the_row_table_gives_the_pin_by_pin_windows() {
+    // The fast path (a row reduced to its crank angles' runs, windows.rs RowTable) against
+    // every pin's gap computed in full at every point, with and without pins out of place.
+    let m = model(&[
+        ("equidistant_modification_mm", -0.010),
+        ("shift_modification_mm", -0.0206),
+    ]);
+    let rows = random_rows(&m, 10);
+    let unplaced: Vec<Vec<f64>> = rows
+        .iter()
+        .map(|x| {
+            let mut x = x.clone();
+            for i in 1..=40 {
+                for name in ["pin_radial_error_mm", "pin_tangential_error_mm"] {
+                    x[m.input_index(&format!("{name}_{i}")).expect("input")] = 0.0;
+                }
+            }
+            x
+        })
+        .collect();
+    for x in rows.iter().chain(&unplaced) {
+        let widths = m.window_widths(x);
+        for (k, width) in widths.iter().enumerate() {
+            let [one, two] = m.disc_windows(x, k);
+            let direct = one.1.min(two.1) - one.0.max(two.0);
+            assert!(
+                (width - direct).abs() < 1e-15,
+                "k {k}: {width} against {direct}"
+            );
+        }
+    }
+}

@@ -338,6 +338,203 @@ fn scan(
     (lag, lead)
 }
 
+/// A row's gaps without the pins' own terms, per crank angle and disc: everything in a
+/// window but the pins depends on the output angle only through z_p·Θ_k, which takes q
+/// values, and the point's slots are one residue's z_p columns; so the row is reduced to
+/// 2q runs of z_p values (t_m = g_m − l_m·ε_m, the pin terms left out) with their offsets
+/// and slacks, and a point's window is one pass over a run rotated by whole pins.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct RowTable {
+    /// Per (kq, d) at 2·kq + d: z_p values t_m.
+    pub runs: Vec<f64>,
+    /// Per (kq, d): the first column entry of its residue (r·z_p), C_d, the slack s_d.
+    pub heads: Vec<(usize, f64, f64)>,
+    /// Whether any pin has a radial or tangential error (else only its radius acts).
+    pub placed_pins: bool,
+}
+
+impl RowTable {
+    /// Fills the table of a row.
+    pub fn fill(
+        &mut self,
+        reducer: &Reducer,
+        grid: &Grid,
+        layout: &Layout,
+        terms: &RowTerms,
+        x: &[f64],
+    ) {
+        let (q, pins) = (grid.per_pin, reducer.stage.pins);
+        let columns = &grid.columns;
+        self.runs.resize(2 * q * pins, 0.0);
+        self.heads.clear();
+        let positions = &x[layout.pins..layout.pins + 2 * pins];
+        self.placed_pins = positions.iter().any(|v| *v != 0.0);
+        for kq in 0..q {
+            let turn = grid.turn[kq];
+            for d in 0..2 {
+                let (offset, along) = offset_and_shift(reducer, terms, d, turn);
+                let pitch = turned_pitch(terms, d, turn);
+                let c = (2 * reducer.stage.teeth * kq + d * grid.points) % (2 * grid.points);
+                let base = (c % (2 * q)) * pins;
+                let run = &mut self.runs[(2 * kq + d) * pins..(2 * kq + d + 1) * pins];
+                for (m, t) in run.iter_mut().enumerate() {
+                    let j = base + m;
+                    let gap = columns.design_gap[j]
+                        + terms.equidistant_error * columns.equidistant[j]
+                        + terms.shift_error * columns.shift[j]
+                        + terms.pin_circle_error * columns.radial[j]
+                        + along * columns.eccentric[j]
+                        + terms.common[d];
+                    let epsilon = pitch.0 * columns.polar_cos[j] + pitch.1 * columns.polar_sin[j];
+                    *t = gap - columns.lever[j] * epsilon;
+                }
+                let slack = grid.needle_lever[2 * kq + d] * terms.needle_radius;
+                self.heads.push((base, offset, slack));
+            }
+        }
+    }
+
+    /// The window ends of disc d at grid point k, output angles (rad).
+    #[inline(always)]
+    pub fn ends(
+        &self,
+        reducer: &Reducer,
+        grid: &Grid,
+        layout: &Layout,
+        x: &[f64],
+        k: usize,
+        d: usize,
+    ) -> (f64, f64) {
+        let (q, pins) = (grid.per_pin, reducer.stage.pins);
+        let kq = k % q;
+        let (base, offset, slack) = self.heads[2 * kq + d];
+        let c = (2 * reducer.stage.teeth * k + d * grid.points) % (2 * grid.points);
+        let start = c / (2 * q);
+        let run = &self.runs[(2 * kq + d) * pins..(2 * kq + d + 1) * pins];
+        let inverse = &grid.columns.inverse_lever[base..base + pins];
+        let radius = &x[layout.pins + 2 * pins..layout.pins + 3 * pins];
+        // Pins [0, z_p − start) meet entries start.., pins [z_p − start, z_p) entries 0...
+        let split = pins - start;
+        let (lag, coast) = if self.placed_pins {
+            let (fr, ft) = (
+                &grid.columns.radial[base..base + pins],
+                &grid.columns.tangential[base..base + pins],
+            );
+            let radial = &x[layout.pins..layout.pins + pins];
+            let tangential = &x[layout.pins + pins..layout.pins + 2 * pins];
+            // Entries `from` of the run meet pins first_pin, first_pin + 1, ….
+            let placed = |from: std::ops::Range<usize>, first_pin: usize| {
+                let (mut low, mut high) = (f64::INFINITY, f64::NEG_INFINITY);
+                for (m, j) in from.enumerate() {
+                    let i = first_pin + m;
+                    let r = (run[j] + radial[i] * fr[j] + tangential[i] * ft[j] - radius[i])
+                        * inverse[j];
+                    if inverse[j] > 0.0 && r < low {
+                        low = r;
+                    }
+                    if inverse[j] < 0.0 && r > high {
+                        high = r;
+                    }
+                }
+                (low, high)
+            };
+            let a = placed(start..pins, 0);
+            let b = placed(0..start, split);
+            (a.0.min(b.0), a.1.max(b.1))
+        } else {
+            let residue = base / pins;
+            let (drive, coast) = (&grid.columns.drive[residue], &grid.columns.coast[residue]);
+            // Entry m meets pin m − start (m ≥ start) or m − start + z_p (m < start).
+            let segments = |range: &std::ops::Range<usize>| {
+                let below = range.start..range.end.min(start);
+                let above = range.start.max(start)..range.end;
+                [
+                    (below.clone(), below.start + split),
+                    (above.clone(), above.start.wrapping_sub(start)),
+                ]
+            };
+            let (mut lag, mut coast_max) = (f64::INFINITY, f64::NEG_INFINITY);
+            for (entries, first_pin) in segments(drive) {
+                if !entries.is_empty() {
+                    let pins_of = &radius[first_pin..first_pin + entries.len()];
+                    lag = lag.min(lane_min(&run[entries.clone()], &inverse[entries], pins_of));
+                }
+            }
+            for (entries, first_pin) in segments(coast) {
+                if !entries.is_empty() {
+                    let pins_of = &radius[first_pin..first_pin + entries.len()];
+                    coast_max = coast_max.max(-lane_min_negated(
+                        &run[entries.clone()],
+                        &inverse[entries],
+                        pins_of,
+                    ));
+                }
+            }
+            (lag, coast_max)
+        };
+        let lambda = reducer.lambda;
+        (
+            lambda * (offset + coast - slack),
+            lambda * (offset + lag + slack),
+        )
+    }
+}
+
+/// min over entries of (t_m − ρ_m)·v_m (the pins' radii ρ the only pin terms), in four
+/// lanes so that the loop compiles to packed instructions (the order of the comparisons
+/// does not change a minimum).
+#[inline(always)]
+fn lane_min(run: &[f64], inverse: &[f64], radius: &[f64]) -> f64 {
+    let n = run.len();
+    let (inverse, radius) = (&inverse[..n], &radius[..n]);
+    let mut low = [f64::INFINITY; 4];
+    let whole = n / 4 * 4;
+    for start in (0..whole).step_by(4) {
+        for (lane, low) in low.iter_mut().enumerate() {
+            let i = start + lane;
+            let r = (run[i] - radius[i]) * inverse[i];
+            *low = if r < *low { r } else { *low };
+        }
+    }
+    for i in whole..n {
+        let r = (run[i] - radius[i]) * inverse[i];
+        low[0] = if r < low[0] { r } else { low[0] };
+    }
+    fold_lanes(low, [f64::NEG_INFINITY; 4]).0
+}
+
+/// min over entries of −(t_m − ρ_m)·v_m: the coast flank's −max.
+#[inline(always)]
+fn lane_min_negated(run: &[f64], inverse: &[f64], radius: &[f64]) -> f64 {
+    let n = run.len();
+    let (inverse, radius) = (&inverse[..n], &radius[..n]);
+    let mut low = [f64::INFINITY; 4];
+    let whole = n / 4 * 4;
+    for start in (0..whole).step_by(4) {
+        for (lane, low) in low.iter_mut().enumerate() {
+            let i = start + lane;
+            let r = (radius[i] - run[i]) * inverse[i];
+            *low = if r < *low { r } else { *low };
+        }
+    }
+    for i in whole..n {
+        let r = (radius[i] - run[i]) * inverse[i];
+        low[0] = if r < low[0] { r } else { low[0] };
+    }
+    fold_lanes(low, [f64::NEG_INFINITY; 4]).0
+}
+
+/// The smallest of four lanes of minima and the largest of four of maxima.
+fn fold_lanes(low: [f64; 4], high: [f64; 4]) -> (f64, f64) {
+    let lag = low
+        .iter()
+        .fold(f64::INFINITY, |a, &v| if v < a { v } else { a });
+    let coast = high
+        .iter()
+        .fold(f64::NEG_INFINITY, |a, &v| if v > a { v } else { a });
+    (lag, coast)
+}
+
 /// ε's (cos, sin) coefficients on the polar angle: (F_p/2)/r_m·(cos, sin) of ϕ_p + z_p·Θ − d·π.
 pub(crate) fn turned_pitch(terms: &RowTerms, d: usize, (s, c): (f64, f64)) -> (f64, f64) {
     let sigma = if d == 0 { 1.0 } else { -1.0 };
