@@ -1754,8 +1754,9 @@ impl TransmissionError {
 
     /// The curve's extremes refined on the exact geometry, rad. Near the maximum (a smooth
     /// maximum of one contact branch, since TE is the upper envelope of its branches) the
-    /// winning branch's parabola through three points gives its vertex, whose branch value
-    /// is a lower bound of TE there; near the minimum (a kink where two branches cross) the
+    /// winning branch's parabola through three points gives its vertex, and a second
+    /// parabola through the vertex and points h/8 either side a better one, whose branch
+    /// values are lower bounds of TE there; near the minimum (a kink where two branches cross) the
     /// crossing of the two branches' chords gives the angle at which TE is evaluated
     /// exactly. Both can only widen the sampled range towards the true one. `j_lo`, `j_hi`:
     /// the first points at which the sampled extremes `lo`, `hi` occur.
@@ -1772,16 +1773,27 @@ impl TransmissionError {
         let at = |j: usize| 2.0 * PI * j as f64 / n as f64;
         let mut best_hi = hi;
         let top = self.exact_flanks(inputs, terms, at(j_hi), false);
-        let values =
-            [-h, 0.0, h].map(|dt| self.branch_value(inputs, terms, top.branch, at(j_hi) + dt));
-        if let [Some(before), Some(centre), Some(after)] = values {
+        // Two parabola steps: through the point and its neighbours, then through the first
+        // vertex and points h/8 either side of it (a branch near a pin whose lever
+        // vanishes is far from a parabola over ±h).
+        let (mut centre_at, mut spacing) = (at(j_hi), h);
+        for _ in 0..2 {
+            let values = [-spacing, 0.0, spacing]
+                .map(|dt| self.branch_value(inputs, terms, top.branch, centre_at + dt));
+            let [Some(before), Some(centre), Some(after)] = values else {
+                break;
+            };
             let curvature = before - 2.0 * centre + after;
-            if curvature < 0.0 {
-                let t = (0.5 * (before - after) / curvature).clamp(-1.0, 1.0);
-                if let Some(v) = self.branch_value(inputs, terms, top.branch, at(j_hi) + t * h) {
-                    best_hi = best_hi.max(v);
-                }
+            if curvature >= 0.0 {
+                break;
             }
+            let t = (0.5 * (before - after) / curvature).clamp(-1.0, 1.0);
+            centre_at += t * spacing;
+            match self.branch_value(inputs, terms, top.branch, centre_at) {
+                Some(v) => best_hi = best_hi.max(v),
+                None => break,
+            }
+            spacing /= 8.0;
         }
         // The kink at the minimum lies towards the lower neighbour.
         let mut best_lo = lo;
