@@ -297,6 +297,8 @@ fn rv40e_params() -> ModelParams {
 /// is not positive, and slots past the last pin (3 pins in 4 slots), are padding
 /// (`blocked` = +∞, every factor 0). Each clearance factor is
 /// stored divided by the lever l, so that a row's clearance ratio g/l is a sum of products.
+/// (The physical reading builds its own tables of this form, one per flank, in
+/// `two_discs`: there the drive flank is the pins with l < 0, their factors over |l|.)
 #[derive(Debug, Clone, Default)]
 struct PinTable {
     /// Entries per phase: the ⌈z_p/2⌉ slots that can have a positive lever, rounded up to
@@ -649,7 +651,7 @@ impl TransmissionError {
         let physical = physical_geometry.map(|(crank_radius, spacing, sun_offset)| {
             Box::new(two_discs::build(
                 &stage,
-                &table,
+                width,
                 &curve_points,
                 &groups,
                 two_discs::Layout {
