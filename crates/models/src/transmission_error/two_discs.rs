@@ -68,7 +68,7 @@
 use std::f64::consts::PI;
 
 use super::{smallest, smallest_ratio, PinTable, TransmissionError, MAX_CRANKS};
-use crate::cycloid::CycloidStage;
+use crate::cycloid::{CycloidStage, PinFactors};
 use crate::spectrum::OrderDft;
 use crate::{ConditionEffect, InputSpec, OutputCondition, OutputKind, OutputSpec};
 
@@ -565,7 +565,7 @@ impl TransmissionError {
     ) -> (f64, f64) {
         let ph = self.physical();
         let factors = ph.stage.pin_factors_at(sin, cos);
-        let (equidistant, shift) = modification(&ph.stage, sin, cos);
+        let (equidistant, shift) = modification(&factors);
         let (pin_r, pin_t) = if self.per_pin {
             (
                 inputs[ph.pin_base + pin],
@@ -956,7 +956,9 @@ impl TransmissionError {
             // all its points at once, the points as vector lanes.
             let lanes = match ph.lane_shifts[group_index] {
                 Some(first) if self.per_pin => Some([0, 1].map(|d| {
-                    let start = (pins - first[d] as usize + s0) % pins;
+                    // (s0 − k) mod z_p without a division: k < z_p, s0 < z_p.
+                    let start = pins - first[d] as usize + s0;
+                    let start = if start >= pins { start - pins } else { start };
                     lane_lags(
                         &drive[d],
                         radial[d],
@@ -1162,9 +1164,14 @@ fn lane_lags(
     pin_tangential: &[[f64; LANES]],
 ) -> [f64; LANES] {
     let mut lags = [f64::INFINITY; LANES];
-    for e in range[0]..range[1] {
-        let (h, a) = (head[e], radial[e]);
-        let (pr, pt) = (&pin_radial[e], &pin_tangential[e]);
+    // Sliced to the range first, so that the loop carries no bounds checks.
+    let [first, last] = range;
+    let columns = head[first..last]
+        .iter()
+        .zip(&radial[first..last])
+        .zip(&pin_radial[first..last])
+        .zip(&pin_tangential[first..last]);
+    for (((&h, &a), pr), pt) in columns {
         for m in 0..LANES {
             let v = h + pr[m] * a + pt[m];
             lags[m] = if v < lags[m] { v } else { lags[m] };
@@ -1354,13 +1361,14 @@ impl Physical {
 /// cos φ = K1 touches, each pin's clearance is c0 + l·δ*: 003's standard form mirrored,
 /// Δr_rp·(1 + sin φ/S) − Δr_p·(1 − K1·cos φ + √(1 − K1²)·sin φ)/S, which vanishes at that
 /// pin. The coast flank (l > 0) then has c0 + l·δ*, and over both flanks the play is 2δ*,
-/// 000's (2Δr_rp − 2Δr_p·√(1 − K1²))/(e·z_c).
-fn modification(stage: &CycloidStage, sin: f64, cos: f64) -> (f64, f64) {
-    let k1 = stage.k1();
-    let s = (1.0 + k1 * k1 - 2.0 * k1 * cos).sqrt();
+/// 000's (2Δr_rp − 2Δr_p·√(1 − K1²))/(e·z_c). From the pin's factors (003's standard form
+/// 1 − sin φ/S and −(1 − K1·cos φ − √(1 − K1²)·sin φ)/S, the radial (1 − K1·cos φ)/S):
+/// 2 − equidistant and −2·radial − shift, no root or division of its own.
+#[inline(always)]
+fn modification(factors: &PinFactors) -> (f64, f64) {
     (
-        1.0 + sin / s,
-        -(1.0 - k1 * cos + (1.0 - k1 * k1).sqrt() * sin) / s,
+        2.0 - factors.equidistant,
+        -2.0 * factors.radial - factors.shift,
     )
 }
 
@@ -1386,7 +1394,7 @@ fn flank_table(
         for e in 0..width {
             let slot = first + e;
             let phi = 2.0 * PI * (slot as f64 + fraction) / pins as f64;
-            let (sin, cos) = phi.sin_cos();
+            let sin = phi.sin();
             let side = if drive { -sin } else { sin };
             if slot >= pins || side <= 1e-12 {
                 table.blocked.push(f64::INFINITY);
@@ -1405,7 +1413,7 @@ fn flank_table(
             }
             let factors = stage.pin_factors(phi);
             let inverse_lever = 1.0 / factors.lever.abs();
-            let (equidistant, shift) = modification(stage, sin, cos);
+            let (equidistant, shift) = modification(&factors);
             table.blocked.push(0.0);
             table.inverse_lever.push(inverse_lever);
             table.equidistant.push(equidistant * inverse_lever);
@@ -1826,19 +1834,21 @@ impl TransmissionError {
         // vertex and points h/8 either side of it (a branch near a pin whose lever
         // vanishes is far from a parabola over ±h).
         let (mut centre_at, mut spacing) = (at(j_hi), h);
+        let mut centre = self.branch_value(inputs, terms, top.branch, centre_at);
         for _ in 0..2 {
-            let values = [-spacing, 0.0, spacing]
+            let values = [-spacing, spacing]
                 .map(|dt| self.branch_value(inputs, terms, top.branch, centre_at + dt));
-            let [Some(before), Some(centre), Some(after)] = values else {
+            let ([Some(before), Some(after)], Some(middle)) = (values, centre) else {
                 break;
             };
-            let curvature = before - 2.0 * centre + after;
+            let curvature = before - 2.0 * middle + after;
             if curvature >= 0.0 {
                 break;
             }
             let t = (0.5 * (before - after) / curvature).clamp(-1.0, 1.0);
             centre_at += t * spacing;
-            match self.branch_value(inputs, terms, top.branch, centre_at) {
+            centre = self.branch_value(inputs, terms, top.branch, centre_at);
+            match centre {
                 Some(v) => best_hi = best_hi.max(v),
                 None => break,
             }
