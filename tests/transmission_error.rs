@@ -1,7 +1,8 @@
 //! Tests of the transmission-error model on its shipped scenarios: document 002's literal
 //! reading reproduces the one-disc model's figures bit for bit; the physical reading's
 //! order amplitudes against the exact curve at 2^16 points with their aliasing bound;
-//! peak-to-peak convergence with the point count; interference counted, not hidden.
+//! peak-to-peak convergence with the point count; interference counted, not hidden; a
+//! disc's window against the exact profile windows of tests/data/exact_profile_windows.csv.
 
 use rvtol_engine::report::RunReport;
 use rvtol_engine::{run, RunSettings, Scenario};

@@ -1831,8 +1831,8 @@ impl TransmissionError {
         let mut best_hi = hi;
         let top = self.exact_flanks(inputs, terms, at(j_hi), false);
         // Two parabola steps: through the point and its neighbours, then through the first
-        // vertex and points h/8 either side of it (a branch near a pin whose lever
-        // vanishes is far from a parabola over ±h).
+        // vertex and points h/8 either side of it (a branch whose curvature changes fast
+        // is far from a parabola over ±h).
         let (mut centre_at, mut spacing) = (at(j_hi), h);
         let mut centre = self.branch_value(inputs, terms, top.branch, centre_at);
         for _ in 0..2 {
