@@ -692,9 +692,7 @@ impl TransmissionError {
     /// with l < 0 (forward drive), the upper by those with l > 0. None for 002's literal
     /// one-disc reading.
     pub fn disc_windows(&self, inputs: &[f64], theta: f64) -> Option<[(f64, f64); 2]> {
-        if self.physical.is_none() {
-            return None;
-        }
+        self.physical.as_ref()?;
         let terms = self.row_terms(inputs);
         Some(self.exact(inputs, &terms, theta).windows)
     }
