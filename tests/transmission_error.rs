@@ -1,7 +1,8 @@
 //! Tests of the transmission-error model on its shipped scenarios: document 002's literal
 //! reading reproduces the one-disc model's figures bit for bit; the physical reading's
 //! order amplitudes against the exact curve at 2^16 points with their aliasing bound;
-//! peak-to-peak convergence with the point count; interference counted, not hidden.
+//! peak-to-peak convergence with the point count; interference counted, not hidden; a
+//! disc's window against the exact profile windows of tests/data/exact_profile_windows.csv.
 
 use rvtol_engine::report::RunReport;
 use rvtol_engine::{run, RunSettings, Scenario};
@@ -293,4 +294,169 @@ fn an_interfering_sample_is_counted_not_reported_as_a_huge_lag() {
     let out = evaluate(&model, &row);
     assert_eq!(out[8], 1.0);
     assert!(out[..8].iter().all(|v| v.is_nan()));
+}
+
+/// One row of tests/data/exact_profile_windows.csv, the fields this test reads.
+struct WindowRow {
+    case: String,
+    dr_rp: f64,
+    dr_p: f64,
+    phi0: f64,
+    t_along: f64,
+    t_across: f64,
+    /// The pin changed (0-based, housing angle 2π·i/40 + φ0), if any.
+    pin: Option<usize>,
+    pin_radial: f64,
+    pin_tangential: f64,
+    pin_radius: f64,
+    beta: (f64, f64),
+    d_beta: (f64, f64),
+}
+
+fn exact_profile_windows() -> Vec<WindowRow> {
+    let path = crate::common::workspace_dir().join("tests/data/exact_profile_windows.csv");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let number = |fields: &[&str], name: &str| -> f64 { fields[column(name)].parse().unwrap() };
+    lines
+        .map(|line| line.split(',').collect::<Vec<_>>())
+        // E2 rows are closed forms without a pin phase.
+        .filter(|fields| !fields[column("phi0_rad")].is_empty())
+        .map(|fields| WindowRow {
+            case: fields[column("case")].to_string(),
+            dr_rp: number(&fields, "dr_rp_mm"),
+            dr_p: number(&fields, "dr_p_mm"),
+            phi0: number(&fields, "phi0_rad"),
+            t_along: number(&fields, "t_along_mm"),
+            t_across: number(&fields, "t_across_mm"),
+            pin: fields[column("pin_moved")].parse().ok(),
+            pin_radial: number(&fields, "pin_radial_mm"),
+            pin_tangential: number(&fields, "pin_tangential_mm"),
+            pin_radius: number(&fields, "pin_radius_mm"),
+            beta: (
+                number(&fields, "beta_lo_rad"),
+                number(&fields, "beta_hi_rad"),
+            ),
+            d_beta: (
+                number(&fields, "d_beta_lo_rad"),
+                number(&fields, "d_beta_hi_rad"),
+            ),
+        })
+        .collect()
+}
+
+#[test]
+fn disc_windows_move_as_the_exact_profile_windows_do() {
+    // tests/data/exact_profile_windows.csv: one RV-20E disc's rotational window [β_lo, β_hi]
+    // among its 40 pins from the exact profile (z_p 40, z_c 39, r_p 52 mm, e 0.9 mm; β > 0
+    // counter-clockwise, closing the gaps of the pins with sin φ > 0, which set β_hi), and
+    // the same in the first-order model (rows E1:…). Disc 1 of the physical reading on that
+    // geometry (module and crank circle any consistent values: they do not reach a window)
+    // has the window [κ·(C − K), κ·(C + L)]: u = window/κ is the disc's turn past its mesh,
+    // β, the lower end set by the pins with l < 0, the upper by those with l > 0 (docs/
+    // models.md §12.4). Its origin is the disc turned into drive-flank contact, δ* =
+    // (Δr_rp − Δr_p·√(1 − K1²))/(e·z_c) clockwise of the reference's centred disc.
+    //
+    // Frames: the model puts pin i (0-based) at φ = 2π·i/z_p + z_c·Θ from disc 1's
+    // eccentric, the reference at 2π·i/z_p + φ0: Θ = φ0/z_c. The reference's toothing
+    // translation (t_along, t_across) in the eccentric frame is the disc runout r_1 =
+    // R(−z_p·Θ)·(t_along, t_across) (disc frame, which the model turns by z_p·Θ into the
+    // eccentric frame); its pin moves are the pin's radial and tangential errors; its pin
+    // radius δ on pin i is the radial error −δ·S_i/(1 − K1·cos φ_i), which changes that
+    // pin's clearance by −δ as the larger pin does (the model has no per-pin radius).
+    //
+    // 1. Against the first-order rows (E1): u − δ* equals [β_lo, β_hi] to rounding
+    //    (1e-12 rad), every modification, phase, translation and pin move.
+    // 2. Against the exact rows: the changes of u's ends equal the reference's d_beta_lo,
+    //    d_beta_hi to first order: within 0.005 arcmin + 10 % of the change (the changes
+    //    are 5 µm at most, up to 0.49 arcmin; the reference's own first-order rows differ
+    //    from its exact ones by at most 0.0039 arcmin, where an outward pin move hands the
+    //    limit to the neighbouring pin on the tight profile, and by 10 % of the change for
+    //    a translation along the eccentric). With the lower end set by the l > 0 pins, as
+    //    before this test, a 5 µm larger pin on that side would move the lower end up by
+    //    0.49 arcmin where the reference moves the upper end down by as much.
+    let (zp, zc, r_p, e) = (40.0, 39.0, 52.0, 0.9);
+    let params = ModelParams::new()
+        .with_number("crank_circle_radius_mm", 27.5)
+        .with_number("disc_spacing_mm", 12.0)
+        .with_number("sun_teeth", 9.0)
+        .with_number("planet_teeth", 27.0)
+        .with_number("module_mm", 1.0)
+        .with_number("pin_count", zp)
+        .with_number("cycloid_teeth", zc)
+        .with_number("pin_circle_radius_mm", r_p)
+        .with_number("eccentricity_mm", e)
+        .with_number("pin_position_errors", 1.0);
+    let model = TransmissionError::from_params(&params).unwrap();
+    let kappa = zc / (zp + 9.0 / 27.0);
+    let k1 = e * zp / r_p;
+    let arcmin = std::f64::consts::PI / 10800.0;
+    let index = |name: &str| model.input_index(name).unwrap_or_else(|| panic!("{name}"));
+    // u = window/κ of disc 1 for one row, with or without its change.
+    let window = |row: &WindowRow, changed: bool| -> (f64, f64) {
+        let theta = row.phi0 / zc;
+        let mut inputs = vec![0.0; model.inputs().len()];
+        inputs[index("equidistant_modification_mm")] = row.dr_rp;
+        inputs[index("shift_modification_mm")] = row.dr_p;
+        if changed {
+            let (s, c) = (zp * theta).sin_cos();
+            inputs[index("disc_runout_x_mm_1")] = row.t_along * c + row.t_across * s;
+            inputs[index("disc_runout_y_mm_1")] = -row.t_along * s + row.t_across * c;
+            if let Some(i) = row.pin {
+                let phi = 2.0 * std::f64::consts::PI * i as f64 / zp + row.phi0;
+                let s_i = (1.0 + k1 * k1 - 2.0 * k1 * phi.cos()).sqrt();
+                let radius_as_radial = -row.pin_radius * s_i / (1.0 - k1 * phi.cos());
+                inputs[index(&format!("pin_radial_error_mm_{}", i + 1))] =
+                    row.pin_radial + radius_as_radial;
+                inputs[index(&format!("pin_tangential_error_mm_{}", i + 1))] = row.pin_tangential;
+            }
+        }
+        let [(lo, hi), _] = model.disc_windows(&inputs, theta).unwrap();
+        (lo / kappa, hi / kappa)
+    };
+    let rows = exact_profile_windows();
+    let (mut first_order, mut exact) = (0, 0);
+    for row in &rows {
+        let changed = window(row, true);
+        if row.case.starts_with("E1:") {
+            let half_play = (row.dr_rp - row.dr_p * (1.0 - k1 * k1).sqrt()) / (e * zc);
+            let (lo, hi) = (changed.0 - half_play, changed.1 - half_play);
+            assert!(
+                (lo - row.beta.0).abs() < 1e-12 && (hi - row.beta.1).abs() < 1e-12,
+                "{} (t {}, {}): [{lo:e}, {hi:e}] against [{:e}, {:e}]",
+                row.case,
+                row.t_along,
+                row.t_across,
+                row.beta.0,
+                row.beta.1
+            );
+            first_order += 1;
+        } else {
+            let base = window(row, false);
+            let moved = (changed.0 - base.0, changed.1 - base.1);
+            for (end, ours, theirs) in
+                [("lo", moved.0, row.d_beta.0), ("hi", moved.1, row.d_beta.1)]
+            {
+                let tolerance = 0.005 * arcmin + 0.1 * theirs.abs();
+                assert!(
+                    (ours - theirs).abs() <= tolerance,
+                    "{} (t {}, {}; pin {:?}: {}, {}, {}): β_{end} moves by {:.5} arcmin, the \
+                     exact profile's by {:.5}",
+                    row.case,
+                    row.t_along,
+                    row.t_across,
+                    row.pin,
+                    row.pin_radial,
+                    row.pin_tangential,
+                    row.pin_radius,
+                    ours / arcmin,
+                    theirs / arcmin
+                );
+            }
+            exact += 1;
+        }
+    }
+    assert_eq!((first_order, exact), (330, 330));
 }

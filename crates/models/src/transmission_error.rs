@@ -52,7 +52,9 @@
 //!    and clearance along its normal g_i = the standard modification clearance (003) +
 //!    d_r·(K1 − cos φ_i)/S_i + pin errors projected as in 003 + the profile error of the
 //!    tooth space at pin i. Under a light driving load the disc turns until the first pin
-//!    touches: the output lags by min over pins with l_i > 0 of g_i/l_i.
+//!    touches: the output lags by min over pins with l_i > 0 of g_i/l_i (002's flank, with
+//!    its crank stage's sign; the physical reading's drive flank is l_i < 0, docs/models.md
+//!    §12.4).
 //! 4. Output mechanism (002 Δθ4): ΔΘ4 = n14·R(Θ)·o/r6.
 //!
 //! TE(Θ) = ΔΘ1 + ΔΘ2 + ΔΘ3 + ΔΘ4, positive when the output is ahead. The curve is
@@ -297,6 +299,8 @@ fn rv40e_params() -> ModelParams {
 /// is not positive, and slots past the last pin (3 pins in 4 slots), are padding
 /// (`blocked` = +∞, every factor 0). Each clearance factor is
 /// stored divided by the lever l, so that a row's clearance ratio g/l is a sum of products.
+/// (The physical reading builds its own tables of this form, one per flank, in
+/// `two_discs`: there the drive flank is the pins with l < 0, their factors over |l|.)
 #[derive(Debug, Clone, Default)]
 struct PinTable {
     /// Entries per phase: the ⌈z_p/2⌉ slots that can have a positive lever, rounded up to
@@ -573,7 +577,9 @@ impl TransmissionError {
             ..PinTable::default()
         };
         let zc = cycloid_teeth as i64;
-        for p in 0..phases {
+        // Filled for 002's reading only: the physical reading builds its own, one per flank.
+        let table_phases = if literal { phases } else { 0 };
+        for p in 0..table_phases {
             let fraction = p as f64 * g as f64 / points as f64;
             for s in 0..width {
                 let phi = 2.0 * PI * (s as f64 + fraction) / pins as f64;
@@ -649,7 +655,7 @@ impl TransmissionError {
         let physical = physical_geometry.map(|(crank_radius, spacing, sun_offset)| {
             Box::new(two_discs::build(
                 &stage,
-                &table,
+                width,
                 &curve_points,
                 &groups,
                 two_discs::Layout {
@@ -714,7 +720,8 @@ impl TransmissionError {
         self.inputs.iter().position(|i| i.name == name)
     }
 
-    /// Calls `sink(j, stages)` for every point j of the curve (stage errors in rad).
+    /// Calls `sink(j, stages)` for every point j of the curve (stage errors in rad): 002's
+    /// literal reading (the physical reading's stage parts are in its curves).
     pub fn trace(&self, inputs: &[f64], sink: impl FnMut(usize, StageErrors)) {
         SEARCH.with_borrow_mut(|search| self.trace_with(inputs, search, sink))
     }

@@ -332,23 +332,29 @@ fn the_windows_are_those_of_the_transmission_error_geometry() {
         put(&format!("disc_runout_x_mm_{}", d + 1), *rx);
         put(&format!("disc_runout_y_mm_{}", d + 1), *ry);
     }
-    // The transmission-error model bounds the lower end of disc d's window by its l > 0
-    // pins, κ·(C_d − L_d), and the upper by its l < 0 pins, κ·(C_d + K_d); here the l > 0
-    // pins bound the upper end, κ·(C_d + L_d), and the l < 0 pins the lower, κ·(C_d − K_d)
-    // (the exact profile decides: tests/lost_motion.rs). Same C_d, L_d, K_d: the widths
-    // agree and our lower end plus its upper is our upper plus its lower, 2κ·C_d.
+    // Both bound the upper end of disc d's window by the pins with l > 0, κ·(C_d + L_d),
+    // and the lower by those with l < 0, κ·(C_d − K_d); the transmission error measures
+    // the angle from the disc turned into contact on the l < 0 flank, 003's reference
+    // turned by 2δ*, δ* = (Δr_rp − √(1 − K1²)·Δr_p)/(e·z_c) (its modification inputs
+    // carry the errors): its ends are ours plus 2κ·δ*, at every pin, every angle.
+    let (d_rp, d_p) = (
+        y[te.input_index("equidistant_modification_mm")
+            .expect("input")],
+        y[te.input_index("shift_modification_mm").expect("input")],
+    );
+    let k1: f64 = 0.9 * 40.0 / 52.0;
+    let offset = 2.0 * m.lambda() * (d_rp - (1.0 - k1 * k1).sqrt() * d_p) / PITCH_LEVER;
     for k in 0..m.points() {
         let theta = 2.0 * PI * k as f64 / m.points() as f64;
         let theirs = te.disc_windows(&y, theta).expect("physical reading");
         let ours = m.disc_windows(&x, k);
         for d in 0..2 {
-            let (width, width_te) = (ours[d].1 - ours[d].0, theirs[d].1 - theirs[d].0);
-            assert!(
-                (width - width_te).abs() < 1e-15,
-                "k {k} disc {d}: {width} against {width_te}"
-            );
-            let (a, b) = (ours[d].0 + theirs[d].1, ours[d].1 + theirs[d].0);
-            assert!((a - b).abs() < 1e-15, "k {k} disc {d}: {a} against {b}");
+            for (a, b) in [(ours[d].0, theirs[d].0), (ours[d].1, theirs[d].1)] {
+                assert!(
+                    (a + offset - b).abs() < 1e-15,
+                    "k {k} disc {d}: {a} + {offset} against {b}"
+                );
+            }
         }
     }
 }

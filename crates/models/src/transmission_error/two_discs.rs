@@ -30,32 +30,45 @@
 //! - crank offset C_d = −T_d,y/(a·z_c) − ρ_d: the translation across the eccentric is an
 //!   eccentric phase change T_d,y/a, which the pins turn into a disc rotation
 //!   −T_d,y/(a·z_c) (cycloid relation Θ_disc = −ψ/z_c); the carrier is the disc less ρ_d.
-//! - the pins hold the disc between a drive-flank lag L_d = min over l_i > 0 of g_i/l_i
-//!   and a coast-flank lead K_d = min over l_i < 0 of g_i/|l_i| (g_i the clearances of
-//!   docs/models.md §12 with d_r = T_d,x and disc d's own profile and tooth errors).
+//! - the disc's turn past its mesh: with the input locked, the output turned
+//!   counter-clockwise by δΘ turns carrier and disc by δΘ and the cranks, rolling on the
+//!   fixed sun, by (1 + z_s/z_pl)·δΘ, and so the eccentric; the mesh would turn the disc by
+//!   −(1 + z_s/z_pl)·δΘ/z_c, so the disc is δΘ·(z_p + z_s/z_pl)/z_c = δΘ/κ counter-clockwise
+//!   past its mesh, which closes the gaps of the pins with l_i > 0 (sin φ > 0). A
+//!   counter-clockwise output (the window's upper end) is therefore limited by the l > 0
+//!   pins, a lagging output (its lower end: forward drive, the single-flank test) by the
+//!   l < 0 pins: the drive flank is the l < 0 one. The pins hold disc d between a
+//!   drive-flank lag K_d = min over l_i < 0 of g_i/|l_i| and a coast-flank lead
+//!   L_d = min over l_i > 0 of g_i/l_i (g_i the clearances of docs/models.md §12 with
+//!   d_r = T_d,x and disc d's own profile and tooth errors; the modification in the
+//!   standard form of the drive flank, measured from the disc turned into drive-flank
+//!   contact). An exact profile agrees (tests/data/exact_profile_windows.csv, tested in
+//!   tests/transmission_error.rs): a translation across the eccentric towards the l > 0
+//!   pins and a larger pin on the l > 0 side both lower the upper end.
 //! - the output follows the disc through the cranks that ride on it: a disc rotation ε
 //!   with the crank held against the carrier turns the output by ε·z_c/z_p (the whole
 //!   carrier, cranks and disc turn about the output axis, where the pin normals have the
 //!   lever a·z_p), and by ε·z_c/D with the carrier feedback (D = z_p + z_s/z_pl); κ =
 //!   z_c/D scales every disc-side term (002 takes κ = 1).
 //!
-//! Output window of disc d: [κ·(C_d − L_d), κ·(C_d + K_d)]. First contact (light load,
-//! the single-flank test): TE = max_d κ·(C_d − L_d); load-shared (both discs loaded, equal
-//! stiffness): TE = mean_d κ·(C_d − L_d). The windows of the two discs must overlap at every
+//! Output window of disc d: [κ·(C_d − K_d), κ·(C_d + L_d)]. First contact (light load,
+//! the single-flank test): TE = max_d κ·(C_d − K_d); load-shared (both discs loaded, equal
+//! stiffness): TE = mean_d κ·(C_d − K_d). The windows of the two discs must overlap at every
 //! point: where they do not, the profile interferes (a negative play), the sample has no
 //! transmission error and the indicator `profile_interference` is 1.
 //!
-//! The curve is tabulated at N points (the disc-1 slot table of the parent module, a
-//! coast table, disc 2's slots found at the phase half a revolution of the eccentric on);
-//! peak-to-peak is refined at its extremes by the exact geometry (a parabola on the
-//! winning contact near the maximum, the crossing of the two contacts near the minimum,
-//! which is a kink): the sampled extremes are off by up to L·h/2 (L the largest slope,
-//! h = 2π/N), the refined ones only move towards the true ones (tests/transmission_error.rs).
+//! The curve is tabulated at N points (a drive table of the l < 0 slots and a coast table
+//! of the l > 0 slots per fractional pin pitch of disc 1, disc 2's slots found at the phase
+//! half a revolution of the eccentric on); peak-to-peak is refined at its extremes by the
+//! exact geometry (a parabola on the winning contact near the maximum, the crossing of the
+//! two contacts near the minimum, which is a kink): the sampled extremes are off by up to
+//! L·h/2 (L the largest slope, h = 2π/N), the refined ones only move towards the true ones
+//! (tests/transmission_error.rs).
 
 use std::f64::consts::PI;
 
 use super::{smallest, smallest_ratio, PinTable, TransmissionError, MAX_CRANKS};
-use crate::cycloid::CycloidStage;
+use crate::cycloid::{CycloidStage, PinFactors};
 use crate::spectrum::OrderDft;
 use crate::{ConditionEffect, InputSpec, OutputCondition, OutputKind, OutputSpec};
 
@@ -206,7 +219,13 @@ pub(super) struct Physical {
     /// κ = z_c/D.
     pub kappa: f64,
     pub stage: CycloidStage,
-    /// Slots with a negative lever (the coast flank), factors over |l|.
+    /// Slots with a negative lever (the drive flank: the window's lower end, the TE),
+    /// factors over |l|; entry e of a block is slot `drive_first_slot` + e.
+    pub drive: PinTable,
+    /// ⌊z_p/2⌋: the first slot that can have a negative lever.
+    pub drive_first_slot: usize,
+    /// Slots with a positive lever (the coast flank: the window's upper end), entry e is
+    /// slot e.
     pub coast: PinTable,
     /// Per disc-1 phase p: disc 2's block.
     pub phase_2: Vec<u32>,
@@ -288,7 +307,8 @@ pub(super) struct Exact {
     pub involute: f64,
     /// Per disc κ·C_d, rad.
     pub crank: [f64; 2],
-    /// Per disc its window [κ·(C_d − L_d), κ·(C_d + K_d)], rad.
+    /// Per disc its window [κ·(C_d − K_d), κ·(C_d + L_d)], rad (the upper end +∞ where
+    /// the coast flank was not asked for).
     pub windows: [(f64, f64); 2],
 }
 
@@ -545,11 +565,7 @@ impl TransmissionError {
     ) -> (f64, f64) {
         let ph = self.physical();
         let factors = ph.stage.pin_factors_at(sin, cos);
-        let (equidistant, shift) = if sin >= 0.0 {
-            (factors.equidistant, factors.shift)
-        } else {
-            coast_modification(&ph.stage, sin, cos)
-        };
+        let (equidistant, shift) = modification(&factors);
         let (pin_r, pin_t) = if self.per_pin {
             (
                 inputs[ph.pin_base + pin],
@@ -585,8 +601,8 @@ impl TransmissionError {
         self.exact_flanks(inputs, terms, theta, true)
     }
 
-    /// [`Self::exact`], the coast flank only when `coast` (else its windows' upper ends
-    /// are +∞ and `clear` is true).
+    /// [`Self::exact`], the coast flank (l > 0) only when `coast` (else its windows' upper
+    /// ends are +∞ and `clear` is true).
     pub(super) fn exact_flanks(
         &self,
         inputs: &[f64],
@@ -608,6 +624,8 @@ impl TransmissionError {
         for d in 0..2 {
             let d_r = Self::along(terms, d, angles[0], angles[1]);
             let start = (self.cycloid_teeth as f64 * theta + d as f64 * PI).rem_euclid(2.0 * PI);
+            // K_d over the drive flank (l < 0, with the pin that holds it), L_d over the
+            // coast flank (l > 0).
             let (mut lag, mut lead, mut winner) = (f64::INFINITY, f64::INFINITY, 0);
             let mut previous = (0.0, 1.0);
             for pin in 0..self.pins {
@@ -622,16 +640,16 @@ impl TransmissionError {
                     )
                 };
                 previous = (sin, cos);
-                if !coast && sin <= 0.0 {
+                if !coast && sin >= 0.0 {
                     continue;
                 }
                 let (ratio, lever) =
                     self.exact_ratio_at(inputs, terms, d, pin, theta, d_r, (sin, cos));
-                if lever > 1e-12 * self.eccentricity {
+                if lever < -1e-12 * self.eccentricity {
                     if ratio < lag {
                         (lag, winner) = (ratio, pin);
                     }
-                } else if lever < -1e-12 * self.eccentricity {
+                } else if lever > 1e-12 * self.eccentricity {
                     lead = lead.min(ratio);
                 }
             }
@@ -670,8 +688,10 @@ impl TransmissionError {
     }
 
     /// Both discs' windows [lower, upper] at the output angle Θ (rad), from the whole
-    /// geometry pin by pin: what `rv_lost_motion` finds on the same deviations (one
-    /// geometry for both). None for 002's literal one-disc reading.
+    /// geometry pin by pin: [κ·(C_d − K_d), κ·(C_d + L_d)], the lower end set by the pins
+    /// with l < 0 (forward drive), the upper by those with l > 0, the angle measured from
+    /// the disc turned into contact on the l < 0 flank (`rv_lost_motion` measures it from
+    /// 003's reference, 2κ·δ* lower). None for 002's literal one-disc reading.
     pub fn disc_windows(&self, inputs: &[f64], theta: f64) -> Option<[(f64, f64); 2]> {
         self.physical.as_ref()?;
         let terms = self.row_terms(inputs);
@@ -679,7 +699,7 @@ impl TransmissionError {
     }
 
     /// The value of one contact branch at Θ (a lower bound of TE there), or None where
-    /// one of its pins has no driving lever.
+    /// one of its pins has no driving lever (l < 0).
     pub(super) fn branch_value(
         &self,
         inputs: &[f64],
@@ -697,7 +717,7 @@ impl TransmissionError {
         let one = |d: usize, pin: usize| {
             let d_r = Self::along(terms, d, angles[0], angles[1]);
             let (ratio, lever) = self.exact_ratio(inputs, terms, d, pin, theta, d_r);
-            (lever > 0.0).then(|| ph.kappa * (offsets[d] - ratio))
+            (lever < 0.0).then(|| ph.kappa * (offsets[d] - ratio))
         };
         match branch {
             Branch::One { disc, pin } => one(disc, pin),
@@ -706,7 +726,8 @@ impl TransmissionError {
     }
 
     /// Fills `curve` (N values, rad) from the tables; returns false when the profile
-    /// interferes at some point (the curve is then still filled, from the drive flanks).
+    /// interferes at some point (the curve is then still filled, from the drive flanks,
+    /// l < 0).
     /// With `stages`, also the parts [involute, cranks, contact] per point.
     pub(super) fn physical_curve(
         &self,
@@ -718,8 +739,10 @@ impl TransmissionError {
     ) -> bool {
         let ph = self.physical();
         let n = self.points;
-        let table = &self.table;
+        let table = &ph.drive;
         let coast_table = &ph.coast;
+        // Entry e of a drive block is slot s0 + e: its pin at shift k is (s0 + e − k) mod z_p.
+        let s0 = ph.drive_first_slot;
         let width = table.width;
         let (pins, teeth) = (self.pins, self.cycloid_teeth);
         // The smooth part, point by point in index order, from its expansion in products of
@@ -749,13 +772,11 @@ impl TransmissionError {
                 }
             }
         }
-        // Pin errors repeated (and reversed for the coast flank), tooth errors repeated.
-        let repeat = |target: &mut Vec<f64>, values: &[f64], len: usize, reverse: bool| {
+        // Pin errors and tooth errors repeated (both flanks' tables run in slot order).
+        let repeat = |target: &mut Vec<f64>, values: &[f64], len: usize| {
             target.clear();
             if values.is_empty() {
                 target.resize(len, 0.0);
-            } else if reverse {
-                target.extend(values.iter().rev().cycle().take(len));
             } else {
                 target.extend(values.iter().cycle().take(len));
             }
@@ -763,24 +784,12 @@ impl TransmissionError {
         let n_pins = if self.per_pin { pins } else { 0 };
         let pin_inputs = &inputs[ph.pin_base..ph.pin_base + 2 * n_pins];
         let (pin_radial, pin_tangential) = pin_inputs.split_at(n_pins);
-        repeat(&mut scratch.pin_radial, pin_radial, pins + width, false);
-        repeat(
-            &mut scratch.pin_tangential,
-            pin_tangential,
-            pins + width,
-            false,
-        );
-        repeat(&mut scratch.coast_radial, pin_radial, pins + width, true);
-        repeat(
-            &mut scratch.coast_tangential,
-            pin_tangential,
-            pins + width,
-            true,
-        );
+        repeat(&mut scratch.pin_radial, pin_radial, pins + width);
+        repeat(&mut scratch.pin_tangential, pin_tangential, pins + width);
         let n_teeth = if self.per_tooth { teeth } else { 0 };
         for d in 0..2 {
             let errors = &inputs[ph.tooth_base + d * n_teeth..ph.tooth_base + (d + 1) * n_teeth];
-            repeat(&mut scratch.tooth[d], errors, 2 * teeth, false);
+            repeat(&mut scratch.tooth[d], errors, 2 * teeth);
         }
         for heads in [&mut scratch.drive, &mut scratch.coast] {
             for head in heads.iter_mut() {
@@ -801,8 +810,6 @@ impl TransmissionError {
             pin_tangential,
             lane_radial,
             lane_tangential,
-            coast_radial,
-            coast_tangential,
             tooth,
             drive,
             coast,
@@ -810,9 +817,10 @@ impl TransmissionError {
         } = scratch;
         let mut clear = true;
         // Pin errors in lane order: lane_radial[q][m] = δr of pin (q − m·Δ) mod z_p, Δ the
-        // stride of the pin shift between a lane group's consecutive points.
+        // stride of the pin shift between a lane group's consecutive points. A tangential
+        // pin error's ratio is −δt·K1/(a·z_c) in every drive slot (see `lane_lags`).
         let lane_rows = pins + width;
-        let tangential_ratio = ph.stage.k1() / (self.eccentricity * teeth as f64);
+        let tangential_ratio = -ph.stage.k1() / (self.eccentricity * teeth as f64);
         for (target, source, scale) in [
             (&mut *lane_radial, &*pin_radial, 1.0),
             (&mut *lane_tangential, &*pin_tangential, tangential_ratio),
@@ -947,12 +955,15 @@ impl TransmissionError {
             // all its points at once, the points as vector lanes.
             let lanes = match ph.lane_shifts[group_index] {
                 Some(first) if self.per_pin => Some([0, 1].map(|d| {
+                    // (s0 − k) mod z_p without a division: k < z_p, s0 < z_p.
+                    let start = pins - first[d] as usize + s0;
+                    let start = if start >= pins { start - pins } else { start };
                     lane_lags(
                         &drive[d],
                         radial[d],
                         candidates[d],
-                        &lane_radial[pins - first[d] as usize..],
-                        &lane_tangential[pins - first[d] as usize..],
+                        &lane_radial[start..],
+                        &lane_tangential[start..],
                     )
                 })),
                 _ => None,
@@ -997,8 +1008,11 @@ impl TransmissionError {
                     point.pin_shift as usize,
                     ph.pin_shift_2[group.start as usize + point_index] as usize,
                 ];
-                // low_d = κ·(C_d − L_d); first contact needs only their maximum, one scan
-                // over both discs' slots of ratio − C_d.
+                // low_d = κ·(C_d − K_d); first contact needs only their maximum, one scan
+                // over both discs' slots of ratio − C_d. The first pin row of disc d's
+                // drive entries, and of its coast entries (slot e: pin (e − k) mod z_p).
+                let drive_start = shifts.map(|k| (pins - k + s0) % pins);
+                let coast_start = shifts.map(|k| pins - k);
                 let (low, drive_end) = if let Some(lags) = &lanes {
                     let low = [0, 1].map(|d| kappa * (offset[d] - lags[d][point_index]));
                     (low, if low[1] > low[0] { low[1] } else { low[0] })
@@ -1006,7 +1020,7 @@ impl TransmissionError {
                     let low = [kappa * (offset[0] - best[0]), kappa * (offset[1] - best[1])];
                     (low, if low[1] > low[0] { low[1] } else { low[0] })
                 } else if first_contact {
-                    let (first, second) = (pins - shifts[0], pins - shifts[1]);
+                    let [first, second] = drive_start;
                     let ([a0, a1], [b0, b1]) = (candidates[0], candidates[1]);
                     let least = smallest_ratio_pair(
                         [&drive[0][a0..a1], &drive[1][b0..b1]],
@@ -1024,7 +1038,7 @@ impl TransmissionError {
                     );
                     ([0.0; 2], -kappa * least)
                 } else {
-                    let (first, second) = (pins - shifts[0], pins - shifts[1]);
+                    let [first, second] = drive_start;
                     let lag = [
                         smallest_ratio(
                             &drive[0],
@@ -1055,13 +1069,13 @@ impl TransmissionError {
                     for d in 0..2 {
                         let lead = if self.per_pin {
                             let block = blocks[d] * width..(blocks[d] + 1) * width;
-                            let start = shifts[d] % pins;
+                            let start = coast_start[d];
                             smallest_ratio(
                                 &coast[d],
                                 &coast_table.radial[block.clone()],
                                 &coast_table.tangential[block],
-                                &coast_radial[start..start + width],
-                                &coast_tangential[start..start + width],
+                                &pin_radial[start..start + width],
+                                &pin_tangential[start..start + width],
                             )
                         } else {
                             smallest(&coast[d])
@@ -1091,7 +1105,7 @@ impl TransmissionError {
 }
 
 /// min over both discs d and their slots e of head_de + δr·radial_de + δt·tangential_de −
-/// C_d: −max_d (C_d − L_d), one reduction for the two discs.
+/// C_d: −max_d (C_d − K_d), one reduction for the two discs.
 #[inline(always)]
 fn smallest_ratio_pair(
     head: [&[f64]; 2],
@@ -1138,8 +1152,9 @@ pub(super) const LANES: usize = 8;
 #[inline(always)]
 ///
 /// A tangential pin displacement δt projects on the contact normal as K1·sin φ/S and the
-/// lever is a·z_c·sin φ/S: its ratio δt·K1/(a·z_c) is the same in every drive slot, so the
-/// lanes carry it ready-made (`pin_tangential` holds δt·K1/(a·z_c)).
+/// lever is a·z_c·sin φ/S, negative in a drive slot: its ratio −δt·K1/(a·z_c) is the same
+/// in every drive slot, so the lanes carry it ready-made (`pin_tangential` holds
+/// −δt·K1/(a·z_c)).
 fn lane_lags(
     head: &[f64],
     radial: &[f64],
@@ -1148,9 +1163,14 @@ fn lane_lags(
     pin_tangential: &[[f64; LANES]],
 ) -> [f64; LANES] {
     let mut lags = [f64::INFINITY; LANES];
-    for e in range[0]..range[1] {
-        let (h, a) = (head[e], radial[e]);
-        let (pr, pt) = (&pin_radial[e], &pin_tangential[e]);
+    // Sliced to the range first, so that the loop carries no bounds checks.
+    let [first, last] = range;
+    let columns = head[first..last]
+        .iter()
+        .zip(&radial[first..last])
+        .zip(&pin_radial[first..last])
+        .zip(&pin_tangential[first..last]);
+    for (((&h, &a), pr), pt) in columns {
         for m in 0..LANES {
             let v = h + pr[m] * a + pt[m];
             lags[m] = if v < lags[m] { v } else { lags[m] };
@@ -1285,8 +1305,6 @@ pub(super) struct TwoDiscScratch {
     pub offsets: [Vec<f64>; 2],
     pub pin_radial: Vec<f64>,
     pub pin_tangential: Vec<f64>,
-    pub coast_radial: Vec<f64>,
-    pub coast_tangential: Vec<f64>,
     pub tooth: [Vec<f64>; 2],
     pub drive: [Vec<f64>; 2],
     pub coast: [Vec<f64>; 2],
@@ -1334,22 +1352,78 @@ impl Physical {
     }
 }
 
-/// The factors of Δr_rp and Δr_p in the clearance of a coast-flank pin at φ (sin φ < 0),
-/// measured, like the drive flank's standard form, from the disc turned into drive-flank
-/// contact. The centred modified disc has the mirror-symmetric clearance
-/// c0 = Δr_rp − Δr_p·(1 − K1·cos φ)/S on both flanks; the standard form of the drive flank
-/// is c0 − l·δ* with the half play δ* = (Δr_rp − Δr_p·√(1 − K1²))/(e·z_c) (the disc turned
-/// by δ* until the pin at cos φ = K1 touches); the coast flank then has c0 + |l|·δ*.
-/// Over both flanks the play is 2δ*, 000's (2Δr_rp − 2Δr_p·√(1 − K1²))/(e·z_c).
-fn coast_modification(stage: &CycloidStage, sin: f64, cos: f64) -> (f64, f64) {
-    let k1 = stage.k1();
-    let s = (1.0 + k1 * k1 - 2.0 * k1 * cos).sqrt();
-    let lever = stage.eccentricity * stage.teeth as f64 * sin.abs() / s;
-    let per_radian = lever / (stage.eccentricity * stage.teeth as f64);
+/// The factors of Δr_rp and Δr_p in the clearance of a pin at φ, either flank, measured
+/// from the disc turned into drive-flank contact (the drive flank being the pins with
+/// l < 0, which a forward drive loads: module comment). The centred modified disc has the
+/// mirror-symmetric clearance c0 = Δr_rp − Δr_p·(1 − K1·cos φ)/S on both flanks; turned by
+/// the half play δ* = (Δr_rp − Δr_p·√(1 − K1²))/(e·z_c) clockwise until the drive pin at
+/// cos φ = K1 touches, each pin's clearance is c0 + l·δ*: 003's standard form mirrored,
+/// Δr_rp·(1 + sin φ/S) − Δr_p·(1 − K1·cos φ + √(1 − K1²)·sin φ)/S, which vanishes at that
+/// pin. The coast flank (l > 0) then has c0 + l·δ*, and over both flanks the play is 2δ*,
+/// 000's (2Δr_rp − 2Δr_p·√(1 − K1²))/(e·z_c). From the pin's factors (003's standard form
+/// 1 − sin φ/S and −(1 − K1·cos φ − √(1 − K1²)·sin φ)/S, the radial (1 − K1·cos φ)/S):
+/// 2 − equidistant and −2·radial − shift, no root or division of its own.
+#[inline(always)]
+fn modification(factors: &PinFactors) -> (f64, f64) {
     (
-        1.0 + per_radian,
-        -(1.0 - k1 * cos) / s - (1.0 - k1 * k1).sqrt() * per_radian,
+        2.0 - factors.equidistant,
+        -2.0 * factors.radial - factors.shift,
     )
+}
+
+/// A flank's slot table (see [`PinTable`]): entry e of phase p is slot s = first + e at
+/// φ = 2π(s + f)/z_p (f = `fraction_of(p)`), kept where the lever's sign is the flank's
+/// (negative on the drive flank, positive on the coast flank) and the slot a pin's; the
+/// factors over |l|, the modification from [`modification`].
+fn flank_table(
+    stage: &CycloidStage,
+    phases: usize,
+    width: usize,
+    fraction_of: impl Fn(usize) -> f64,
+    first: usize,
+    drive: bool,
+) -> PinTable {
+    let pins = stage.pins;
+    let mut table = PinTable {
+        width,
+        ..PinTable::default()
+    };
+    for p in 0..phases {
+        let fraction = fraction_of(p);
+        for e in 0..width {
+            let slot = first + e;
+            let phi = 2.0 * PI * (slot as f64 + fraction) / pins as f64;
+            let sin = phi.sin();
+            let side = if drive { -sin } else { sin };
+            if slot >= pins || side <= 1e-12 {
+                table.blocked.push(f64::INFINITY);
+                for column in [
+                    &mut table.inverse_lever,
+                    &mut table.equidistant,
+                    &mut table.shift,
+                    &mut table.eccentric,
+                    &mut table.radial,
+                    &mut table.tangential,
+                ] {
+                    column.push(0.0);
+                }
+                table.tooth.push(0);
+                continue;
+            }
+            let factors = stage.pin_factors(phi);
+            let inverse_lever = 1.0 / factors.lever.abs();
+            let (equidistant, shift) = modification(&factors);
+            table.blocked.push(0.0);
+            table.inverse_lever.push(inverse_lever);
+            table.equidistant.push(equidistant * inverse_lever);
+            table.shift.push(shift * inverse_lever);
+            table.eccentric.push(factors.eccentric * inverse_lever);
+            table.radial.push(factors.radial * inverse_lever);
+            table.tangential.push(factors.tangential * inverse_lever);
+            table.tooth.push(tooth_space(stage, phi, fraction));
+        }
+    }
+    table
 }
 
 /// Points of the grid of [`Physical::floor_grid`] over (0, π).
@@ -1378,10 +1452,12 @@ fn tooth_space(stage: &CycloidStage, phi: f64, fraction: f64) -> u32 {
         .rem_euclid(stage.teeth as i64) as u32
 }
 
-/// Builds the coast table, disc 2's phases and tooth columns, and the per-point angles.
+/// Builds the drive and coast tables, disc 2's phases and tooth columns, and the per-point
+/// angles. `width`: the entries per phase of every table (the ⌈z_p/2⌉ slots that can have
+/// a lever of one sign, rounded up to a multiple of 4).
 pub(super) fn build(
     stage: &CycloidStage,
-    drive: &PinTable,
+    width: usize,
     curve_points: &[super::Point],
     groups: &[super::Group],
     layout: Layout,
@@ -1391,7 +1467,6 @@ pub(super) fn build(
     let n = layout.points;
     let g = layout.common_divisor;
     let phases = n / g;
-    let width = drive.width;
     let fraction_of = |p: usize| p as f64 * g as f64 / n as f64;
     // Disc 2 sees the pins half a revolution of the eccentric on: z_p·N/2 in units of 1/N
     // pin pitch, which N/2 being a multiple of g keeps on the phase grid.
@@ -1399,44 +1474,11 @@ pub(super) fn build(
     let phase_2: Vec<u32> = (0..phases)
         .map(|p| (((p * g + half_turn) % n) / g) as u32)
         .collect();
-    // Coast slots: entry e is slot s = z_p − 1 − e, at φ = 2π(s + f)/z_p with sin φ < 0.
-    let mut coast = PinTable {
-        width,
-        ..PinTable::default()
-    };
-    for p in 0..phases {
-        let fraction = fraction_of(p);
-        for e in 0..width {
-            let phi = 2.0 * PI * ((pins as f64 - 1.0 - e as f64) + fraction) / pins as f64;
-            let (sin, cos) = phi.sin_cos();
-            if e >= pins || sin >= -1e-12 {
-                coast.blocked.push(f64::INFINITY);
-                for column in [
-                    &mut coast.inverse_lever,
-                    &mut coast.equidistant,
-                    &mut coast.shift,
-                    &mut coast.eccentric,
-                    &mut coast.radial,
-                    &mut coast.tangential,
-                ] {
-                    column.push(0.0);
-                }
-                coast.tooth.push(0);
-                continue;
-            }
-            let factors = stage.pin_factors(phi);
-            let inverse_lever = -1.0 / factors.lever;
-            let (equidistant, shift) = coast_modification(stage, sin, cos);
-            coast.blocked.push(0.0);
-            coast.inverse_lever.push(inverse_lever);
-            coast.equidistant.push(equidistant * inverse_lever);
-            coast.shift.push(shift * inverse_lever);
-            coast.eccentric.push(factors.eccentric * inverse_lever);
-            coast.radial.push(factors.radial * inverse_lever);
-            coast.tangential.push(factors.tangential * inverse_lever);
-            coast.tooth.push(tooth_space(stage, phi, fraction));
-        }
-    }
+    // Drive slots (sin φ < 0): s + f > z_p/2, so s ≥ ⌊z_p/2⌋, at most ⌈z_p/2⌉ of them;
+    // coast slots (sin φ > 0): s + f < z_p/2, from s = 0.
+    let drive_first_slot = pins / 2;
+    let drive = flank_table(stage, phases, width, fraction_of, drive_first_slot, true);
+    let coast = flank_table(stage, phases, width, fraction_of, 0, false);
     // Disc 2's tooth spaces, per disc-1 phase, relative to disc 1's tooth shift.
     let mut tooth_2_drive = Vec::with_capacity(phases * width);
     let mut tooth_2_coast = Vec::with_capacity(phases * width);
@@ -1445,13 +1487,13 @@ pub(super) fn build(
         let fraction = fraction_of(p);
         let fraction_2 = fraction_of(block_2);
         for e in 0..width {
-            let drive_phi = 2.0 * PI * (e as f64 + fraction_2) / pins as f64;
+            let drive_phi = 2.0 * PI * ((drive_first_slot + e) as f64 + fraction_2) / pins as f64;
             tooth_2_drive.push(if drive.blocked[block_2 * width + e] == 0.0 {
                 tooth_space(stage, drive_phi, fraction)
             } else {
                 0
             });
-            let coast_phi = 2.0 * PI * ((pins as f64 - 1.0 - e as f64) + fraction_2) / pins as f64;
+            let coast_phi = 2.0 * PI * (e as f64 + fraction_2) / pins as f64;
             tooth_2_coast.push(if coast.blocked[block_2 * width + e] == 0.0 {
                 tooth_space(stage, coast_phi, fraction)
             } else {
@@ -1512,6 +1554,8 @@ pub(super) fn build(
         sun_offset: settings.sun_offset,
         kappa: settings.kappa,
         stage: *stage,
+        drive,
+        drive_first_slot,
         coast,
         phase_2,
         tooth_2_drive,
@@ -1766,8 +1810,9 @@ impl TransmissionError {
 
     /// The curve's extremes refined on the exact geometry, rad. Near the maximum (a smooth
     /// maximum of one contact branch, since TE is the upper envelope of its branches) the
-    /// winning branch's parabola through three points gives its vertex, whose branch value
-    /// is a lower bound of TE there; near the minimum (a kink where two branches cross) the
+    /// winning branch's parabola through three points gives its vertex, and a second
+    /// parabola through the vertex and points h/8 either side a better one, whose branch
+    /// values are lower bounds of TE there; near the minimum (a kink where two branches cross) the
     /// crossing of the two branches' chords gives the angle at which TE is evaluated
     /// exactly. Both can only widen the sampled range towards the true one. `j_lo`, `j_hi`:
     /// the first points at which the sampled extremes `lo`, `hi` occur.
@@ -1784,16 +1829,29 @@ impl TransmissionError {
         let at = |j: usize| 2.0 * PI * j as f64 / n as f64;
         let mut best_hi = hi;
         let top = self.exact_flanks(inputs, terms, at(j_hi), false);
-        let values =
-            [-h, 0.0, h].map(|dt| self.branch_value(inputs, terms, top.branch, at(j_hi) + dt));
-        if let [Some(before), Some(centre), Some(after)] = values {
-            let curvature = before - 2.0 * centre + after;
-            if curvature < 0.0 {
-                let t = (0.5 * (before - after) / curvature).clamp(-1.0, 1.0);
-                if let Some(v) = self.branch_value(inputs, terms, top.branch, at(j_hi) + t * h) {
-                    best_hi = best_hi.max(v);
-                }
+        // Two parabola steps: through the point and its neighbours, then through the first
+        // vertex and points h/8 either side of it (a branch whose curvature changes fast
+        // is far from a parabola over ±h).
+        let (mut centre_at, mut spacing) = (at(j_hi), h);
+        let mut centre = self.branch_value(inputs, terms, top.branch, centre_at);
+        for _ in 0..2 {
+            let values = [-spacing, spacing]
+                .map(|dt| self.branch_value(inputs, terms, top.branch, centre_at + dt));
+            let ([Some(before), Some(after)], Some(middle)) = (values, centre) else {
+                break;
+            };
+            let curvature = before - 2.0 * middle + after;
+            if curvature >= 0.0 {
+                break;
             }
+            let t = (0.5 * (before - after) / curvature).clamp(-1.0, 1.0);
+            centre_at += t * spacing;
+            centre = self.branch_value(inputs, terms, top.branch, centre_at);
+            match centre {
+                Some(v) => best_hi = best_hi.max(v),
+                None => break,
+            }
+            spacing /= 8.0;
         }
         // The kink at the minimum lies towards the lower neighbour.
         let mut best_lo = lo;
@@ -2054,6 +2112,59 @@ mod tests {
     }
 
     #[test]
+    fn interference_flag_equals_the_exact_windows() {
+        // The coast flank's tables (a floor per row, one per group, then the exact minimum
+        // over the slots) against the geometry pin by pin: the indicator is 1 exactly when
+        // at some point of the curve the exact windows of the two discs fail to overlap.
+        // Both eccentrics under disc 1 displaced by r across themselves turn its window
+        // against disc 2's by κ·r/(a·z_c): the play 2δ* = 126.9″ at r = 30 µm, less what
+        // the other inputs (every one set, a few µm) take, so the rows cross from clear to
+        // interfering between 10 and 40 µm (40, 41 and 3 pins).
+        for zp in [40, 41, 3] {
+            let model = with(
+                params()
+                    .with_number("pin_count", zp as f64)
+                    .with_number("cycloid_teeth", (zp - 1) as f64)
+                    .with_number("pin_position_errors", 1.0)
+                    .with_number("tooth_profile_errors", 1.0),
+            );
+            let phases = [1, 2].map(|k| {
+                model
+                    .input_index(&format!("crank_phase_error_mm_{k}_1"))
+                    .unwrap()
+            });
+            let (mut clear, mut interfering) = (0, 0);
+            for (k, r) in [0.0, 0.010, 0.020, 0.026, 0.028, 0.030, 0.032, 0.034, 0.040]
+                .iter()
+                .enumerate()
+            {
+                let mut row = busy_row(&model, 0x51f1_5eed ^ ((k as u64) << 4) ^ zp as u64);
+                for index in phases {
+                    row[index] = *r;
+                }
+                let flagged = outputs(&model, &row)[8] == 1.0;
+                let terms = model.row_terms(&row);
+                let n = model.points();
+                let exact = (0..n).any(|j| {
+                    !model
+                        .exact(&row, &terms, 2.0 * PI * j as f64 / n as f64)
+                        .clear
+                });
+                assert_eq!(flagged, exact, "{zp} pins, runout {r}");
+                if flagged {
+                    interfering += 1;
+                } else {
+                    clear += 1;
+                }
+            }
+            assert!(
+                clear > 0 && interfering > 0,
+                "{zp} pins: {clear} clear, {interfering} not"
+            );
+        }
+    }
+
+    #[test]
     fn order_outputs_are_the_fft_amplitudes_of_the_curve() {
         // The outputs' orders come from the direct DFT of the five orders: the same
         // amplitudes as the FFT of the curve, to the last bits (odd and even pin counts,
@@ -2248,17 +2359,31 @@ mod tests {
         // of 39 either, 4096·m ± 39 being odd), its content at 78. The load-shared mean
         // cancels the same way. One disc's profile error breaks the symmetry and order 39
         // returns; with disc 2 retracted by 20 µm of profile (85″ of extra play, more than
-        // the pin errors' ratios move) the curve is disc 1's alone, κ times 002's one-disc
-        // curve for the same pins.
+        // the pin errors' ratios move) the curve is disc 1's alone: κ times 002's one-disc
+        // curve mirrored. Disc 1's drive pins are those with l < 0, 002's those with l > 0
+        // (002's reading keeps its own flank), so the two meet under the reflection
+        // φ → −φ: pin i (0-based) at Θ is 002's pin (z_p − i) mod z_p at −Θ, with its
+        // radial error and its tangential error reversed (the modification, the radial
+        // factor and |l| are even in φ, the tangential factor odd).
         let mut next = xorshift(99);
-        let pins: Vec<(String, f64)> = (1..=40)
-            .flat_map(|i| {
-                [
-                    (format!("pin_radial_error_mm_{i}"), 0.003 * next()),
-                    (format!("pin_tangential_error_mm_{i}"), 0.003 * next()),
-                ]
-            })
-            .collect();
+        let errors: Vec<(f64, f64)> = (0..40).map(|_| (0.003 * next(), 0.003 * next())).collect();
+        let named = |mirrored: bool| -> Vec<(String, f64)> {
+            (0..40)
+                .flat_map(|i| {
+                    let (radial, tangential) = if mirrored {
+                        let (r, t) = errors[(40 - i) % 40];
+                        (r, -t)
+                    } else {
+                        errors[i]
+                    };
+                    [
+                        (format!("pin_radial_error_mm_{}", i + 1), radial),
+                        (format!("pin_tangential_error_mm_{}", i + 1), tangential),
+                    ]
+                })
+                .collect()
+        };
+        let (pins, mirrored) = (named(false), named(true));
         let pins: Vec<(&str, f64)> = pins.iter().map(|(n, v)| (n.as_str(), *v)).collect();
         let mut set = MODIFIED.to_vec();
         set.extend(&pins);
@@ -2289,9 +2414,13 @@ mod tests {
         let mut retracted = set.clone();
         retracted.push(("profile_normal_error_mm_2", 0.02));
         let curve = model.curve(&row(&model, &retracted));
-        let one_disc = literal.curve(&row(&literal, &set));
-        for (j, (a, b)) in curve.iter().zip(&one_disc).enumerate() {
-            assert!((a - KAPPA * b).abs() < 1e-9, "{j}: {a} vs {}", KAPPA * b);
+        let mut reflected = MODIFIED.to_vec();
+        reflected.extend(mirrored.iter().map(|(n, v)| (n.as_str(), *v)));
+        let one_disc = literal.curve(&row(&literal, &reflected));
+        let n = curve.len();
+        for (j, a) in curve.iter().enumerate() {
+            let b = KAPPA * one_disc[(n - j) % n];
+            assert!((a - b).abs() < 1e-9, "{j}: {a} vs {b}");
         }
     }
 
