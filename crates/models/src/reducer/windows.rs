@@ -23,10 +23,11 @@
 //! runout F_r,d at its phase), u the needle rows' radial internal clearance (the bore
 //! centre moves within u/2) and h_d the needle lever of `geometry.rs`.
 //!
-//! Only the pins that can set a window are evaluated: with G_d a bound on every pin's gap
-//! change from the deviations (every factor is at most 2 in size), pin i can set L_d only
-//! if g0_i/|l_i| − G_d/|l_i| − |ε|max lies below the smallest ratio found so far; the
-//! pins are visited in order of their design ratio g0_i/|l_i|. The result is exact.
+//! Every pin of both discs counts at every point (a pin far from the pitch point sets the
+//! window when its own error is large enough). Two paths compute the same windows:
+//! [`disc_window`], every gap in full (the reference, and the public `disc_windows`), and
+//! [`RowTable`], the model's: a row reduced once to its crank angles' runs, so that a
+//! point costs one subtraction and one product per pin (equal to 1e-15, tested).
 
 use super::geometry::{Grid, Reducer, Slot};
 use super::layout::Layout;
@@ -52,10 +53,6 @@ pub(crate) struct RowTerms {
     pub pitch: [(f64, f64); 2],
     /// u/2, the bore centres' free radius, mm.
     pub needle_radius: f64,
-    /// Per disc: a bound on |gap change| of any pin from everything but the pitch, mm, and
-    /// the pitch's largest turn, rad.
-    pub bound: [f64; 2],
-    pub pitch_bound: [f64; 2],
 }
 
 /// One disc's window at one output angle, disc angles (rad) before the factor λ.
@@ -91,17 +88,6 @@ pub(crate) fn row_terms(reducer: &Reducer, grid: &Grid, layout: &Layout, x: &[f6
         needle_radius: 0.5 * x[layout.needle_clearance],
         ..RowTerms::default()
     };
-    let pins = reducer.stage.pins;
-    let (radial, tangential, radii) = (
-        &x[layout.pins..layout.pins + pins],
-        &x[layout.pins + pins..layout.pins + 2 * pins],
-        &x[layout.pins + 2 * pins..layout.pins + 3 * pins],
-    );
-    let pin_bound = radial
-        .iter()
-        .zip(tangential)
-        .zip(radii)
-        .fold(0.0_f64, |a, ((r, t), s)| a.max(r.abs() + t.abs() + s.abs()));
     let mean = 1.0 / m as f64;
     for d in 0..2 {
         let disc = layout.disc(d);
@@ -113,7 +99,6 @@ pub(crate) fn row_terms(reducer: &Reducer, grid: &Grid, layout: &Layout, x: &[f6
         terms.carried[d] = (runout * cr, runout * sr);
         let (sp, cp) = pitch_phase.sin_cos();
         terms.pitch[d] = (pitch * cp, pitch * sp);
-        terms.pitch_bound[d] = pitch.abs();
     }
     for (k, &(sb, cb)) in grid.crank_angles.iter().enumerate() {
         let crank = layout.crank(k);
@@ -129,16 +114,6 @@ pub(crate) fn row_terms(reducer: &Reducer, grid: &Grid, layout: &Layout, x: &[f6
             terms.p1[d] += -sb * qx + cb * qy;
             terms.p2[d] += -sb * qy - cb * qx;
         }
-    }
-    for d in 0..2 {
-        let along = terms.eccentric[d].0.abs() + terms.carried[d].0.hypot(terms.carried[d].1);
-        terms.bound[d] = 2.0 * (terms.equidistant_error.abs() + terms.shift_error.abs())
-            + terms.pin_circle_error.abs()
-            + x[layout.pin_radius_error].abs()
-            + 0.5 * x[layout.pin_hole_clearance].abs()
-            + x[layout.disc(d)].abs()
-            + pin_bound
-            + along;
     }
     terms
 }
