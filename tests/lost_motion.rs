@@ -4,7 +4,7 @@
 //! clearances along the exact normals, each window by root finding to 1e-15 rad).
 
 use crate::common;
-use rvtol_models::{ErrorModel, ModelParams, RvLostMotion};
+use rvtol_models::{ErrorModel, RvLostMotion};
 use std::f64::consts::PI;
 
 const ARCMIN: f64 = 10800.0 / PI;
@@ -93,22 +93,12 @@ fn window(row: &Reference, zero: bool) -> (f64, f64) {
     window_of(&model, row, zero)
 }
 
-/// The model of a reference row's modification, q = 8.
+/// The reference's RV-20E (document 000's Table 8, pins of 2 mm: the model's example) with
+/// the row's modification, q = 8.
 fn build(row: &Reference) -> RvLostMotion {
-    let params = ModelParams::new()
-        .with_number("sun_teeth", 12.0)
-        .with_number("planet_teeth", 42.0)
-        .with_number("cycloid_teeth", 39.0)
-        .with_number("pin_count", 40.0)
-        .with_number("pin_circle_radius_mm", 52.0)
-        .with_number("pin_radius_mm", 2.0)
-        .with_number("eccentricity_mm", 0.9)
+    let params = RvLostMotion::rv20e_params()
         .with_number("equidistant_modification_mm", row.equidistant)
         .with_number("shift_modification_mm", row.shift)
-        .with_number("center_distance_mm", 27.5)
-        .with_number("sun_pitch_radius_mm", 13.5)
-        .with_number("disc_face_width_mm", 8.0)
-        .with_number("rated_torque_nm", 167.0)
         .with_number("positions_per_pin", 8.0);
     RvLostMotion::from_params(&params).expect("valid")
 }

@@ -29,6 +29,17 @@ fn row(model: &RvLostMotion, set: &[(&str, f64)]) -> Vec<f64> {
     x
 }
 
+/// A fixed stream of uniform numbers on [−1, 1) (xorshift64; tests only).
+fn uniform() -> impl FnMut() -> f64 {
+    let mut state = 0x9e3779b97f4a7c15_u64;
+    move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    }
+}
+
 fn outputs(model: &RvLostMotion, x: &[f64]) -> Vec<f64> {
     let mut out = vec![0.0; model.outputs().len()];
     model.evaluate(x, &mut out);
@@ -264,13 +275,7 @@ fn the_windows_are_those_of_the_transmission_error_geometry() {
             .with_number("pin_position_errors", 1.0),
     )
     .expect("valid");
-    let mut state = 0x9e3779b97f4a7c15_u64;
-    let mut next = move || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    };
+    let mut next = uniform();
     let mut shared: Vec<(String, f64)> = vec![
         ("equidistant_modification_error_mm".into(), 0.001 * next()),
         ("shift_modification_error_mm".into(), 0.002 * next()),
@@ -426,13 +431,7 @@ fn bad_parameters_name_their_key() {
 /// Rows with every deviation drawn uniform within ±1.5 µm (phases over a turn), a free
 /// profile (Δr_p −0.0206 mm) and the design's involute backlash.
 fn random_rows(m: &RvLostMotion, n: usize) -> Vec<Vec<f64>> {
-    let mut state = 0x9e3779b97f4a7c15_u64;
-    let mut next = move || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    };
+    let mut next = uniform();
     let len = m.inputs().len();
     (0..n)
         .map(|_| {

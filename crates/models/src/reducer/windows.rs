@@ -432,13 +432,17 @@ impl RowTable {
             for (entries, first_pin) in segments(drive) {
                 if !entries.is_empty() {
                     let pins_of = &radius[first_pin..first_pin + entries.len()];
-                    lag = lag.min(lane_min(&run[entries.clone()], &inverse[entries], pins_of));
+                    lag = lag.min(lane_min::<false>(
+                        &run[entries.clone()],
+                        &inverse[entries],
+                        pins_of,
+                    ));
                 }
             }
             for (entries, first_pin) in segments(coast) {
                 if !entries.is_empty() {
                     let pins_of = &radius[first_pin..first_pin + entries.len()];
-                    coast_max = coast_max.max(-lane_min_negated(
+                    coast_max = coast_max.max(-lane_min::<true>(
                         &run[entries.clone()],
                         &inverse[entries],
                         pins_of,
@@ -455,45 +459,32 @@ impl RowTable {
     }
 }
 
-/// min over entries of (t_m − ρ_m)·v_m (the pins' radii ρ the only pin terms), in four
-/// lanes so that the loop compiles to packed instructions (the order of the comparisons
-/// does not change a minimum).
+/// min over entries of (t_m − ρ_m)·v_m (the pins' radii ρ the only pin terms), or of its
+/// negative with `NEGATED` (the coast flank's −max), in four lanes so that the loop
+/// compiles to packed instructions (the order of the comparisons does not change a
+/// minimum).
 #[inline(always)]
-fn lane_min(run: &[f64], inverse: &[f64], radius: &[f64]) -> f64 {
+fn lane_min<const NEGATED: bool>(run: &[f64], inverse: &[f64], radius: &[f64]) -> f64 {
     let n = run.len();
     let (inverse, radius) = (&inverse[..n], &radius[..n]);
-    let mut low = [f64::INFINITY; 4];
-    let whole = n / 4 * 4;
-    for start in (0..whole).step_by(4) {
-        for (lane, low) in low.iter_mut().enumerate() {
-            let i = start + lane;
-            let r = (run[i] - radius[i]) * inverse[i];
-            *low = if r < *low { r } else { *low };
-        }
-    }
-    for i in whole..n {
+    let term = |i: usize| {
         let r = (run[i] - radius[i]) * inverse[i];
-        low[0] = if r < low[0] { r } else { low[0] };
-    }
-    fold_lanes(low, [f64::NEG_INFINITY; 4]).0
-}
-
-/// min over entries of −(t_m − ρ_m)·v_m: the coast flank's −max.
-#[inline(always)]
-fn lane_min_negated(run: &[f64], inverse: &[f64], radius: &[f64]) -> f64 {
-    let n = run.len();
-    let (inverse, radius) = (&inverse[..n], &radius[..n]);
+        if NEGATED {
+            -r
+        } else {
+            r
+        }
+    };
     let mut low = [f64::INFINITY; 4];
     let whole = n / 4 * 4;
     for start in (0..whole).step_by(4) {
         for (lane, low) in low.iter_mut().enumerate() {
-            let i = start + lane;
-            let r = (radius[i] - run[i]) * inverse[i];
+            let r = term(start + lane);
             *low = if r < *low { r } else { *low };
         }
     }
     for i in whole..n {
-        let r = (radius[i] - run[i]) * inverse[i];
+        let r = term(i);
         low[0] = if r < low[0] { r } else { low[0] };
     }
     fold_lanes(low, [f64::NEG_INFINITY; 4]).0
