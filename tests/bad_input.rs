@@ -765,3 +765,54 @@ fn init_refuses_every_parameter_validate_would_refuse() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The shipped geometric RV-20E with `change` applied to its JSON.
+fn rv20e_lost_motion_with(change: impl FnOnce(&mut Value)) -> String {
+    let text = std::fs::read_to_string(common::scenario("rv20e-lost-motion.json")).unwrap();
+    let mut scenario: Value = serde_json::from_str(&text).unwrap();
+    change(&mut scenario);
+    serde_json::to_string_pretty(&scenario).expect("serialisable")
+}
+
+#[test]
+fn a_reducer_parameter_given_twice_or_taken_by_no_model_is_refused() {
+    // A reducer is defined once: the `reducer` section's keys go to every model that knows
+    // them, a model that gives one of them itself is refused, and so is a reducer key no
+    // model takes, a source of no parameter, and a bad value, each at its own path.
+    let twice = rv20e_lost_motion_with(|s| {
+        s["models"][0]["params"]["pin_count"] = json!(40);
+    });
+    assert_bad_scenario(
+        "reducer key given twice",
+        &twice,
+        Some("models[0].params.pin_count"),
+        &["also given in reducer.params", "defined once"],
+    );
+    let unused = rv20e_lost_motion_with(|s| {
+        s["reducer"]["params"]["needle_row_count"] = json!(15);
+    });
+    assert_bad_scenario(
+        "reducer key no model takes",
+        &unused,
+        Some("reducer.params.needle_row_count"),
+        &["no model of this scenario takes it", "rv_lost_motion"],
+    );
+    let source = rv20e_lost_motion_with(|s| {
+        s["reducer"]["sources"]["pin_length_mm"] = json!("a drawing");
+    });
+    assert_bad_scenario(
+        "source of no parameter",
+        &source,
+        Some("reducer.sources.pin_length_mm"),
+        &["not a key of reducer.params"],
+    );
+    let value = rv20e_lost_motion_with(|s| {
+        s["reducer"]["params"]["crank_count"] = json!(4);
+    });
+    assert_bad_scenario(
+        "bad reducer value",
+        &value,
+        Some("reducer.params.crank_count"),
+        &["must be 2 or 3"],
+    );
+}

@@ -749,3 +749,32 @@ fn variable_mut<'a>(document: &'a mut Value, name: &str) -> &'a mut Value {
         .find(|v| v["name"] == name)
         .unwrap()
 }
+
+#[test]
+fn a_reducer_section_is_its_parameters_given_to_each_model() {
+    // scenarios/rv20e-lost-motion.json defines its reducer once in `reducer`; the same
+    // parameters written into the model's `params` give the same run, bit for bit.
+    let text = std::fs::read_to_string(scenario_path("rv20e-lost-motion.json")).unwrap();
+    let shared: Value = serde_json::from_str(&text).unwrap();
+    let mut inline = shared.clone();
+    let reducer = inline
+        .as_object_mut()
+        .unwrap()
+        .remove("reducer")
+        .expect("the scenario has a reducer section");
+    for (key, value) in reducer["params"].as_object().unwrap() {
+        inline["models"][0]["params"][key] = value.clone();
+    }
+    let results: Vec<Vec<u64>> = [shared, inline]
+        .iter()
+        .map(|document| {
+            let result = run(&scenario(document), settings(256, 3), &|_| {}).unwrap();
+            result
+                .outputs
+                .iter()
+                .flat_map(|o| [o.moments.mean.to_bits(), o.moments.m2.to_bits()])
+                .collect()
+        })
+        .collect();
+    assert_eq!(results[0], results[1]);
+}

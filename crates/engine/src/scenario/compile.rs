@@ -11,7 +11,8 @@ use rvtol_models::{ConditionEffect, ErrorModel, ModelEntry, ModelParams, OutputK
 use serde_json::Value;
 
 use super::file::{
-    DistributionFile, ModelFile, PartFile, ScenarioFile, SpecFile, VariableFile, MAX_ARRAY_MEMBERS,
+    DistributionFile, ModelFile, PartFile, ReducerFile, ScenarioFile, SpecFile, VariableFile,
+    MAX_ARRAY_MEMBERS,
 };
 use super::{
     Binding, BoundModel, ColumnInfo, InputGroup, OutputInfo, Scenario, ScenarioError,
@@ -514,7 +515,7 @@ fn input_binding<'a>(
 /// conversion, before the model's bindings are checked.
 type BuiltModel = Result<(&'static ModelEntry, Box<dyn ErrorModel>), ScenarioError>;
 
-fn build_model(path: &str, model_file: &ModelFile) -> BuiltModel {
+fn build_model(path: &str, model_file: &ModelFile, reducer: Option<&ReducerFile>) -> BuiltModel {
     let Some(entry) = rvtol_models::find(&model_file.model) else {
         let known: Vec<&str> = rvtol_models::all().iter().map(|e| e.name).collect();
         return Err(ScenarioError::new(
@@ -526,10 +527,78 @@ fn build_model(path: &str, model_file: &ModelFile) -> BuiltModel {
             ),
         ));
     };
-    let params = model_params(&format!("{path}.params"), &model_file.params)?;
-    let model = (entry.build)(&params)
-        .map_err(|err| ScenarioError::new(format!("{path}.params.{}", err.key), err.reason))?;
+    let mut params = model_params(&format!("{path}.params"), &model_file.params)?;
+    // The reducer's parameters this model knows, unless it gives them itself (an error:
+    // a reducer is defined once).
+    let mut shared = BTreeSet::new();
+    if let Some(reducer) = reducer {
+        let given = model_params("reducer.params", &reducer.params)?;
+        for (key, value) in given.entries() {
+            if !entry.params.iter().any(|spec| spec.name == key) {
+                continue;
+            }
+            if model_file.params.contains_key(key) {
+                return Err(ScenarioError::new(
+                    format!("{path}.params.{key}"),
+                    "also given in reducer.params: a reducer is defined once, leave it out here",
+                ));
+            }
+            params.insert(key.to_string(), value.clone());
+            shared.insert(key.to_string());
+        }
+    }
+    let model = (entry.build)(&params).map_err(|err| {
+        let section = if shared.contains(&err.key) {
+            "reducer".to_string()
+        } else {
+            path.to_string()
+        };
+        ScenarioError::new(format!("{section}.params.{}", err.key), err.reason)
+    })?;
     Ok((entry, model))
+}
+
+/// The `reducer` section's own checks: each of its parameters is taken by some model of
+/// the scenario, and each source names one of its parameters and is a text.
+fn check_reducer(file: &ScenarioFile) -> Vec<ScenarioError> {
+    let Some(reducer) = &file.reducer else {
+        return Vec::new();
+    };
+    let entries: Vec<&ModelEntry> = file
+        .models
+        .iter()
+        .filter_map(|(_, model)| rvtol_models::find(&model.model))
+        .collect();
+    let mut problems = Vec::new();
+    for key in reducer.params.keys() {
+        if !entries
+            .iter()
+            .any(|e| e.params.iter().any(|spec| spec.name == key))
+        {
+            let names: Vec<&str> = entries.iter().map(|e| e.name).collect();
+            problems.push(ScenarioError::new(
+                format!("reducer.params.{key}"),
+                format!(
+                    "no model of this scenario takes it (models: {}; `rvtol models` lists their parameters)",
+                    names.join(", ")
+                ),
+            ));
+        }
+    }
+    for (key, source) in &reducer.sources {
+        if !reducer.params.contains_key(key) {
+            problems.push(ScenarioError::new(
+                format!("reducer.sources.{key}"),
+                "not a key of reducer.params: a source says where a parameter's value comes from",
+            ));
+        } else if !source.is_string() {
+            problems.push(ScenarioError::new(
+                format!("reducer.sources.{key}"),
+                format!("must be a text (a document, a reference, or an estimate and its rule), got {source}"),
+            ));
+        }
+    }
+    problems
 }
 
 /// Per variable name, the units of the model inputs it is bound to, each with the binding's
@@ -719,8 +788,13 @@ pub(super) fn compile(
     let built_models: Vec<BuiltModel> = file
         .models
         .iter()
-        .map(|(i, model_file)| build_model(&format!("models[{i}]"), model_file))
+        .map(|(i, model_file)| {
+            build_model(&format!("models[{i}]"), model_file, file.reducer.as_ref())
+        })
         .collect();
+    for problem in check_reducer(&file) {
+        report(Err(problem));
+    }
     let bound_units = bound_input_units(&file, &built_models);
     // The variable arrays (`count`): name → member columns, for the `*` bindings.
     let mut arrays: BTreeMap<String, (String, Vec<usize>)> = BTreeMap::new();

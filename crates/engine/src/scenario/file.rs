@@ -48,9 +48,30 @@ pub(super) struct ScenarioFile {
     pub(super) spec_limits: BTreeMap<String, SpecFile>,
     pub(super) sensitivity_groups: Vec<(usize, GroupFile)>,
     pub(super) allocation: Option<AllocationFile>,
+    pub(super) reducer: Option<ReducerFile>,
     /// Names of parts and variables whose element did not parse (a part's names include
     /// its components `name.du` …): what refers to them is not reported again.
     pub(super) broken_names: BTreeSet<String>,
+}
+
+/// The `reducer` section: the reducer's parameters, given once for every model of the
+/// scenario (each model takes the keys it knows), with a source for each.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct ReducerFile {
+    /// Documentation for the reader of the file; not used by the run.
+    #[serde(default)]
+    #[allow(dead_code)]
+    pub(super) name: Option<String>,
+    #[serde(default)]
+    #[allow(dead_code)]
+    pub(super) description: Option<String>,
+    #[serde(default)]
+    pub(super) params: serde_json::Map<String, serde_json::Value>,
+    /// Parameter key → where its value comes from (a document, a reference, or an
+    /// estimate and its rule).
+    #[serde(default)]
+    pub(super) sources: serde_json::Map<String, serde_json::Value>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -392,7 +413,7 @@ fn tidy_serde_message(message: &str) -> String {
 }
 
 /// The keys a scenario file may have at its top level.
-const TOP_LEVEL_KEYS: [&str; 13] = [
+const TOP_LEVEL_KEYS: [&str; 14] = [
     "name",
     "description",
     "samples",
@@ -406,6 +427,7 @@ const TOP_LEVEL_KEYS: [&str; 13] = [
     "spec_limits",
     "sensitivity_groups",
     "allocation",
+    "reducer",
 ];
 
 /// Parses every section of the scenario file: the file with the elements that parsed, and
@@ -454,6 +476,7 @@ pub(super) fn parse(text: &str) -> Result<(ScenarioFile, Vec<ScenarioError>), Sc
     scalar!("sampling", sampling);
     scalar!("replicates", replicates);
     scalar!("allocation", allocation);
+    scalar!("reducer", reducer);
     if let Some(value) = take("spec_limits") {
         match value {
             Value::Object(entries) => {
@@ -588,7 +611,7 @@ fn check_magnitudes(root: &Value, problems: &mut Vec<ScenarioError>) {
     for (key, value) in object {
         let limit = match key.as_str() {
             "parts" | "variables" | "correlations" | "spec_limits" => MAX_DEVIATION,
-            "models" | "allocation" => MAX_PARAMETER,
+            "models" | "allocation" | "reducer" => MAX_PARAMETER,
             _ => continue,
         };
         walk(key, value, limit, problems);
