@@ -326,6 +326,25 @@ struct PinTable {
     tooth: Vec<u32>,
 }
 
+impl PinTable {
+    /// An entry that no pin fills or that has no lever on this flank: blocked (+∞), every
+    /// factor 0.
+    fn push_padding(&mut self) {
+        self.blocked.push(f64::INFINITY);
+        for column in [
+            &mut self.inverse_lever,
+            &mut self.equidistant,
+            &mut self.shift,
+            &mut self.eccentric,
+            &mut self.radial,
+            &mut self.tangential,
+        ] {
+            column.push(0.0);
+        }
+        self.tooth.push(0);
+    }
+}
+
 /// Per curve point: the angles and indices of point j.
 #[derive(Debug, Clone, Copy)]
 struct Point {
@@ -586,18 +605,7 @@ impl TransmissionError {
                 let (sin, cos) = phi.sin_cos();
                 // Padding: no positive lever, or past the last pin (3 pins, 4 slots).
                 if s >= pins || sin <= 1e-12 {
-                    table.blocked.push(f64::INFINITY);
-                    for column in [
-                        &mut table.inverse_lever,
-                        &mut table.equidistant,
-                        &mut table.shift,
-                        &mut table.eccentric,
-                        &mut table.radial,
-                        &mut table.tangential,
-                    ] {
-                        column.push(0.0);
-                    }
-                    table.tooth.push(0);
+                    table.push_padding();
                     continue;
                 }
                 let factors = stage.pin_factors(phi);

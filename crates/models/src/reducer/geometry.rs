@@ -10,7 +10,7 @@
 //! (0-based) sits at φ = 2π·i/z_p + z_c·Θ (+ π on disc 2) from its disc's eccentric.
 //!
 //! The grid. With Θ_k = 2π·k/M and M = q·z_p, φ = 2π·(q·i + z_c·k)/M + d·π takes only the
-//! 2M values π·j/M, so every factor is tabulated once per j (a `Slot`), and z_p·Θ_k =
+//! 2M values π·j/M, so every factor is tabulated once per j (the `Columns`), and z_p·Θ_k =
 //! 2π·k/q takes q values.
 
 use std::f64::consts::PI;
@@ -63,7 +63,7 @@ impl Reducer {
     pub fn from_params(params: &ModelParams) -> Result<Self, ModelError> {
         let sun_teeth = params.count("sun_teeth", None)? as f64;
         let planet_teeth = params.count("planet_teeth", None)? as f64;
-        let stage = CycloidStage::from_params(params, 200)?;
+        let stage = CycloidStage::from_params(params, super::preload::MAX_PINS)?;
         let pin_radius = params.positive("pin_radius_mm", None)?;
         stage.check_pin_radius("pin_radius_mm", pin_radius)?;
         let equidistant = params.number("equidistant_modification_mm", None)?;
@@ -145,11 +145,9 @@ impl Reducer {
 
 /// A pin angle φ of the grid with its factors (docs/models.md §10, §14).
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct Slot {
+struct Slot {
     /// l = e·z_c·sin φ/S, mm (signed: > 0 on the drive flank).
     pub lever: f64,
-    /// 1/|l|, 1/mm.
-    pub inverse_lever: f64,
     /// Factors of the equidistant and shift amounts (003's standard form), of an outward
     /// pin displacement, of the disc's displacement along its eccentric, of a tangential
     /// pin displacement.
@@ -167,36 +165,24 @@ pub(crate) struct Slot {
     pub design_gap: f64,
 }
 
-/// A pin of one disc at one output angle: its slot and its index.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct Entry {
-    pub slot: u32,
-    pub pin: u32,
-}
-
 /// The output angles of the grid with what each needs.
 #[derive(Debug, Clone)]
 pub(crate) struct Grid {
-    /// q, points per pin pitch; M = q·z_p.
+    /// q, points per pin pitch (per turn of the cranks against the carrier); M = q·z_p.
     pub per_pin: usize,
     pub points: usize,
-    /// The 2M slots, slot j at φ = π·j/M.
-    pub slots: Vec<Slot>,
-    /// Per point k and disc d (index 2k + d): its drive-flank pins and its coast-flank pins,
-    /// each sorted by the design ratio g0/|l| (smallest first).
-    pub drive: Vec<Vec<Entry>>,
-    pub coast: Vec<Vec<Entry>>,
-    /// Per point and disc: the pins on the eccentric's line (no lever: they hold no turn,
-    /// but an overlap there loads them radially).
-    pub radial: Vec<Vec<Entry>>,
-    /// Per point k: (sin, cos) of z_p·Θ_k.
+    /// z_p and z_c.
+    pins: usize,
+    teeth: usize,
+    /// Per crank angle kq < q (z_p·Θ_k depends on k mod q only): (sin, cos) of z_p·Θ.
     pub turn: Vec<(f64, f64)>,
-    /// Per point k and disc d: the needle rows' lever, the largest shift of the window (disc
-    /// angle, rad) per mm of the bore centres' free radius (docs/models.md §14.3).
+    /// Per crank angle kq and disc d (index 2·kq + d): the needle rows' lever, the largest
+    /// shift of the window (disc angle, rad) per mm of the bore centres' free radius
+    /// (docs/models.md §14.3).
     pub needle_lever: Vec<f64>,
     /// (sin, cos) of each crank's place β_k on the crank circle.
     pub crank_angles: Vec<(f64, f64)>,
-    /// The slots as columns for the windows' scan.
+    /// The 2M slots as columns.
     pub columns: Columns,
 }
 
@@ -216,6 +202,7 @@ pub(crate) struct Columns {
     pub inverse_lever: Vec<f64>,
     pub polar_cos: Vec<f64>,
     pub polar_sin: Vec<f64>,
+    pub slip_arm: Vec<f64>,
     /// Per residue r: the entries m with a positive lever (the drive flank, φ in (0, π))
     /// and those with a negative one, each one range (φ grows with m from below 2π/z_p).
     pub drive: Vec<std::ops::Range<usize>>,
@@ -258,6 +245,7 @@ impl Columns {
                 });
                 columns.polar_cos.push(s.polar.0);
                 columns.polar_sin.push(s.polar.1);
+                columns.slip_arm.push(s.slip_arm);
             }
         }
         columns
@@ -268,7 +256,7 @@ impl Grid {
     /// The grid of `reducer` with q = `per_pin` points per pin pitch.
     pub fn new(reducer: &Reducer, per_pin: usize) -> Grid {
         let stage = &reducer.stage;
-        let (zp, zc) = (stage.pins, stage.teeth);
+        let zp = stage.pins;
         let points = per_pin * zp;
         let slots: Vec<Slot> = (0..2 * points)
             .map(|j| slot(reducer, PI * j as f64 / points as f64))
@@ -276,38 +264,11 @@ impl Grid {
         let crank_angles: Vec<(f64, f64)> = (0..reducer.cranks)
             .map(|k| (2.0 * PI * k as f64 / reducer.cranks as f64).sin_cos())
             .collect();
-        let (mut drive, mut coast, mut radial) = (Vec::new(), Vec::new(), Vec::new());
         let mut needle_lever = Vec::new();
-        for k in 0..points {
+        for kq in 0..per_pin {
             for d in 0..2 {
-                let (mut ahead, mut behind, mut still) = (Vec::new(), Vec::new(), Vec::new());
-                for pin in 0..zp {
-                    let j = (2 * (per_pin * pin + zc * k) + d * points) % (2 * points);
-                    let entry = Entry {
-                        slot: j as u32,
-                        pin: pin as u32,
-                    };
-                    let s = &slots[j];
-                    if s.lever > LEVER_FLOOR * stage.eccentricity {
-                        ahead.push(entry);
-                    } else if s.lever < -LEVER_FLOOR * stage.eccentricity {
-                        behind.push(entry);
-                    } else {
-                        still.push(entry);
-                    }
-                }
-                let ratio = |e: &Entry| {
-                    let s = &slots[e.slot as usize];
-                    s.design_gap * s.inverse_lever
-                };
-                ahead.sort_by(|a, b| ratio(a).total_cmp(&ratio(b)));
-                behind.sort_by(|a, b| ratio(a).total_cmp(&ratio(b)));
-                drive.push(ahead);
-                coast.push(behind);
-                radial.push(still);
-                // The eccentric of disc d at χ = −z_p·Θ_k (+π), its across direction χ + π/2.
-                let across =
-                    -(zp as f64) * 2.0 * PI * k as f64 / points as f64 + d as f64 * PI + 0.5 * PI;
+                // Disc d's eccentric at χ = −z_p·Θ (+π), its across direction χ + π/2.
+                let across = -2.0 * PI * kq as f64 / per_pin as f64 + d as f64 * PI + 0.5 * PI;
                 needle_lever.push(needle_lever_at(
                     across.sin_cos(),
                     &crank_angles,
@@ -316,22 +277,34 @@ impl Grid {
                 ));
             }
         }
-        let turn = (0..points)
-            .map(|k| (2.0 * PI * (k % per_pin) as f64 / per_pin as f64).sin_cos())
-            .collect();
-        let columns = Columns::new(&slots, per_pin, zp, LEVER_FLOOR * stage.eccentricity);
         Grid {
             per_pin,
             points,
-            columns,
-            slots,
-            drive,
-            coast,
-            radial,
-            turn,
+            pins: zp,
+            teeth: stage.teeth,
+            turn: (0..per_pin)
+                .map(|kq| (2.0 * PI * kq as f64 / per_pin as f64).sin_cos())
+                .collect(),
             needle_lever,
             crank_angles,
+            columns: Columns::new(&slots, per_pin, zp, LEVER_FLOOR * stage.eccentricity),
         }
+    }
+
+    /// z_p.
+    #[inline]
+    pub fn pins(&self) -> usize {
+        self.pins
+    }
+
+    /// Where disc d's pins sit at grid point k: the first column entry of their residue
+    /// (r·z_p) and the rotation `start`: pin i meets entry (start + i) mod z_p. Pin i is at
+    /// slot j = 2q·i + c with c = 2·z_c·k + d·M (mod 2M), so r = c mod 2q, start = c div 2q.
+    #[inline]
+    pub fn placement(&self, k: usize, d: usize) -> (usize, usize) {
+        let q = self.per_pin;
+        let c = (2 * self.teeth * k + d * self.points) % (2 * self.points);
+        ((c % (2 * q)) * self.pins, c / (2 * q))
     }
 }
 
@@ -350,7 +323,6 @@ fn slot(reducer: &Reducer, phi: f64) -> Slot {
     let polar = (r_p * sin).atan2(r_p * cos - e).sin_cos();
     Slot {
         lever: f.lever,
-        inverse_lever: 1.0 / f.lever.abs(),
         equidistant: f.equidistant,
         shift: f.shift,
         radial: f.radial,

@@ -24,9 +24,11 @@
 //! `lost_motion_arcmin` and its mean are non-conforming when the assembly is
 //! over-preloaded; a preload within the limit is a design state and conforms.
 //!
-//! q (`positions_per_pin`, default 4): the windows change with the pins' place against the
-//! pitch point, which repeats every pin pitch; q points per pitch find the worst window of
-//! the RV-20E's design to 0.1 % of the play (tests: the worst play converges in q).
+//! q (`positions_per_pin`, default 4) is the number of points per turn of the cranks
+//! against the carrier, in which the pins advance one pitch against the eccentric. The mean
+//! over the revolution is settled at q = 4; the worst of M angles converges as 1/q (a pin
+//! limits a window in a narrow peak), 4 % low at P99.865 on the RV-20E scenario against
+//! q = 16 (docs/models.md §14.4; test: the worst grows and the mean settles with q).
 
 mod geometry;
 mod layout;
@@ -107,6 +109,8 @@ pub struct RvLostMotion {
     grid: Grid,
     layout: Layout,
     limits: Limits,
+    /// The largest pin force at rated torque of the design, N.
+    rated_pin_force: f64,
     /// 10800/π / (2·r1·i·a0·cos α).
     involute_scale: f64,
     inputs: Vec<InputSpec>,
@@ -175,6 +179,7 @@ impl RvLostMotion {
             layout,
             grid,
             limits,
+            rated_pin_force: rated,
             involute_scale,
             reducer,
         })
@@ -182,7 +187,7 @@ impl RvLostMotion {
 
     /// The largest pin force at rated torque of the design, N (the default limit).
     pub fn rated_pin_force(&self) -> f64 {
-        preload::rated_pin_force(&self.reducer, &self.grid)
+        self.rated_pin_force
     }
 
     /// M = q·z_p, the output angles over a revolution.
@@ -260,28 +265,26 @@ impl RvLostMotion {
 
     /// Both discs' pins at grid point k, every pin, for the preload's balance.
     fn pins_at(&self, terms: &RowTerms, x: &[f64], k: usize) -> [DiscPins; 2] {
+        let (grid, pins) = (&self.grid, self.reducer.stage.pins);
+        let kq = k % grid.per_pin;
         [0, 1].map(|d| {
-            let turn = self.grid.turn[k];
+            let turn = grid.turn[kq];
             let (offset, shift) = offset_and_shift(&self.reducer, terms, d, turn);
             let pitch = turned_pitch(terms, d, turn);
-            let index = 2 * k + d;
-            let slack = self.grid.needle_lever[index] * terms.needle_radius;
-            let mut pins = DiscPins::new(offset, slack);
-            for list in [
-                &self.grid.drive[index],
-                &self.grid.coast[index],
-                &self.grid.radial[index],
-            ] {
-                for &entry in list {
-                    let s = &self.grid.slots[entry.slot as usize];
-                    let at = self.layout.pins + entry.pin as usize;
-                    let count = self.reducer.stage.pins;
-                    let errors = (x[at], x[at + count], x[at + 2 * count]);
-                    let (gap, epsilon) = pin_gap(s, terms, d, errors, shift, pitch);
-                    pins.push(gap - s.lever * epsilon, s.lever, s.slip_arm);
-                }
+            let slack = grid.needle_lever[2 * kq + d] * terms.needle_radius;
+            let mut disc = DiscPins::new(offset, slack);
+            let (base, start) = grid.placement(k, d);
+            // Pin i meets entry start + i, less z_p past the end of the run.
+            let entries = (start..pins).chain(0..start);
+            for (i, m) in entries.enumerate() {
+                let j = base + m;
+                let at = self.layout.pins + i;
+                let errors = (x[at], x[at + pins], x[at + 2 * pins]);
+                let (gap, epsilon) = pin_gap(&grid.columns, j, terms, d, errors, shift, pitch);
+                let lever = grid.columns.lever[j];
+                disc.push(gap - lever * epsilon, lever, grid.columns.slip_arm[j]);
             }
-            pins
+            disc
         })
     }
 }

@@ -228,13 +228,14 @@ pub(crate) fn rated_pin_force(reducer: &Reducer, grid: &Grid) -> f64 {
     largest
 }
 
-/// Disc 1's pins at grid point k with the design gaps only.
+/// Disc 1's pins at grid point k with the design gaps only (the pins with a lever).
 fn design_pins(grid: &Grid, k: usize) -> DiscPins {
     let mut pins = DiscPins::new(0.0, 0.0);
-    for list in [&grid.drive[2 * k], &grid.coast[2 * k]] {
-        for entry in list {
-            let s = &grid.slots[entry.slot as usize];
-            pins.push(s.design_gap, s.lever, s.slip_arm);
+    let (base, _) = grid.placement(k, 0);
+    let columns = &grid.columns;
+    for j in base..base + grid.pins() {
+        if columns.inverse_lever[j] != 0.0 {
+            pins.push(columns.design_gap[j], columns.lever[j], columns.slip_arm[j]);
         }
     }
     pins

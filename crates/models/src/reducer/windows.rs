@@ -29,7 +29,7 @@
 //! [`RowTable`], the model's: a row reduced once to its crank angles' runs, so that a
 //! point costs one subtraction and one product per pin (equal to 1e-15, tested).
 
-use super::geometry::{Grid, Reducer, Slot};
+use super::geometry::{Columns, Grid, Reducer};
 use super::layout::Layout;
 
 /// What a row contributes, reduced once per row.
@@ -134,27 +134,28 @@ pub(crate) fn offset_and_shift(
     (-across / reducer.pitch_lever() - rho, along)
 }
 
-/// The gap of one pin (mm) at `slot`, with the pitch's turn ε at it (rad): `pin` holds the
-/// pin's (radial, tangential, radius) errors, `shift` the disc's T_d,x.
+/// The gap of one pin (mm) at column entry `j`, with the pitch's turn ε at it (rad):
+/// `pin` holds the pin's (radial, tangential, radius) errors, `shift` the disc's T_d,x.
 #[inline(always)]
 pub(crate) fn pin_gap(
-    s: &Slot,
+    columns: &Columns,
+    j: usize,
     terms: &RowTerms,
     d: usize,
     (radial, tangential, radius): (f64, f64, f64),
     shift: f64,
     pitch: (f64, f64),
 ) -> (f64, f64) {
-    let gap = s.design_gap
-        + terms.equidistant_error * s.equidistant
-        + terms.shift_error * s.shift
-        + (terms.pin_circle_error + radial) * s.radial
-        + tangential * s.tangential
-        + shift * s.eccentric
+    let gap = columns.design_gap[j]
+        + terms.equidistant_error * columns.equidistant[j]
+        + terms.shift_error * columns.shift[j]
+        + (terms.pin_circle_error + radial) * columns.radial[j]
+        + tangential * columns.tangential[j]
+        + shift * columns.eccentric[j]
         + terms.common[d]
         - radius;
     // ε at the pin's polar angle ϑ = polar − z_p·Θ + d·π: pitch holds the turned phase.
-    let epsilon = pitch.0 * s.polar.0 + pitch.1 * s.polar.1;
+    let epsilon = pitch.0 * columns.polar_cos[j] + pitch.1 * columns.polar_sin[j];
     (gap, epsilon)
 }
 
@@ -171,14 +172,12 @@ pub(crate) fn disc_window(
     k: usize,
     d: usize,
 ) -> DiscWindow {
-    let turn = grid.turn[k];
+    let kq = k % grid.per_pin;
+    let turn = grid.turn[kq];
     let (offset, shift) = offset_and_shift(reducer, terms, d, turn);
     let pitch = turned_pitch(terms, d, turn);
     let pins = reducer.stage.pins;
-    let q = grid.per_pin;
-    let c = (2 * reducer.stage.teeth * k + d * grid.points) % (2 * grid.points);
-    let (residue, start) = (c % (2 * q), c / (2 * q));
-    let base = residue * pins;
+    let (base, start) = grid.placement(k, d);
     let coefficients = Coefficients {
         equidistant: terms.equidistant_error,
         shift: terms.shift_error,
@@ -218,7 +217,7 @@ pub(crate) fn disc_window(
         offset,
         lag: lag_a.min(lag_b),
         lead: -coast_a.max(coast_b),
-        slack: grid.needle_lever[2 * k + d] * terms.needle_radius,
+        slack: grid.needle_lever[2 * kq + d] * terms.needle_radius,
     }
 }
 
@@ -349,8 +348,7 @@ impl RowTable {
             for d in 0..2 {
                 let (offset, along) = offset_and_shift(reducer, terms, d, turn);
                 let pitch = turned_pitch(terms, d, turn);
-                let c = (2 * reducer.stage.teeth * kq + d * grid.points) % (2 * grid.points);
-                let base = (c % (2 * q)) * pins;
+                let (base, _) = grid.placement(kq, d);
                 let run = &mut self.runs[(2 * kq + d) * pins..(2 * kq + d + 1) * pins];
                 for (m, t) in run.iter_mut().enumerate() {
                     let j = base + m;
@@ -383,8 +381,7 @@ impl RowTable {
         let (q, pins) = (grid.per_pin, reducer.stage.pins);
         let kq = k % q;
         let (base, offset, slack) = self.heads[2 * kq + d];
-        let c = (2 * reducer.stage.teeth * k + d * grid.points) % (2 * grid.points);
-        let start = c / (2 * q);
+        let (_, start) = grid.placement(k, d);
         let run = &self.runs[(2 * kq + d) * pins..(2 * kq + d + 1) * pins];
         let inverse = &grid.columns.inverse_lever[base..base + pins];
         let radius = &x[layout.pins + 2 * pins..layout.pins + 3 * pins];

@@ -1396,18 +1396,7 @@ fn flank_table(
             let sin = phi.sin();
             let side = if drive { -sin } else { sin };
             if slot >= pins || side <= 1e-12 {
-                table.blocked.push(f64::INFINITY);
-                for column in [
-                    &mut table.inverse_lever,
-                    &mut table.equidistant,
-                    &mut table.shift,
-                    &mut table.eccentric,
-                    &mut table.radial,
-                    &mut table.tangential,
-                ] {
-                    column.push(0.0);
-                }
-                table.tooth.push(0);
+                table.push_padding();
                 continue;
             }
             let factors = stage.pin_factors(phi);
