@@ -28,8 +28,9 @@ pub use params::{ModelError, ModelParams, ParamValue};
 pub use reducer::RvLostMotion;
 pub use spectrum::{OrderDft, RealFft};
 pub use stiffness::{
-    line_contact_approach, Carrier, ChainTerms, CrankShaft, CrankSide, InvoluteStage, RollerRow,
-    ShaftModes, PALMGREN_LINE, STRIBECK_LINE,
+    hertz_half_width, iso_16281_roller_approach, line_contact_approach, lundberg_body_approach,
+    lundberg_needle_approach, Carrier, ChainTerms, CrankShaft, CrankSide, InvoluteStage, RollerRow,
+    ShaftModes, ISO_16281_ROLLER, LUNDBERG_CONSTANT, PALMGREN_LINE, STRIBECK_LINE,
 };
 pub use test_functions::{Ishigami, SobolG};
 pub use torsion_curve::TorsionCurve;

@@ -7,6 +7,7 @@
 //! One file per element, each opening with its equations and sources:
 //!
 //! - `contact`: Palmgren's line contact and the Stribeck–Palmgren roller row;
+//! - `lundberg`: Lundberg's and ISO/TS 16281's laws beside Palmgren's, for the choice;
 //! - `bodies`: the plates around the rows' bores (Michell's harmonics, Kelvin's force);
 //! - `shaft`: the crank shaft on its supports, in the two load modes of the discs;
 //! - `carrier`: the pillars on their roots in the plates;
@@ -32,10 +33,15 @@ mod carrier;
 mod chain;
 mod contact;
 mod involute;
+mod lundberg;
 mod shaft;
 
 pub use carrier::Carrier;
 pub use chain::{ChainTerms, CrankSide};
 pub use contact::{line_contact_approach, RollerRow, PALMGREN_LINE, STRIBECK_LINE};
 pub use involute::InvoluteStage;
+pub use lundberg::{
+    hertz_half_width, iso_16281_roller_approach, lundberg_body_approach, lundberg_needle_approach,
+    ISO_16281_ROLLER, LUNDBERG_CONSTANT,
+};
 pub use shaft::{CrankShaft, ShaftModes};
