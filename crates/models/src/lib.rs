@@ -30,7 +30,7 @@ pub use spectrum::{OrderDft, RealFft};
 pub use stiffness::{
     hertz_half_width, iso_16281_roller_approach, line_contact_approach, lundberg_body_approach,
     lundberg_needle_approach, Carrier, ChainTerms, CrankShaft, CrankSide, InvoluteStage, RollerRow,
-    ShaftModes, ISO_16281_ROLLER, LUNDBERG_CONSTANT, PALMGREN_LINE, STRIBECK_LINE,
+    ShaftModes, TaperedRow, ISO_16281_ROLLER, LUNDBERG_CONSTANT, PALMGREN_LINE, STRIBECK_LINE,
 };
 pub use test_functions::{Ishigami, SobolG};
 pub use torsion_curve::TorsionCurve;

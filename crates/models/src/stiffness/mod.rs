@@ -9,6 +9,7 @@
 //! - `contact`: Palmgren's line contact and the Stribeck–Palmgren roller row;
 //! - `lundberg`: Lundberg's and ISO/TS 16281's laws beside Palmgren's, for the choice;
 //! - `bodies`: the plates around the rows' bores (Michell's harmonics, Kelvin's force);
+//! - `tapered`: a support bearing's tapered row with its axial preload;
 //! - `shaft`: the crank shaft on its supports, in the two load modes of the discs;
 //! - `carrier`: the pillars on their roots in the plates;
 //! - `involute`: the first stage reflected to the output;
@@ -35,6 +36,7 @@ mod contact;
 mod involute;
 mod lundberg;
 mod shaft;
+mod tapered;
 
 pub use carrier::Carrier;
 pub use chain::{ChainTerms, CrankSide};
@@ -45,3 +47,4 @@ pub use lundberg::{
     ISO_16281_ROLLER, LUNDBERG_CONSTANT,
 };
 pub use shaft::{CrankShaft, ShaftModes};
+pub use tapered::TaperedRow;
