@@ -6,10 +6,12 @@
 
 use rvtol_engine::Scenario;
 use rvtol_models::{
-    Carrier, CrankElasticError, CrankShaft, CycloidPinContact, ErrorModel, InvoluteStage,
-    ModelParams, RollerRow, TorsionCurve, ARCMIN_PER_RAD,
+    assembly_preload, disc_web_compliance, hub_tilt_stiffness, net_force_compliance, BoltedJoint,
+    Carrier, CrankElasticError, CrankShaft, CycloidPinContact, EndCompliance, ErrorModel,
+    InvoluteStage, ModelParams, RollerRow, TaperedRow, TorsionCurve, TorsionTerms, ARCMIN_PER_RAD,
 };
 use rvtol_tests::scenario_path;
+use std::f64::consts::PI;
 
 /// The numeric parameters of the first model of a shipped scenario.
 fn params_of(file: &str) -> ModelParams {
@@ -102,22 +104,48 @@ fn rv20e_crank_side_against_the_hand_calculation() {
         "{}",
         arcmin(terms.disc_bore)
     );
-    // Supports (30202 size: 13 rollers of 8.225 mm at 13°, 11.75 mm wide): shares
-    // S_A = S_B = 1, A_A = 9/30.75 = 0.292683; rms loads √((1469.73·1)² + (1151.50·0.292683)²)
-    // = 1507.88 N at both; row compliance 2.53446e-6 mm/N plus the plate's seat
-    // 0.462461/(206 000·11.75) = 1.91060e-7, 2.72552e-6 mm/N; weights 1 − x1/L = 0.646341 and
-    // 0.353659; symmetric 2.72552e-6, antisymmetric 0.292683·(0.646341 − 0.353659)·2.72552e-6
-    // = 2.33477e-7; term 1.48430e-4 rad = 0.510268 arcmin (the row alone: 0.47450).
-    let support_deflection = {
-        let cos = 13f64.to_radians().cos();
-        2.0 * 3.84e-5 * (4.08 * 1507.8756 / (13.0 * cos)).powf(0.9) / 8.225f64.powf(0.8) / cos
-    };
-    assert!((support_deflection / 1507.8756 / 2.53446e-6 - 1.0).abs() < 1e-5);
+    // Supports (30202 size: 13 rollers of 8.225 mm at 13°, 11.75 mm wide), preloaded by the
+    // rule (stiffness/build.rs): at 3 % of rated, T_c = 2425.053 N·mm, τ = 44.0919 N,
+    // |F|/m = 34.5449 N, A_A = 9/30.75 = 0.292683, reaction √(44.0919² + (34.5449·
+    // 0.292683)²) = 45.2363 N, F_a0 = 45.2363·tan 13°/J(1) = 45.2363·0.230868/0.545495 =
+    // 19.1452 N. At rated both supports carry √((1469.73·1)² + (1151.50·0.292683)²) =
+    // 1507.88 N: J(x) = 1507.88·tan 13°/19.1452 = 18.1832 at x = 47.0225, δ_n0 =
+    // (19.1452/(13·2.428147e5·sin 13°))^0.9 = 7.72108e-5 mm, δ_r = x·δ_n0/cos 13° =
+    // 3.72615e-3 mm, 2.47112e-6 mm/N (unpreloaded: 2.53446e-6); plus the plate's seat
+    // 0.462461/(206 000·11.75) = 1.91060e-7: 2.66218e-6 mm/N; weights 1 − x1/L = 0.646341
+    // and 0.353659; symmetric 2.66218e-6, antisymmetric 0.292683·(0.646341 − 0.353659)·
+    // 2.66218e-6 = 2.28050e-7; term 1.44982e-4 rad = 0.498410 arcmin.
+    assert!(
+        (side.support.preload / 19.1452 - 1.0).abs() < 1e-5,
+        "{}",
+        side.support.preload
+    );
+    assert!((side.support.radial_deflection(1507.8756) / 3.72615e-3 - 1.0).abs() < 1e-5);
     assert!((side.support_housing_compliance / 1.91060e-7 - 1.0).abs() < 1e-5);
     assert!(
-        (arcmin(terms.support) - 0.510268).abs() < 1e-5,
+        (arcmin(terms.support) - 0.498410).abs() < 1e-5,
         "{}",
         arcmin(terms.support)
+    );
+    // The plates' paths from each seat (bore 35/2 mm) to the nearest pillar, s = 2·27.5·
+    // sin 45° = 38.8909 mm: 0.279317·ln(38.8909/17.5)/(206 000·11.75) = 0.279317·0.798559/
+    // 2 420 500 = 9.21508e-8 mm/N, weighted as the seats: 51.7390·9.21508e-8 + 31.7592·
+    // 0.0856633·9.21508e-8 = 5.01850e-6 rad = 0.0172523 arcmin.
+    assert!((side.seat_path_compliance / 9.21508e-8 - 1.0).abs() < 1e-5);
+    assert!(
+        (arcmin(terms.seat_path) - 0.0172523).abs() < 1e-6,
+        "{}",
+        arcmin(terms.seat_path)
+    );
+    // The disc web around the pillars' holes (stiffness/bodies.rs: c_web,S = 3.846930e-8,
+    // c_web,A = 2.565422e-8 mm/N): 51.7390·3.846930e-8 + 31.7592·2.565422e-8 =
+    // 2.80512e-6 rad = 0.00964330 arcmin.
+    assert!((side.web_compliance.0 / 3.846930e-8 - 1.0).abs() < 1e-6);
+    assert!((side.web_compliance.1 / 2.565422e-8 - 1.0).abs() < 1e-6);
+    assert!(
+        (arcmin(terms.disc_web) - 0.00964330).abs() < 1e-7,
+        "{}",
+        arcmin(terms.disc_web)
     );
     // Carrier (two 11 × 11 mm pillars, 19 mm, on 27.5 mm), each pillar on its two roots
     // (stiffness.rs: the section a rigid footing on a half-space): lateral 19³/(12EI) +
@@ -132,6 +160,29 @@ fn rv20e_crank_side_against_the_hand_calculation() {
         (arcmin(terms.carrier) - 0.654826).abs() < 1e-5,
         "{}",
         arcmin(terms.carrier)
+    );
+    // The end plate at the pillars' B ends. Its bolted joint (stiffness/joint.rs, M5 12.9 at
+    // VDI 2230's 12 378.5 N on 97.2417 mm²): sliding 2.21801e-8 mm/N, rocking 1.51146e-9 and
+    // twisting 9.17672e-10 rad/(N·mm) added to the root's: the guided beam with unequal
+    // ends gives the lateral 8.09012e-6 mm/N (7.93352e-6 without), the twist 1.36346e-7,
+    // K_c = 2.01625e8 N·mm/rad, and 3.68158e-6·(2.05415e8/2.01625e8 − 1)·51.7390 =
+    // 3.58038e-6 rad = 0.0123084 arcmin. Its bending around the root (stiffness/plate.rs,
+    // K_p = 1.00012e9 N·mm/rad added to the rocking): lateral 8.17692e-6, K_c = 1.99640e8,
+    // 1.92906e-6 rad more = 0.00663163 arcmin.
+    assert!(
+        (1.0 / (1.0 / side.carrier_stiffness + side.end_plate_joint_compliance) / 2.01625e8 - 1.0)
+            .abs()
+            < 1e-5
+    );
+    assert!(
+        (arcmin(terms.end_plate_joint) - 0.0123084).abs() < 1e-6,
+        "{}",
+        arcmin(terms.end_plate_joint)
+    );
+    assert!(
+        (arcmin(terms.end_plate_bending) - 0.00663163).abs() < 1e-6,
+        "{}",
+        arcmin(terms.end_plate_bending)
     );
     // Involute stage (z1 12, z2 42, i 141, r_b2 = 27.5·42/54·cos 20° = 20.0990 mm, b = 8 mm,
     // c_γ = 20 N/(mm·µm), crank torsion over 10.875 + 15.375 mm with GJ = G·π·15⁴/32):
@@ -174,12 +225,46 @@ fn crank_side_parts_build_from_their_dimensions() {
         depth: 11.0,
         length: 19.0,
     };
-    assert_eq!(
-        side.carrier_stiffness,
-        carrier.torsional_stiffness_on_elastic_roots(206_000.0, 0.3)
-    );
-    // With body_compliance 0 the disc and the plates are rigid: the chain before they were
-    // added (rigidity 75.0 N·m/arcmin on this scenario, docs/models.md §13).
+    // (Within rounding: powi folded at compile time may round differently.)
+    let roots = carrier.torsional_stiffness_on_elastic_roots(206_000.0, 0.3);
+    assert!((side.carrier_stiffness / roots - 1.0).abs() < 1e-14);
+    // The end plate: its bolted joint (M5 by the rule, VDI 2230's preload, Ito's C and m, the
+    // cone through an 11.75 mm plate) and its bending around a hub of the root's radius,
+    // clamped 38.8909 − 17.5 mm out.
+    let joint = BoltedJoint {
+        width: 11.0,
+        depth: 11.0,
+        hole: 5.5,
+        cone: 8.5 + 2.0 * 11.75 * 0.348,
+        preload: assembly_preload(5.0, 0.8, 0.12),
+        coefficient: 0.046,
+        exponent: 0.48,
+    }
+    .compliance(0.3);
+    let bolted = carrier.torsional_stiffness_with_end_plate(206_000.0, 0.3, &joint);
+    let joint_part = 1.0 / bolted - 1.0 / roots;
+    assert!((side.end_plate_joint_compliance / joint_part - 1.0).abs() < 1e-9);
+    let seat_to_pillar = (2.0 * 27.5 * 27.5 * (1.0 - (PI / 2.0).cos())).sqrt();
+    let hub = (4.0 * 1220.0833333_f64 / PI).powf(0.25);
+    let plate = hub_tilt_stiffness(hub, seat_to_pillar - 17.5, 11.75, 206_000.0, 0.3);
+    let bent = EndCompliance {
+        rocking: joint.rocking + 1.0 / plate,
+        ..joint
+    };
+    let whole = carrier.torsional_stiffness_with_end_plate(206_000.0, 0.3, &bent);
+    let bending_part = 1.0 / whole - 1.0 / bolted;
+    assert!((side.end_plate_bending_compliance / bending_part - 1.0).abs() < 1e-9);
+    let path = net_force_compliance(17.5, seat_to_pillar, 11.75, 206_000.0, 0.3);
+    assert!((side.seat_path_compliance / path - 1.0).abs() < 1e-14);
+    let hole = 0.5 * 11f64.hypot(11.0) + 0.9;
+    let web = disc_web_compliance(2, 27.5, 27.5, hole, 8.0, 206_000.0, 0.3);
+    assert!((side.web_compliance.0 / web.0 - 1.0).abs() < 1e-14);
+    assert!((side.web_compliance.1 / web.1 - 1.0).abs() < 1e-14);
+    // With body_compliance 0 the discs, the plates and the housing are rigid (rigidity
+    // 75.01 N·m/arcmin on this scenario before the supports were preloaded, 74.99 with the
+    // rule's light preload: its continuous load zone, 4.085 for Stribeck's 4.08 at
+    // heavy load, docs/models.md §13).
+
     let rigid = TorsionCurve::from_params(
         &params_of("rv20e-torsion.json").with_number("body_compliance", 0.0),
     )
@@ -187,6 +272,10 @@ fn crank_side_parts_build_from_their_dimensions() {
     let rigid_side = *rigid.crank_side();
     assert_eq!(rigid_side.bore_compliance, 0.0);
     assert_eq!(rigid_side.support_housing_compliance, 0.0);
+    assert_eq!(rigid_side.web_compliance, (0.0, 0.0));
+    assert_eq!(rigid_side.seat_path_compliance, 0.0);
+    assert_eq!(rigid_side.end_plate_joint_compliance, 0.0);
+    assert_eq!(rigid_side.end_plate_bending_compliance, 0.0);
     assert_eq!(
         rigid_side.carrier_stiffness,
         carrier.torsional_stiffness(206_000.0, 0.3)
@@ -194,7 +283,7 @@ fn crank_side_parts_build_from_their_dimensions() {
     let x = nominal_inputs("rv20e-torsion.json");
     let mut out = vec![0.0; rigid.outputs().len()];
     rigid.evaluate(&x, &mut out);
-    assert!((out[2] / 75.0063 - 1.0).abs() < 2e-5, "{}", out[2]);
+    assert!((out[2] / 74.9900 - 1.0).abs() < 2e-5, "{}", out[2]);
     let involute = InvoluteStage {
         sun_teeth: 12.0,
         planet_teeth: 42.0,
@@ -343,59 +432,133 @@ fn the_discs_shift_along_its_eccentric_hardly_moves_the_pins() {
     }
 }
 
+/// The names of the chain's terms, in the order of [`Figures::shares`] and the tables of
+/// docs/models.md §13 and the README.
+pub const TERMS: [&str; 12] = [
+    "pins",
+    "needle rows",
+    "disc around the bores",
+    "disc web (pillar holes)",
+    "crank shaft",
+    "support bearings and seats",
+    "seats' paths to the pillars",
+    "carrier (pillars on their roots)",
+    "end plate's bolted joints",
+    "end plate's bending",
+    "housing around the pins",
+    "involute stage",
+];
+
+/// A torsion scenario's figures at the design point (every error zero).
+#[derive(Debug, Clone)]
+pub struct Figures {
+    /// Rigidity (N·m/arcmin), lost motion, hysteresis loss and angle at rated (arcmin).
+    pub rigidity: f64,
+    pub lost_motion: f64,
+    pub hysteresis_loss: f64,
+    pub angle_at_rated: f64,
+    /// Each term's share of the frictionless 50–100 % slope, %, in [`TERMS`]' order.
+    pub shares: [f64; 12],
+    /// Each term's angle at rated torque, frictionless, arcmin.
+    pub at_rated: [f64; 12],
+}
+
+fn term_values(terms: &TorsionTerms) -> [f64; 12] {
+    let c = &terms.chain;
+    [
+        terms.pins,
+        c.needle,
+        c.disc_bore,
+        c.disc_web,
+        c.shaft,
+        c.support,
+        c.seat_path,
+        c.carrier,
+        c.end_plate_joint,
+        c.end_plate_bending,
+        c.housing,
+        c.involute,
+    ]
+}
+
+/// The figures of a shipped torsion scenario, or of its parameters changed by `edit`.
+pub fn figures_with(file: &str, edit: &dyn Fn(ModelParams) -> ModelParams) -> Figures {
+    let model = TorsionCurve::from_params(&edit(params_of(file))).unwrap();
+    let x = nominal_inputs(file);
+    let mut out = vec![0.0; model.outputs().len()];
+    model.evaluate(&x, &mut out);
+    let rated = model.rated_torque();
+    let full = term_values(&model.breakdown(&x, rated).unwrap());
+    let half = term_values(&model.breakdown(&x, 0.5 * rated).unwrap());
+    let slope: f64 = full.iter().sum::<f64>() - half.iter().sum::<f64>();
+    let mut shares = [0.0; 12];
+    for (share, (f, h)) in shares.iter_mut().zip(full.iter().zip(half)) {
+        *share = (f - h) / slope * 100.0;
+    }
+    Figures {
+        rigidity: out[2],
+        lost_motion: out[0],
+        hysteresis_loss: out[1],
+        angle_at_rated: out[4],
+        shares,
+        at_rated: full,
+    }
+}
+
+/// The figures of a shipped torsion scenario.
+pub fn figures(file: &str) -> Figures {
+    figures_with(file, &|p| p)
+}
+
 #[test]
 fn torsion_scenarios_nominal_figures() {
     // The nominal figures docs/models.md §13 and the README quote, pinned so that a change
     // of the model or of a scenario's dimensions is deliberate: rigidity (N·m/arcmin), lost
-    // motion, hysteresis loss and angle at rated (arcmin), and the terms' shares of the
-    // frictionless 50–100 % slope. They follow from the dimensions of the scenarios (rules of
-    // §13), not from the catalogue; §13 compares them with it.
-    for (file, rigidity, lost_motion, hysteresis_loss, angle) in [
-        ("rv20e-torsion.json", 63.1326, 0.468945, 0.280178, 2.86020),
-        ("rv40e-torsion.json", 149.974, 0.760817, 0.501871, 3.18055),
-        ("rv80e-torsion.json", 250.362, 0.755793, 0.464816, 3.56037),
-    ] {
-        let model = torsion(file);
-        let x = nominal_inputs(file);
-        let mut out = vec![0.0; model.outputs().len()];
-        model.evaluate(&x, &mut out);
+    // motion, hysteresis loss and angle at rated (arcmin). They follow from the dimensions
+    // of the scenarios (rules of §13), not from the catalogue; §13 compares them with it.
+    let all: Vec<(&str, Figures)> = [
+        "rv20e-torsion.json",
+        "rv40e-torsion.json",
+        "rv80e-torsion.json",
+    ]
+    .iter()
+    .map(|file| (*file, figures(file)))
+    .collect();
+    for (file, f) in &all {
         eprintln!(
             "{file}: rigidity {:.6}, lost motion {:.6}, hysteresis loss {:.6}, angle at rated {:.6}",
-            out[2], out[0], out[1], out[4]
+            f.rigidity, f.lost_motion, f.hysteresis_loss, f.angle_at_rated
         );
-        let rated = model.rated_torque();
-        let (full, half) = (
-            model.breakdown(&x, rated).unwrap(),
-            model.breakdown(&x, 0.5 * rated).unwrap(),
-        );
-        let slope = full.total() - half.total();
-        let share = |a: f64, b: f64| (a - b) / slope * 100.0;
-        eprintln!(
-            "{file}: pins {:.1} %, needle {:.1} %, disc bore {:.1} %, shaft {:.1} %, support {:.1} %, carrier {:.1} %, involute {:.2} %; at rated {:.4} {:.4} {:.4} {:.4} {:.4} {:.4} {:.5} arcmin",
-            share(full.pins, half.pins),
-            share(full.chain.needle, half.chain.needle),
-            share(full.chain.disc_bore, half.chain.disc_bore),
-            share(full.chain.shaft, half.chain.shaft),
-            share(full.chain.support, half.chain.support),
-            share(full.chain.carrier, half.chain.carrier),
-            share(full.chain.involute, half.chain.involute),
-            full.pins,
-            full.chain.needle,
-            full.chain.disc_bore,
-            full.chain.shaft,
-            full.chain.support,
-            full.chain.carrier,
-            full.chain.involute,
-        );
+        for (name, (share, angle)) in TERMS.iter().zip(f.shares.iter().zip(f.at_rated)) {
+            eprintln!("    {name}: {share:.2} % ({angle:.5} arcmin at rated)");
+        }
+    }
+    for ((file, f), (rigidity, lost_motion, hysteresis_loss, angle)) in all.iter().zip([
+        (61.2397, 0.453912, 0.280178, 2.92717),
+        (143.207, 0.752235, 0.501871, 3.31341),
+        (239.119, 0.747381, 0.464816, 3.71064),
+    ]) {
         let close = |value: f64, pinned: f64| (value / pinned - 1.0).abs() < 2e-5;
-        assert!(close(out[2], rigidity), "{file}: rigidity {}", out[2]);
-        assert!(close(out[0], lost_motion), "{file}: lost motion {}", out[0]);
         assert!(
-            close(out[1], hysteresis_loss),
-            "{file}: hysteresis loss {}",
-            out[1]
+            close(f.rigidity, rigidity),
+            "{file}: rigidity {}",
+            f.rigidity
         );
-        assert!(close(out[4], angle), "{file}: angle {}", out[4]);
+        assert!(
+            close(f.lost_motion, lost_motion),
+            "{file}: lost motion {}",
+            f.lost_motion
+        );
+        assert!(
+            close(f.hysteresis_loss, hysteresis_loss),
+            "{file}: hysteresis loss {}",
+            f.hysteresis_loss
+        );
+        assert!(
+            close(f.angle_at_rated, angle),
+            "{file}: angle {}",
+            f.angle_at_rated
+        );
     }
 }
 
@@ -422,6 +585,7 @@ fn rigidity_rises_with_every_stiffening_dimension() {
         "support_roller_count",
         "support_roller_length_mm",
         "support_bearing_width_mm",
+        "support_bearing_outer_diameter_mm",
         "carrier_pillar_width_mm",
         "carrier_pillar_depth_mm",
         "planet_face_width_mm",
@@ -436,11 +600,130 @@ fn rigidity_rises_with_every_stiffening_dimension() {
         eprintln!("{key}: {:+.2} %", (changed / reference - 1.0) * 100.0);
         assert!(changed > reference, "{key}: {changed} vs {reference}");
     }
-    // A longer span or longer pillars soften.
-    for key in ["crank_support_span_mm", "carrier_pillar_length_mm"] {
-        let value = base.number(key, None).unwrap();
+    // A longer span or longer pillars soften, as does a softer joint surface (Ito's C,
+    // default 0.046).
+    for key in [
+        "crank_support_span_mm",
+        "carrier_pillar_length_mm",
+        "joint_deflection_coefficient",
+    ] {
+        let value = base.number(key, Some(0.046)).unwrap();
         let changed = rigidity(&base.clone().with_number(key, value * 1.1));
         eprintln!("{key}: {:+.2} %", (changed / reference - 1.0) * 100.0);
         assert!(changed < reference, "{key}");
+    }
+}
+
+/// The three torsion scenarios with their catalogue figures (validation.md, "Real
+/// reducers": the Nabtesco RV-E catalogue as validation.md quotes it; the RV-42N's for the
+/// RV-40E's class): name, file, rigidity (N·m/arcmin).
+pub const CATALOGUE: [(&str, &str, f64); 3] = [
+    ("RV-20E", "rv20e-torsion.json", 49.0),
+    ("RV-40E", "rv40e-torsion.json", 108.0),
+    ("RV-80E", "rv80e-torsion.json", 196.0),
+];
+
+/// The aim of issue 29: rigidity within ±30 % of the catalogue.
+const WITHIN: f64 = 0.30;
+
+/// The factor on the estimated dimensions `keys` of `file` (all scaled alike) that brings
+/// the rigidity to `target`, by bisection in [0.5, 1.5] (the rigidity is monotone in each).
+fn factor_for(file: &str, keys: &[&str], target: f64) -> f64 {
+    let rigidity = |factor: f64| {
+        figures_with(file, &|mut p| {
+            for key in keys {
+                let v = p.number(key, None).unwrap();
+                p = p.with_number(key, v * factor);
+            }
+            p
+        })
+        .rigidity
+    };
+    let rises = rigidity(1.1) > rigidity(1.0);
+    let (mut lo, mut hi) = (0.5, 1.5);
+    for _ in 0..50 {
+        let mid = 0.5 * (lo + hi);
+        if (rigidity(mid) > target) == rises {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// The estimated dimensions whose change docs/models.md §13 gives for a size outside the
+/// aim: (label, keys scaled together).
+const LEVERS: [(&str, &[&str]); 4] = [
+    ("eccentric journal d_j", &["crank_journal_diameter_mm"]),
+    (
+        "pillar section b × h",
+        &["carrier_pillar_width_mm", "carrier_pillar_depth_mm"],
+    ),
+    ("pillar length L_p", &["carrier_pillar_length_mm"]),
+    ("support span L", &["crank_support_span_mm"]),
+];
+
+#[test]
+fn rigidity_against_the_catalogue() {
+    // Issue 29's aim, rigidity within ±30 % of the catalogue: the RV-20E (1.25) and RV-80E
+    // (1.22) hold it, the RV-40E (1.326 against 108; 1.267 against the RV-42N's 113) does
+    // not. What would bring it to 1.30·108 = 140.4 N·m/arcmin, one estimated dimension at
+    // a time (docs/models.md §13): the journal 3.2 % thinner (20 → 19.35 mm), the pillars'
+    // section 2.8 % smaller (14 → 13.61 mm square), the pillars 4.8 % longer (23 → 24.11
+    // mm), or the support span 4.5 % longer (38.25 → 39.98 mm).
+    let ratios: Vec<f64> = CATALOGUE
+        .iter()
+        .map(|(_, file, catalogue)| figures(file).rigidity / catalogue)
+        .collect();
+    assert!((ratios[0] - 1.2498).abs() < 1e-3, "{ratios:?}");
+    assert!((ratios[1] - 1.3260).abs() < 1e-3, "{ratios:?}");
+    assert!((ratios[2] - 1.2200).abs() < 1e-3, "{ratios:?}");
+    assert!(ratios[0] < 1.0 + WITHIN && ratios[2] < 1.0 + WITHIN);
+    assert!(ratios[1] > 1.0 + WITHIN && ratios[1] * 108.0 / 113.0 < 1.0 + WITHIN);
+    let target = (1.0 + WITHIN) * 108.0;
+    let factors: Vec<f64> = LEVERS
+        .iter()
+        .map(|(_, keys)| factor_for("rv40e-torsion.json", keys, target))
+        .collect();
+    eprintln!("RV-40E to {target} N·m/arcmin: {factors:?}");
+    for (factor, pinned) in factors.iter().zip([0.9676, 0.9718, 1.0482, 1.0452]) {
+        assert!((factor - pinned).abs() < 2e-4, "{factors:?}");
+    }
+}
+
+#[test]
+fn support_preload_moves_the_angle_more_than_the_rigidity() {
+    // The supports' preload (docs/models.md §13): the rule's light preload (every roller
+    // loaded at 3 % of rated: 19.1 / 35.8 / 58.6 N) against none and against a setting
+    // that keeps every roller loaded at rated (638 / 1194 / 1954 N): the rigidity (the
+    // 50–100 % slope, where the rows' load zones are partial either way) moves by under
+    // 0.1 % with the light preload and 8 % with the heavy one; the angle at rated by 0.4 %
+    // and 8 %.
+    for (name, file, _) in CATALOGUE {
+        let model = torsion(file);
+        let side = *model.crank_side();
+        let rated = 0.5 * model.torque_factor() * model.rated_torque() * 1000.0;
+        let heavy = TaperedRow::full_zone_preload(&side.support.row, side.support_load(rated));
+        let base = figures(file);
+        let none = figures_with(file, &|p| p.with_number("support_preload_n", 0.0));
+        let rigid = figures_with(file, &|p| p.with_number("support_preload_n", heavy));
+        eprintln!(
+            "{name}: preload {:.1} N (heavy {heavy:.0} N): rigidity {:.2} / {:.2} / {:.2}, angle {:.3} / {:.3} / {:.3}, lost motion {:.3} / {:.3} / {:.3}",
+            side.support.preload,
+            base.rigidity,
+            none.rigidity,
+            rigid.rigidity,
+            base.angle_at_rated,
+            none.angle_at_rated,
+            rigid.angle_at_rated,
+            base.lost_motion,
+            none.lost_motion,
+            rigid.lost_motion
+        );
+        assert!((base.rigidity / none.rigidity - 1.0).abs() < 1e-3);
+        assert!(rigid.rigidity / base.rigidity > 1.07 && rigid.rigidity / base.rigidity < 1.09);
+        assert!(base.angle_at_rated < none.angle_at_rated);
+        assert!(rigid.angle_at_rated / base.angle_at_rated < 0.93);
     }
 }

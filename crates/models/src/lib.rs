@@ -28,12 +28,15 @@ pub use params::{ModelError, ModelParams, ParamValue};
 pub use reducer::RvLostMotion;
 pub use spectrum::{OrderDft, RealFft};
 pub use stiffness::{
-    hertz_half_width, iso_16281_roller_approach, line_contact_approach, lundberg_body_approach,
-    lundberg_needle_approach, Carrier, ChainTerms, CrankShaft, CrankSide, InvoluteStage, RollerRow,
+    assembly_preload, bolt_for_pillar, disc_web_compliance, guided_beam_compliance,
+    hertz_half_width, hole_energy, hub_deflection_coefficients, hub_tilt_stiffness,
+    iso_16281_roller_approach, kelvin_stress, line_contact_approach, lundberg_body_approach,
+    lundberg_needle_approach, michell_response, net_force_compliance, BoltedJoint, Carrier,
+    ChainTerms, CrankShaft, CrankSide, EndCompliance, Housing, InvoluteStage, RollerRow,
     ShaftModes, TaperedRow, ISO_16281_ROLLER, LUNDBERG_CONSTANT, PALMGREN_LINE, STRIBECK_LINE,
 };
 pub use test_functions::{Ishigami, SobolG};
-pub use torsion_curve::TorsionCurve;
+pub use torsion_curve::{TorsionCurve, TorsionTerms};
 pub use transmission_error::TransmissionError;
 
 /// Arcminutes per radian, 180·60/π (000 Eq. 5, 13, 18 carry this factor).

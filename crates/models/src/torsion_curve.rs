@@ -84,12 +84,12 @@
 
 use crate::cycloid_pin_contact::CycloidPinContact;
 use crate::geometric_hysteresis::{self, GeometricHysteresis};
-use crate::stiffness::{Carrier, ChainTerms, CrankShaft, CrankSide, InvoluteStage, RollerRow};
+use crate::stiffness::{build, ChainTerms, CrankSide, Housing};
 use crate::{
     Curve, CurveStyle, ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputKind,
     OutputSpec, ParamSpec, Series, ARCMIN_PER_RAD,
 };
-use rvtol_deviation::{Rounded, Shown};
+use rvtol_deviation::Shown;
 
 /// Inputs of 000 (`geometric_hysteresis`), in its order, come first: its eighteen, without
 /// the fitter's measuring error (the torsion curve takes the pins as drawn, one class, where
@@ -335,6 +335,18 @@ const PARAMS: &[ParamSpec] = &[
         default: None,
     },
     ParamSpec {
+        name: "support_bearing_outer_diameter_mm",
+        unit: "mm",
+        description: "D_s, outer diameter of a support bearing, the end plate's seat bore; default d_j + 4π·d_j/(1.2·Z_s − 2π) (the roller-count rule of docs/models.md §13 inverted)",
+        default: None,
+    },
+    ParamSpec {
+        name: "support_preload_n",
+        unit: "N",
+        description: "F_a0, axial preload of each support bearing (the crank's shim), ≥ 0; default the least that keeps every roller loaded under a support's reaction at 3 % of rated torque (docs/models.md §13)",
+        default: None,
+    },
+    ParamSpec {
         name: "carrier_pillar_count",
         unit: "1",
         description: "n_p, pillars joining the carrier's plates; default crank_count",
@@ -365,6 +377,36 @@ const PARAMS: &[ParamSpec] = &[
         default: None,
     },
     ParamSpec {
+        name: "end_plate_bolt_diameter_mm",
+        unit: "mm",
+        description: "d, the 12.9 bolt clamping each pillar to the end plate: 4, 5, 6, 8 or 10; default the largest no thicker than half the pillar's smaller side",
+        default: None,
+    },
+    ParamSpec {
+        name: "end_plate_bolt_preload_n",
+        unit: "N",
+        description: "F_M, that bolt's preload; default VDI 2230's assembly preload (12.9, μ_G 0.12, 90 % of the yield point)",
+        default: None,
+    },
+    ParamSpec {
+        name: "joint_deflection_coefficient",
+        unit: "µm/MPa^m",
+        description: "C of the joint surface's δ = C·p^m (Ito, Modular Design for Machine Tools, Table 6-5: ground steel 0.046)",
+        default: Some(0.046),
+    },
+    ParamSpec {
+        name: "joint_deflection_exponent",
+        unit: "1",
+        description: "m of the joint surface's δ = C·p^m, in (0, 1) (Ito, Table 6-5: ground steel 0.48)",
+        default: Some(0.48),
+    },
+    ParamSpec {
+        name: "disc_pillar_hole_radius_mm",
+        unit: "mm",
+        description: "r_h, the holes the pillars pass through in each disc; default the pillar's half-diagonal plus e",
+        default: None,
+    },
+    ParamSpec {
         name: "planet_face_width_mm",
         unit: "mm",
         description: "b, face width of the sun–planet mesh",
@@ -385,7 +427,7 @@ const PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "body_compliance",
         unit: "1",
-        description: "1: the disc around its crank bores and the pillars' roots in the carrier plates are elastic (docs/models.md §13); 0: rigid disc and plates (the chain before they were added)",
+        description: "1: the discs (around their bores and pillars' holes), the carrier's plates (seats, paths to the pillars, the pillars' roots, the end plate's joints and bending) and the housing around the pins are elastic (docs/models.md §13); 0: rigid bodies",
         default: Some(1.0),
     },
     ParamSpec {
@@ -439,6 +481,8 @@ pub struct TorsionCurve {
     /// Load sharing of one disc, m cranks on the crank circle, no per-pin errors.
     contact: CycloidPinContact,
     side: CrankSide,
+    /// The housing around the pin grooves (`None`: rigid bodies).
+    housing: Option<Housing>,
     rated_torque: f64,
     pin_friction: f64,
     bearing_friction: f64,
@@ -465,6 +509,8 @@ struct RowState {
     preload_force: f64,
     /// Needle stiffness factor 1 + x_k.
     needle_factor: f64,
+    /// F_0, the pin forces at zero torque (a preload's; zero with free play), N.
+    preload_forces: [f64; crate::cycloid_pin_contact::MAX_PINS],
 }
 
 /// The elastic angle of one load case split into its elements, arcmin at the output.
@@ -488,8 +534,9 @@ impl TorsionCurve {
     /// a0 = 27.5 mm, also the crank circle), two cranks, rated torque 167 N·m (catalogue),
     /// and the estimated dimensions of docs/models.md §13: disc face width 8 mm, eccentric
     /// journal 15 mm with 15 needles of 3 × 6 mm, support span 30.75 mm with the eccentrics
-    /// 9 mm apart, 30202-size supports (13 rollers of 8.2 mm at 13°, 11.75 mm wide), two 11 × 11 × 19 mm
-    /// pillars, planet face width 8 mm with an 11 mm overhang; friction 0.02 at the pins
+    /// 9 mm apart, 30202-size supports (13 rollers of 8.2 mm at 13°, 11.75 mm wide, 35 mm
+    /// outside, ISO 355), two 11 × 11 × 19 mm pillars, planet face width 8 mm with an 11 mm
+    /// overhang; friction 0.02 at the pins
     /// (000 Table 7's dynamic coefficient) and 0.002 in the needle rows (SKF).
     pub fn rv20e_params() -> ModelParams {
         GeometricHysteresis::rv20e_params()
@@ -506,6 +553,7 @@ impl TorsionCurve {
             .with_number("support_roller_length_mm", 8.225)
             .with_number("support_contact_angle_deg", 13.0)
             .with_number("support_bearing_width_mm", 11.75)
+            .with_number("support_bearing_outer_diameter_mm", 35.0)
             .with_number("carrier_pillar_width_mm", 11.0)
             .with_number("carrier_pillar_depth_mm", 11.0)
             .with_number("carrier_pillar_length_mm", 19.0)
@@ -553,63 +601,6 @@ impl TorsionCurve {
             ));
         }
         let contact = CycloidPinContact::of_disc(params, cranks, crank_circle_radius)?;
-        let youngs = params.positive("youngs_modulus_mpa", Some(206_000.0))?;
-        let poisson = params.number("poisson_ratio", Some(0.3))?;
-        let journal_diameter = params.positive("crank_journal_diameter_mm", None)?;
-        let needle = RollerRow {
-            rollers: params.count("needle_roller_count", None)? as f64,
-            length: params.positive("needle_roller_length_mm", None)?,
-            contact_angle: 0.0,
-        };
-        let needle_diameter =
-            params.positive("needle_roller_diameter_mm", Some(0.2 * journal_diameter))?;
-        let span = params.positive("crank_support_span_mm", None)?;
-        let spacing = params.positive("crank_eccentric_spacing_mm", None)?;
-        if spacing >= span {
-            return Err(ModelError::new(
-                "crank_eccentric_spacing_mm",
-                format!(
-                    "must be below crank_support_span_mm ({}), got {}",
-                    Shown(span),
-                    Shown(spacing)
-                ),
-            ));
-        }
-        let shaft = CrankShaft::new(journal_diameter, span, spacing, youngs, poisson);
-        let contact_angle = params.number("support_contact_angle_deg", None)?;
-        if !(0.0..45.0).contains(&contact_angle) {
-            return Err(ModelError::new(
-                "support_contact_angle_deg",
-                format!("must lie in [0, 45), got {}", Shown(contact_angle)),
-            ));
-        }
-        let support = RollerRow {
-            rollers: params.count("support_roller_count", None)? as f64,
-            length: params.positive("support_roller_length_mm", None)?,
-            contact_angle: contact_angle.to_radians(),
-        };
-        let support_width =
-            params.positive("support_bearing_width_mm", Some(support.length / 0.7))?;
-        let carrier = Carrier {
-            pillars: params.count("carrier_pillar_count", Some(cranks as f64))? as f64,
-            radius: params.positive("carrier_pillar_radius_mm", Some(crank_circle_radius))?,
-            width: params.positive("carrier_pillar_width_mm", None)?,
-            depth: params.positive("carrier_pillar_depth_mm", None)?,
-            length: params.positive("carrier_pillar_length_mm", None)?,
-        };
-        let sun = params.count("sun_teeth", None)? as f64;
-        let planet = params.count("planet_teeth", None)? as f64;
-        let pressure_angle = params.number("pressure_angle_deg", Some(20.0))?;
-        let involute = InvoluteStage {
-            sun_teeth: sun,
-            planet_teeth: planet,
-            cranks: cranks as f64,
-            planet_base_radius: crank_circle_radius * planet / (sun + planet)
-                * pressure_angle.to_radians().cos(),
-            face_width: params.positive("planet_face_width_mm", None)?,
-            mesh_stiffness: 1000.0 * params.positive("mesh_stiffness_n_per_mm_um", Some(20.0))?,
-            torsion_length: params.positive("planet_gear_overhang_mm", None)? + 0.5 * span,
-        };
         let friction = |key: &str| -> Result<f64, ModelError> {
             let value = params.number(key, None)?;
             if (0.0..0.5).contains(&value) {
@@ -621,55 +612,27 @@ impl TorsionCurve {
                 ))
             }
         };
-        let pin_friction = friction("pin_friction_coefficient")?;
-        let bearing_friction = friction("crank_bearing_friction_coefficient")?;
         let consistent_clearance = params.flag("clearance_reading", true)?;
         let elastic_bodies = params.flag("body_compliance", true)?;
         let rated_torque = params.positive("rated_torque_nm", None)?;
-        params.reject_unknown(&PARAMS.iter().map(|p| p.name).collect::<Vec<_>>())?;
         let stage = *contact.stage();
-        // The disc's bore (needle row on the journal) and its rim, the pin circle, along the
-        // crank circle's radius.
-        let bore_radius = 0.5 * journal_diameter + needle_diameter;
-        let rim_distance = stage.pin_circle_radius - crank_circle_radius;
-        if bore_radius >= rim_distance {
-            return Err(ModelError::new(
-                "needle_roller_diameter_mm",
-                format!(
-                    "the disc's bore (crank_journal_diameter_mm/2 + needle_roller_diameter_mm = {} mm) must lie inside the pin circle, {} mm beyond the crank circle",
-                    Rounded(bore_radius),
-                    Rounded(rim_distance)
-                ),
-            ));
-        }
-        let (bore_compliance, support_housing_compliance, carrier_stiffness) = if elastic_bodies {
-            (
-                RollerRow::ringless_housing_compliance(
-                    bore_radius,
-                    rim_distance,
-                    contact.face_width(),
-                    youngs,
-                    poisson,
-                ),
-                RollerRow::housing_ovalisation_compliance(support_width, youngs, poisson),
-                carrier.torsional_stiffness_on_elastic_roots(youngs, poisson),
-            )
-        } else {
-            (0.0, 0.0, carrier.torsional_stiffness(youngs, poisson))
-        };
-        let side = CrankSide {
-            cranks: cranks as f64,
+        let reducer = build::Reducer {
+            cranks,
             crank_circle_radius,
-            pitch_radius: stage.eccentricity * stage.teeth as f64,
-            needle,
-            bore_compliance,
-            shaft,
-            support,
-            support_housing_compliance,
-            carrier_stiffness,
-            involute_compliance: involute
-                .output_compliance(hysteresis.ratio(), shaft.torsional_rigidity),
+            pins: stage.pins,
+            teeth: stage.teeth,
+            pin_circle_radius: stage.pin_circle_radius,
+            eccentricity: stage.eccentricity,
+            curtate: contact.k1(),
+            face_width: contact.face_width(),
+            ratio: hysteresis.ratio(),
+            reference_disc_torque: contact.disc_torque(0.03 * rated_torque),
+            elastic_bodies,
         };
+        let built = build::crank_side(params, &reducer)?;
+        let pin_friction = friction("pin_friction_coefficient")?;
+        let bearing_friction = friction("crank_bearing_friction_coefficient")?;
+        params.reject_unknown(&PARAMS.iter().map(|p| p.name).collect::<Vec<_>>())?;
         let inputs = hysteresis.inputs()[..HYSTERESIS_INPUTS]
             .iter()
             .cloned()
@@ -686,12 +649,13 @@ impl TorsionCurve {
         Ok(TorsionCurve {
             hysteresis,
             contact,
-            side,
+            side: built.side,
+            housing: built.housing,
             rated_torque,
             pin_friction,
             bearing_friction,
-            journal_diameter,
-            crank_turn: sun / planet,
+            journal_diameter: built.journal_diameter,
+            crank_turn: built.crank_turn,
             consistent_clearance,
             inputs,
             outputs: OUTPUTS
@@ -780,12 +744,12 @@ impl TorsionCurve {
         let free_play =
             (stages[1].max(0.0) + stages[3].max(0.0)) / ARCMIN_PER_RAD + cycloid.max(0.0);
         let width = self.contact.face_width();
-        let (reference, preload_force) = if play >= 0.0 {
-            (forward, 0.0)
+        let (reference, preload_force, preload_forces) = if play >= 0.0 {
+            (forward, 0.0, [0.0; crate::cycloid_pin_contact::MAX_PINS])
         } else {
             let zero = self.contact.share_load(&clearances, width, 0.0, 0.0);
             let largest = zero.forces.iter().cloned().fold(0.0, f64::max);
-            (zero.rotation, largest)
+            (zero.rotation, largest, zero.forces)
         };
         let preloaded = if self.consistent_clearance {
             play < 0.0
@@ -799,6 +763,7 @@ impl TorsionCurve {
             preloaded,
             preload_force,
             needle_factor,
+            preload_forces,
         })
     }
 
@@ -840,23 +805,28 @@ impl TorsionCurve {
         } else {
             0.0
         };
-        let chain = self.side.terms(
+        let mut chain = self.side.terms(
             disc_torque,
             sharing.resultant,
             state.needle_factor,
             effective,
             lambda,
         );
+        // The housing turns the disc by 2·U_h(F − F_0)/T_c (housing.rs).
+        if let (Some(housing), true) = (&self.housing, disc_torque > 0.0) {
+            let mut change = [0.0; crate::cycloid_pin_contact::MAX_PINS];
+            for ((d, f), f0) in change
+                .iter_mut()
+                .zip(&sharing.forces)
+                .zip(&state.preload_forces)
+            {
+                *d = f - f0;
+            }
+            chain.housing = lambda * 2.0 * housing.energy(&change) / disc_torque;
+        }
         TorsionTerms {
             pins: pins * ARCMIN_PER_RAD,
-            chain: ChainTerms {
-                needle: chain.needle * ARCMIN_PER_RAD,
-                disc_bore: chain.disc_bore * ARCMIN_PER_RAD,
-                shaft: chain.shaft * ARCMIN_PER_RAD,
-                support: chain.support * ARCMIN_PER_RAD,
-                carrier: chain.carrier * ARCMIN_PER_RAD,
-                involute: chain.involute * ARCMIN_PER_RAD,
-            },
+            chain: chain.scaled(ARCMIN_PER_RAD),
         }
     }
 
@@ -1214,7 +1184,21 @@ mod tests {
             .crank_side()
             .terms(t_c, sharing.resultant, 1.1, 167_000.0, lambda);
         let breakdown = model.breakdown(&x, 167.0).unwrap();
-        assert!((breakdown.chain.total() / (chain.total() * ARCMIN_PER_RAD) - 1.0).abs() < 1e-12);
+        let housing = breakdown.chain.housing;
+        assert!(
+            ((breakdown.chain.total() - housing) / (chain.total() * ARCMIN_PER_RAD) - 1.0).abs()
+                < 1e-12
+        );
+        // The housing's term is the caller's: λ·2·U_h(F − F_0)/T_c (stiffness/housing.rs).
+        let change: Vec<f64> = (0..40)
+            .map(|i| sharing.forces[i] - state.preload_forces[i])
+            .collect();
+        let energy = model.housing.as_ref().unwrap().energy(&change);
+        let hand = lambda * 2.0 * energy / t_c * ARCMIN_PER_RAD;
+        assert!(
+            housing > 0.0 && (housing / hand - 1.0).abs() < 1e-12,
+            "{housing} vs {hand}"
+        );
         // And the torque balance: Σ F_i·l_i = T_c.
         let moment: f64 = sharing
             .forces
@@ -1473,6 +1457,36 @@ mod tests {
                 "needle_roller_diameter_mm",
             ),
             ("support_bearing_width_mm", -1.0, "support_bearing_width_mm"),
+            ("support_preload_n", -5.0, "support_preload_n"),
+            // The seat's bore (70/2 mm) reaches past a pillar's root (38.9 − 35 < 6.3 mm).
+            (
+                "support_bearing_outer_diameter_mm",
+                70.0,
+                "support_bearing_outer_diameter_mm",
+            ),
+            (
+                "end_plate_bolt_diameter_mm",
+                7.0,
+                "end_plate_bolt_diameter_mm",
+            ),
+            ("end_plate_bolt_preload_n", 0.0, "end_plate_bolt_preload_n"),
+            (
+                "joint_deflection_coefficient",
+                0.0,
+                "joint_deflection_coefficient",
+            ),
+            (
+                "joint_deflection_exponent",
+                1.2,
+                "joint_deflection_exponent",
+            ),
+            (
+                "disc_pillar_hole_radius_mm",
+                -1.0,
+                "disc_pillar_hole_radius_mm",
+            ),
+            // Three pillars for two cranks: the body terms put a pillar between two cranks.
+            ("carrier_pillar_count", 3.0, "carrier_pillar_count"),
             (
                 "crank_bearing_stiffness_n_per_mm",
                 2e5,

@@ -19,7 +19,28 @@
 //!   c_bore = (c_oval + (1 + ν)(3 − ν)/(4π)·ln(R/a))/(E·t)       (mm/N, linear, both modes)
 //! a support bearing's seat: the outer ring in a carrier plate as thick as the bearing is
 //! wide (B); Palmgren's formula holds for rings in a rigid housing, so the plate's bore
-//! adds its ovalisation, c_seat = c_oval/(E·B), in series with the row.
+//! adds its ovalisation, c_seat = c_oval/(E·B), in series with the row; and the plate
+//! carries the seat's net force to the pillars, s = 2·a_w·sin(π/(2m)) from the seat's
+//! centre (the nearest pillar root; a_s = D_s/2 the seat's bore):
+//!   c_path = (1 + ν)(3 − ν)/(4π)·ln(s/a_s)/(E·B)
+//!
+//! the disc web between its bores and pins, weakened by the pillars' holes (radius r_h):
+//! Kelvin's plane-stress point force P along x at the origin, at (r, θ) (Timoshenko &
+//! Goodier 1970 §42, from u_x = k[−(3 − ν) ln r + (1 + ν)cos²θ], u_y = k(1 + ν)cos θ sin θ,
+//! k = P(1 + ν)/(4π·E·t)):
+//!   σ_xx = −P·cos θ/(4π·r·t)·((1 − ν) + 2(1 + ν)cos²θ)
+//!   σ_yy =  P·cos θ/(4π·r·t)·(2(1 + ν)cos²θ − (1 + 3ν))
+//!   τ_xy = −P·sin θ/(4π·r·t)·((1 − ν) + 2(1 + ν)cos²θ)
+//! a traction-free round hole of radius r_h in a plate under the stresses (σ1, σ2) raises
+//! its complementary energy by (Kirsch's field; Betti: ΔU = −½∮T⁰·(u⁰ + u_c), u_c the
+//! hole's field under −T⁰)
+//!   ΔU = (π·r_h²·t/E)·((σ1 + σ2)²/2 + (σ1 − σ2)²)
+//! (uniaxial: E_eff = E(1 − 3f), f the holes' area fraction), so, the hole small beside its
+//! distance to the bores (r_h/s ≈ ¼ here), the bores' Kelvin fields at each pillar hole's
+//! centre give the disc's added compliance per unit force at a bore, by Castigliano:
+//!   symmetric (a tangential unit force at each of the m bores)   c_web,S = 2·ΣΔU/m
+//!   antisymmetric (the same unit force at every bore, its direction turning with the
+//!   crank against the disc: the mean over the direction)           c_web,A = 2·⟨ΣΔU⟩/m
 //! ```
 
 use std::f64::consts::PI;
@@ -35,10 +56,190 @@ pub(crate) fn bore_ovalisation_factor(poisson: f64) -> f64 {
         * ((1.0 + poisson) + 2.0 * (CATALAN - 0.5) + 2.0 * (1.0 - poisson) * (0.5 - PI / 8.0))
 }
 
+/// (1 + ν)(3 − ν)/(4π)·ln(R/a)/(E·t): Kelvin's net force carried from a bore of radius
+/// `bore_radius` to a rim or root `distance` from its centre in a plate of `thickness`,
+/// mm/N (module comment); zero when the distance is no larger than the bore.
+pub fn net_force_compliance(
+    bore_radius: f64,
+    distance: f64,
+    thickness: f64,
+    youngs: f64,
+    poisson: f64,
+) -> f64 {
+    (1.0 + poisson) * (3.0 - poisson) / (4.0 * PI) * (distance / bore_radius).ln().max(0.0)
+        / (youngs * thickness)
+}
+
+/// Kelvin's plane-stress stresses (σ_xx, σ_yy, τ_xy) at (x, y) from a point force
+/// (f_x, f_y) at the origin of a plate of `thickness`, MPa (module comment).
+pub fn kelvin_stress(force: (f64, f64), at: (f64, f64), thickness: f64, poisson: f64) -> [f64; 3] {
+    let magnitude = force.0.hypot(force.1);
+    if magnitude == 0.0 {
+        return [0.0; 3];
+    }
+    // In the force's frame: x' along the force.
+    let (c, s) = (force.0 / magnitude, force.1 / magnitude);
+    let (x, y) = (c * at.0 + s * at.1, -s * at.0 + c * at.1);
+    let r = x.hypot(y);
+    let (cos, sin) = (x / r, y / r);
+    let scale = magnitude / (4.0 * PI * r * thickness);
+    let lobe = (1.0 - poisson) + 2.0 * (1.0 + poisson) * cos * cos;
+    let xx = -scale * cos * lobe;
+    let yy = scale * cos * (2.0 * (1.0 + poisson) * cos * cos - (1.0 + 3.0 * poisson));
+    let xy = -scale * sin * lobe;
+    // Back to the plate's frame: σ = R·σ'·Rᵀ.
+    [
+        c * c * xx - 2.0 * c * s * xy + s * s * yy,
+        s * s * xx + 2.0 * c * s * xy + c * c * yy,
+        c * s * (xx - yy) + (c * c - s * s) * xy,
+    ]
+}
+
+/// ΔU of a traction-free hole of radius `radius` in a plate of `thickness` under the
+/// stresses `stress` (σ_xx, σ_yy, τ_xy), N·mm (module comment).
+pub fn hole_energy(stress: [f64; 3], radius: f64, thickness: f64, youngs: f64) -> f64 {
+    let [xx, yy, xy] = stress;
+    let deviator = (xx - yy) * (xx - yy) + 4.0 * xy * xy;
+    PI * radius * radius * thickness / youngs * (0.5 * (xx + yy) * (xx + yy) + deviator)
+}
+
+/// The disc web's added compliances (c_web,S, c_web,A) per unit force at each of `cranks`
+/// bores on the radius `crank_radius`, with a pillar hole of radius `hole` on the radius
+/// `pillar_radius` midway between neighbouring bores, in a disc of `thickness`, mm/N
+/// (module comment).
+pub fn disc_web_compliance(
+    cranks: usize,
+    crank_radius: f64,
+    pillar_radius: f64,
+    hole: f64,
+    thickness: f64,
+    youngs: f64,
+    poisson: f64,
+) -> (f64, f64) {
+    let m = cranks as f64;
+    let angle = |k: usize, offset: f64| 2.0 * PI * k as f64 / m + offset;
+    let energy = |force_at: &dyn Fn(usize) -> (f64, f64)| -> f64 {
+        (0..cranks)
+            .map(|j| {
+                let theta = angle(j, PI / m);
+                let centre = (pillar_radius * theta.cos(), pillar_radius * theta.sin());
+                let mut stress = [0.0; 3];
+                for k in 0..cranks {
+                    let phi = angle(k, 0.0);
+                    let bore = (crank_radius * phi.cos(), crank_radius * phi.sin());
+                    let at = (centre.0 - bore.0, centre.1 - bore.1);
+                    let part = kelvin_stress(force_at(k), at, thickness, poisson);
+                    for (total, add) in stress.iter_mut().zip(part) {
+                        *total += add;
+                    }
+                }
+                hole_energy(stress, hole, thickness, youngs)
+            })
+            .sum()
+    };
+    let symmetric = energy(&|k| {
+        let phi = angle(k, 0.0);
+        (-phi.sin(), phi.cos())
+    });
+    let along_x = energy(&|_| (1.0, 0.0));
+    let along_y = energy(&|_| (0.0, 1.0));
+    (2.0 * symmetric / m, (along_x + along_y) / m)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::stiffness::RollerRow;
+
+    #[test]
+    fn kelvins_stresses_balance_the_force_and_follow_from_its_displacements() {
+        // Equilibrium: the tractions on a circle of radius 3 around a force (2, −1) N in a
+        // 1 mm plate sum to minus the force; Hooke: the stresses are E/(1 − ν²)-weighted
+        // derivatives of the module comment's displacement field (central differences).
+        let (nu, e, force) = (0.3, 206_000.0, (2.0, -1.0));
+        let steps = 20_000;
+        let (mut fx, mut fy) = (0.0, 0.0);
+        for k in 0..steps {
+            let t = 2.0 * PI * (k as f64 + 0.5) / steps as f64;
+            let (c, s) = (t.cos(), t.sin());
+            let [xx, yy, xy] = kelvin_stress(force, (3.0 * c, 3.0 * s), 1.0, nu);
+            let ds = 3.0 * 2.0 * PI / steps as f64;
+            fx += (xx * c + xy * s) * ds;
+            fy += (xy * c + yy * s) * ds;
+        }
+        assert!(
+            (fx + 2.0).abs() < 1e-9 && (fy - 1.0).abs() < 1e-9,
+            "{fx} {fy}"
+        );
+        // Displacement of a unit force along x: u_x = k(−(3 − ν) ln r + (1 + ν)x²/r²),
+        // u_y = k(1 + ν)xy/r², k = (1 + ν)/(4πE).
+        let k = (1.0 + nu) / (4.0 * PI * e);
+        let u = |x: f64, y: f64| {
+            let r2 = x * x + y * y;
+            (
+                k * (-(3.0 - nu) * 0.5 * r2.ln() + (1.0 + nu) * x * x / r2),
+                k * (1.0 + nu) * x * y / r2,
+            )
+        };
+        let (x, y, h) = (1.3, -0.7, 1e-5);
+        let exx = (u(x + h, y).0 - u(x - h, y).0) / (2.0 * h);
+        let eyy = (u(x, y + h).1 - u(x, y - h).1) / (2.0 * h);
+        let gxy = (u(x, y + h).0 - u(x, y - h).0 + u(x + h, y).1 - u(x - h, y).1) / (2.0 * h);
+        let hooke = [
+            e / (1.0 - nu * nu) * (exx + nu * eyy),
+            e / (1.0 - nu * nu) * (eyy + nu * exx),
+            e / (2.0 * (1.0 + nu)) * gxy,
+        ];
+        let closed = kelvin_stress((1.0, 0.0), (x, y), 1.0, nu);
+        for (a, b) in hooke.iter().zip(closed) {
+            assert!((a / b - 1.0).abs() < 1e-6, "{hooke:?} vs {closed:?}");
+        }
+    }
+
+    #[test]
+    fn a_holes_energy_is_kirschs() {
+        // Uniaxial σ: ΔU = 1.5·π·r²·t·σ²/E, the dilute E(1 − 3f); equibiaxial: 2·π·r²·t·σ²/E
+        // (Betti with Lamé's hole: u⁰ = σa(1 − ν)/E, u_c = σa(1 + ν)/E, ΔU =
+        // ½·σ·2πa·t·(u⁰ + u_c)); pure shear τ: 4·π·r²·t·τ²/E.
+        let (r, t, e) = (2.0, 3.0, 200_000.0);
+        let unit = PI * r * r * t / e;
+        assert!((hole_energy([10.0, 0.0, 0.0], r, t, e) / (150.0 * unit) - 1.0).abs() < 1e-14);
+        assert!((hole_energy([10.0, 10.0, 0.0], r, t, e) / (200.0 * unit) - 1.0).abs() < 1e-14);
+        let betti = 0.5 * 10.0 * 2.0 * PI * r * t * (10.0 * r * (0.7 + 1.3) / e);
+        assert!((hole_energy([10.0, 10.0, 0.0], r, t, e) / betti - 1.0).abs() < 1e-14);
+        assert!((hole_energy([0.0, 0.0, 10.0], r, t, e) / (400.0 * unit) - 1.0).abs() < 1e-14);
+        assert!((hole_energy([10.0, -10.0, 0.0], r, t, e) / (400.0 * unit) - 1.0).abs() < 1e-14);
+    }
+
+    #[test]
+    fn rv20e_disc_web_by_hand() {
+        // Two bores on 27.5 mm, pillar holes at ±90° of radius 11·√2/2 + 0.9 = 8.678175 mm
+        // (the pillar's half-diagonal and the disc's orbit e), a disc 8 mm thick.
+        // Symmetric mode: unit tangential forces (0, 1) at (27.5, 0) and (0, −1) at
+        // (−27.5, 0); the hole at (0, 27.5) sits r = 38.890873 mm from each, 45° off each
+        // force's line. In the force's frame scale = 1/(4π·38.890873·8) = 2.557786e-4 MPa,
+        // cos θ = ±0.707107: σ'_xx = ∓2.557786e-4·0.707107·(0.7 + 2.6·0.5) = ∓3.617158e-4,
+        // σ'_yy = ±2.557786e-4·0.707107·(1.3 − 1.9) = ∓1.085147e-4, τ' = −3.617158e-4;
+        // rotated into the plate (the force along y) the two bores give (∓1.085147e-4,
+        // ∓3.617158e-4, 3.617158e-4): their sum is pure shear τ = 7.234316e-4 MPa. Kirsch:
+        // ΔU = π·8.678175²·8/206 000·4τ² = 1.923465e-8 N·mm per hole, both holes alike,
+        // so c_web,S = 2·(2·ΔU)/m = 3.846930e-8 mm/N, 9.1 % of the bore's 4.24227e-7;
+        // antisymmetric (x: 3.846930e-8, y: 1.283913e-8, mean over the direction)
+        // c_web,A = 2.565422e-8 mm/N.
+        let hole = 11.0 * 2f64.sqrt() / 2.0 + 0.9;
+        let (s, a) = disc_web_compliance(2, 27.5, 27.5, hole, 8.0, 206_000.0, 0.3);
+        let one = kelvin_stress((0.0, 1.0), (-27.5, 27.5), 8.0, 0.3);
+        let other = kelvin_stress((0.0, -1.0), (27.5, 27.5), 8.0, 0.3);
+        assert!((one[0] + 1.085147e-4).abs() < 1e-10 && (one[1] + 3.617158e-4).abs() < 1e-10);
+        assert!((one[2] - 3.617158e-4).abs() < 1e-10 && (other[2] - one[2]).abs() < 1e-15);
+        assert!((one[0] + other[0]).abs() < 1e-15 && (one[1] + other[1]).abs() < 1e-15);
+        let tau: f64 = 7.234316e-4;
+        let per_hole = PI * hole * hole * 8.0 / 206_000.0 * 4.0 * tau * tau;
+        assert!((s / (2.0 * per_hole) - 1.0).abs() < 1e-6, "{s}");
+        assert!((s / 3.846930e-8 - 1.0).abs() < 1e-6, "{s}");
+        assert!((a / 2.565422e-8 - 1.0).abs() < 1e-6, "{a}");
+    }
+
     #[test]
     fn bore_ovalisation_is_the_sum_of_michells_harmonics() {
         // The module comment's closed form against the harmonic sum it comes from:

@@ -16,8 +16,19 @@
 //! root), so a pillar on its roots has the lateral and twist compliances
 //!   c_lat = L_p³/(12·E·I) + L_p/(κ_r·G·b·h) + 2/K_h + L_p²/(2·K_r),   c_tw = L_p/(G·J_p) + 2/K_t
 //!   K_c = n_p·(r_p²/c_lat + 1/c_tw)
+//! the end plate is bolted to the pillars' ends (joint.rs) and bends around them
+//! (plate.rs): its root adds, per pillar, a sliding s_B, a rocking r_B and a twisting t_B
+//! compliance to the half-space's, so the pillar's ends differ (A: the output flange, the
+//! pillar grown out of it; B: the end plate). A fixed–guided beam with end rotational
+//! compliances c_A, c_B (Castigliano, the end moment M_A the redundant; a = L_p/(E·I)):
+//!   M_A = F·L_p·(a/2 + c_B)/(a + c_A + c_B)
+//!   δ/F = L_p³/(3·E·I) + c_B·L_p² − L_p²·(a/2 + c_B)²/(a + c_A + c_B)
+//! (= L_p³/(12·E·I) + c·L_p²/2 for c_A = c_B = c), so
+//!   c_lat = δ/F + L_p/(κ_r·G·b·h) + 2/K_h + s_B,   c_A = 1/K_r,   c_B = 1/K_r + r_B
+//!   c_tw = L_p/(G·J_p) + 2/K_t + t_B
 //! ```
 
+use super::joint::EndCompliance;
 use std::f64::consts::PI;
 
 /// The carrier's pillars between its output flange and its second plate.
@@ -67,18 +78,40 @@ impl Carrier {
 
     /// K_c with each pillar on its two elastic roots, N·mm/rad (module comment).
     pub fn torsional_stiffness_on_elastic_roots(&self, youngs: f64, poisson: f64) -> f64 {
+        self.torsional_stiffness_with_end_plate(youngs, poisson, &EndCompliance::default())
+    }
+
+    /// K_c with each pillar on its two elastic roots and the end plate's extra compliances
+    /// `end` at its B end (joint and plate), N·mm/rad (module comment).
+    pub fn torsional_stiffness_with_end_plate(
+        &self,
+        youngs: f64,
+        poisson: f64,
+        end: &EndCompliance,
+    ) -> f64 {
         let shear_modulus = youngs / (2.0 * (1.0 + poisson));
         let (b, h, length) = (self.width, self.depth, self.length);
         let (sliding, rocking, twisting) = self.root_compliances(youngs, poisson);
-        let lateral = length.powi(3) / (12.0 * youngs * h * b.powi(3) / 12.0)
+        let bending = youngs * h * b.powi(3) / 12.0;
+        let lateral = guided_beam_compliance(length, bending, rocking, rocking + end.rocking)
             + length / (5.0 / 6.0 * shear_modulus * b * h)
             + 2.0 * sliding
-            + 0.5 * length * length * rocking;
+            + end.sliding;
         let (long, short) = (b.max(h), b.min(h));
         let twist = rectangle_torsion_factor(long / short) * long * short.powi(3);
-        let twist_compliance = length / (shear_modulus * twist) + 2.0 * twisting;
+        let twist_compliance = length / (shear_modulus * twist) + 2.0 * twisting + end.twisting;
         self.pillars * (self.radius * self.radius / lateral + 1.0 / twist_compliance)
     }
+}
+
+/// δ/F of a fixed–guided beam of length `length` and bending rigidity E·I `bending` whose
+/// ends rotate against the compliances `end_a` and `end_b` (rad per N·mm), mm/N (module
+/// comment).
+pub fn guided_beam_compliance(length: f64, bending: f64, end_a: f64, end_b: f64) -> f64 {
+    let a = length / bending;
+    let l2 = length * length;
+    length * l2 / (3.0 * bending) + end_b * l2
+        - l2 * (0.5 * a + end_b).powi(2) / (a + end_a + end_b)
 }
 
 /// β of a solid rectangle's torsion constant J = β·a·b³ (a ≥ b), Roark & Young Table 10.7
@@ -91,6 +124,43 @@ fn rectangle_torsion_factor(aspect: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn unequal_ends_of_a_guided_beam() {
+        // Equal ends give the symmetric L³/(12EI) + c·L²/2; rigid ends L³/(12EI); a free
+        // end B (c_B → ∞) the cantilever L³/(3EI) + c_A·L²; and Castigliano by hand for
+        // L = 19, EI = 2.51337e8 (11 × 11 steel), c_A = 1.33894e-8, c_B = 1.5e-8:
+        // a = 7.55957e-8, M_A/(F·L) = (3.77978e-8 + 1.5e-8)/(7.55957e-8 + 2.83894e-8) =
+        // 0.507744, δ/F = 9.09668e-6 + 5.415e-6 − 361·(5.27978e-8)²/1.039851e-7 =
+        // 4.83406e-6 mm/N.
+        let (l, ei): (f64, f64) = (19.0, 206_000.0 * 1220.0833333);
+        let c = 1.33894e-8;
+        let symmetric = l.powi(3) / (12.0 * ei) + c * l * l / 2.0;
+        assert!((guided_beam_compliance(l, ei, c, c) / symmetric - 1.0).abs() < 1e-12);
+        assert!(
+            (guided_beam_compliance(l, ei, 0.0, 0.0) / (l.powi(3) / (12.0 * ei)) - 1.0).abs()
+                < 1e-12
+        );
+        let cantilever = l.powi(3) / (3.0 * ei) + c * l * l;
+        assert!((guided_beam_compliance(l, ei, c, 1.0) / cantilever - 1.0).abs() < 1e-6);
+        let hand = guided_beam_compliance(l, ei, c, 1.5e-8);
+        assert!((hand / 4.83406e-6 - 1.0).abs() < 1e-5, "{hand}");
+        // The end plate's extra compliance at B softens the carrier, the flange end kept.
+        let carrier = Carrier {
+            pillars: 2.0,
+            radius: 27.5,
+            width: 11.0,
+            depth: 11.0,
+            length: 19.0,
+        };
+        let plain = carrier.torsional_stiffness_on_elastic_roots(206_000.0, 0.3);
+        let end = EndCompliance {
+            sliding: 2.2e-8,
+            rocking: 1.5e-9,
+            twisting: 9.2e-10,
+        };
+        assert!(carrier.torsional_stiffness_with_end_plate(206_000.0, 0.3, &end) < plain);
+    }
     #[test]
     fn carrier_pillars_as_fixed_guided_beams() {
         // Two 11 × 11 mm pillars, 18 mm long, on 27.5 mm: lateral stiffness per pillar

@@ -15,7 +15,7 @@
 //!   c_car = m·S_B·a_w²·((x1 + x2)/(2L))/K_c   (symmetric mode only)
 //! ```
 
-use super::{CrankShaft, RollerRow};
+use super::{CrankShaft, RollerRow, TaperedRow};
 
 /// The crank side of one disc: m cranks on the crank circle, each with a needle row, a
 /// shaft on two support rows, the carrier, and the involute stage; what the chain adds to
@@ -32,14 +32,23 @@ pub struct CrankSide {
     pub needle: RollerRow,
     /// c_bore, the disc around the needle row's bore, mm/N (0: a rigid disc).
     pub bore_compliance: f64,
+    /// (c_web,S, c_web,A), the disc web around the pillars' holes, mm/N (bodies.rs).
+    pub web_compliance: (f64, f64),
     /// The crank shaft.
     pub shaft: CrankShaft,
-    /// One support bearing row (both supports alike).
-    pub support: RollerRow,
+    /// One support bearing row with its preload (both supports alike).
+    pub support: TaperedRow,
     /// The carrier plate around one support bearing's outer ring, mm/N (0: rigid plates).
     pub support_housing_compliance: f64,
-    /// K_c, N·mm/rad.
+    /// c_path, the plate carrying a seat's net force to the pillars, mm/N (bodies.rs).
+    pub seat_path_compliance: f64,
+    /// K_c, the pillars on their half-space roots, N·mm/rad.
     pub carrier_stiffness: f64,
+    /// What the end plate's bolted joints add to 1/K_c, rad per N·mm (joint.rs).
+    pub end_plate_joint_compliance: f64,
+    /// What the end plate's bending adds to 1/K_c beyond the joints, rad per N·mm
+    /// (plate.rs).
+    pub end_plate_bending_compliance: f64,
     /// C_inv, rad per N·mm at the output.
     pub involute_compliance: f64,
 }
@@ -52,12 +61,23 @@ pub struct ChainTerms {
     pub needle: f64,
     /// The discs around the needle rows' bores.
     pub disc_bore: f64,
+    /// The disc web weakened by the pillars' holes.
+    pub disc_web: f64,
     /// Crank shaft bending and shear.
     pub shaft: f64,
-    /// Support bearings.
+    /// Support bearings and their seats' ovalisation.
     pub support: f64,
-    /// Carrier wind-up.
+    /// The plates' paths from the seats to the pillars.
+    pub seat_path: f64,
+    /// Carrier wind-up: the pillars on their roots.
     pub carrier: f64,
+    /// The end plate's bolted joints.
+    pub end_plate_joint: f64,
+    /// The end plate's bending around the pillars' roots.
+    pub end_plate_bending: f64,
+    /// The housing around the pin grooves (filled in by the caller, who has the pin
+    /// forces: housing.rs).
+    pub housing: f64,
     /// Involute stage and crank torsion.
     pub involute: f64,
 }
@@ -65,8 +85,45 @@ pub struct ChainTerms {
 impl ChainTerms {
     /// The sum of the terms.
     pub fn total(&self) -> f64 {
-        self.needle + self.disc_bore + self.shaft + self.support + self.carrier + self.involute
+        self.needle
+            + self.disc_bore
+            + self.disc_web
+            + self.shaft
+            + self.support
+            + self.seat_path
+            + self.carrier
+            + self.end_plate_joint
+            + self.end_plate_bending
+            + self.housing
+            + self.involute
     }
+
+    /// Every term multiplied by `factor` (rad to arcmin).
+    pub fn scaled(&self, factor: f64) -> ChainTerms {
+        ChainTerms {
+            needle: self.needle * factor,
+            disc_bore: self.disc_bore * factor,
+            disc_web: self.disc_web * factor,
+            shaft: self.shaft * factor,
+            support: self.support * factor,
+            seat_path: self.seat_path * factor,
+            carrier: self.carrier * factor,
+            end_plate_joint: self.end_plate_joint * factor,
+            end_plate_bending: self.end_plate_bending * factor,
+            housing: self.housing * factor,
+            involute: self.involute * factor,
+        }
+    }
+}
+
+/// The supports' weights and loads for one load state (module comment).
+struct SupportState {
+    /// Symmetric and antisymmetric weights of a compliance c_A at support A, c_B at B:
+    /// (S_A·w_A, S_B·w_B) and (A_A·w_A, A_B·w_B).
+    symmetric: (f64, f64),
+    antisymmetric: (f64, f64),
+    /// The rms radial loads of supports A and B, N.
+    loads: (f64, f64),
 }
 
 impl CrankSide {
@@ -98,34 +155,86 @@ impl CrankSide {
         // Output angle per unit compliance in each mode.
         let symmetric = reflection * disc_torque / (m * a * a);
         let antisymmetric = reflection * force.0.abs() / (m * self.pitch_radius);
-        let needle_load = tangential.hypot(shared);
-        let needle = self.needle.secant_compliance(needle_load) / needle_factor;
+        let needle = self.needle.secant_compliance(tangential.hypot(shared)) / needle_factor;
         let modes = self.shaft.modes();
-        let (weight_a, weight_b) = self.shaft.support_weights();
-        let (s_a, s_b) = modes.symmetric_reactions;
-        let (anti_a, anti_b) = modes.antisymmetric_reactions;
-        let load_a = (tangential * s_a).hypot(shared * anti_a);
-        let load_b = (tangential * s_b).hypot(shared * anti_b);
-        let (compliance_a, compliance_b) = (
-            self.support.secant_compliance(load_a) + self.support_housing_compliance,
-            self.support.secant_compliance(load_b) + self.support_housing_compliance,
-        );
-        let support_symmetric = s_a * weight_a * compliance_a + s_b * weight_b * compliance_b;
-        let support_antisymmetric =
-            anti_a * weight_a * compliance_a + anti_b * weight_b * compliance_b;
+        let supports = self.support_state(tangential, shared);
+        let row =
+            |load: f64| self.support.secant_compliance(load) + self.support_housing_compliance;
+        let (row_a, row_b) = (row(supports.loads.0), row(supports.loads.1));
+        let weigh = |(wa, wb): (f64, f64), ca: f64, cb: f64| wa * ca + wb * cb;
+        let path = self.seat_path_compliance;
         // Support B's tangential shift reaches the planes x1 and x2 by x1/L and x2/L; the
         // two discs share the load equally, so the output sees the mean.
         let mean_plane = 0.5 * (self.shaft.first + self.shaft.second) / self.shaft.span;
-        let carrier = m * s_b * a * a * mean_plane / self.carrier_stiffness;
+        let carrier = symmetric * m * modes.symmetric_reactions.1 * a * a * mean_plane;
         ChainTerms {
             needle: (symmetric + antisymmetric) * needle,
             disc_bore: (symmetric + antisymmetric) * self.bore_compliance,
+            disc_web: symmetric * self.web_compliance.0 + antisymmetric * self.web_compliance.1,
             shaft: symmetric * modes.symmetric + antisymmetric * modes.antisymmetric,
-            support: symmetric * support_symmetric + antisymmetric * support_antisymmetric,
-            carrier: symmetric * carrier,
+            support: symmetric * weigh(supports.symmetric, row_a, row_b)
+                + antisymmetric * weigh(supports.antisymmetric, row_a, row_b),
+            seat_path: symmetric * weigh(supports.symmetric, path, path)
+                + antisymmetric * weigh(supports.antisymmetric, path, path),
+            carrier: carrier / self.carrier_stiffness,
+            end_plate_joint: carrier * self.end_plate_joint_compliance,
+            end_plate_bending: carrier * self.end_plate_bending_compliance,
+            housing: 0.0,
             involute: self.involute_compliance * output_torque,
         }
     }
+
+    /// The supports' weights (shares times the lever of each support on the first
+    /// eccentric plane) and rms loads for the crank loads τ and |F|/m.
+    fn support_state(&self, tangential: f64, shared: f64) -> SupportState {
+        support_state(&self.shaft, tangential, shared)
+    }
+
+    /// The larger rms radial load of the two supports for the disc torque T_c with the
+    /// closed-form pin resultant F_x = T_c/(e·z_c) (the unmodified profile), N.
+    pub fn support_load(&self, disc_torque: f64) -> f64 {
+        closed_form_support_load(
+            &self.shaft,
+            self.cranks,
+            self.crank_circle_radius,
+            self.pitch_radius,
+            disc_torque,
+        )
+    }
+}
+
+/// The supports' weights and rms loads of a shaft for the crank loads τ and |F|/m.
+fn support_state(shaft: &CrankShaft, tangential: f64, shared: f64) -> SupportState {
+    let modes = shaft.modes();
+    let (weight_a, weight_b) = shaft.support_weights();
+    let (s_a, s_b) = modes.symmetric_reactions;
+    let (anti_a, anti_b) = modes.antisymmetric_reactions;
+    SupportState {
+        symmetric: (s_a * weight_a, s_b * weight_b),
+        antisymmetric: (anti_a * weight_a, anti_b * weight_b),
+        loads: (
+            (tangential * s_a).hypot(shared * anti_a),
+            (tangential * s_b).hypot(shared * anti_b),
+        ),
+    }
+}
+
+/// The larger rms radial load of a shaft's two supports, `cranks` cranks on
+/// `crank_radius`, for the disc torque T_c with the closed-form pin resultant
+/// F_x = T_c/(e·z_c), `pitch_radius` = e·z_c, N.
+pub(crate) fn closed_form_support_load(
+    shaft: &CrankShaft,
+    cranks: f64,
+    crank_radius: f64,
+    pitch_radius: f64,
+    disc_torque: f64,
+) -> f64 {
+    let state = support_state(
+        shaft,
+        disc_torque / (cranks * crank_radius),
+        disc_torque / (pitch_radius * cranks),
+    );
+    state.loads.0.max(state.loads.1)
 }
 
 #[cfg(test)]
@@ -143,14 +252,21 @@ mod tests {
                 contact_angle: 0.0,
             },
             bore_compliance: 4.0e-7,
+            web_compliance: (3.0e-8, 2.0e-8),
             shaft: CrankShaft::new(15.0, 28.0, 9.0, 206_000.0, 0.3),
-            support: RollerRow {
-                rollers: 14.0,
-                length: 7.0,
-                contact_angle: 15f64.to_radians(),
+            support: TaperedRow {
+                row: RollerRow {
+                    rollers: 14.0,
+                    length: 7.0,
+                    contact_angle: 15f64.to_radians(),
+                },
+                preload: 0.0,
             },
             support_housing_compliance: 2.0e-7,
+            seat_path_compliance: 1.0e-7,
             carrier_stiffness: 3e8,
+            end_plate_joint_compliance: 1e-10,
+            end_plate_bending_compliance: 5e-11,
             involute_compliance: 1e-11,
         };
         assert_eq!(
@@ -172,5 +288,40 @@ mod tests {
         let symmetric = 80_000.0 / (2.0 * 27.5 * 27.5);
         let antisymmetric = 2300.0 / (2.0 * 35.1);
         assert!((one.disc_bore / ((symmetric + antisymmetric) * 4.0e-7) - 1.0).abs() < 1e-14);
+        // The body terms are linear: the web by mode, the seats' paths weighted like the
+        // supports' seats, the end plate's increments in proportion to the carrier's.
+        let web = symmetric * 3.0e-8 + antisymmetric * 2.0e-8;
+        assert!((one.disc_web / web - 1.0).abs() < 1e-14);
+        assert!((one.end_plate_joint / one.carrier - 3e8 * 1e-10).abs() < 1e-12);
+        assert!((one.end_plate_bending / one.carrier - 3e8 * 5e-11).abs() < 1e-12);
+        // The seats' paths are weighted as the seats' ovalisation: their ratio is 1e-7/2e-7
+        // once the rows are taken out (rows of zero compliance: a huge row stiffness).
+        let stiff_rows = CrankSide {
+            support: TaperedRow {
+                row: RollerRow {
+                    length: 1e12,
+                    ..side.support.row
+                },
+                preload: 0.0,
+            },
+            ..side
+        };
+        let bodies = stiff_rows.terms(80_000.0, (2300.0, -120.0), 1.0, 167_000.0, 1.0);
+        assert!((bodies.seat_path / bodies.support - 0.5).abs() < 1e-6);
+        assert_eq!(one.housing, 0.0);
+        // A preloaded support is stiffer, the rest unchanged.
+        let preloaded = CrankSide {
+            support: TaperedRow {
+                preload: 300.0,
+                ..side.support
+            },
+            ..side
+        };
+        let with = preloaded.terms(80_000.0, (2300.0, -120.0), 1.0, 167_000.0, 1.0);
+        assert!(with.support < one.support && with.shaft == one.shaft);
+        // The support load of the closed-form resultant: τ = T_c/(m·a_w) = 1454.55 N,
+        // |F|/m = T_c/(e·z_c·m) = 1139.60 N, A_A = 9/28: √(1454.55² + (1139.60·9/28)²) =
+        // 1499.96 N at both supports.
+        assert!((side.support_load(80_000.0) / 1499.96 - 1.0).abs() < 1e-5);
     }
 }

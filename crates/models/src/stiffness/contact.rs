@@ -10,8 +10,7 @@
 //!   secant stiffness k(F) = F/δ_r(F)
 //! ```
 
-use super::bodies::bore_ovalisation_factor;
-use std::f64::consts::PI;
+use super::bodies::{bore_ovalisation_factor, net_force_compliance};
 
 /// Palmgren's line-contact coefficient: δ = 3.84·10⁻⁵·Q^0.9/l^0.8, mm with Q in N and l in
 /// mm (Palmgren 1959; Harris 2001 §6.4), steel on steel.
@@ -74,15 +73,15 @@ impl RollerRow {
         youngs: f64,
         poisson: f64,
     ) -> f64 {
-        let net = (1.0 + poisson) * (3.0 - poisson) / (4.0 * PI)
-            * (rim_distance / bore_radius).ln().max(0.0);
-        (bore_ovalisation_factor(poisson) + net) / (youngs * thickness)
+        bore_ovalisation_factor(poisson) / (youngs * thickness)
+            + net_force_compliance(bore_radius, rim_distance, thickness, youngs, poisson)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::PI;
     #[test]
     fn roller_row_is_palmgren_at_the_stribeck_load() {
         // 15 needles of 6 mm, 1870 N: Q_max = 4.08·1870/15 = 508.64 N; one contact

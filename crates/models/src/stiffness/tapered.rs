@@ -60,6 +60,12 @@ impl TaperedRow {
         x * self.preload_approach() / alpha.cos()
     }
 
+    /// The least preload that keeps every roller of `row` loaded under the radial load
+    /// `load`: x = 1 there, F_a0 = F·tan α/J(1), N (module comment).
+    pub fn full_zone_preload(row: &RollerRow, load: f64) -> f64 {
+        load * row.contact_angle.tan() / load_zone_integral(1.0, false)
+    }
+
     /// Secant radial compliance δ_r(F)/F at the load F > 0; at F = 0 the tangent at zero
     /// load (the preloaded row is linear there; an unpreloaded row's is infinite), mm/N.
     pub fn secant_compliance(&self, load: f64) -> f64 {
