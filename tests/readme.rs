@@ -310,3 +310,63 @@ fn argument_splitting_groups_quotes() {
         ]
     );
 }
+
+/// The content between `<!-- torsion-table: NAME -->` and the next
+/// `<!-- /torsion-table -->` in `text`, for each NAME: its byte range.
+fn torsion_blocks(text: &str, name: &str) -> Vec<std::ops::Range<usize>> {
+    let open = format!("<!-- torsion-table: {name} -->\n");
+    let mut found = Vec::new();
+    let mut search = 0;
+    while let Some(at) = text[search..].find(&open) {
+        let start = search + at + open.len();
+        let end = start
+            + text[start..]
+                .find("<!-- /torsion-table -->")
+                .expect("a torsion table is closed by <!-- /torsion-table -->");
+        found.push(start..end);
+        search = end;
+    }
+    found
+}
+
+#[test]
+fn torsion_tables_are_the_models_figures() {
+    // The torsion curve's figures against the catalogue, its terms' shares and the shipped
+    // scenarios' runs, in README.md and docs/models.md §13, as tests/stiffness.rs computes
+    // them from the three shipped torsion scenarios. RVTOL_README_BLESS=1 rewrites them.
+    let [figures, terms, runs] = crate::stiffness::torsion_tables();
+    let bless = std::env::var_os("RVTOL_README_BLESS").is_some();
+    let mut stale = Vec::new();
+    for file in ["README.md", "docs/models.md"] {
+        let path = workspace_dir().join(file);
+        let text = std::fs::read_to_string(&path).unwrap();
+        let mut updated = text.clone();
+        let mut blocks: Vec<(std::ops::Range<usize>, &str)> = Vec::new();
+        for (name, table) in [("figures", &figures), ("terms", &terms), ("runs", &runs)] {
+            blocks.extend(
+                torsion_blocks(&text, name)
+                    .into_iter()
+                    .map(|r| (r, table.as_str())),
+            );
+        }
+        assert!(
+            blocks.len() >= 2,
+            "{file} shows the torsion figures and terms tables"
+        );
+        blocks.sort_by_key(|(r, _)| std::cmp::Reverse(r.start));
+        for (range, table) in blocks {
+            if text[range.clone()] != *table {
+                stale.push(file);
+                updated.replace_range(range, table);
+            }
+        }
+        if bless && updated != text {
+            std::fs::write(&path, updated).unwrap();
+        }
+    }
+    assert!(
+        bless || stale.is_empty(),
+        "the torsion tables of {stale:?} differ from the model's figures; after a deliberate \
+         change rerun with RVTOL_README_BLESS=1 and update the prose"
+    );
+}

@@ -727,3 +727,153 @@ fn support_preload_moves_the_angle_more_than_the_rigidity() {
         assert!(rigid.angle_at_rated / base.angle_at_rated < 0.93);
     }
 }
+
+/// The markdown of the torsion tables docs/models.md §13 and the README show: the figures
+/// against the catalogue, each term's angle at rated and share of the slope, and the
+/// shipped scenarios' runs.
+pub fn torsion_tables() -> [String; 3] {
+    let all: Vec<Figures> = CATALOGUE.iter().map(|(_, f, _)| figures(f)).collect();
+    let mut figures_table = String::from(
+        "| | RV-20E | RV-40E | RV-80E | catalogue (validation.md: Nabtesco RV-E) |\n|---|---|---|---|---|\n",
+    );
+    let row = |label: &str, values: Vec<String>, catalogue: &str| {
+        format!("| {label} | {} | {catalogue} |\n", values.join(" | "))
+    };
+    figures_table += &row(
+        "torsional rigidity (N·m/arcmin)",
+        all.iter().map(|f| format!("{:.1}", f.rigidity)).collect(),
+        "about 49 / 108 (RV-42N: 113) / 196",
+    );
+    figures_table += &row(
+        "model / catalogue",
+        all.iter()
+            .zip(CATALOGUE)
+            .map(|(f, (_, _, c))| format!("{:.2}", f.rigidity / c))
+            .collect(),
+        "aim 0.70–1.30 (RV-40E against the RV-42N: 1.27)",
+    );
+    figures_table += &row(
+        "angle at rated torque (arcmin)",
+        all.iter()
+            .map(|f| format!("{:.2}", f.angle_at_rated))
+            .collect(),
+        "not stated",
+    );
+    figures_table += &row(
+        "lost motion at ±3 % rated (arcmin)",
+        all.iter()
+            .map(|f| format!("{:.2}", f.lost_motion))
+            .collect(),
+        "≤ 1",
+    );
+    figures_table += &row(
+        "hysteresis loss (arcmin)",
+        all.iter()
+            .map(|f| format!("{:.2}", f.hysteresis_loss))
+            .collect(),
+        "RV-42N: < 1",
+    );
+    figures_table += &row(
+        "rigidity with rigid discs, plates, housing (`body_compliance` 0)",
+        CATALOGUE
+            .iter()
+            .map(|(_, file, _)| {
+                let rigid = figures_with(file, &|p| p.with_number("body_compliance", 0.0));
+                format!("{:.1}", rigid.rigidity)
+            })
+            .collect(),
+        "—",
+    );
+    let mut terms_table = String::from("| term | RV-20E | RV-40E | RV-80E |\n|---|---|---|---|\n");
+    for (k, name) in TERMS.iter().enumerate() {
+        let cells: Vec<String> = all
+            .iter()
+            .map(|f| format!("{:.3}, {:.1} %", f.at_rated[k], f.shares[k]))
+            .collect();
+        terms_table += &format!("| {name} | {} |\n", cells.join(" | "));
+    }
+    [figures_table, terms_table, runs_table()]
+}
+
+/// The shipped torsion scenarios run as shipped (100 000 samples, their seeds, two
+/// threads: the result does not depend on the count): the docs' table of their outputs.
+fn runs_table() -> String {
+    let reports: Vec<serde_json::Value> = CATALOGUE
+        .iter()
+        .map(|(_, file, _)| {
+            let scenario = Scenario::load(&scenario_path(file)).unwrap();
+            let settings = rvtol_engine::RunSettings {
+                samples: scenario.samples,
+                seed: scenario.seed,
+                exact_percentile_limit: rvtol_engine::DEFAULT_EXACT_PERCENTILE_LIMIT,
+                sampling: Default::default(),
+            };
+            serde_json::from_str(&rvtol_tests::run_with_threads(&scenario, settings, 2)).unwrap()
+        })
+        .collect();
+    let output = |report: &serde_json::Value, name: &str| -> serde_json::Value {
+        report["outputs"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|o| o["name"] == name)
+            .unwrap()
+            .clone()
+    };
+    let number = |v: &serde_json::Value| v.as_f64().unwrap();
+    let mut table = format!(
+        "| | RV-20E (seed {}) | RV-40E ({}) | RV-80E ({}) |\n|---|---|---|---|\n",
+        reports[0]["seed"], reports[1]["seed"], reports[2]["seed"]
+    );
+    let mut line = |label: &str, cell: &dyn Fn(&serde_json::Value) -> String| {
+        let cells: Vec<String> = reports.iter().map(cell).collect();
+        table += &format!("| {label} | {} |\n", cells.join(" | "));
+    };
+    line("lost motion mean, sd, P99.865 (arcmin)", &|r| {
+        let o = output(r, "lost_motion_arcmin");
+        format!(
+            "{:.3}, {:.3}, {:.2}",
+            number(&o["mean"]),
+            number(&o["sd"]),
+            number(&o["percentiles"]["99.865"])
+        )
+    });
+    line("above 1 arcmin", &|r| {
+        format!(
+            "{:.1} %",
+            number(&output(r, "lost_motion_arcmin")["ppm_out"]) / 1e4
+        )
+    });
+    line("hysteresis loss mean (arcmin)", &|r| {
+        format!(
+            "{:.3}",
+            number(&output(r, "hysteresis_loss_arcmin")["mean"])
+        )
+    });
+    line(
+        "rigidity mean, sd (P0.135 … P99.865) (N·m/arcmin)",
+        &|r| {
+            let o = output(r, "torsional_rigidity_nm_per_arcmin");
+            format!(
+                "{:.1}, {:.1} ({:.1} … {:.1})",
+                number(&o["mean"]),
+                number(&o["sd"]),
+                number(&o["percentiles"]["0.135"]),
+                number(&o["percentiles"]["99.865"])
+            )
+        },
+    );
+    line("angle at rated mean (arcmin)", &|r| {
+        format!("{:.2}", number(&output(r, "angle_at_rated_arcmin")["mean"]))
+    });
+    line("preloaded", &|r| {
+        format!("{:.1} %", 100.0 * number(&output(r, "preloaded")["mean"]))
+    });
+    line("preload pin force P99.865 (N)", &|r| {
+        format!(
+            "{:.0}",
+            number(&output(r, "preload_pin_force_n")["percentiles"]["99.865"])
+        )
+    });
+    table
+}

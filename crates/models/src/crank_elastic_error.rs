@@ -65,7 +65,7 @@
 //! Bearing stiffness: a ringless needle row of Z needles of length l on the eccentric
 //! (`needle_roller_count`, `needle_roller_length_mm`), at its secant stiffness at the
 //! load's rms over a crank turn √((T_c/(m·a))² + (|F|/m)²) (Palmgren line contact and
-//! Stribeck's 4.08, crates/models/src/stiffness.rs), times (1 + x_k) for crank k; or, when
+//! Stribeck's 4.08, crates/models/src/stiffness/contact.rs), times (1 + x_k) for crank k; or, when
 //! `crank_bearing_stiffness_n_per_mm` is given, that constant k (004's k1 = k3).
 //!
 //! 004's crank equations (axial positions from the planet gear: output bearing 5 at l1,

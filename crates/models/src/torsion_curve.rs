@@ -2,10 +2,11 @@
 //! output torque with the input locked, from −rated to +rated and back, and the catalogue
 //! figures read from it: lost motion, hysteresis loss, torsional rigidity. It combines the
 //! free play of document 000, the pin-contact load sharing of document 003 on the same
-//! profile, the compliance chain of the crank side (needle rows and the disc around their
-//! bores, crank shafts, support bearings in their seats, carrier pillars on their roots,
-//! involute stage; crates/models/src/stiffness.rs) and Coulomb friction
-//! at the pins and crank bearings; docs/models.md §13.
+//! profile, the compliance chain (needle rows and the disc around their bores and pillar
+//! holes, crank shafts, preloaded support bearings in their seats and the plates' paths to
+//! the pillars, carrier pillars on their roots, the end plate's bolted joints and bending,
+//! the housing around the pins, involute stage; crates/models/src/stiffness/) and Coulomb
+//! friction at the pins and crank bearings; docs/models.md §13.
 //!
 //! Units: torque in N·m (N·mm inside), angles in arcmin at the output (rad inside),
 //! lengths in mm. Sign convention: a positive torque turns the output in the positive
@@ -33,8 +34,10 @@
 //!           radian of the output)
 //!   T_c   = s_d·λ·(T − s·T_fb)                 (s_d the disc's share of the load)
 //!   β     load sharing of 003 with Σ F_i·(l_i + s·λ·μ_p·h_i) = T_c (cycloid_pin_contact)
-//!   E     = λ·(β − β_ref) + needle + disc bore + shaft + support + carrier + involute
-//!           (CrankSide; `body_compliance` = 0: no disc bore, rigid seats and plates)
+//!   E     = λ·(β − β_ref) + the crank side's terms (CrankSide: needle rows, disc bore and
+//!           web, shaft, supports, seats' paths, carrier, end plate's joints and bending,
+//!           involute) + housing λ·2·U_h(F − F_0)/T_c (stiffness/housing.rs, F_0 the
+//!           zero-torque forces); `body_compliance` = 0: rigid discs, plates and housing
 //!   β_ref = β_f when the stage has free play, else β_0, the zero-torque equilibrium of the
 //!           preloaded flanks (Σ F_i·l_i = 0)
 //!
@@ -75,12 +78,11 @@
 //!   them).
 //!
 //! Left out (docs/models.md §13 says why and how much): the bending of the disc's lobes, the
-//! plates' bending beyond the pillars' roots and their in-plane paths, the bolted joint of
-//! the end plate, the housing, the main bearings (no torque about the axis; their tilt
-//! under the two discs' couple stays under 1 % of E), the support bearings' preload and the rows' edge loading under
-//! the shaft's slope, the disc's shift along its eccentric in the load sharing (under 1 % of
-//! E), the planet gear's force on the crank shaft, the friction of the support and main
-//! bearings and of the seals, the input shaft's torsion.
+//! main bearings (no torque about the axis; their tilt under the two discs' couple stays
+//! under 1 % of E), the rows' edge loading under the shaft's slope, the disc's shift along
+//! its eccentric in the load sharing (under 1 % of E), the planet gear's force on the crank
+//! shaft, the friction of the support and main bearings and of the seals, the input shaft's
+//! torsion.
 
 use crate::cycloid_pin_contact::CycloidPinContact;
 use crate::geometric_hysteresis::{self, GeometricHysteresis};
@@ -459,7 +461,7 @@ const PARAMS: &[ParamSpec] = &[
 /// Registry entry.
 pub const ENTRY: ModelEntry = ModelEntry {
     name: "torsion_curve",
-    summary: "hysteresis (torsion) curve, input locked: 000 free play, 003 load sharing on the same profile, needle rows, crank shafts, support bearings, carrier and involute stage in series, Coulomb friction; lost motion at ±3 % rated, hysteresis loss, torsional rigidity 50-100 % rated",
+    summary: "hysteresis (torsion) curve, input locked: 000 free play, 003 load sharing on the same profile, needle rows, discs, crank shafts, preloaded supports, carrier with its bolted end plate, housing and involute stage in series, Coulomb friction; lost motion at ±3 % rated, hysteresis loss, torsional rigidity 50-100 % rated",
     params: PARAMS,
     build: |params| Ok(Box::new(TorsionCurve::from_params(params)?)),
     example_params: TorsionCurve::rv20e_params,
@@ -1374,7 +1376,7 @@ mod tests {
     fn body_compliance_softens_the_chain_by_its_own_terms() {
         // body_compliance 0 (rigid disc and plates) against the default: the pins, the
         // needle rows, the shaft and the involute stage are the same; the disc bore is new,
-        // the supports gain their seats and the carrier its pillar roots (stiffness.rs);
+        // the supports gain their seats and the carrier its pillar roots (stiffness/);
         // the default needle diameter and support width are the estimation rules' d_j/5 and
         // l_s/0.7 (3 mm and 11.75 mm on the RV-20E: the same model).
         let soft = rv20e();
