@@ -109,16 +109,23 @@ impl Housing {
         self.influence[i * self.pins + j]
     }
 
-    /// U_h = ½·Σ F_i·F_j·g_ij of the pin forces `forces` (pin order), N·mm.
+    /// U_h = ½·Σ F_i·F_j·g_ij of the pin forces `forces` (pin order), N·mm; only the
+    /// loaded pins' pairs (about half the pins carry load).
     pub fn energy(&self, forces: &[f64]) -> f64 {
-        let mut sum = 0.0;
-        for (i, &fi) in forces.iter().enumerate().take(self.pins) {
-            if fi == 0.0 {
-                continue;
+        let mut loaded = [0usize; crate::cycloid_pin_contact::MAX_PINS];
+        let mut count = 0;
+        for (i, &f) in forces.iter().enumerate().take(self.pins) {
+            if f != 0.0 {
+                loaded[count] = i;
+                count += 1;
             }
+        }
+        let loaded = &loaded[..count];
+        let mut sum = 0.0;
+        for &i in loaded {
             let row = &self.influence[i * self.pins..(i + 1) * self.pins];
-            let inner: f64 = row.iter().zip(forces).map(|(g, f)| g * f).sum();
-            sum += fi * inner;
+            let inner: f64 = loaded.iter().map(|&j| row[j] * forces[j]).sum();
+            sum += forces[i] * inner;
         }
         0.5 * sum
     }

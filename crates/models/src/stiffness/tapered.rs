@@ -248,7 +248,7 @@ fn cosine_power_integral() -> f64 {
 }
 
 /// ∫₀^end f(ψ) dψ for an f that vanishes at `end` like a power of (end − ψ): with
-/// ψ = end·(1 − (1 − u)⁴) the integrand becomes smooth there, then 128 panels of eight-point
+/// ψ = end·(1 − (1 − u)⁴) the integrand becomes smooth there, then 32 panels of eight-point
 /// Gauss–Legendre in u.
 fn arc_integral(f: &dyn Fn(f64) -> f64, end: f64) -> f64 {
     const NODES: [f64; 4] = [
@@ -263,7 +263,7 @@ fn arc_integral(f: &dyn Fn(f64) -> f64, end: f64) -> f64 {
         0.222_381_034_453_374_5,
         0.101_228_536_290_376_3,
     ];
-    const PANELS: usize = 128;
+    const PANELS: usize = 32;
     let h = 1.0 / PANELS as f64;
     let mut sum = 0.0;
     for panel in 0..PANELS {
