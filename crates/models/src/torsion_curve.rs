@@ -1487,6 +1487,12 @@ mod tests {
                 -1.0,
                 "disc_pillar_hole_radius_mm",
             ),
+            // 30 + 10.5 mm reaches past the 38.9 mm between a bore and a hole.
+            (
+                "disc_pillar_hole_radius_mm",
+                30.0,
+                "disc_pillar_hole_radius_mm",
+            ),
             // Three pillars for two cranks: the body terms put a pillar between two cranks.
             ("carrier_pillar_count", 3.0, "carrier_pillar_count"),
             (

@@ -350,7 +350,19 @@ impl Bodies {
                 "must equal crank_count with body_compliance 1 (a pillar midway between two cranks: the seats' paths and the discs' holes)".to_string(),
             ));
         }
-        let clamp = self.seat_to_pillar(reducer) - 0.5 * self.seat_diameter;
+        let between = self.seat_to_pillar(reducer);
+        if self.hole + self.bore_radius >= between {
+            return Err(ModelError::new(
+                "disc_pillar_hole_radius_mm",
+                format!(
+                    "a pillar's hole must clear the crank bores: {} + {} mm against {} mm between their centres",
+                    Rounded(self.hole),
+                    Rounded(self.bore_radius),
+                    Rounded(between)
+                ),
+            ));
+        }
+        let clamp = between - 0.5 * self.seat_diameter;
         if clamp <= self.hub_radius() {
             return Err(ModelError::new(
                 "support_bearing_outer_diameter_mm",
