@@ -558,8 +558,41 @@ fn build_model(path: &str, model_file: &ModelFile, reducer: Option<&ReducerFile>
     Ok((entry, model))
 }
 
+/// How an input names a parameter of the `reducer` section (`"reducer.KEY"`): a design value
+/// a model takes as an input (a modification the torsion curve also draws errors about).
+const REDUCER_BINDING: &str = "reducer.";
+
+/// The value of the reducer parameter `name` (`reducer.KEY`) an input at `at` is bound to.
+fn reducer_binding(file: &ScenarioFile, name: &str, at: &str) -> Result<f64, ScenarioError> {
+    let key = &name[REDUCER_BINDING.len()..];
+    let Some(reducer) = &file.reducer else {
+        return Err(ScenarioError::new(
+            at,
+            format!("binds {name:?}, but the scenario has no reducer section"),
+        ));
+    };
+    match reducer.params.get(key) {
+        Some(serde_json::Value::Number(n)) => match n.as_f64() {
+            Some(v) if v.is_finite() => Ok(v),
+            _ => Err(ScenarioError::new(
+                at,
+                format!("{name} must be a finite number"),
+            )),
+        },
+        Some(other) => Err(ScenarioError::new(
+            at,
+            format!("binds {name:?}, which is {other}, not a number"),
+        )),
+        None => Err(ScenarioError::new(
+            at,
+            format!("binds {name:?}, but reducer.params has no {key:?}"),
+        )),
+    }
+}
+
 /// The `reducer` section's own checks: each of its parameters is taken by some model of
-/// the scenario, and each source names one of its parameters and is a text.
+/// the scenario (by some model of rvtol when the reducer comes from a shared file, which
+/// defines it for every model), and each source names one of its parameters and is a text.
 fn check_reducer(file: &ScenarioFile) -> Vec<ScenarioError> {
     let Some(reducer) = &file.reducer else {
         return Vec::new();
@@ -570,11 +603,30 @@ fn check_reducer(file: &ScenarioFile) -> Vec<ScenarioError> {
         .filter_map(|(_, model)| rvtol_models::find(&model.model))
         .collect();
     let mut problems = Vec::new();
+    // Keys an input is bound to (`reducer.KEY`) are taken too.
+    let bound: BTreeSet<&str> = file
+        .models
+        .iter()
+        .flat_map(|(_, model)| model.inputs.values())
+        .filter_map(|value| value.as_str()?.strip_prefix(REDUCER_BINDING))
+        .collect();
+    let takes = |e: &&ModelEntry, key: &str| {
+        bound.contains(key) || e.params.iter().any(|spec| spec.name == key)
+    };
     for key in reducer.params.keys() {
-        if !entries
-            .iter()
-            .any(|e| e.params.iter().any(|spec| spec.name == key))
-        {
+        if reducer.file.is_some() {
+            if !rvtol_models::all().iter().any(|e| takes(&e, key)) {
+                problems.push(ScenarioError::new(
+                    format!("reducer.params.{key}"),
+                    format!(
+                        "no model of rvtol takes it (in {}; `rvtol models` lists their parameters)",
+                        reducer.file.as_deref().unwrap_or_default()
+                    ),
+                ));
+            }
+            continue;
+        }
+        if !entries.iter().any(|e| takes(e, key)) {
             let names: Vec<&str> = entries.iter().map(|e| e.name).collect();
             problems.push(ScenarioError::new(
                 format!("reducer.params.{key}"),
@@ -999,6 +1051,14 @@ pub(super) fn compile(
                                     .map(|()| Binding::Constant(v))
                                     .map_err(|reason| ScenarioError::new(&binding_path, reason))
                             }
+                        }
+                        serde_json::Value::String(name) if name.starts_with(REDUCER_BINDING) => {
+                            reducer_binding(&file, name, &binding_path).and_then(|v| {
+                                model
+                                    .check_constant(bindings.len(), v)
+                                    .map(|()| Binding::Constant(v))
+                                    .map_err(|reason| ScenarioError::new(&binding_path, reason))
+                            })
                         }
                         serde_json::Value::String(name) => {
                             // A pattern bound to an array takes the member of its index; an
