@@ -29,7 +29,7 @@ PARAMS.update(SCENARIO["models"][0]["params"])
 # Document 000's printed K1 = 0.72, the function the peers' estimators were first compared
 # on (the scenario derives 0.692 from e, z_p and r_p; at 0.692 SALib's total index of the
 # cumulative pitch error sat 4.1 of its standard errors from rvtol's, which is left to
-# investigate: docs/models.md §8).
+# investigate).
 PARAMS["curtate_ratio"] = 0.72
 INPUTS = [name for name, _unit in ENTRY["inputs"]]
 
