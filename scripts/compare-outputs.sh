@@ -1,0 +1,116 @@
+#!/usr/bin/env bash
+# Writes what one rvtol binary makes of every shipped scenario into a folder, so that two
+# builds can be compared byte for byte (`diff -r`): a refactoring that claims to change no
+# behaviour runs this with the binary before and after it.
+#
+#   scripts/compare-outputs.sh BINARY OUT_DIR [SCENARIO_DIR]
+#   diff -r OUT_DIR_BEFORE OUT_DIR_AFTER
+#
+# Per scenario: `run` (Monte Carlo with exact percentiles; with a quantile sketch; with an
+# rqmc design), `nominal`, `sensitivity` (Monte Carlo; Shapley effects where the scenario
+# has no Eq. 11 constraint and few sources), `baseline` and `check` against it, a run in
+# two shards merged; per scenario with an `allocation` section, `allocate`; besides, one
+# `evaluate` of sampled rows and one `fit`. Every command's JSON report, its text on
+# standard output, its error line and its exit code are kept (shard files are not: they
+# carry the build's hash). Sample counts are small: the sweep takes a few minutes on two
+# cores; set RVTOL_COMPARE_SCALE=k to multiply them.
+set -u
+binary=$(realpath "$1")
+out=$2
+scenarios=$(realpath "${3:-$(dirname "$0")/../scenarios}")
+scale=${RVTOL_COMPARE_SCALE:-1}
+mkdir -p "$out"
+out=$(realpath "$out")
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+# Paths in messages are written as OUT and WORK at the end, so two sweeps compare.
+
+# Runs one command, keeping its standard output, standard error and exit code under
+# $out/NAME.{stdout,stderr,code}.
+record() {
+    local name=$1
+    shift
+    (cd "$work" && RVTOL_ESTIMATE_THRESHOLD_SECONDS=1e9 "$binary" "$@" --quiet \
+        >"$out/$name.stdout" 2>"$out/$name.stderr")
+    echo $? >"$out/$name.code"
+}
+
+# Like `record`, for the commands without --quiet.
+record_plain() {
+    local name=$1
+    shift
+    (cd "$work" && "$binary" "$@" >"$out/$name.stdout" 2>"$out/$name.stderr")
+    echo $? >"$out/$name.code"
+}
+
+n_run=$((20000 * scale))
+n_sens=$((2048 * scale))
+for path in "$scenarios"/*.json; do
+    s=$(basename "$path" .json)
+    echo "$s" >&2
+    record "$s.run" run "$path" --samples "$n_run" --seed 7 --json "$out/$s.run.json"
+    record "$s.run-sketch" run "$path" --samples "$n_run" --seed 7 \
+        --exact-percentile-limit 100 --json "$out/$s.run-sketch.json"
+    record "$s.run-rqmc" run "$path" --samples $((8 * 512 * scale)) --seed 7 \
+        --sampling rqmc --replicates 8 --json "$out/$s.run-rqmc.json"
+    record_plain "$s.nominal" nominal "$path" --json "$out/$s.nominal.json"
+    record "$s.sensitivity" sensitivity "$path" --samples "$n_sens" --seed 7 \
+        --bootstrap 40 --json "$out/$s.sensitivity.json"
+    case $s in
+    shapley-linear-gaussian | allocation-linear | ishigami | sobol-g | linear-stack-correlated)
+        record "$s.shapley" sensitivity "$path" --samples "$n_sens" --seed 7 --bootstrap 40 \
+            --shapley --permutations 60 --outer 32 --json "$out/$s.shapley.json"
+        ;;
+    esac
+    record "$s.baseline" baseline "$path" --samples "$n_run" --seed 7 -o "$out/$s.baseline.json"
+    record "$s.check" check "$path" --baseline "$out/$s.baseline.json" --seed 8 \
+        --json "$out/$s.check.json" --junit "$out/$s.check.xml"
+    record "$s.check-one-sided" check "$path" --baseline "$out/$s.baseline.json" --seed 9 \
+        --one-sided --json "$out/$s.check-one-sided.json"
+    for k in 0 1; do
+        record "$s.shard$k" run "$path" --samples "$n_run" --seed 7 --shard $k/2 \
+            --partial "$work/$s.$k.shard"
+        record "$s.sensitivity-shard$k" sensitivity "$path" --samples "$n_sens" --seed 7 \
+            --bootstrap 40 --shard $k/2 --partial "$work/$s.sensitivity.$k.shard"
+    done
+    record "$s.merge" merge "$work/$s.0.shard" "$work/$s.1.shard" --json "$out/$s.merge.json"
+    record "$s.merge-check" merge "$work/$s.0.shard" "$work/$s.1.shard" \
+        --check "$out/$s.baseline.json" --json "$out/$s.merge-check.json"
+    record "$s.merge-baseline" merge "$work/$s.0.shard" "$work/$s.1.shard" \
+        --baseline "$out/$s.merge-baseline.json"
+    record "$s.merge-sensitivity" merge "$work/$s.sensitivity.0.shard" \
+        "$work/$s.sensitivity.1.shard" --json "$out/$s.merge-sensitivity.json"
+    rm -f "$work"/*.shard
+done
+
+alloc() {
+    local name=$1 scenario=$2 output=$3 target=$4 samples=$5
+    record "$name" allocate "$scenarios/$scenario.json" --output "$output" --target "$target" \
+        --samples "$samples" --json "$out/$name.json"
+}
+alloc allocation-linear.allocate allocation-linear gap_mm "sd <= 0.02" $((20000 * scale))
+alloc allocation-linear.allocate-ppm allocation-linear gap_mm "ppm_out <= 2000" $((20000 * scale))
+alloc rv20e-selective-fitting.allocate rv20e-selective-fitting hysteresis_arcmin "p99.865 <= 1.0" $((8000 * scale))
+alloc rv20e-hysteresis.allocate rv20e-hysteresis hysteresis_arcmin "cpk >= 1.33" $((4000 * scale))
+
+# evaluate: the rows of a small run, evaluated again; fit: a normal model of the sampled
+# inputs of a part.
+record samples run "$scenarios/linear-stack-correlated.json" --samples 200 --seed 3 \
+    --samples-out "$out/samples.csv" --json "$out/samples.run.json"
+record evaluate evaluate "$scenarios/linear-stack-correlated.json" --inputs "$out/samples.csv" \
+    -o "$out/evaluate.csv"
+record samples-rv20e run "$scenarios/rv20e-hysteresis.json" --samples 300 --seed 3 \
+    --samples-out "$out/samples-rv20e.csv"
+first_part=$(head -1 "$out/samples-rv20e.csv" | tr ',' '\n' | grep '\.du' | head -1 | sed 's/\.du.*//')
+record_plain fit fit "$out/samples-rv20e.csv" --part "$first_part" -o "$out/fit.json"
+record_plain fit-all fit "$out/samples.csv"
+record_plain fit-variables fit "$out/samples-rv20e.csv" --part nothing
+record_plain validate validate "$scenarios/rv20e-lost-motion.json"
+record_plain models models
+record_plain init init geometric_hysteresis -o "$out/init.json"
+
+for f in "$out"/*; do
+    case $f in *.stdout | *.stderr | *.json | *.xml) sed -i -e "s#$work#WORK#g" -e "s#$out#OUT#g" \
+        -e "s#$scenarios#SCENARIOS#g" "$f" ;; esac
+done
+exit 0
