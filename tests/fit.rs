@@ -16,7 +16,7 @@ use common::run_rvtol;
 use nalgebra::DMatrix;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use rvtol_engine::fit::{anderson_darling, fit, fragment};
+use rvtol_analysis::fit::{anderson_darling, fit, fragment};
 use rvtol_engine::Scenario;
 
 fn truth() -> DMatrix<f64> {

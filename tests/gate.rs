@@ -9,7 +9,7 @@
 use crate::common;
 
 use common::{run_rvtol, workspace_dir};
-use rvtol_engine::gate::{
+use rvtol_analysis::gate::{
     baseline, check, check_with, parse_requirement, Baseline, CheckOptions, Worse,
     FAMILY_FALSE_ALARM,
 };
@@ -146,7 +146,7 @@ fn cli_exit_codes_and_junit() {
     let xml = std::fs::read_to_string(&junit).unwrap();
     assert!(xml.starts_with("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<testsuites"));
     assert!(xml.contains("failures=\"0\""));
-    let figures = rvtol_engine::gate::gated_figure_count(&scenario(&rv20e_text()));
+    let figures = rvtol_analysis::gate::gated_figure_count(&scenario(&rv20e_text()));
     assert_eq!(xml.matches("<testcase ").count(), figures);
 
     let out = run_rvtol(&[

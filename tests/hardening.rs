@@ -1581,9 +1581,9 @@ fn a_long_run_says_how_long_it_will_take_even_quiet_and_outside_a_terminal() {
 fn rewritten_shard(
     from: &Path,
     to: &Path,
-    change: impl FnOnce(&mut rvtol_engine::shard::ShardHeader, &mut rvtol_engine::run::RunPartial),
+    change: impl FnOnce(&mut rvtol_analysis::shard::ShardHeader, &mut rvtol_engine::run::RunPartial),
 ) {
-    use rvtol_engine::shard::{decode, encode, ShardContent};
+    use rvtol_analysis::shard::{decode, encode, ShardContent};
     let mut file = decode(&std::fs::read(from).expect("read shard")).expect("decode shard");
     let ShardContent::Run(partial) = &mut file.content else {
         panic!("a run's shard");

@@ -7,12 +7,12 @@
 //! (six intervals). The tests therefore check the coverage over many seeds against its
 //! binomial distribution (precision policy, tests/lib.rs), and every interval's width.
 
-use rvtol_deviation::SamplingMethod;
-use rvtol_engine::sensitivity::{
+use rvtol_analysis::sensitivity::{
     independent_groups, sobol_indices, IntervalMethod, SensitivitySettings,
     DEFAULT_ROW_BOOTSTRAP_LIMIT,
 };
-use rvtol_engine::sensitivity_report::SensitivityReport;
+use rvtol_analysis::sensitivity_report::SensitivityReport;
+use rvtol_deviation::SamplingMethod;
 use rvtol_engine::{Sampling, Scenario};
 use rvtol_models::{Ishigami, ModelParams, ParamValue, SobolG};
 use rvtol_tests::{scenario_path, SIGMA_BOUND};
@@ -366,7 +366,7 @@ fn linear_gaussian_shapley(a: &[f64], cov: &nalgebra::DMatrix<f64>) -> Vec<f64> 
 
 #[test]
 fn shapley_effects_of_a_linear_gaussian_model_match_the_closed_form() {
-    use rvtol_engine::shapley::{shapley_effects, ShapleySettings};
+    use rvtol_analysis::shapley::{shapley_effects, ShapleySettings};
     let scenario = Scenario::load(&scenario_path("shapley-linear-gaussian.json")).unwrap();
     let (_, _, cov) = scenario.input_space.gaussian_specification();
     let exact = linear_gaussian_shapley(&[1.0, 1.0, 0.5], &cov);
@@ -394,8 +394,8 @@ fn screening_of_a_linear_stack_is_exact() {
     // For y = c + aᵀx the central difference is the coefficient (to rounding), gᵀΣg is the
     // closed-form variance 8.957994e-5 mm² (tests/engine.rs), the Euler shares sum to 1 and
     // the regression fits exactly (R² = 1).
-    use rvtol_engine::screening::screening;
-    use rvtol_engine::shapley::players;
+    use rvtol_analysis::screening::screening;
+    use rvtol_analysis::shapley::players;
     let scenario = Scenario::load(&scenario_path("linear-stack-correlated.json")).unwrap();
     let result = screening(&scenario, &players(&scenario), 20_000, 3).unwrap();
     let output = &result[0];

@@ -13,15 +13,17 @@ use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
+use rvtol_analysis::sensitivity::{merge_sobol, sobol_chunks, sobol_indices, SensitivitySettings};
+use rvtol_analysis::shapley::{
+    merge_shapley, shapley_effects, shapley_partial, shapley_permutations, ShapleySettings,
+};
+use rvtol_analysis::shard::{
+    decode, encode, ShapleyShard, ShardCommand, ShardContent, ShardHeader,
+};
 use rvtol_deviation::SamplingMethod;
 use rvtol_engine::report::RunReport;
 use rvtol_engine::run::shard_range;
 use rvtol_engine::run::CHUNK_SIZE;
-use rvtol_engine::sensitivity::{merge_sobol, sobol_chunks, sobol_indices, SensitivitySettings};
-use rvtol_engine::shapley::{
-    merge_shapley, shapley_effects, shapley_partial, shapley_permutations, ShapleySettings,
-};
-use rvtol_engine::shard::{decode, encode, ShapleyShard, ShardCommand, ShardContent, ShardHeader};
 use rvtol_engine::{merge, run, run_chunks, RunSettings, Sampling, Scenario};
 use rvtol_tests::scenario_path;
 
@@ -267,9 +269,9 @@ fn sensitivity_merges_to_the_analysis_bit_for_bit() {
                         shards,
                         0..0,
                     );
-                    let sobol = rvtol_engine::sensitivity::SobolPartial {
+                    let sobol = rvtol_analysis::sensitivity::SobolPartial {
                         chunks: 0..0,
-                        values: rvtol_engine::sensitivity::SobolChunks::Rows(Vec::new()),
+                        values: rvtol_analysis::sensitivity::SobolChunks::Rows(Vec::new()),
                     };
                     match round_trip(
                         &header,

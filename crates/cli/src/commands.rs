@@ -10,21 +10,25 @@ use std::sync::OnceLock;
 
 use anyhow::Result;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use rvtol_deviation::SamplingMethod;
-use rvtol_engine::allocation::report::AllocationReport;
-use rvtol_engine::allocation::spec::{CostKind, Target};
-use rvtol_engine::allocation::{
+use rvtol_analysis::allocation::report::AllocationReport;
+use rvtol_analysis::allocation::{
     allocate as run_allocation, default_samples, proposal_document, AllocationSettings,
 };
+use rvtol_analysis::gate;
+use rvtol_analysis::sensitivity::{
+    sobol_indices, SensitivitySettings, DEFAULT_ROW_BOOTSTRAP_LIMIT,
+};
+use rvtol_analysis::sensitivity_report::SensitivityReport;
+use rvtol_analysis::shapley::{shapley_effects, ShapleySettings};
+use rvtol_analysis::target::Target;
+use rvtol_deviation::SamplingMethod;
 use rvtol_engine::input_file::{self, ReadLimit};
 use rvtol_engine::memory::{self, MemoryNeed};
 use rvtol_engine::run::{check_non_finite, Sampling};
-use rvtol_engine::sensitivity::{sobol_indices, SensitivitySettings, DEFAULT_ROW_BOOTSTRAP_LIMIT};
-use rvtol_engine::sensitivity_report::SensitivityReport;
-use rvtol_engine::shapley::{shapley_effects, ShapleySettings};
+use rvtol_engine::scenario::allocation::CostKind;
 use rvtol_engine::table::CsvTable;
 use rvtol_engine::{
-    gate, nominal_curves, run as run_scenario, NominalReport, RunReport, RunSettings, Scenario,
+    nominal_curves, run as run_scenario, NominalReport, RunReport, RunSettings, Scenario,
     ScenarioError,
 };
 
@@ -283,9 +287,9 @@ impl Progress {
             let line = format!(
                 "{}: {} samples will take about {} at the pace of the first {}; fewer --samples take less",
                 self.command,
-                rvtol_engine::report::group_thousands(self.total),
+                rvtol_engine::format::group_thousands(self.total),
                 human_duration(total_seconds),
-                rvtol_engine::report::group_thousands(done)
+                rvtol_engine::format::group_thousands(done)
             );
             self.bar.suspend(|| note(&line));
         }
@@ -753,7 +757,7 @@ pub fn sensitivity(
     let scenario = load(path)?;
     let settings = sensitivity_settings(path, &scenario, &args)?;
     let pool = pool_for(execution, "sensitivity", |threads| {
-        memory::sensitivity(&scenario, &settings, threads)
+        rvtol_analysis::memory::sensitivity(&scenario, &settings, threads)
     })?;
     let bar = Progress::new(
         "sensitivity",
@@ -847,8 +851,8 @@ fn finish_sensitivity(
     path: &Path,
     scenario: &Scenario,
     settings: SensitivitySettings,
-    outputs: Vec<rvtol_engine::sensitivity::OutputSensitivity>,
-    shapley: Option<Vec<(String, Vec<rvtol_engine::shapley::ShapleyEffect>)>>,
+    outputs: Vec<rvtol_analysis::sensitivity::OutputSensitivity>,
+    shapley: Option<Vec<(String, Vec<rvtol_analysis::shapley::ShapleyEffect>)>>,
     to: Destinations<'_>,
     execution: &Execution,
     pool: &rayon::ThreadPool,
@@ -902,12 +906,12 @@ pub fn sensitivity_shard(
     execution: &Execution,
 ) -> Result<()> {
     outputs_ok(&[partial_target(partial_path)], &scenario_inputs(path))?;
-    use rvtol_engine::shard::{ShapleyShard, ShardCommand, ShardContent, ShardHeader};
+    use rvtol_analysis::shard::{ShapleyShard, ShardCommand, ShardContent, ShardHeader};
     let (scenario, text) = read(path)?;
     let settings = sensitivity_settings(path, &scenario, &args)?;
     let build = build_identity()?;
     let pool = pool_for(execution, "sensitivity", |threads| {
-        memory::sensitivity(&scenario, &settings, threads)
+        rvtol_analysis::memory::sensitivity(&scenario, &settings, threads)
     })?;
     let chunks = rvtol_engine::shard_range(settings.chunk_count(), shard, shards);
     let bar = Progress::new(
@@ -918,7 +922,7 @@ pub fn sensitivity_shard(
     );
     let sobol = pool
         .install(|| {
-            rvtol_engine::sensitivity::sobol_chunks(&scenario, settings, chunks.clone(), &|n| {
+            rvtol_analysis::sensitivity::sobol_chunks(&scenario, settings, chunks.clone(), &|n| {
                 bar.inc(n)
             })
         })
@@ -926,12 +930,12 @@ pub fn sensitivity_shard(
     bar.finish_and_clear();
     let (shapley, shapley_shard) = if args.shapley {
         let shapley_settings = shapley_settings(&args, settings.seed);
-        let total = rvtol_engine::shapley::shapley_permutations(&scenario, shapley_settings)
+        let total = rvtol_analysis::shapley::shapley_permutations(&scenario, shapley_settings)
             .map_err(|err| bad_scenario(path, err))?;
         let range = rvtol_engine::run::shard_range(total, shard, shards);
         let partial = pool
             .install(|| {
-                rvtol_engine::shapley::shapley_partial(&scenario, shapley_settings, range.clone())
+                rvtol_analysis::shapley::shapley_partial(&scenario, shapley_settings, range.clone())
             })
             .map_err(|err| bad_scenario(path, err))?;
         (
@@ -966,14 +970,14 @@ pub fn sensitivity_shard(
     };
     write_bytes(
         partial_path,
-        &rvtol_engine::shard::encode(&header, &ShardContent::Sensitivity { sobol, shapley }),
+        &rvtol_analysis::shard::encode(&header, &ShardContent::Sensitivity { sobol, shapley }),
     )?;
     print(&format!(
         "{}: sensitivity shard {shard}/{shards} of {} ({} of {} base samples, seed {}) written to {}\n",
         path.display(),
         scenario.name,
-        rvtol_engine::report::group_thousands(settings.samples_before_chunk(chunks.end) - settings.samples_before_chunk(chunks.start)),
-        rvtol_engine::report::group_thousands(settings.base_samples),
+        rvtol_engine::format::group_thousands(settings.samples_before_chunk(chunks.end) - settings.samples_before_chunk(chunks.start)),
+        rvtol_engine::format::group_thousands(settings.base_samples),
         settings.seed,
         partial_path.display()
     ))
@@ -1177,7 +1181,7 @@ pub fn allocate(
         cost,
     };
     let pool = pool_for(execution, "allocate", |threads| {
-        memory::allocation(&scenario, settings.samples, threads)
+        rvtol_analysis::memory::allocation(&scenario, settings.samples, threads)
     })?;
     let spinner = if execution.quiet || !std::io::stderr().is_terminal() {
         ProgressBar::hidden()
@@ -1568,7 +1572,7 @@ const SAMPLE_INDEX: &str = "sample";
 
 /// `rvtol fit`: a normal model of measured parts, as a scenario fragment.
 pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()> {
-    use rvtol_engine::fit::{check_fragment, fit as fit_normal, fragment, PART_COMPONENTS};
+    use rvtol_analysis::fit::{check_fragment, fit as fit_normal, fragment, PART_COMPONENTS};
     // Diagnostics go to standard error once the fragment is written: a refused fit says
     // only why.
     let mut notes: Vec<String> = Vec::new();
@@ -1717,7 +1721,7 @@ pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()>
     for line in notes {
         note(&line);
     }
-    note(&rvtol_engine::fit::summary(&fitted, &source));
+    note(&rvtol_analysis::fit::summary(&fitted, &source));
     let doubtful: Vec<&str> = fitted
         .names
         .iter()
@@ -1785,12 +1789,12 @@ pub fn run_shard(
         .install(|| rvtol_engine::run_chunks(&scenario, settings, chunks.clone(), &|n| bar.inc(n)))
         .map_err(|err| bad_scenario(scenario_path, err))?;
     bar.finish_and_clear();
-    let header = rvtol_engine::shard::ShardHeader {
+    let header = rvtol_analysis::shard::ShardHeader {
         rvtol_version: env!("CARGO_PKG_VERSION").to_string(),
         build,
         scenario_fallback_name: fallback_name(scenario_path),
         scenario_file: text,
-        command: rvtol_engine::shard::ShardCommand::Run {
+        command: rvtol_analysis::shard::ShardCommand::Run {
             samples: settings.samples,
             seed: settings.seed,
             exact_percentile_limit: settings.exact_percentile_limit,
@@ -1803,14 +1807,14 @@ pub fn run_shard(
     };
     write_bytes(
         partial_path,
-        &rvtol_engine::shard::encode(&header, &rvtol_engine::shard::ShardContent::Run(partial)),
+        &rvtol_analysis::shard::encode(&header, &rvtol_analysis::shard::ShardContent::Run(partial)),
     )?;
     print(&format!(
         "{}: shard {shard}/{shards} of {} ({} of {} samples, seed {}) written to {}\n",
         scenario_path.display(),
         scenario.name,
-        rvtol_engine::report::group_thousands(shard_samples),
-        rvtol_engine::report::group_thousands(settings.samples),
+        rvtol_engine::format::group_thousands(shard_samples),
+        rvtol_engine::format::group_thousands(settings.samples),
         settings.seed,
         partial_path.display()
     ))
@@ -1847,7 +1851,7 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
             .into_iter()
             .flatten()
             .any(is_stdout);
-    use rvtol_engine::shard;
+    use rvtol_analysis::shard;
     let build = build_identity()?;
     // The shard files are held decoded, about their size each, while the next is read:
     // together they take at most the memory the merge may use beyond the program's.
@@ -1954,12 +1958,12 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
                 }
             }
             let outputs = pool
-                .install(|| rvtol_engine::sensitivity::merge_sobol(&scenario, settings, sobol))
+                .install(|| rvtol_analysis::sensitivity::merge_sobol(&scenario, settings, sobol))
                 .map_err(|err| bad_scenario(first, err))?;
             let effects = if sensitivity_args.shapley {
                 Some(
                     pool.install(|| {
-                        rvtol_engine::shapley::merge_shapley(
+                        rvtol_analysis::shapley::merge_shapley(
                             &scenario,
                             shapley_settings(&sensitivity_args, seed),
                             permutations,

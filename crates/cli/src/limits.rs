@@ -29,7 +29,7 @@ pub fn parse_count(text: &str) -> Result<u64, String> {
                 return Err(if x.is_finite() && x >= u64::MAX as f64 {
                     format!(
                         "must be at most {}",
-                        rvtol_engine::report::group_thousands(u64::MAX)
+                        rvtol_engine::format::group_thousands(u64::MAX)
                     )
                 } else {
                     "must be a whole number of at least 1".to_string()
@@ -49,7 +49,7 @@ pub fn parse_seed(text: &str) -> Result<u64, String> {
     text.trim().replace('_', "").parse::<u64>().map_err(|_| {
         format!(
             "must be a whole number from 0 to {}",
-            rvtol_engine::report::group_thousands(u64::MAX)
+            rvtol_engine::format::group_thousands(u64::MAX)
         )
     })
 }

@@ -22,7 +22,7 @@ use crate::limits::{parse_count, parse_sampling, parse_seed, parse_share, parse_
 
 /// `K/N` of `--shard`.
 fn parse_shard_arg(text: &str) -> Result<(u64, u64), String> {
-    rvtol_engine::shard::parse_shard(text)
+    rvtol_analysis::shard::parse_shard(text)
 }
 
 /// Monte Carlo tolerance and deviation statistics for RV reducers.
@@ -445,7 +445,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
                 baseline,
                 check,
                 junit,
-                options: rvtol_engine::gate::CheckOptions {
+                options: rvtol_analysis::gate::CheckOptions {
                     one_sided,
                     requirements,
                 },
@@ -520,7 +520,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             seed,
             junit.as_deref(),
             json.as_deref(),
-            &rvtol_engine::gate::CheckOptions {
+            &rvtol_analysis::gate::CheckOptions {
                 one_sided,
                 requirements,
             },

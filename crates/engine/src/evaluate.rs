@@ -204,9 +204,9 @@ pub fn non_finite_lines(
                 format!(
                     "{} is not finite for {} of {} rows ({} %, first in {})",
                     scenario.outputs[o].name,
-                    crate::report::group_thousands(l.count as u64),
-                    crate::report::group_thousands(table.rows as u64),
-                    crate::report::format_sig(100.0 * l.count as f64 / table.rows as f64),
+                    crate::format::group_thousands(l.count as u64),
+                    crate::format::group_thousands(table.rows as u64),
+                    crate::format::format_sig(100.0 * l.count as f64 / table.rows as f64),
                     row(l.first.unwrap_or(0))
                 ),
             )

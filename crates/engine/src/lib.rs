@@ -4,22 +4,16 @@
 //! (input space + bound models + outputs); [`run`] draws chunks in parallel under the
 //! reproducibility contract and folds model outputs into [`stats`] accumulators;
 //! [`report`] turns the result into JSON and text. Nothing downstream reaches back into
-//! the scenario or the sampler, and the engine never prints.
+//! the scenario or the sampler, and the engine never prints. The analyses that use a run
+//! (sensitivity, the gate, the allocation, the fit, shards) are rvtol-analysis, above.
 
-pub mod allocation;
 pub mod evaluate;
-pub mod fit;
-pub mod gate;
+pub mod format;
 pub mod input_file;
 pub mod memory;
 pub mod report;
 pub mod run;
 pub mod scenario;
-pub mod screening;
-pub mod sensitivity;
-pub mod sensitivity_report;
-pub mod shapley;
-pub mod shard;
 pub mod stats;
 pub mod table;
 

@@ -9,11 +9,10 @@
 
 use crate::run::{RunSettings, BLOCK_ROWS, CHUNK_SIZE, WAVE_CHUNKS};
 use crate::scenario::Scenario;
-use crate::sensitivity::{independent_groups, IntervalMethod, SensitivitySettings};
 use rvtol_deviation::human_bytes;
 
 /// Bytes of one kept value.
-const VALUE: f64 = 8.0;
+pub const VALUE: f64 = 8.0;
 /// Allowance for everything that does not grow with the request (program, model tables,
 /// sketches).
 pub const BASE_BYTES: f64 = 64e6;
@@ -30,7 +29,7 @@ pub struct MemoryNeed {
 }
 
 /// How a user needs less worker memory: fewer threads while there are several.
-fn fewer_workers(threads: usize) -> &'static str {
+pub fn fewer_workers(threads: usize) -> &'static str {
     if threads > 1 {
         "use fewer threads (--threads) or fewer input columns"
     } else {
@@ -64,7 +63,7 @@ impl MemoryNeed {
 /// The buffers each worker thread of a run keeps: a block of sampled columns and the
 /// sampler's scratch, the chunk's output columns, one model's outputs and its constant
 /// input columns.
-fn run_scratch_per_thread(scenario: &Scenario) -> f64 {
+pub fn run_scratch_per_thread(scenario: &Scenario) -> f64 {
     let constants: usize = scenario
         .models
         .iter()
@@ -105,7 +104,7 @@ pub fn run(scenario: &Scenario, settings: &RunSettings, threads: usize) -> Memor
         what: if exact {
             format!(
                 "{} kept values for exact percentiles of {continuous} output{}",
-                crate::report::group_thousands((samples * continuous) as u64),
+                crate::format::group_thousands((samples * continuous) as u64),
                 if continuous == 1.0 { "" } else { "s" }
             )
         } else {
@@ -119,79 +118,6 @@ pub fn run(scenario: &Scenario, settings: &RunSettings, threads: usize) -> Memor
         } else {
             fewer_workers(threads)
         },
-    }
-}
-
-/// `rvtol sensitivity`: the row bootstrap keeps N·(2G + 2) values per continuous output
-/// (twice, while one output's are concatenated); every worker holds a chunk's sample
-/// matrices A, B and a mixed one with their column-major copy, and the chunk's values.
-pub fn sensitivity(
-    scenario: &Scenario,
-    settings: &SensitivitySettings,
-    threads: usize,
-) -> MemoryNeed {
-    let variants = (2 * independent_groups(scenario).len() + 2) as f64;
-    let continuous = scenario.continuous_outputs().len() as f64;
-    let n = settings.base_samples as f64;
-    let method = settings.interval_method(scenario);
-    let rows = method == IntervalMethod::Rows;
-    let kept = match method {
-        IntervalMethod::Rows => VALUE * n * variants * (continuous + 1.0),
-        // Block sums: 2G + 3 numbers per block and output.
-        IntervalMethod::Blocks { rows } => {
-            VALUE * (n / rows as f64).ceil() * (variants + 1.0) * continuous
-        }
-        // One block per chunk.
-        IntervalMethod::Replicates => {
-            VALUE * settings.chunk_count() as f64 * (variants + 1.0) * continuous
-        }
-    };
-    let columns = scenario.input_space.n_columns() as f64;
-    let per_thread = VALUE * CHUNK_SIZE as f64 * (4.0 * columns + variants * continuous);
-    let workers = threads as f64 * per_thread;
-    let (what, way_out) = if rows {
-        (
-            format!(
-                "{} model values for the row bootstrap",
-                crate::report::group_thousands((n * variants * continuous) as u64)
-            ),
-            "lower --row-bootstrap-limit (the intervals then come from the bounded-memory block bootstrap) or ask for fewer --samples",
-        )
-    } else if kept > workers {
-        (
-            format!(
-                "the sums of {} blocks of rows for the intervals",
-                crate::report::group_thousands(
-                    (kept / (VALUE * (variants + 1.0) * continuous.max(1.0))) as u64
-                )
-            ),
-            "ask for fewer --samples",
-        )
-    } else {
-        (
-            format!("the sample matrices of {columns} input columns per worker thread"),
-            fewer_workers(threads),
-        )
-    };
-    MemoryNeed {
-        bytes: BASE_BYTES + kept + workers,
-        what,
-        way_out,
-    }
-}
-
-/// `rvtol allocate`: each Monte Carlo run keeps the targeted output's values (one run at a
-/// time) besides the run's per-thread buffers.
-pub fn allocation(scenario: &Scenario, samples: u64, threads: usize) -> MemoryNeed {
-    let scratch = 4.0 * threads as f64 * run_scratch_per_thread(scenario);
-    let kept = 2.0 * VALUE * samples as f64;
-    MemoryNeed {
-        bytes: BASE_BYTES + kept + scratch,
-        what: format!(
-            "{} kept values of the targeted output per Monte Carlo run",
-            crate::report::group_thousands(samples)
-        ),
-        way_out: "ask for fewer --samples",
     }
 }
 

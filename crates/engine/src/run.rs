@@ -1507,8 +1507,8 @@ pub fn check_non_finite(
                 format!(
                     "{} has no value: {indicator} excludes {} of {} samples and the model could not evaluate the rest; the scenario describes an assembly that cannot be built",
                     scenario.outputs[o].name,
-                    crate::report::group_thousands(acc.excluded),
-                    crate::report::group_thousands(result.samples),
+                    crate::format::group_thousands(acc.excluded),
+                    crate::format::group_thousands(result.samples),
                 ),
             ));
         }
@@ -1519,9 +1519,9 @@ pub fn check_non_finite(
                 format!(
                     "{} is not finite for {} of {} samples ({} %, first at sample {}), more than the allowed {} %: the model cannot evaluate the inputs the scenario draws there; narrow the distributions to the model's domain, or accept a share with --max-non-finite",
                     scenario.outputs[o].name,
-                    crate::report::group_thousands(acc.non_finite),
-                    crate::report::group_thousands(result.samples),
-                    crate::report::format_sig(100.0 * share),
+                    crate::format::group_thousands(acc.non_finite),
+                    crate::format::group_thousands(result.samples),
+                    crate::format::format_sig(100.0 * share),
                     acc.first_non_finite.unwrap_or(0),
                     rvtol_deviation::Shown(100.0 * max_share),
                 ),

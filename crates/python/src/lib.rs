@@ -12,13 +12,14 @@ use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-use rvtol_engine::allocation::report::AllocationReport;
-use rvtol_engine::allocation::spec::{CostKind, Target};
-use rvtol_engine::allocation::{allocate as run_allocation, default_samples, AllocationSettings};
+use rvtol_analysis::allocation::report::AllocationReport;
+use rvtol_analysis::allocation::{allocate as run_allocation, default_samples, AllocationSettings};
+use rvtol_analysis::sensitivity::{sobol_indices, SensitivitySettings};
+use rvtol_analysis::sensitivity_report::SensitivityReport;
+use rvtol_analysis::shapley::{shapley_effects, ShapleySettings};
+use rvtol_analysis::target::Target;
 use rvtol_engine::run::{Sampling, SamplingMethod};
-use rvtol_engine::sensitivity::{sobol_indices, SensitivitySettings};
-use rvtol_engine::sensitivity_report::SensitivityReport;
-use rvtol_engine::shapley::{shapley_effects, ShapleySettings};
+use rvtol_engine::scenario::allocation::CostKind;
 use rvtol_engine::{RunReport, RunSettings, DEFAULT_EXACT_PERCENTILE_LIMIT};
 
 /// A validated scenario: `Scenario(path)` reads a scenario file, `Scenario(dict)` takes
@@ -291,7 +292,7 @@ fn chosen_sampling(
 #[pyfunction]
 #[pyo3(signature = (scenario, samples = 65_536, seed = None, *, sampling = None,
     replicates = None, bootstrap = None,
-    row_bootstrap_limit = rvtol_engine::sensitivity::DEFAULT_ROW_BOOTSTRAP_LIMIT,
+    row_bootstrap_limit = rvtol_analysis::sensitivity::DEFAULT_ROW_BOOTSTRAP_LIMIT,
     shapley = false, permutations = 600, outer = 256, threads = None))]
 #[allow(clippy::too_many_arguments)]
 fn sensitivity<'py>(

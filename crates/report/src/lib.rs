@@ -19,8 +19,8 @@ use serde_json::Value;
 
 use chart::{BarRow, Cumulative, Limits, Marker};
 use html::{escape, figure, interval, number, table};
-use rvtol_engine::allocation::spec::TargetFigure;
-use rvtol_engine::report::group_thousands as thousands;
+use rvtol_analysis::target::TargetFigure;
+use rvtol_engine::format::group_thousands as thousands;
 
 /// What the page is a record of.
 #[derive(Debug, Clone, Default)]
@@ -806,7 +806,7 @@ fn allocation_section(report: &Value) -> Result<String, ReportError> {
         .collect();
     // A target on a value of the output (a percentile, the mean) is a line on the plot;
     // one on a spread or an index is not.
-    let target_line = match rvtol_engine::allocation::spec::Target::parse(target) {
+    let target_line = match rvtol_analysis::target::Target::parse(target) {
         Ok(parsed) => match parsed.figure {
             TargetFigure::Percentile(p) => Some((parsed.value, Some(p))),
             TargetFigure::Mean => Some((parsed.value, None)),
@@ -848,7 +848,7 @@ fn allocation_section(report: &Value) -> Result<String, ReportError> {
             escape(s(v, "unit").unwrap_or("")),
             number(f(v, "current")),
             number(f(v, "proposed")),
-            rvtol_engine::report::format_change(f(v, "factor").unwrap_or(f64::NAN)),
+            rvtol_engine::format::format_change(f(v, "factor").unwrap_or(f64::NAN)),
             format!("{} .. {}", number(lo), number(hi)),
             number(f(v, "current_cost")),
             number(f(v, "proposed_cost")),

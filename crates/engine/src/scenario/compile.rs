@@ -10,6 +10,7 @@ use rvtol_deviation::{
 use rvtol_models::{ConditionEffect, ErrorModel, ModelEntry, ModelParams, OutputKind, ParamValue};
 use serde_json::Value;
 
+use super::allocation::{compile_allocation, compile_levers, ToleranceKind, ToleranceSource};
 use super::file::{
     DistributionFile, ModelFile, PartFile, ReducerFile, ScenarioFile, SpecFile, VariableFile,
     MAX_ARRAY_MEMBERS,
@@ -18,7 +19,6 @@ use super::{
     Binding, BoundModel, ColumnInfo, InputGroup, OutputInfo, Scenario, ScenarioError,
     DEFAULT_SAMPLES, DEFAULT_SEED,
 };
-use crate::allocation::spec::{compile_allocation, compile_levers, ToleranceKind, ToleranceSource};
 use crate::run::Sampling;
 use crate::stats::SpecLimits;
 
@@ -180,7 +180,7 @@ fn part_spec_in_model_units(
     Ok(PartSpec::from_correlation(path, mean, sd, correlation)?)
 }
 
-/// A part's tolerance as `rvtol allocate` reads it (see [`crate::allocation::spec`]).
+/// A part's tolerance as `rvtol allocate` reads it (see [`super::allocation`]).
 fn part_tolerance(path: &str, part: &PartFile) -> ToleranceSource {
     let (kind, current, unit) = match &part.tolerance_band {
         Some(band) => (ToleranceKind::PartToleranceBand, band.delta_tau_mm, "mm"),
@@ -196,7 +196,7 @@ fn part_tolerance(path: &str, part: &PartFile) -> ToleranceSource {
     }
 }
 
-/// A variable's tolerance as `rvtol allocate` reads it (see [`crate::allocation::spec`]).
+/// A variable's tolerance as `rvtol allocate` reads it (see [`super::allocation`]).
 fn variable_tolerance(path: &str, variable: &VariableFile) -> ToleranceSource {
     let (kind, current) = match variable.distribution {
         DistributionFile::Normal { sd, .. } => (ToleranceKind::VariableNormal, 3.0 * sd),

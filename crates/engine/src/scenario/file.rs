@@ -18,8 +18,8 @@ use serde::de::{self, DeserializeOwned, MapAccess, SeqAccess, Visitor};
 use serde::{Deserialize, Deserializer};
 use serde_json::Value;
 
+use super::allocation::AllocationFile;
 use super::ScenarioError;
-use crate::allocation::spec::AllocationFile;
 use rvtol_deviation::Shown;
 
 /// Largest magnitude of a deviation's parameter (a mean, sd, bound or band limit; mm or

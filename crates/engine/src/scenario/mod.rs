@@ -10,6 +10,7 @@
 //! numbers of the data files a scenario file refers to into its text first. The keys and
 //! units are documented in scenarios/README.md.
 
+pub mod allocation;
 mod compile;
 pub mod data;
 mod file;
@@ -21,9 +22,9 @@ use std::path::Path;
 use rvtol_deviation::InputSpace;
 use rvtol_models::{ConditionEffect, ErrorModel, OutputKind};
 
-use crate::allocation::spec::{AllocatableSource, Lever};
 use crate::input_file::ReadLimit;
 use crate::stats::SpecLimits;
+use allocation::{AllocatableSource, Lever};
 
 pub use file::{MAX_ARRAY_MEMBERS, MAX_COVARIANCE, MAX_DEVIATION, MAX_PARAMETER};
 

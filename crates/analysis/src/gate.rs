@@ -31,14 +31,14 @@ use rvtol_deviation::Shown;
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ContinuousCDF, Normal};
 
-use crate::allocation::spec::{Target, TargetFigure};
-use crate::report::escape_markup;
-use crate::run::{
+use crate::target::{Target, TargetFigure};
+use rvtol_engine::format::escape_markup;
+use rvtol_engine::run::{
     check_non_finite, replicated_sd, run, Distribution, ReplicateFigures, RunResult, RunSettings,
     DEFAULT_EXACT_PERCENTILE_LIMIT,
 };
-use crate::scenario::{OutputInfo, Scenario, ScenarioError};
-use crate::stats::{
+use rvtol_engine::scenario::{OutputInfo, Scenario, ScenarioError};
+use rvtol_engine::stats::{
     order_statistic_interval, percentile_type7_of_sorted, proportion_standard_error,
     replicate_standard_error, student_t_quantile, QuantileSketch, StandardisedSketch, PERCENTS,
 };
@@ -442,7 +442,7 @@ pub fn figures_of(
                 acc.flagged_within_spec
             };
         if let (Some(limits), 0) = (info.spec, hidden) {
-            let indices = crate::stats::capability_from_moments(mean, sd, limits);
+            let indices = rvtol_engine::stats::capability_from_moments(mean, sd, limits);
             if let Some(cp) = indices.cp {
                 let half = two_sample * cp * acc.moments.sd_standard_error() / sd;
                 push(&info.name, "cp", cp, half, half);
@@ -497,7 +497,7 @@ impl Percentiles {
     }
 
     /// The percentile and the distribution-free one-sample interval [X_(l), X_(u)] at z
-    /// ([`crate::stats::order_statistic_interval`]); from a sketch, each end moved out by
+    /// ([`rvtol_engine::stats::order_statistic_interval`]); from a sketch, each end moved out by
     /// its error bound α·|x − centre|.
     fn with_interval(&mut self, percent: f64, z: f64) -> (f64, f64, f64) {
         match self {
@@ -1007,15 +1007,15 @@ impl CheckReport {
             .map(|c| {
                 let value = c
                     .value
-                    .map_or("missing".to_string(), crate::report::format_sig);
+                    .map_or("missing".to_string(), rvtol_engine::format::format_sig);
                 format!(
                     "moved: {} {}: {} -> {} (allowed {} .. {}); {hint}",
                     c.output,
                     c.figure,
-                    crate::report::format_sig(c.baseline),
+                    rvtol_engine::format::format_sig(c.baseline),
                     value,
-                    crate::report::format_sig(c.allowed[0]),
-                    crate::report::format_sig(c.allowed[1]),
+                    rvtol_engine::format::format_sig(c.allowed[0]),
+                    rvtol_engine::format::format_sig(c.allowed[1]),
                 )
             })
             .collect()
@@ -1023,7 +1023,7 @@ impl CheckReport {
 
     /// One line per requirement.
     pub fn requirement_lines(&self) -> Vec<String> {
-        use crate::report::format_sig;
+        use rvtol_engine::format::format_sig;
         self.requirements
             .iter()
             .map(|r| match r.value {

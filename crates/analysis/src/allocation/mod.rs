@@ -26,19 +26,20 @@
 
 pub mod report;
 pub mod scaling;
-pub mod spec;
 
 use rvtol_models::OutputKind;
 use serde_json::Value;
 
-use crate::run::{run_for_output, Distribution, RunSettings};
-use crate::scenario::{Scenario, ScenarioError};
-use crate::stats::{
+use rvtol_engine::run::{run_for_output, Distribution, RunSettings};
+use rvtol_engine::scenario::allocation::{self as spec, AllocatableSource, CostKind};
+use rvtol_engine::scenario::{Scenario, ScenarioError};
+use rvtol_engine::stats::{
     capability_from_moments, cpk_on_upper_side, cpk_standard_error, order_statistic_interval,
     out_of_spec_interval, percentile_type7_of_sorted, proportion_standard_error, Moments,
     SpecLimits,
 };
-use spec::{AllocatableSource, CostKind, Target, TargetFigure};
+
+use crate::target::{Target, TargetFigure};
 
 /// Standard errors kept between the optimised figure and the target.
 pub const MARGIN_Z: f64 = 3.0 + Z95;

@@ -29,9 +29,9 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use rvtol_deviation::ConditionalSampler;
 
-use crate::evaluate::ChunkEvaluator;
-use crate::run::CHUNK_SIZE;
-use crate::scenario::{InputGroup, Scenario, ScenarioError};
+use rvtol_engine::evaluate::ChunkEvaluator;
+use rvtol_engine::run::CHUNK_SIZE;
+use rvtol_engine::scenario::{InputGroup, Scenario, ScenarioError};
 
 const SHAPLEY_STREAM_BASE: u64 = 1 << 61;
 /// Rows of the run that estimates Var Y.
@@ -196,13 +196,13 @@ pub fn shapley_partial(
         rng.set_stream(SHAPLEY_STREAM_BASE - 1);
         let mut counts = space.new_constraint_counts();
         let mut evaluator = ChunkEvaluator::new(scenario);
-        let mut moments = vec![crate::stats::Moments::new(); continuous.len()];
+        let mut moments = vec![rvtol_engine::stats::Moments::new(); continuous.len()];
         let mut rows = vec![0.0; CHUNK_SIZE * n_columns];
         for _ in 0..VARIANCE_ROWS / CHUNK_SIZE {
             space.sample_rows(&mut rng, &mut rows, &mut counts)?;
             evaluator.evaluate(&rows, CHUNK_SIZE);
             for (slot, &o) in continuous.iter().enumerate() {
-                moments[slot].merge(&crate::stats::Moments::from_slice(
+                moments[slot].merge(&rvtol_engine::stats::Moments::from_slice(
                     &evaluator.output_columns[o],
                 ));
             }

@@ -7,9 +7,10 @@
 
 use serde::Serialize;
 
-use crate::report::{format_sig, group_thousands, SamplingReport};
-use crate::scenario::Scenario;
 use crate::sensitivity::{IntervalMethod, OutputSensitivity, SensitivitySettings};
+use rvtol_engine::format::{format_sig, group_thousands};
+use rvtol_engine::report::SamplingReport;
+use rvtol_engine::scenario::Scenario;
 
 /// The estimators, in words.
 const ESTIMATORS: &str = "Sobol' indices of independent input groups: first order by Saltelli et al. (2010), total by Jansen (1999), each averaged over the A_B and B_A designs";
@@ -56,7 +57,7 @@ pub struct ScreeningSourceReport {
     /// Sum of its squared standardized regression coefficients.
     pub src_squared: f64,
     /// Derivatives at the nominal point, keyed by column.
-    pub derivatives_at_nominal: crate::report::OrderedNumbers,
+    pub derivatives_at_nominal: rvtol_engine::report::OrderedNumbers,
 }
 
 /// Screening figures of one output.
@@ -207,7 +208,7 @@ impl SensitivityReport {
         settings: SensitivitySettings,
         outputs: Vec<OutputSensitivity>,
         shapley: Option<Vec<(String, Vec<crate::shapley::ShapleyEffect>)>>,
-    ) -> Result<SensitivityReport, crate::ScenarioError> {
+    ) -> Result<SensitivityReport, rvtol_engine::ScenarioError> {
         let screening = crate::screening::screening(
             scenario,
             &crate::shapley::players(scenario),
@@ -231,7 +232,7 @@ impl SensitivityReport {
                     input: s.input,
                     contribution_percent: 100.0 * s.contribution,
                     src_squared: s.src_squared,
-                    derivatives_at_nominal: crate::report::OrderedNumbers(s.derivatives),
+                    derivatives_at_nominal: rvtol_engine::report::OrderedNumbers(s.derivatives),
                 })
                 .collect();
             sources.sort_by(|a, b| {

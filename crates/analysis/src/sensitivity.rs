@@ -62,10 +62,10 @@ use rayon::prelude::*;
 
 use rvtol_deviation::{PointSet, SamplerScratch};
 
-use crate::evaluate::ChunkEvaluator;
-use crate::run::{Sampling, CHUNK_SIZE};
-use crate::scenario::{InputGroup, Scenario, ScenarioError};
-use crate::stats::{replicate_standard_error, student_t_quantile};
+use rvtol_engine::evaluate::ChunkEvaluator;
+use rvtol_engine::run::{Sampling, CHUNK_SIZE};
+use rvtol_engine::scenario::{InputGroup, Scenario, ScenarioError};
+use rvtol_engine::stats::{replicate_standard_error, student_t_quantile};
 
 /// First bootstrap stream (far above the 2k, 2k + 1 streams of the sample matrices).
 const BOOTSTRAP_STREAM_BASE: u64 = 1 << 62;
@@ -322,7 +322,7 @@ fn finite_mean<'a>(values: impl Iterator<Item = &'a f64>) -> f64 {
     if finite.is_empty() {
         0.0
     } else {
-        crate::stats::Moments::from_slice(&finite).mean
+        rvtol_engine::stats::Moments::from_slice(&finite).mean
     }
 }
 
@@ -920,7 +920,7 @@ fn output_sensitivity(
 
 fn percentile_interval(mut values: Vec<f64>, confidence: f64) -> [f64; 2] {
     let tail = 50.0 * (1.0 - confidence);
-    let ends = crate::stats::percentiles_type7(&mut values, &[tail, 100.0 - tail]);
+    let ends = rvtol_engine::stats::percentiles_type7(&mut values, &[tail, 100.0 - tail]);
     [ends[0].unwrap_or(f64::NAN), ends[1].unwrap_or(f64::NAN)]
 }
 
@@ -1068,7 +1068,7 @@ fn indices_from_rows(
                 .iter()
                 .flat_map(|&r| [f[0][r] - centre, f[1][r] - centre])
                 .collect();
-            crate::stats::Moments::from_slice(&values).variance()
+            rvtol_engine::stats::Moments::from_slice(&values).variance()
         };
         // The estimator's terms of every finite row, row-major: their sums in row order
         // give the indices, and a resample reads them block by block (row_resamples).

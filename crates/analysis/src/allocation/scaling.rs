@@ -19,8 +19,8 @@
 
 use serde_json::Value;
 
-use super::spec::{AllocatableSource, ToleranceKind};
-use crate::scenario::ScenarioError;
+use rvtol_engine::scenario::allocation::{AllocatableSource, ToleranceKind};
+use rvtol_engine::scenario::ScenarioError;
 
 /// Returns `document` with each source's tolerance scaled by the matching factor, and the
 /// `allocation` section removed when `keep_allocation` is false.
@@ -176,7 +176,7 @@ fn scale_node(node: &mut Value, kind: ToleranceKind, s: f64) -> Option<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::allocation::spec::{CostModel, ToleranceSource};
+    use rvtol_engine::scenario::allocation::{CostModel, ToleranceSource};
 
     fn source(path: &str, kind: ToleranceKind) -> AllocatableSource {
         AllocatableSource {

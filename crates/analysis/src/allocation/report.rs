@@ -5,7 +5,7 @@
 use serde::Serialize;
 
 use super::{Allocation, Evaluation, MARGIN_Z};
-use crate::report::{format_change, format_sig};
+use rvtol_engine::format::{format_change, format_sig};
 
 /// One source's row.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -284,7 +284,7 @@ impl AllocationReport {
             self.scenario,
             self.output,
             self.target,
-            crate::report::group_thousands(self.samples),
+            rvtol_engine::format::group_thousands(self.samples),
             self.seed
         ));
         let header = [

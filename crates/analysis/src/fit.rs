@@ -26,7 +26,7 @@
 
 use nalgebra::{DMatrix, SymmetricEigen};
 
-use crate::scenario::{units, Scenario};
+use rvtol_engine::scenario::{units, Scenario};
 use serde_json::{json, Value};
 use statrs::distribution::{ChiSquared, ContinuousCDF, Normal};
 
@@ -89,8 +89,8 @@ pub fn fit(names: &[String], rows: &[Vec<f64>]) -> Result<Fit, String> {
     if p > MAX_FIT_COLUMNS {
         return Err(format!(
             "{} columns to fit, more than the {MAX_FIT_COLUMNS} rvtol fit takes (the fragment holds a correlation for every pair of columns, {} pairs here): fit the columns that vary together a group at a time (one part with --part, or a file per group)",
-            crate::report::group_thousands(p as u64),
-            crate::report::group_thousands((p * (p - 1) / 2) as u64)
+            rvtol_engine::format::group_thousands(p as u64),
+            rvtol_engine::format::group_thousands((p * (p - 1) / 2) as u64)
         ));
     }
     if n < 2 {

@@ -1,8 +1,8 @@
 //! Shards of a run or a sensitivity analysis and their files: what `rvtol run` and
 //! `rvtol sensitivity` write with `--shard K/N --partial FILE`, and `rvtol merge` reads.
 //!
-//! A shard of a run computes the chunks [`crate::run::shard_range`] (over the run's chunk count) gives it
-//! ([`crate::run_chunks`]) and stores the [`RunPartial`]; a shard of a sensitivity analysis
+//! A shard of a run computes the chunks [`rvtol_engine::run::shard_range`] (over the run's chunk count) gives it
+//! ([`rvtol_engine::run_chunks`]) and stores the [`RunPartial`]; a shard of a sensitivity analysis
 //! the same chunks of its matrices ([`crate::sensitivity::sobol_chunks`]) and, with
 //! Shapley effects, its range of permutations ([`crate::shapley::shapley_partial`]). The
 //! file holds everything the merge must check: the scenario file's text, the command's
@@ -32,16 +32,16 @@ use sha2::{Digest, Sha256};
 use std::collections::BTreeMap;
 use std::ops::Range;
 
-use crate::report::group_thousands;
+use rvtol_engine::format::group_thousands;
 
-use crate::run::{
+use crate::sensitivity::{BlockSums, SobolChunks, SobolPartial};
+use crate::shapley::ShapleyPartial;
+use rvtol_deviation::ConstraintCounts;
+use rvtol_engine::run::{
     shard_range, Distribution, OutputAccumulator, PercentileMethod, RunPartial, RunSettings,
     Sampling, SamplingMethod,
 };
-use crate::sensitivity::{BlockSums, SobolChunks, SobolPartial};
-use crate::shapley::ShapleyPartial;
-use crate::stats::{Moments, QuantileSketch, SketchParts};
-use rvtol_deviation::ConstraintCounts;
+use rvtol_engine::stats::{Moments, QuantileSketch, SketchParts};
 
 /// First bytes of a shard file.
 pub const MAGIC: &[u8] = b"rvtol-partial\n";
