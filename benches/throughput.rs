@@ -16,7 +16,7 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rvtol_benches::scenario_path;
 use rvtol_deviation::{SamplerScratch, Ziggurat, ZigguratScratch};
-use rvtol_engine::run::BLOCK_ROWS;
+use rvtol_engine::chunk::BLOCK_ROWS;
 use rvtol_engine::stats::{Moments, QuantileSketch};
 use rvtol_engine::{run, RunSettings, Scenario};
 

@@ -10,8 +10,8 @@
 //! standard deviation √(S·0.95·0.05) of 0.95·S.
 
 use rvtol_deviation::SamplingMethod;
+use rvtol_engine::chunk::Sampling;
 use rvtol_engine::report::RunReport;
-use rvtol_engine::run::Sampling;
 use rvtol_engine::{merge, run, run_chunks, shard_range, RunSettings, Scenario};
 use rvtol_tests::{linear_closed_form, run_with_threads, scenario_path, SIGMA_BOUND};
 

@@ -21,9 +21,9 @@ use rvtol_analysis::shard::{
     decode, encode, ShapleyShard, ShardCommand, ShardContent, ShardHeader,
 };
 use rvtol_deviation::SamplingMethod;
+use rvtol_engine::chunk::shard_range;
+use rvtol_engine::chunk::CHUNK_SIZE;
 use rvtol_engine::report::RunReport;
-use rvtol_engine::run::shard_range;
-use rvtol_engine::run::CHUNK_SIZE;
 use rvtol_engine::{merge, run, run_chunks, RunSettings, Sampling, Scenario};
 use rvtol_tests::scenario_path;
 

@@ -3,9 +3,9 @@
 //! return too): the sensitivity analysis' kept model values or block sums and its
 //! per-thread sample matrices, the allocation's kept values of the targeted output.
 
+use rvtol_engine::chunk::CHUNK_SIZE;
 use rvtol_engine::format::group_thousands;
 use rvtol_engine::memory::{fewer_workers, run_scratch_per_thread, MemoryNeed, BASE_BYTES, VALUE};
-use rvtol_engine::run::CHUNK_SIZE;
 use rvtol_engine::Scenario;
 
 use crate::sensitivity::{independent_groups, IntervalMethod, SensitivitySettings};

@@ -18,8 +18,8 @@ use nalgebra::{DMatrix, DVector};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
+use rvtol_engine::chunk::CHUNK_SIZE;
 use rvtol_engine::evaluate::ChunkEvaluator;
-use rvtol_engine::run::CHUNK_SIZE;
 use rvtol_engine::scenario::{InputGroup, Scenario, ScenarioError};
 
 const SCREENING_STREAM_BASE: u64 = 1 << 60;

@@ -62,8 +62,8 @@ use rayon::prelude::*;
 
 use rvtol_deviation::{PointSet, SamplerScratch};
 
+use rvtol_engine::chunk::{Sampling, CHUNK_SIZE};
 use rvtol_engine::evaluate::ChunkEvaluator;
-use rvtol_engine::run::{Sampling, CHUNK_SIZE};
 use rvtol_engine::scenario::{InputGroup, Scenario, ScenarioError};
 use rvtol_engine::stats::{replicate_standard_error, student_t_quantile};
 
@@ -521,7 +521,7 @@ fn sobol_plan(
         ));
     }
     let sampling = settings.sampling;
-    sampling.check(settings.base_samples, "base samples", scenario)?;
+    sampling.check(settings.base_samples, "base samples", &scenario.input_space)?;
     let points = if sampling.is_replicated() {
         let dims = scenario.input_space.quasi_dimensions()?;
         let points = PointSet::new(

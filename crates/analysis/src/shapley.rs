@@ -29,8 +29,8 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use rvtol_deviation::ConditionalSampler;
 
+use rvtol_engine::chunk::CHUNK_SIZE;
 use rvtol_engine::evaluate::ChunkEvaluator;
-use rvtol_engine::run::CHUNK_SIZE;
 use rvtol_engine::scenario::{InputGroup, Scenario, ScenarioError};
 
 const SHAPLEY_STREAM_BASE: u64 = 1 << 61;

@@ -1,7 +1,7 @@
 //! Shards of a run or a sensitivity analysis and their files: what `rvtol run` and
 //! `rvtol sensitivity` write with `--shard K/N --partial FILE`, and `rvtol merge` reads.
 //!
-//! A shard of a run computes the chunks [`rvtol_engine::run::shard_range`] (over the run's chunk count) gives it
+//! A shard of a run computes the chunks [`rvtol_engine::chunk::shard_range`] (over the run's chunk count) gives it
 //! ([`rvtol_engine::run_chunks`]) and stores the [`RunPartial`]; a shard of a sensitivity analysis
 //! the same chunks of its matrices ([`crate::sensitivity::sobol_chunks`]) and, with
 //! Shapley effects, its range of permutations ([`crate::shapley::shapley_partial`]). The
@@ -37,9 +37,9 @@ use rvtol_engine::format::group_thousands;
 use crate::sensitivity::{BlockSums, SobolChunks, SobolPartial};
 use crate::shapley::ShapleyPartial;
 use rvtol_deviation::ConstraintCounts;
+use rvtol_engine::chunk::{shard_range, Sampling, SamplingMethod};
 use rvtol_engine::run::{
-    shard_range, Distribution, OutputAccumulator, PercentileMethod, RunPartial, RunSettings,
-    Sampling, SamplingMethod,
+    Distribution, OutputAccumulator, PercentileMethod, RunPartial, RunSettings,
 };
 use rvtol_engine::stats::{Moments, QuantileSketch, SketchParts};
 

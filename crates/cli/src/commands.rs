@@ -22,9 +22,10 @@ use rvtol_analysis::sensitivity_report::SensitivityReport;
 use rvtol_analysis::shapley::{shapley_effects, ShapleySettings};
 use rvtol_analysis::target::Target;
 use rvtol_deviation::SamplingMethod;
+use rvtol_engine::chunk::Sampling;
 use rvtol_engine::input_file::{self, ReadLimit};
 use rvtol_engine::memory::{self, MemoryNeed};
-use rvtol_engine::run::{check_non_finite, Sampling};
+use rvtol_engine::run::check_non_finite;
 use rvtol_engine::scenario::allocation::CostKind;
 use rvtol_engine::table::CsvTable;
 use rvtol_engine::{
@@ -263,7 +264,7 @@ impl Progress {
             total: samples,
             done: AtomicU64::new(0),
             estimated: AtomicBool::new(false),
-            settled: threads.max(1) as u64 * rvtol_engine::run::CHUNK_SIZE as u64,
+            settled: threads.max(1) as u64 * rvtol_engine::chunk::CHUNK_SIZE as u64,
             threshold_seconds,
         }
     }
@@ -513,7 +514,7 @@ pub fn run(
         .check(&scenario)
         .map_err(|err| choice.checked_error(scenario_path, err))?;
     if to.samples.is_some() {
-        rvtol_engine::run::check_table_rows(&scenario, settings.samples)
+        rvtol_engine::evaluate::check_table_rows(&scenario, settings.samples)
             .map_err(|message| BadInput(format!("--samples-out: {message}; run fewer samples")))?;
     }
     let pool = pool_for(execution, "run", |threads| {
@@ -802,7 +803,7 @@ fn sensitivity_settings(
     // The base samples are the command line's (`--samples` or its default), never the
     // scenario's.
     sampling
-        .check(args.samples, "base samples", scenario)
+        .check(args.samples, "base samples", &scenario.input_space)
         .map_err(|err| {
             option_or_scenario_error(
                 path,
@@ -932,7 +933,7 @@ pub fn sensitivity_shard(
         let shapley_settings = shapley_settings(&args, settings.seed);
         let total = rvtol_analysis::shapley::shapley_permutations(&scenario, shapley_settings)
             .map_err(|err| bad_scenario(path, err))?;
-        let range = rvtol_engine::run::shard_range(total, shard, shards);
+        let range = rvtol_engine::chunk::shard_range(total, shard, shards);
         let partial = pool
             .install(|| {
                 rvtol_analysis::shapley::shapley_partial(&scenario, shapley_settings, range.clone())
@@ -1493,12 +1494,14 @@ pub fn evaluate(
         .into());
     }
     let n_inputs = scenario.columns.len();
-    rvtol_engine::run::check_table_rows(&scenario, table.rows.len() as u64).map_err(|message| {
-        BadInput(format!(
-            "{}: {message}; split the file",
-            inputs_path.display()
-        ))
-    })?;
+    rvtol_engine::evaluate::check_table_rows(&scenario, table.rows.len() as u64).map_err(
+        |message| {
+            BadInput(format!(
+                "{}: {message}; split the file",
+                inputs_path.display()
+            ))
+        },
+    )?;
     // A heading's unit is the column's: converted into the scenario's unit of that input
     // (µm into mm), refused when it cannot be (another kind, or a unit rvtol does not know).
     let mut factor = Vec::with_capacity(position.len());
@@ -1538,7 +1541,7 @@ pub fn evaluate(
     for (o, line) in rvtol_engine::evaluate::non_finite_lines(&scenario, &rows, &lost, &row) {
         note(&format!(
             "warning: {}: {line}, within the allowed {} % (--max-non-finite): written as NaN",
-            rvtol_engine::run::model_of_output(&scenario, o),
+            scenario.model_of_output(o),
             rvtol_deviation::Shown(100.0 * execution.max_non_finite)
         ));
     }

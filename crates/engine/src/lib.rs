@@ -7,6 +7,8 @@
 //! the scenario or the sampler, and the engine never prints. The analyses that use a run
 //! (sensitivity, the gate, the allocation, the fit, shards) are rvtol-analysis, above.
 
+pub mod chunk;
+pub mod error;
 pub mod evaluate;
 pub mod format;
 pub mod input_file;
@@ -17,9 +19,11 @@ pub mod scenario;
 pub mod stats;
 pub mod table;
 
+pub use chunk::{shard_range, Sampling};
+pub use evaluate::SampleTable;
 pub use report::{NominalReport, RunReport};
 pub use run::{
-    merge, nominal, nominal_curves, run, run_chunks, sample_table, shard_range, RunPartial,
-    RunResult, RunSettings, SampleTable, Sampling, DEFAULT_EXACT_PERCENTILE_LIMIT,
+    merge, nominal, nominal_curves, run, run_chunks, sample_table, RunPartial, RunResult,
+    RunSettings, DEFAULT_EXACT_PERCENTILE_LIMIT,
 };
 pub use scenario::{Scenario, ScenarioError};

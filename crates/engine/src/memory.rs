@@ -7,7 +7,8 @@
 //! outputs, sample matrices of the analyses). Constant overheads (sketches, model tables,
 //! the program itself) are covered by [`BASE_BYTES`].
 
-use crate::run::{RunSettings, BLOCK_ROWS, CHUNK_SIZE, WAVE_CHUNKS};
+use crate::chunk::{BLOCK_ROWS, CHUNK_SIZE, WAVE_CHUNKS};
+use crate::run::RunSettings;
 use crate::scenario::Scenario;
 use rvtol_deviation::human_bytes;
 

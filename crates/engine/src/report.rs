@@ -14,9 +14,10 @@ use rayon::prelude::*;
 use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
 
+use crate::chunk::CHUNK_SIZE;
+use crate::evaluate::SampleTable;
 use crate::run::{
     replicated_sd, Distribution, OutputAccumulator, PercentileMethod, ReplicateFigures, RunResult,
-    CHUNK_SIZE,
 };
 use crate::scenario::{OutputInfo, Scenario};
 use crate::stats::quantile_sketch::bucket_representative;
@@ -1060,7 +1061,7 @@ fn name_column_width<'a>(names: impl Iterator<Item = &'a str>) -> usize {
 /// column and one per output, headed `name [unit]` (an indicator `name [0/1]`, its flag); numbers in Rust's shortest form that
 /// reads back to the same value (non-finite values as `NaN`, `inf`, `-inf`, which pandas
 /// and polars read). The same table gives the same bytes.
-pub fn sample_csv(scenario: &Scenario, table: &crate::SampleTable) -> String {
+pub fn sample_csv(scenario: &Scenario, table: &SampleTable) -> String {
     let quote = |s: &str| {
         if s.contains([',', '"', '\n']) {
             format!("\"{}\"", s.replace('"', "\"\""))
@@ -1120,7 +1121,7 @@ const PARQUET_ROW_GROUP: usize = 1 << 20;
 /// as INT64 and every other column as DOUBLE (the exact values), plain encoding, no
 /// compression, row groups of 2^20 rows; no timestamp, so the same table gives the same
 /// bytes. pandas (with pyarrow), polars and DuckDB read it as it is.
-pub fn sample_parquet(scenario: &Scenario, table: &crate::SampleTable) -> Result<Vec<u8>, String> {
+pub fn sample_parquet(scenario: &Scenario, table: &SampleTable) -> Result<Vec<u8>, String> {
     use parquet::basic::{Compression, Repetition, Type as PhysicalType};
     use parquet::data_type::{DoubleType, Int64Type};
     use parquet::file::properties::{EnabledStatistics, WriterProperties};

@@ -34,21 +34,14 @@ use std::ops::Range;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
-pub use rvtol_deviation::SamplingMethod;
 use rvtol_deviation::{ConstraintCounts, PointSet, SamplerScratch};
 use rvtol_models::{ConditionEffect, Curve, OutputKind};
 
-use crate::evaluate::ChunkEvaluator;
+use crate::chunk::{waves, Sampling, BLOCK_ROWS, CHUNK_SIZE};
+use crate::evaluate::{check_table_rows, ChunkEvaluator, SampleTable};
 use crate::scenario::{Scenario, ScenarioError};
 use crate::stats::{values_at_ranks, Moments, QuantileSketch, SpecLimits, PERCENTS};
 
-/// Samples per chunk (part of the reproducibility contract: changing it changes results).
-pub const CHUNK_SIZE: usize = 4096;
-/// Rows sampled and evaluated at a time inside a chunk (part of the stream layout): small
-/// enough that a block's rows, model inputs and outputs stay in the core's caches.
-pub const BLOCK_ROWS: usize = 64;
-/// Chunks per wave: bounds the memory of in-flight partial results.
-pub const WAVE_CHUNKS: u64 = 1024;
 /// Relative accuracy of the quantile sketch used beyond the exact-percentile limit.
 pub const SKETCH_RELATIVE_ACCURACY: f64 = 1e-3;
 /// Default memory cap for exact percentiles: values kept over all outputs (8 bytes each).
@@ -66,174 +59,6 @@ pub struct RunSettings {
     pub exact_percentile_limit: u64,
     /// How the rows are drawn.
     pub sampling: Sampling,
-}
-
-/// How a run's rows (and a sensitivity analysis' matrices A and B,
-/// [`crate::sensitivity`]) are drawn: the method and its independent randomizations.
-///
-/// Monte Carlo has one (its rows are independent; the report's intervals come from them).
-/// A Latin hypercube or scrambled Sobol' run of N samples is R independent replicates of
-/// n = N/R points (replicate r holds samples r·n … (r+1)·n − 1); its statistics are those
-/// of all N rows, and each figure's interval comes from the spread of its R replicate
-/// values (Student t with R − 1 degrees of freedom), the rows of one replicate not being
-/// independent.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Sampling {
-    /// The method.
-    pub method: SamplingMethod,
-    /// Independent randomizations (1 for Monte Carlo).
-    pub replicates: u64,
-}
-
-impl Default for Sampling {
-    fn default() -> Sampling {
-        Sampling::MONTE_CARLO
-    }
-}
-
-impl Sampling {
-    /// Plain Monte Carlo.
-    pub const MONTE_CARLO: Sampling = Sampling {
-        method: SamplingMethod::MonteCarlo,
-        replicates: 1,
-    };
-    /// Replicates of a Latin hypercube or RQMC run unless the scenario says.
-    pub const DEFAULT_REPLICATES: u64 = 16;
-    /// Fewest replicates: an interval from R values needs R − 1 ≥ 1 degrees of freedom.
-    pub const MIN_REPLICATES: u64 = 2;
-    /// Most replicates (each keeps its own statistics).
-    pub const MAX_REPLICATES: u64 = 1024;
-
-    /// The method with its default replicates.
-    pub fn of(method: SamplingMethod) -> Sampling {
-        match method {
-            SamplingMethod::MonteCarlo => Sampling::MONTE_CARLO,
-            _ => Sampling {
-                method,
-                replicates: Sampling::DEFAULT_REPLICATES,
-            },
-        }
-    }
-
-    /// The sampling a caller asks for over `scenario`'s: the method given, else the
-    /// scenario's; the replicates given, else the scenario's when the method is the
-    /// scenario's, else the method's default.
-    pub fn chosen(
-        scenario: Sampling,
-        method: Option<SamplingMethod>,
-        replicates: Option<u64>,
-    ) -> Sampling {
-        let method = method.unwrap_or(scenario.method);
-        let mut sampling = if method == scenario.method {
-            scenario
-        } else {
-            Sampling::of(method)
-        };
-        if let Some(replicates) = replicates {
-            sampling.replicates = replicates;
-        }
-        sampling
-    }
-
-    /// Whether the rows come from replicated point sets (Latin hypercube or RQMC).
-    pub fn is_replicated(&self) -> bool {
-        self.method != SamplingMethod::MonteCarlo
-    }
-}
-
-impl Sampling {
-    /// Rows per replicate of `samples` rows (all of them for Monte Carlo).
-    pub fn replicate_points(&self, samples: u64) -> u64 {
-        samples / self.replicates.max(1)
-    }
-
-    fn chunks_per_replicate(&self, samples: u64) -> u64 {
-        self.replicate_points(samples).div_ceil(CHUNK_SIZE as u64)
-    }
-
-    /// Number of chunks of `samples` rows: each replicate's rows in chunks of
-    /// [`CHUNK_SIZE`] (the last one of each replicate shorter), replicate after replicate.
-    pub fn chunk_count(&self, samples: u64) -> u64 {
-        self.replicates.max(1) * self.chunks_per_replicate(samples)
-    }
-
-    /// Chunk `chunk` of `samples` rows as (replicate, its first row within the replicate,
-    /// its first row overall, rows).
-    pub fn chunk_rows(&self, samples: u64, chunk: u64) -> (u64, u64, u64, usize) {
-        let per = self.chunks_per_replicate(samples).max(1);
-        let (replicate, local) = (chunk / per, chunk % per);
-        let n = self.replicate_points(samples);
-        let first = local * CHUNK_SIZE as u64;
-        let rows = (n - first).min(CHUNK_SIZE as u64) as usize;
-        (replicate, first, replicate * n + first, rows)
-    }
-
-    /// Rows of `samples` in the chunks before `chunk` (for progress).
-    pub fn rows_before_chunk(&self, samples: u64, chunk: u64) -> u64 {
-        if chunk >= self.chunk_count(samples) {
-            return samples;
-        }
-        self.chunk_rows(samples, chunk).2
-    }
-
-    /// Checks this sampling of `samples` rows (`what` names that count in messages)
-    /// against the scenario: for a replicated method, replicates within their range
-    /// dividing the rows, points per replicate within the method's limit, and an input
-    /// space it can draw; Monte Carlo has one replicate (one line each, naming the
-    /// setting).
-    pub fn check(
-        &self,
-        samples: u64,
-        what: &str,
-        scenario: &Scenario,
-    ) -> Result<(), ScenarioError> {
-        let Sampling { method, replicates } = *self;
-        if !self.is_replicated() {
-            if replicates != 1 {
-                return Err(ScenarioError::new(
-                    "replicates",
-                    "Monte Carlo rows are independent and have no replicates: give replicates with \"sampling\": \"lhs\" or \"rqmc\"",
-                ));
-            }
-            return Ok(());
-        }
-        if !(Sampling::MIN_REPLICATES..=Sampling::MAX_REPLICATES).contains(&replicates) {
-            return Err(ScenarioError::new(
-                "replicates",
-                format!(
-                    "must lie in {}..={}, got {replicates}",
-                    Sampling::MIN_REPLICATES,
-                    Sampling::MAX_REPLICATES
-                ),
-            ));
-        }
-        if !samples.is_multiple_of(replicates) || samples < 2 * replicates {
-            return Err(ScenarioError::new(
-                "samples",
-                format!(
-                    "{samples} {what} do not split into {replicates} replicates of equal size (at least 2 points each): give a multiple of {replicates}{}",
-                    if method == SamplingMethod::Rqmc {
-                        format!(", best {replicates} × a power of two such as {}", replicates * (samples / replicates).max(2).next_power_of_two())
-                    } else {
-                        String::new()
-                    }
-                ),
-            ));
-        }
-        if self.replicate_points(samples) > method.max_points() {
-            return Err(ScenarioError::new(
-                "samples",
-                format!(
-                    "{} points per replicate, {} takes at most {}: give more replicates",
-                    self.replicate_points(samples),
-                    method.name(),
-                    method.max_points()
-                ),
-            ));
-        }
-        scenario.input_space.quasi_dimensions()?;
-        Ok(())
-    }
 }
 
 impl RunSettings {
@@ -264,7 +89,7 @@ impl RunSettings {
         if self.samples == 0 {
             return Err(ScenarioError::new("samples", "must be at least 1"));
         }
-        self.sampling.check(self.samples, "samples", scenario)
+        (self.sampling).check(self.samples, "samples", &scenario.input_space)
     }
 }
 
@@ -897,41 +722,8 @@ impl<'a> Plan<'a> {
     }
 }
 
-/// The drawn inputs and the models' outputs of every sample of a run, one row per sample
-/// in sample order: the values [`run`] draws and evaluates for the same seed, whatever
-/// the thread count.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SampleTable {
-    /// Rows (samples).
-    pub rows: usize,
-    /// Input-space columns per row ([`Scenario::columns`] order).
-    pub n_inputs: usize,
-    /// Outputs per row ([`Scenario::outputs`] order).
-    pub n_outputs: usize,
-    /// Row-major inputs, `rows × n_inputs`.
-    pub inputs: Vec<f64>,
-    /// Row-major outputs, `rows × n_outputs`.
-    pub outputs: Vec<f64>,
-}
-
-/// Most values (rows × (inputs + outputs)) a [`SampleTable`] holds: 160 MB of numbers.
-pub const MAX_SAMPLE_TABLE_VALUES: u64 = 20_000_000;
-
-/// Whether a [`SampleTable`] of `rows` rows of `scenario` (its inputs and outputs) stays
-/// within [`MAX_SAMPLE_TABLE_VALUES`]; the error says how many rows fit.
-pub fn check_table_rows(scenario: &Scenario, rows: u64) -> Result<(), String> {
-    let columns = (scenario.input_space.n_columns() + scenario.outputs.len()).max(1) as u64;
-    let most = MAX_SAMPLE_TABLE_VALUES / columns;
-    if rows > most {
-        return Err(format!(
-            "at most {most} rows of this scenario ({columns} columns, {MAX_SAMPLE_TABLE_VALUES} values), asked {rows}"
-        ));
-    }
-    Ok(())
-}
-
 /// Draws and evaluates every sample of the run `settings` describes, keeping each row
-/// ([`SampleTable`]); at most [`MAX_SAMPLE_TABLE_VALUES`] values. Uses the current rayon
+/// ([`SampleTable`]); at most [`crate::evaluate::MAX_SAMPLE_TABLE_VALUES`] values. Uses the current rayon
 /// thread pool; the chunks' rows are joined in chunk order.
 pub fn sample_table(
     scenario: &Scenario,
@@ -1022,20 +814,6 @@ fn run_keeping(
         merger.add(plan.run_wave(wave, progress)?)?;
     }
     merger.finish()
-}
-
-/// The `shard`-th of `shards` contiguous ranges of `0..total`, as equal as whole items
-/// allow (chunks of a run, permutations of a Shapley estimate).
-pub fn shard_range(total: u64, shard: u64, shards: u64) -> Range<u64> {
-    let at = |k: u64| (k as u128 * total as u128 / shards.max(1) as u128) as u64;
-    at(shard.min(shards))..at((shard + 1).min(shards))
-}
-
-/// Consecutive ranges of at most [`WAVE_CHUNKS`] chunks covering `chunks`.
-fn waves(chunks: Range<u64>) -> impl Iterator<Item = Range<u64>> {
-    (chunks.start..chunks.end)
-        .step_by(WAVE_CHUNKS as usize)
-        .map(move |start| start..(start + WAVE_CHUNKS).min(chunks.end))
 }
 
 /// The statistics of a contiguous range of a run's chunks: what one shard of a run
@@ -1474,19 +1252,6 @@ fn indicator_moments(events: u64, n: u64) -> Moments {
     }
 }
 
-/// The JSON path and name of the model that produces output `output`: `models[i] (name)`.
-pub fn model_of_output(scenario: &Scenario, output: usize) -> String {
-    scenario
-        .models
-        .iter()
-        .enumerate()
-        .find(|(_, bound)| {
-            (bound.first_output..bound.first_output + bound.model.outputs().len()).contains(&output)
-        })
-        .map(|(i, bound)| format!("models[{i}] ({})", bound.model.name()))
-        .unwrap_or_else(|| "models".to_string())
-}
-
 /// Checks that no output lost more than `max_share` of its samples to non-finite values
 /// (the model could not evaluate them), and that every output has a value at all (its
 /// indicator did not exclude every sample): the first output that fails is an error naming
@@ -1503,7 +1268,7 @@ pub fn check_non_finite(
                 .condition
                 .map_or(String::new(), |(k, _)| scenario.outputs[k].name.clone());
             return Err(ScenarioError::new(
-                model_of_output(scenario, o),
+                scenario.model_of_output(o),
                 format!(
                     "{} has no value: {indicator} excludes {} of {} samples and the model could not evaluate the rest; the scenario describes an assembly that cannot be built",
                     scenario.outputs[o].name,
@@ -1515,7 +1280,7 @@ pub fn check_non_finite(
         let share = acc.non_finite as f64 / result.samples as f64;
         if acc.non_finite > 0 && share > max_share {
             return Err(ScenarioError::new(
-                model_of_output(scenario, o),
+                scenario.model_of_output(o),
                 format!(
                     "{} is not finite for {} of {} samples ({} %, first at sample {}), more than the allowed {} %: the model cannot evaluate the inputs the scenario draws there; narrow the distributions to the model's domain, or accept a share with --max-non-finite",
                     scenario.outputs[o].name,
@@ -1558,7 +1323,7 @@ pub fn nominal(scenario: &Scenario) -> Result<Vec<Option<f64>>, ScenarioError> {
                 Ok(Some(values[o]))
             } else {
                 Err(ScenarioError::new(
-                    model_of_output(scenario, o),
+                    scenario.model_of_output(o),
                     format!(
                         "{} is {} at the nominal point (every deviation at its mean): the model cannot evaluate the scenario's nominal design",
                         scenario.outputs[o].name,

@@ -18,7 +18,7 @@ use rvtol_analysis::sensitivity::{sobol_indices, SensitivitySettings};
 use rvtol_analysis::sensitivity_report::SensitivityReport;
 use rvtol_analysis::shapley::{shapley_effects, ShapleySettings};
 use rvtol_analysis::target::Target;
-use rvtol_engine::run::{Sampling, SamplingMethod};
+use rvtol_engine::chunk::{Sampling, SamplingMethod};
 use rvtol_engine::scenario::allocation::CostKind;
 use rvtol_engine::{RunReport, RunSettings, DEFAULT_EXACT_PERCENTILE_LIMIT};
 
@@ -151,7 +151,7 @@ fn evaluate_rows<'py>(
                 .join(", ")
         )));
     }
-    rvtol_engine::run::check_table_rows(scenario, rows as u64)
+    rvtol_engine::evaluate::check_table_rows(scenario, rows as u64)
         .map_err(|message| value_error(format!("inputs: {message}")))?;
     let values: Vec<f64> = array.iter().copied().collect();
     let pool = pool(threads)?;
@@ -222,7 +222,7 @@ fn run<'py>(
     };
     settings.check(s).map_err(value_error)?;
     if samples_out {
-        rvtol_engine::run::check_table_rows(s, settings.samples)
+        rvtol_engine::evaluate::check_table_rows(s, settings.samples)
             .map_err(|message| value_error(format!("samples_out: {message}; run fewer samples")))?;
     }
     let pool = pool(threads)?;

@@ -19,7 +19,7 @@ use super::{
     Binding, BoundModel, ColumnInfo, InputGroup, OutputInfo, Scenario, ScenarioError,
     DEFAULT_SAMPLES, DEFAULT_SEED,
 };
-use crate::run::Sampling;
+use crate::chunk::Sampling;
 use crate::stats::SpecLimits;
 
 fn fixed_array<const N: usize>(path: &str, values: &[f64]) -> Result<[f64; N], ScenarioError> {

@@ -22,42 +22,18 @@ use std::path::Path;
 use rvtol_deviation::InputSpace;
 use rvtol_models::{ConditionEffect, ErrorModel, OutputKind};
 
+use crate::chunk::Sampling;
 use crate::input_file::ReadLimit;
 use crate::stats::SpecLimits;
 use allocation::{AllocatableSource, Lever};
 
+pub use crate::error::ScenarioError;
 pub use file::{MAX_ARRAY_MEMBERS, MAX_COVARIANCE, MAX_DEVIATION, MAX_PARAMETER};
 
 /// Samples of a run when neither the scenario nor the command line sets them.
 pub const DEFAULT_SAMPLES: u64 = 1_000_000;
 /// Seed of a run when neither the scenario nor the command line sets it.
 pub const DEFAULT_SEED: u64 = 1;
-
-/// A scenario that cannot be read or used, with the JSON path of the problem.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{path}: {message}")]
-pub struct ScenarioError {
-    /// JSON path of the offending value (`(file)` for the file as a whole).
-    pub path: String,
-    /// What is wrong, in one line.
-    pub message: String,
-}
-
-impl ScenarioError {
-    /// A new error at `path`.
-    pub fn new(path: impl Into<String>, message: impl Into<String>) -> Self {
-        ScenarioError {
-            path: path.into(),
-            message: message.into(),
-        }
-    }
-}
-
-impl From<rvtol_deviation::DeviationError> for ScenarioError {
-    fn from(err: rvtol_deviation::DeviationError) -> Self {
-        ScenarioError::new(err.path(), err.message())
-    }
-}
 
 /// The folder a scenario file's relative data paths start from.
 pub fn scenario_folder(path: &Path) -> std::path::PathBuf {
@@ -154,7 +130,7 @@ pub struct Scenario {
     /// Seed when the command line does not say.
     pub seed: u64,
     /// How rows are drawn when the command line does not say (`sampling`, `replicates`).
-    pub sampling: crate::run::Sampling,
+    pub sampling: Sampling,
     /// The joint input space.
     pub input_space: InputSpace,
     /// Its columns' names.
@@ -214,14 +190,11 @@ impl Scenario {
         let (file, mut problems) = file::parse(text).map_err(|err| vec![err])?;
         match compile::compile(file, fallback_name, &mut problems) {
             Some(scenario) if problems.is_empty() => {
-                // The file's sampling against its own samples and input space.
-                let settings = crate::run::RunSettings {
-                    samples: scenario.samples,
-                    seed: scenario.seed,
-                    exact_percentile_limit: 0,
-                    sampling: scenario.sampling,
-                };
-                settings.check(&scenario).map_err(|err| vec![err])?;
+                // The file's sampling against its own samples (at least 1, checked by the
+                // compiler) and input space.
+                (scenario.sampling)
+                    .check(scenario.samples, "samples", &scenario.input_space)
+                    .map_err(|err| vec![err])?;
                 Ok(scenario)
             }
             _ => {
@@ -243,5 +216,19 @@ impl Scenario {
     /// Index of an output by name.
     pub fn output_index(&self, name: &str) -> Option<usize> {
         self.outputs.iter().position(|o| o.name == name)
+    }
+
+    /// The JSON path and name of the model that produces output `output`:
+    /// `models[i] (name)`.
+    pub fn model_of_output(&self, output: usize) -> String {
+        self.models
+            .iter()
+            .enumerate()
+            .find(|(_, bound)| {
+                (bound.first_output..bound.first_output + bound.model.outputs().len())
+                    .contains(&output)
+            })
+            .map(|(i, bound)| format!("models[{i}] ({})", bound.model.name()))
+            .unwrap_or_else(|| "models".to_string())
     }
 }
