@@ -8,9 +8,10 @@
 #
 # Per scenario: `run` (Monte Carlo with exact percentiles; with a quantile sketch; with an
 # rqmc design), `nominal`, `sensitivity` (Monte Carlo; Shapley effects where the scenario
-# has no Eq. 11 constraint and few sources), `baseline` and `check` against it, a run in
-# two shards merged; per scenario with an `allocation` section, `allocate`; besides, one
-# `evaluate` of sampled rows and one `fit`. Every command's JSON report, its text on
+# has no Eq. 11 constraint and few sources), `baseline` and `check` against it (exact, from
+# a sketch, and of the scenario drawn by an rqmc design), a run in two shards merged; per
+# scenario with an `allocation` section, `allocate`; besides, one `evaluate` of sampled
+# rows and one `fit`. Every command's JSON report, its text on
 # standard output, its error line and its exit code are kept (shard files are not: they
 # carry the build's hash). Sample counts are small: the sweep takes a few minutes on two
 # cores; set RVTOL_COMPARE_SCALE=k to multiply them.
@@ -67,6 +68,18 @@ for path in "$scenarios"/*.json; do
         --json "$out/$s.check.json" --junit "$out/$s.check.xml"
     record "$s.check-one-sided" check "$path" --baseline "$out/$s.baseline.json" --seed 9 \
         --one-sided --json "$out/$s.check-one-sided.json"
+    record "$s.baseline-sketch" baseline "$path" --samples "$n_run" --seed 7 \
+        --exact-percentile-limit 100 -o "$out/$s.baseline-sketch.json"
+    record "$s.check-sketch" check "$path" --baseline "$out/$s.baseline-sketch.json" --seed 8 \
+        --json "$out/$s.check-sketch.json"
+    # The scenario drawn by an rqmc design (the gate's replicate bands).
+    python3 -c 'import json, sys
+d = json.load(open(sys.argv[1]))
+d.update(sampling="rqmc", replicates=8, samples=int(sys.argv[3]))
+json.dump(d, open(sys.argv[2], "w"))' "$path" "$work/$s.rqmc.json" $((8 * 1024 * scale))
+    record "$s.baseline-rqmc" baseline "$work/$s.rqmc.json" -o "$out/$s.baseline-rqmc.json"
+    record "$s.check-rqmc" check "$work/$s.rqmc.json" --baseline "$out/$s.baseline-rqmc.json" \
+        --seed 8 --require "p50 <= 1e9" --json "$out/$s.check-rqmc.json"
     for k in 0 1; do
         record "$s.shard$k" run "$path" --samples "$n_run" --seed 7 --shard $k/2 \
             --partial "$work/$s.$k.shard"

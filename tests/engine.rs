@@ -72,7 +72,7 @@ fn sketch_percentiles_of_a_normal_output_lie_within_their_bound() {
     let report = RunReport::new(&scenario, result);
     let output = &report.outputs[0];
     let standard = Normal::new(0.0, 1.0).unwrap();
-    for (key, percent) in rvtol_engine::report::PERCENTS {
+    for (key, percent) in rvtol_engine::figures::PERCENTS {
         let p = percent / 100.0;
         let z = standard.inverse_cdf(p);
         let exact = mean + sd * z;

@@ -32,15 +32,15 @@ use serde::{Deserialize, Serialize};
 use statrs::distribution::{ContinuousCDF, Normal};
 
 use crate::target::{Target, TargetFigure};
+use rvtol_engine::figures::{output_figures, OrderStatistics, PERCENTS};
 use rvtol_engine::format::escape_markup;
 use rvtol_engine::run::{
-    check_non_finite, replicated_sd, run, Distribution, ReplicateFigures, RunResult, RunSettings,
-    DEFAULT_EXACT_PERCENTILE_LIMIT,
+    check_non_finite, run, ReplicateFigures, RunResult, RunSettings, DEFAULT_EXACT_PERCENTILE_LIMIT,
 };
 use rvtol_engine::scenario::{OutputInfo, Scenario, ScenarioError};
 use rvtol_engine::stats::{
-    order_statistic_interval, percentile_type7_of_sorted, proportion_standard_error,
-    replicate_standard_error, student_t_quantile, QuantileSketch, StandardisedSketch, PERCENTS,
+    capability_from_moments, proportion_standard_error, replicate_standard_error,
+    student_t_quantile,
 };
 use rvtol_models::OutputKind;
 
@@ -350,89 +350,91 @@ pub fn measure_with_capability(
 /// event in the run, which keeps its independent-rows band. Cp and Cpk keep theirs.
 pub fn figures_of(
     scenario: &Scenario,
-    result: RunResult,
+    mut result: RunResult,
     z: f64,
     max_non_finite: f64,
 ) -> Result<(Vec<Figure>, Vec<Figure>), ScenarioError> {
     check_non_finite(scenario, &result, max_non_finite)?;
+    if let Some((info, _)) = (scenario.outputs.iter())
+        .zip(&result.outputs)
+        .find(|(_, acc)| acc.moments.n < 2)
+    {
+        return Err(ScenarioError::new(
+            format!("(output {})", info.name),
+            "fewer than 2 finite values: nothing to gate",
+        ));
+    }
+    // The values of the figures are the run report's; the bands are the gate's.
+    let values = output_figures(scenario, &mut result);
     let samples = result.samples;
-    let two_sample = std::f64::consts::SQRT_2 * z;
-    let replicates = &result.replicates;
-    // √2·t: the band's half-width per unit of the replicates' standard error.
-    let replicate_scale = (!replicates.is_empty()).then(|| {
-        let tail = Normal::new(0.0, 1.0).expect("standard normal").cdf(z);
-        std::f64::consts::SQRT_2 * student_t_quantile(replicates.len() as f64 - 1.0, tail)
-    });
-    // The half-width from output o's replicate values of a figure, for a replicated run.
-    let replicate_half = |o: usize, figure: &dyn Fn(&ReplicateFigures) -> f64| {
-        replicate_scale.map(|scale| {
-            let values: Vec<f64> = replicates.iter().map(|r| figure(&r[o])).collect();
-            scale * replicate_standard_error(&values)
-        })
-    };
+    let bands = Bands::new(&result.replicates, z);
     let mut figures = Vec::new();
     let mut capability = Vec::new();
-    let mut push = |output: &str, figure: &str, value: f64, below: f64, above: f64| {
-        let list = if figure == "cp" || figure == "cpk" {
-            &mut capability
-        } else {
-            &mut figures
+    for (o, ((info, acc), value)) in (scenario.outputs.iter())
+        .zip(result.outputs)
+        .zip(values)
+        .enumerate()
+    {
+        let mut push = |figure: &str, value: f64, half: f64| {
+            let list = if figure == "cp" || figure == "cpk" {
+                &mut capability
+            } else {
+                &mut figures
+            };
+            list.push(Figure {
+                output: info.name.clone(),
+                figure: figure.to_string(),
+                value,
+                lower: value - half,
+                upper: value + half,
+                absolute_tolerance: None,
+                relative_tolerance: None,
+                worse: None,
+            });
         };
-        list.push(Figure {
-            output: output.to_string(),
-            figure: figure.to_string(),
-            value,
-            lower: value - below,
-            upper: value + above,
-            absolute_tolerance: None,
-            relative_tolerance: None,
-            worse: None,
-        });
-    };
-    for (o, (info, acc)) in scenario.outputs.iter().zip(result.outputs).enumerate() {
         let n = acc.moments.n;
-        if n < 2 {
-            return Err(ScenarioError::new(
-                format!("(output {})", info.name),
-                "fewer than 2 finite values: nothing to gate",
-            ));
-        }
-        let nf = n as f64;
         if info.kind == OutputKind::Indicator {
-            let half = two_sample * proportion_standard_error(acc.nonzero as f64 / nf, n);
-            push(&info.name, "fraction", acc.nonzero as f64 / nf, half, half);
+            let fraction = value.fraction.unwrap_or(f64::NAN);
+            let half = bands.two_sample * proportion_standard_error(fraction, n);
+            push("fraction", fraction, half);
             continue;
         }
-        let sd = replicated_sd(replicates, o).unwrap_or_else(|| acc.moments.sd());
-        let mean = acc.moments.mean;
-        let half = replicate_half(o, &|r| r.mean)
-            .unwrap_or_else(|| two_sample * acc.moments.mean_standard_error());
-        push(&info.name, "mean", mean, half, half);
-        let half = replicate_half(o, &|r| r.sd)
-            .unwrap_or_else(|| two_sample * acc.moments.sd_standard_error());
-        push(&info.name, "sd", sd, half, half);
+        let half = bands
+            .replicate(o, &|r| r.mean)
+            .unwrap_or_else(|| bands.two_sample * acc.moments.mean_standard_error());
+        push("mean", value.mean, half);
+        let half = bands
+            .replicate(o, &|r| r.sd)
+            .unwrap_or_else(|| bands.two_sample * acc.moments.sd_standard_error());
+        push("sd", value.sd, half);
         let out = acc.out_of_spec(info.flagged_conform);
         let (min, max) = (acc.moments.min, acc.moments.max);
-        let mut percentiles = Percentiles::new(acc.distribution, n, min, max);
+        let order = OrderStatistics::new(acc.distribution, n, min, max)
+            .expect("the gate keeps the distribution of every continuous output");
         for (name, percent) in GATED_PERCENTS {
-            let (value, low, high) = percentiles.with_interval(percent, z);
+            let (_, low, high) = order.percentile_with_interval(percent, z);
             let k = PERCENTS.iter().position(|p| p.1 == percent);
             let half = k
                 .and_then(|k| {
-                    replicate_half(o, &|r| r.percentiles[k].unwrap_or(f64::NAN))
+                    bands
+                        .replicate(o, &|r| r.percentiles[k].unwrap_or(f64::NAN))
                         .filter(|h| h.is_finite())
                 })
                 .unwrap_or_else(|| std::f64::consts::SQRT_2 * 0.5 * (high - low).max(0.0));
-            push(&info.name, name, value, half, half);
+            let key = name.trim_start_matches('p');
+            push(name, value.percentiles.get(key).unwrap_or(f64::NAN), half);
         }
-        if info.spec.is_some() {
+        if let Some(capability) = &value.capability {
             // Out of spec among every sample drawn (non-finite, excluded and flagged ones
             // included).
             let fraction = out as f64 / samples as f64;
-            let half = replicate_half(o, &|r| 1e6 * r.out_of_spec_fraction)
+            let half = bands
+                .replicate(o, &|r| 1e6 * r.out_of_spec_fraction)
                 .filter(|_| out > 0)
-                .unwrap_or_else(|| two_sample * proportion_standard_error(fraction, samples) * 1e6);
-            push(&info.name, "ppm_out", fraction * 1e6, half, half);
+                .unwrap_or_else(|| {
+                    bands.two_sample * proportion_standard_error(fraction, samples) * 1e6
+                });
+            push("ppm_out", capability.ppm_out, half);
         }
         let hidden = acc.non_finite
             + acc.excluded
@@ -442,97 +444,53 @@ pub fn figures_of(
                 acc.flagged_within_spec
             };
         if let (Some(limits), 0) = (info.spec, hidden) {
-            let indices = rvtol_engine::stats::capability_from_moments(mean, sd, limits);
+            // From the mean and the sd of the figures (a replicated run's sd unbiased under
+            // its design), with the band of the moments' standard errors.
+            let (mean, sd) = (value.mean, value.sd);
+            let indices = capability_from_moments(mean, sd, limits);
             if let Some(cp) = indices.cp {
-                let half = two_sample * cp * acc.moments.sd_standard_error() / sd;
-                push(&info.name, "cp", cp, half, half);
+                let half = bands.two_sample * cp * acc.moments.sd_standard_error() / sd;
+                push("cp", cp, half);
             }
             if let Some(cpk) = indices.cpk {
-                let g2 = acc.moments.excess_kurtosis();
+                let (g2, nf) = (acc.moments.excess_kurtosis(), n as f64);
                 let variance = 1.0 / (9.0 * nf) + cpk * cpk * (g2 + 2.0).max(0.0) / (4.0 * nf);
-                let half = two_sample * variance.sqrt();
-                push(&info.name, "cpk", cpk, half, half);
+                push("cpk", cpk, bands.two_sample * variance.sqrt());
             }
         }
     }
     Ok((figures, capability))
 }
 
-/// The percentiles of one output, exact (sorted values) or from its sketch.
-enum Percentiles {
-    Exact(Vec<f64>),
-    Sketch {
-        sketch: QuantileSketch,
-        center: f64,
-        scale: f64,
-        n: u64,
-        min: f64,
-        max: f64,
-    },
+/// The half-widths of a re-run's bands: √2·z per standard error of one run's figure, or,
+/// for a replicated run, √2·t per standard error of its replicates' values.
+struct Bands<'a> {
+    /// √2·z.
+    two_sample: f64,
+    replicates: &'a [Vec<ReplicateFigures>],
+    /// √2·t, t the Student quantile (R − 1 degrees of freedom) of z's tail probability.
+    replicate_scale: Option<f64>,
 }
 
-impl Percentiles {
-    fn new(distribution: Distribution, n: u64, min: f64, max: f64) -> Percentiles {
-        match distribution {
-            Distribution::Values(mut values) => {
-                values.sort_unstable_by(f64::total_cmp);
-                Percentiles::Exact(values)
-            }
-            Distribution::Sketch {
-                sketch,
-                center,
-                scale,
-            } => Percentiles::Sketch {
-                sketch,
-                center,
-                scale,
-                n,
-                min,
-                max,
-            },
-            Distribution::Indicator | Distribution::Dropped => {
-                unreachable!("the gate keeps the distribution of every continuous output")
-            }
+impl<'a> Bands<'a> {
+    fn new(replicates: &'a [Vec<ReplicateFigures>], z: f64) -> Bands<'a> {
+        Bands {
+            two_sample: std::f64::consts::SQRT_2 * z,
+            replicates,
+            replicate_scale: (!replicates.is_empty()).then(|| {
+                let tail = Normal::new(0.0, 1.0).expect("standard normal").cdf(z);
+                std::f64::consts::SQRT_2 * student_t_quantile(replicates.len() as f64 - 1.0, tail)
+            }),
         }
     }
 
-    /// The percentile and the distribution-free one-sample interval [X_(l), X_(u)] at z
-    /// ([`rvtol_engine::stats::order_statistic_interval`]); from a sketch, each end moved out by
-    /// its error bound α·|x − centre|.
-    fn with_interval(&mut self, percent: f64, z: f64) -> (f64, f64, f64) {
-        match self {
-            Percentiles::Exact(sorted) => {
-                let value = percentile_type7_of_sorted(sorted, percent).unwrap_or(f64::NAN);
-                let (low, high) =
-                    order_statistic_interval(sorted, percent, z).unwrap_or((value, value));
-                (value, low, high)
-            }
-            Percentiles::Sketch {
-                sketch,
-                center,
-                scale,
-                n,
-                min,
-                max,
-            } => {
-                let sketch = StandardisedSketch {
-                    sketch,
-                    center: *center,
-                    scale: *scale,
-                    min: *min,
-                    max: *max,
-                };
-                let last = (*n - 1) as f64;
-                let at_rank =
-                    |rank: f64, outward: f64| sketch.order_statistic(rank as u64, outward);
-                let (nf, p) = (*n as f64, (percent / 100.0).clamp(0.0, 1.0));
-                let value = at_rank((p * last).floor(), 0.0);
-                let reach = z * (nf * p * (1.0 - p)).sqrt();
-                let low = at_rank((nf * p - reach).floor().clamp(0.0, last), -1.0);
-                let high = at_rank((nf * p + reach).ceil().clamp(0.0, last), 1.0);
-                (value, low.min(value), high.max(value))
-            }
-        }
+    /// The half-width from output `o`'s replicate values of a figure, for a replicated
+    /// run.
+    fn replicate(&self, o: usize, figure: &dyn Fn(&ReplicateFigures) -> f64) -> Option<f64> {
+        self.replicate_scale.map(|scale| {
+            let values: Vec<f64> = self.replicates.iter().map(|r| figure(&r[o])).collect();
+            scale * replicate_standard_error(&values)
+        })
     }
 }
 

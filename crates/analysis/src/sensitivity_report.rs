@@ -57,7 +57,7 @@ pub struct ScreeningSourceReport {
     /// Sum of its squared standardized regression coefficients.
     pub src_squared: f64,
     /// Derivatives at the nominal point, keyed by column.
-    pub derivatives_at_nominal: rvtol_engine::report::OrderedNumbers,
+    pub derivatives_at_nominal: rvtol_engine::figures::OrderedNumbers,
 }
 
 /// Screening figures of one output.
@@ -232,7 +232,7 @@ impl SensitivityReport {
                     input: s.input,
                     contribution_percent: 100.0 * s.contribution,
                     src_squared: s.src_squared,
-                    derivatives_at_nominal: rvtol_engine::report::OrderedNumbers(s.derivatives),
+                    derivatives_at_nominal: rvtol_engine::figures::OrderedNumbers(s.derivatives),
                 })
                 .collect();
             sources.sort_by(|a, b| {

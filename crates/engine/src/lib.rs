@@ -10,6 +10,7 @@
 pub mod chunk;
 pub mod error;
 pub mod evaluate;
+pub mod figures;
 pub mod format;
 pub mod input_file;
 pub mod memory;

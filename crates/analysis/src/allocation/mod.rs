@@ -30,13 +30,13 @@ pub mod scaling;
 use rvtol_models::OutputKind;
 use serde_json::Value;
 
+use rvtol_engine::figures::{percentile_of_sorted_with_interval, symmetric95, CONFIDENCE, Z95};
 use rvtol_engine::run::{run_for_output, Distribution, RunSettings};
 use rvtol_engine::scenario::allocation::{self as spec, AllocatableSource, CostKind};
 use rvtol_engine::scenario::{Scenario, ScenarioError};
 use rvtol_engine::stats::{
-    capability_from_moments, cpk_on_upper_side, cpk_standard_error, order_statistic_interval,
-    out_of_spec_interval, percentile_type7_of_sorted, proportion_standard_error, Moments,
-    SpecLimits,
+    capability_from_moments, cpk_on_upper_side, cpk_standard_error, out_of_spec_interval,
+    percentile_type7_of_sorted, proportion_standard_error, Moments, SpecLimits,
 };
 
 use crate::target::{Target, TargetFigure};
@@ -44,8 +44,6 @@ use crate::target::{Target, TargetFigure};
 /// Standard errors kept between the optimised figure and the target.
 pub const MARGIN_Z: f64 = 3.0 + Z95;
 
-/// Φ⁻¹(0.975), the 95 % intervals' quantile.
-const Z95: f64 = 1.959963984540054;
 /// Sequential Lagrange iterations at most.
 pub const MAX_ITERATIONS: usize = 30;
 /// Relative step of the forward differences, on the tolerance factor.
@@ -1073,12 +1071,14 @@ fn evaluate_figure(
     } else {
         0.0
     };
-    let symmetric = |value: f64, se: f64| (value, se, (value - Z95 * se, value + Z95 * se));
+    let symmetric = |value: f64, se: f64| {
+        let [low, high] = symmetric95(value, se);
+        (value, se, (low, high))
+    };
     let (value, se, interval) = match figure {
         TargetFigure::Percentile(p) => {
-            let value = percentile_type7_of_sorted(sorted, p)?;
-            let interval = order_statistic_interval(sorted, p, Z95)?;
-            (value, (interval.1 - interval.0) / (2.0 * Z95), interval)
+            let (value, low, high) = percentile_of_sorted_with_interval(sorted, p, Z95)?;
+            (value, (high - low) / (2.0 * Z95), (low, high))
         }
         TargetFigure::Mean => symmetric(mean, moments.mean_standard_error()),
         TargetFigure::Sd => symmetric(sd, moments.sd_standard_error()),
@@ -1128,13 +1128,13 @@ fn evaluate_figure(
             let se = 1e6 * proportion_standard_error(fraction, samples);
             let interval = match out_of_spec.counted {
                 Some(out) => {
-                    let e = out_of_spec_interval(out, samples, 0.95);
+                    let e = out_of_spec_interval(out, samples, CONFIDENCE);
                     (e.lower * 1e6, e.upper * 1e6)
                 }
-                None => (
-                    (fraction * 1e6 - Z95 * se).max(0.0),
-                    fraction * 1e6 + Z95 * se,
-                ),
+                None => {
+                    let [low, high] = symmetric95(fraction * 1e6, se);
+                    (low.max(0.0), high)
+                }
             };
             (fraction * 1e6, se, interval)
         }
