@@ -11,7 +11,7 @@
 # has no Eq. 11 constraint and few sources), `baseline` and `check` against it (exact, from
 # a sketch, and of the scenario drawn by an rqmc design), a run in two shards merged; per
 # scenario with an `allocation` section, `allocate`; besides, one `evaluate` of sampled
-# rows and one `fit`. Every command's JSON report, its text on
+# rows and one `fit`; `validate` of a few thousand mutated scenarios. Every command's JSON report, its text on
 # standard output, its error line and its exit code are kept (shard files are not: they
 # carry the build's hash). Sample counts are small: the sweep takes a few minutes on two
 # cores; set RVTOL_COMPARE_SCALE=k to multiply them.
@@ -121,6 +121,53 @@ record_plain fit-variables fit "$out/samples-rv20e.csv" --part nothing
 record_plain validate validate "$scenarios/rv20e-lost-motion.json"
 record_plain models models
 record_plain init init geometric_hysteresis -o "$out/init.json"
+
+# validate of mutated scenarios: every problem each reports, in order (the scenario
+# compiler's messages and their order). Deterministic: each scalar and each key of every
+# shipped scenario changed in a few ways.
+mkdir -p "$work/mutants"
+python3 - "$scenarios" "$work/mutants" <<'PY'
+import copy, json, os, sys
+source, target = sys.argv[1], sys.argv[2]
+def places(node, path=()):
+    yield path, node
+    if isinstance(node, dict):
+        for key, value in node.items():
+            yield from places(value, path + (key,))
+    elif isinstance(node, list):
+        for index, value in enumerate(node):
+            yield from places(value, path + (index,))
+def put(document, path, value):
+    node = document
+    for step in path[:-1]:
+        node = node[step]
+    if value is KeyError:
+        del node[path[-1]]
+    else:
+        node[path[-1]] = value
+count = 0
+for name in sorted(os.listdir(source)):
+    if not name.endswith(".json"):
+        continue
+    document = json.load(open(os.path.join(source, name)))
+    for k, (path, node) in enumerate(places(document)):
+        if not path or k % 3:
+            continue
+        changes = [KeyError, "text", -1.5, 0, None, [1, 2]]
+        if isinstance(node, (int, float)) and not isinstance(node, bool):
+            changes += [node * 1e9, -node]
+        for j, value in enumerate(changes):
+            if value is KeyError and isinstance(path[-1], int):
+                continue
+            mutant = copy.deepcopy(document)
+            put(mutant, path, value)
+            count += 1
+            with open(os.path.join(target, "%s.%04d.%d.json" % (name[:-5], k, j)), "w") as f:
+                json.dump(mutant, f)
+PY
+for mutant in "$work"/mutants/*.json; do
+    echo "== $(basename "$mutant"): $("$binary" validate "$mutant" 2>&1 >/dev/null | sed "s#$work#WORK#g"; echo "exit ${PIPESTATUS[0]}")"
+done >"$out/validate-mutants.txt" 2>&1
 
 for f in "$out"/*; do
     case $f in *.stdout | *.stderr | *.json | *.xml) sed -i -e "s#$work#WORK#g" -e "s#$out#OUT#g" \

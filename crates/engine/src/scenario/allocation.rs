@@ -164,7 +164,7 @@ struct ExponentialFile {
 /// A source's `cost`: one or more models; `--cost` picks one when there are several.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct CostFile {
+pub(crate) struct CostFile {
     #[serde(default)]
     reciprocal: Option<ReciprocalFile>,
     #[serde(default)]
@@ -174,7 +174,7 @@ struct CostFile {
 }
 
 impl CostFile {
-    fn models(&self) -> Vec<CostModel> {
+    pub(crate) fn models(&self) -> Vec<CostModel> {
         let mut models = Vec::new();
         if let Some(r) = &self.reciprocal {
             models.push(CostModel::Reciprocal { a: r.a, b: r.b });
@@ -226,7 +226,7 @@ impl CostModel {
         }
     }
 
-    fn validate(&self, path: &str) -> Result<(), ScenarioError> {
+    pub(crate) fn validate(&self, path: &str) -> Result<(), ScenarioError> {
         let finite = |name: &str, v: f64| {
             if v.is_finite() {
                 Ok(())
@@ -340,23 +340,23 @@ pub(crate) struct AllocationFile {
     #[serde(default)]
     #[allow(dead_code)]
     description: Option<String>,
-    sources: BTreeMap<String, AllocationSourceFile>,
+    pub(crate) sources: BTreeMap<String, AllocationSourceFile>,
     #[serde(default)]
-    levers: BTreeMap<String, LeverFile>,
+    pub(crate) levers: BTreeMap<String, LeverFile>,
 }
 
 /// A discrete design choice as written: a model parameter and its candidate values with
 /// their costs.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct LeverFile {
+pub(crate) struct LeverFile {
     /// Documentation for the reader of the file; not used.
     #[serde(default)]
     #[allow(dead_code)]
     description: Option<String>,
-    param: String,
-    values: Vec<f64>,
-    cost: Vec<f64>,
+    pub(crate) param: String,
+    pub(crate) values: Vec<f64>,
+    pub(crate) cost: Vec<f64>,
 }
 
 /// A discrete design choice `rvtol allocate` makes besides the tolerances: a model
@@ -379,80 +379,6 @@ pub struct Lever {
 /// Most candidate combinations of all levers together (each is a whole allocation).
 pub const MAX_LEVER_COMBINATIONS: usize = 64;
 
-/// The `allocation.levers` of a scenario with `n_models` models.
-pub(crate) fn compile_levers(
-    file: &AllocationFile,
-    n_models: usize,
-) -> Result<Vec<Lever>, ScenarioError> {
-    let mut levers = Vec::new();
-    let mut combinations = 1usize;
-    for (name, lever) in &file.levers {
-        let path = format!("allocation.levers.{name}");
-        let parsed = lever
-            .param
-            .strip_prefix("models[")
-            .and_then(|rest| rest.split_once("].params."))
-            .and_then(|(index, key)| Some((index.parse::<usize>().ok()?, key)))
-            .filter(|(_, key)| !key.is_empty() && !key.contains('.'));
-        let Some((model, key)) = parsed else {
-            return Err(ScenarioError::new(
-                format!("{path}.param"),
-                format!(
-                    "{:?} is not a model parameter path such as \"models[0].params.pin_classes\"",
-                    lever.param
-                ),
-            ));
-        };
-        if model >= n_models {
-            return Err(ScenarioError::new(
-                format!("{path}.param"),
-                format!("the scenario has {n_models} models, no models[{model}]"),
-            ));
-        }
-        if lever.values.is_empty() {
-            return Err(ScenarioError::new(
-                format!("{path}.values"),
-                "give at least one candidate value",
-            ));
-        }
-        if lever.cost.len() != lever.values.len() {
-            return Err(ScenarioError::new(
-                format!("{path}.cost"),
-                format!(
-                    "give one cost per value: {} values, {} costs",
-                    lever.values.len(),
-                    lever.cost.len()
-                ),
-            ));
-        }
-        for (i, &c) in lever.cost.iter().enumerate() {
-            if !(c.is_finite() && c >= 0.0) {
-                return Err(ScenarioError::new(
-                    format!("{path}.cost[{i}]"),
-                    format!("must be a finite number ≥ 0, got {}", Shown(c)),
-                ));
-            }
-        }
-        combinations = combinations.saturating_mul(lever.values.len());
-        if combinations > MAX_LEVER_COMBINATIONS {
-            return Err(ScenarioError::new(
-                format!("{path}.values"),
-                format!(
-                    "the levers give more than {MAX_LEVER_COMBINATIONS} combinations, each a whole allocation; offer fewer values"
-                ),
-            ));
-        }
-        levers.push(Lever {
-            name: name.clone(),
-            model,
-            key: key.to_string(),
-            values: lever.values.clone(),
-            costs: lever.cost.clone(),
-        });
-    }
-    Ok(levers)
-}
-
 impl AllocationFile {
     /// Whether the section names any of `names` as a source.
     pub(crate) fn names_any(&self, names: &std::collections::BTreeSet<String>) -> bool {
@@ -462,12 +388,12 @@ impl AllocationFile {
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct AllocationSourceFile {
+pub(crate) struct AllocationSourceFile {
     #[serde(default)]
-    min: Option<f64>,
+    pub(crate) min: Option<f64>,
     #[serde(default)]
-    max: Option<f64>,
-    cost: CostFile,
+    pub(crate) max: Option<f64>,
+    pub(crate) cost: CostFile,
 }
 
 /// A source whose tolerance `rvtol allocate` may change.
@@ -516,106 +442,6 @@ impl AllocatableSource {
             ..self.clone()
         })
     }
-}
-
-/// Validates the `allocation` section against the scenario's parts and variables.
-pub(crate) fn compile_allocation(
-    file: &AllocationFile,
-    sources: &[ToleranceSource],
-) -> Result<Vec<AllocatableSource>, ScenarioError> {
-    if file.sources.is_empty() {
-        return Err(ScenarioError::new(
-            "allocation.sources",
-            "name at least one part or variable whose tolerance may change",
-        ));
-    }
-    if let Some(unknown) = file
-        .sources
-        .keys()
-        .find(|name| !sources.iter().any(|s| &s.name == *name))
-    {
-        return Err(ScenarioError::new(
-            format!("allocation.sources.{unknown}"),
-            format!("no part or variable named {unknown:?}"),
-        ));
-    }
-    let mut allocatable = Vec::with_capacity(file.sources.len());
-    // In scenario order (parts, then variables), the order of every report.
-    for source in sources {
-        let Some(entry) = file.sources.get(&source.name) else {
-            continue;
-        };
-        let path = format!("allocation.sources.{}", source.name);
-        if !(source.current.is_finite() && source.current > 0.0) {
-            return Err(ScenarioError::new(
-                &path,
-                format!(
-                    "{} has no spread to scale (its {} is {})",
-                    source.name,
-                    source.kind.meaning(),
-                    source.current
-                ),
-            ));
-        }
-        let models = entry.cost.models();
-        if models.is_empty() {
-            return Err(ScenarioError::new(
-                format!("{path}.cost"),
-                "give a reciprocal, exponential or table cost model",
-            ));
-        }
-        for model in &models {
-            model.validate(&format!("{path}.cost"))?;
-        }
-        let range = models.iter().find_map(CostModel::range);
-        let min = entry.min.or(range.map(|r| r.0)).ok_or_else(|| {
-            ScenarioError::new(
-                format!("{path}.min"),
-                "required (the smallest tolerance the process can hold)",
-            )
-        })?;
-        let max = entry.max.or(range.map(|r| r.1)).ok_or_else(|| {
-            ScenarioError::new(
-                format!("{path}.max"),
-                "required (the largest tolerance the design may take)",
-            )
-        })?;
-        if !(min.is_finite() && min > 0.0) {
-            return Err(ScenarioError::new(
-                format!("{path}.min"),
-                format!("must be a finite number > 0, got {}", Shown(min)),
-            ));
-        }
-        if !(max.is_finite() && max >= min) {
-            return Err(ScenarioError::new(
-                format!("{path}.max"),
-                format!(
-                    "must be a finite number ≥ min ({}), got {}",
-                    Shown(min),
-                    Shown(max)
-                ),
-            ));
-        }
-        if let Some((lo, hi)) = range {
-            if lo > min || hi < max {
-                return Err(ScenarioError::new(
-                    format!("{path}.cost.table"),
-                    format!(
-                        "covers tolerances {lo} .. {hi} but the bounds are {min} .. {max}: \
-                         the table must cover the bounds"
-                    ),
-                ));
-            }
-        }
-        allocatable.push(AllocatableSource {
-            source: source.clone(),
-            min,
-            max,
-            cost: models[0].clone(),
-            cost_models: models,
-        });
-    }
-    Ok(allocatable)
 }
 
 #[cfg(test)]
