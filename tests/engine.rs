@@ -10,7 +10,7 @@ use rvtol_tests::{linear_closed_form, run_with_threads, scenario_path, SIGMA_BOU
 use statrs::distribution::{ContinuousCDF, Normal};
 
 fn load(file: &str) -> Scenario {
-    Scenario::load(&scenario_path(file)).unwrap()
+    rvtol_analysis::request::scenario::load(&scenario_path(file)).unwrap()
 }
 
 #[test]

@@ -452,7 +452,7 @@ fn requests_that_cannot_fit_are_refused_before_they_start() {
         2,
     );
     // 8 bytes per kept value: 1e9 samples of each continuous output, the figure named.
-    let continuous = rvtol_engine::Scenario::load(&scenario)
+    let continuous = rvtol_analysis::request::scenario::load(&scenario)
         .expect("load")
         .continuous_outputs()
         .len();
@@ -579,16 +579,17 @@ fn requests_that_cannot_fit_are_refused_before_they_start() {
 fn a_baseline_of_a_billion_samples_takes_bounded_memory() {
     // Beyond the exact-percentile limit the gate's percentiles come from the sketch: the
     // memory estimate stays below 100 MB for any sample count (the run is not made).
-    let scenario =
-        rvtol_engine::Scenario::load(&workspace_dir().join("scenarios/rv20e-hysteresis.json"))
-            .expect("load");
+    let scenario = rvtol_analysis::request::scenario::load(
+        &workspace_dir().join("scenarios/rv20e-hysteresis.json"),
+    )
+    .expect("load");
     let settings = rvtol_engine::RunSettings {
         samples: 1_000_000_000,
         seed: 1,
         exact_percentile_limit: rvtol_engine::DEFAULT_EXACT_PERCENTILE_LIMIT,
         sampling: Default::default(),
     };
-    let need = rvtol_engine::memory::run(&scenario, &settings, 2);
+    let need = rvtol_analysis::request::memory::run(&scenario, &settings, 2);
     assert!(need.bytes < 100e6, "{need:?}");
 }
 

@@ -16,7 +16,7 @@ use rvtol_engine::{merge, run, run_chunks, shard_range, RunSettings, Scenario};
 use rvtol_tests::{linear_closed_form, run_with_threads, scenario_path, SIGMA_BOUND};
 
 fn load(file: &str) -> Scenario {
-    Scenario::load(&scenario_path(file)).unwrap()
+    rvtol_analysis::request::scenario::load(&scenario_path(file)).unwrap()
 }
 
 fn settings(method: SamplingMethod, replicates: u64, samples: u64, seed: u64) -> RunSettings {

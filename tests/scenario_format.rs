@@ -409,7 +409,7 @@ fn measured_csv() -> String {
 }
 
 fn load(path: &Path) -> Result<Scenario, String> {
-    Scenario::load(path).map_err(|err| err.to_string())
+    rvtol_analysis::request::scenario::load(path).map_err(|err| err.to_string())
 }
 
 #[test]
@@ -418,7 +418,7 @@ fn a_csv_column_is_read_relative_to_the_scenario_and_written_into_its_text() {
     dir.write("data/measured.csv", &measured_csv());
     let reference = empirical_stack(json!({ "csv": "data/measured.csv", "column": "x" }), "mm");
     let path = dir.write("stack.json", &reference.to_string());
-    let (from_file, text) = Scenario::read(&path).unwrap();
+    let (from_file, text) = rvtol_analysis::request::scenario::read(&path).unwrap();
     let inline = scenario(&empirical_stack(json!({ "values": MEASURED }), "mm"));
     let a = run(&from_file, settings(20_000, 5), &|_| {}).unwrap();
     let b = run(&inline, settings(20_000, 5), &|_| {}).unwrap();
@@ -457,7 +457,8 @@ fn a_csv_column_is_read_relative_to_the_scenario_and_written_into_its_text() {
     assert_eq!(load(&path).unwrap().columns[0].unit.as_deref(), Some("mm"));
     // A text without a CSV reference is returned as it is.
     let plain = std::fs::read_to_string(scenario_path("rv20e-hysteresis.json")).unwrap();
-    let (_, text) = Scenario::read(&scenario_path("rv20e-hysteresis.json")).unwrap();
+    let (_, text) =
+        rvtol_analysis::request::scenario::read(&scenario_path("rv20e-hysteresis.json")).unwrap();
     assert_eq!(text, plain);
 }
 
@@ -689,7 +690,9 @@ fn carrier_in_micrometres_and_arcsec(as_covariance: bool) -> Value {
 fn a_part_in_micrometres_and_arcsec_is_the_part_in_millimetres_and_radians() {
     // The joint normal's mean and covariance over every column agree with the shipped
     // file's to rounding (relative 1e-12), for both ways of giving the part.
-    let shipped = Scenario::load(&scenario_path("linear-stack-correlated.json")).unwrap();
+    let shipped =
+        rvtol_analysis::request::scenario::load(&scenario_path("linear-stack-correlated.json"))
+            .unwrap();
     let (columns, mean, cov) = shipped.input_space.gaussian_specification();
     for as_covariance in [false, true] {
         let converted = scenario(&carrier_in_micrometres_and_arcsec(as_covariance));

@@ -118,7 +118,7 @@ fn every_shipped_scenario_merges_to_the_run_bit_for_bit() {
     // Three full chunks and a partial one: 64 shards leave most of them empty.
     let samples = 3 * CHUNK_SIZE as u64 + 1234;
     for file in shipped() {
-        let scenario = Scenario::load(&scenario_path(&file)).unwrap();
+        let scenario = rvtol_analysis::request::scenario::load(&scenario_path(&file)).unwrap();
         // Exact percentiles, then the sketch (a limit of 0 values forces it).
         for exact_percentile_limit in [u64::MAX, 0] {
             let settings = RunSettings {
@@ -159,7 +159,7 @@ fn sensitivity_merges_to_the_analysis_bit_for_bit() {
         "linear-stack-correlated.json",
         "shapley-linear-gaussian.json",
     ] {
-        let scenario = Scenario::load(&scenario_path(file)).unwrap();
+        let scenario = rvtol_analysis::request::scenario::load(&scenario_path(file)).unwrap();
         // The row bootstrap, then the block bootstrap (a limit of 0 values forces it); a
         // scrambled Sobol' design of 2 replicates (two chunks each, the second part-filled)
         // and a Latin hypercube of 4 (one part-filled chunk each).
@@ -234,7 +234,9 @@ fn sensitivity_merges_to_the_analysis_bit_for_bit() {
         }
     }
     // Shapley effects: 120 permutations of the five-player Gaussian scenario.
-    let scenario = Scenario::load(&scenario_path("shapley-linear-gaussian.json")).unwrap();
+    let scenario =
+        rvtol_analysis::request::scenario::load(&scenario_path("shapley-linear-gaussian.json"))
+            .unwrap();
     let settings = ShapleySettings {
         permutations: 120,
         outer: 64,
@@ -304,7 +306,8 @@ fn sensitivity_merges_to_the_analysis_bit_for_bit() {
 /// check, under the CLI's file checks).
 #[test]
 fn merge_refuses_gaps_and_overlaps() {
-    let scenario = Scenario::load(&scenario_path("rv20e-hysteresis.json")).unwrap();
+    let scenario =
+        rvtol_analysis::request::scenario::load(&scenario_path("rv20e-hysteresis.json")).unwrap();
     let settings = RunSettings {
         samples: 5 * CHUNK_SIZE as u64,
         seed: 3,

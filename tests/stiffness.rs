@@ -4,7 +4,6 @@
 //! unequal cranks, what the disc's shift along its eccentric would change, and the
 //! nominal figures of the three torsion scenarios (docs/models.md §10, §11, §13).
 
-use rvtol_engine::Scenario;
 use rvtol_models::{
     Carrier, CrankElasticError, CrankShaft, CycloidPinContact, ErrorModel, InvoluteStage,
     ModelParams, RollerRow, TorsionCurve, ARCMIN_PER_RAD,
@@ -27,7 +26,7 @@ fn params_of(file: &str) -> ModelParams {
 /// (pin-hole clearance, runout, cumulative pitch error), whose design value is 0 while the
 /// mean of their laws (folded normal, Rayleigh) is not.
 fn nominal_inputs(file: &str) -> Vec<f64> {
-    let scenario = Scenario::load(&scenario_path(file)).unwrap();
+    let scenario = rvtol_analysis::request::scenario::load(&scenario_path(file)).unwrap();
     let mut row = scenario.input_space.mean_row();
     for (column, info) in scenario.columns.iter().enumerate() {
         if [

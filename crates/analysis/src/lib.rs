@@ -10,12 +10,13 @@
 //! - [`allocation`]: the cheapest tolerances that meet a target;
 //! - [`fit`]: a normal model of measured parts, as a scenario fragment;
 //! - [`shard`]: a shard's file and the assembly of a set of them for the merge;
-//! - [`memory`]: what an analysis needs in memory, before it starts.
+//! - [`request`]: the requests the command line and the Python module make (scenario
+//!   sources, settings with their defaults and limits, memory), one API for both.
 
 pub mod allocation;
 pub mod fit;
 pub mod gate;
-pub mod memory;
+pub mod request;
 pub mod screening;
 pub mod sensitivity;
 pub mod sensitivity_report;

@@ -2,7 +2,6 @@
 //! machine ([`crate::limits`]), call the engine, print or write the report
 //! ([`crate::output`]). The engine computes; nothing here does statistics.
 
-use std::collections::BTreeSet;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -10,38 +9,55 @@ use std::sync::OnceLock;
 
 use anyhow::Result;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rvtol_analysis::allocation::allocate as run_allocation;
+use rvtol_analysis::allocation::proposal_document;
 use rvtol_analysis::allocation::report::AllocationReport;
-use rvtol_analysis::allocation::{
-    allocate as run_allocation, default_samples, proposal_document, AllocationSettings,
-};
 use rvtol_analysis::gate;
+use rvtol_analysis::request::allocation::AllocationRequest;
+use rvtol_analysis::request::gate::{
+    check_baseline_samples, check_requirements, check_settings, BaselineRequest, RequirementError,
+};
+use rvtol_analysis::request::input_file::{self, ReadLimit};
+use rvtol_analysis::request::machine::{self, memory_budget};
+use rvtol_analysis::request::memory::{self, MemoryNeed};
+use rvtol_analysis::request::run::{check_samples_out, RunRequest};
+use rvtol_analysis::request::scenario::{ScenarioSource, ScenarioText, SourceError};
+use rvtol_analysis::request::sensitivity::{SensitivityRequest, ShapleyRequest};
+use rvtol_analysis::request::shard::{build_identity, ShardOf};
+use rvtol_analysis::request::table::CsvTable;
+use rvtol_analysis::request::{Caller, Refusal};
 use rvtol_analysis::sensitivity::{
     sobol_indices, SensitivitySettings, DEFAULT_ROW_BOOTSTRAP_LIMIT,
 };
 use rvtol_analysis::sensitivity_report::SensitivityReport;
-use rvtol_analysis::shapley::{shapley_effects, ShapleySettings};
-use rvtol_analysis::target::Target;
+use rvtol_analysis::shapley::shapley_effects;
 use rvtol_deviation::SamplingMethod;
-use rvtol_engine::chunk::Sampling;
-use rvtol_engine::input_file::{self, ReadLimit};
-use rvtol_engine::memory::{self, MemoryNeed};
 use rvtol_engine::run::check_non_finite;
-use rvtol_engine::scenario::allocation::CostKind;
-use rvtol_engine::table::CsvTable;
 use rvtol_engine::{
-    nominal_curves, run as run_scenario, NominalReport, RunReport, RunSettings, Scenario,
-    ScenarioError,
+    nominal_curves, run as run_scenario, NominalReport, RunReport, Scenario, ScenarioError,
 };
 
-use crate::limits::{memory_budget, parse_count, parse_sampling, parse_seed, thread_pool, threads};
+use crate::limits::{parse_count, parse_sampling, parse_seed};
 use crate::output::{
     check_targets, is_stdout, note, print, write_bytes, write_report, Format, Input, OutputFile,
     StagedOutputs,
 };
 use crate::{BadInput, Execution, Failed};
 
+/// The command line's spelling of options in the library's messages.
+const CALLER: Caller = Caller::CommandLine;
+
 fn bad_scenario(path: &Path, err: ScenarioError) -> anyhow::Error {
     BadInput(format!("{}: {err}", shown(path))).into()
+}
+
+/// A refused request as one line: a scenario's problem named after its file (`path`), a
+/// request value after its option.
+fn refused(path: &Path, refusal: Refusal) -> anyhow::Error {
+    match refusal {
+        Refusal::Scenario(err) => bad_scenario(path, err),
+        other => BadInput(other.to_string()).into(),
+    }
 }
 
 /// An input path as messages name it: `-` is standard input.
@@ -53,66 +69,28 @@ fn shown(path: &Path) -> String {
     }
 }
 
-/// The bound of a scenario, report or baseline read whole: a quarter of the memory this
-/// process may take (a JSON document takes several times its bytes once parsed), worked out
-/// once.
+/// The bound of a scenario, report or baseline read whole ([`machine::whole_file_limit`]),
+/// worked out once.
 fn whole_file_limit() -> &'static ReadLimit {
     static LIMIT: OnceLock<ReadLimit> = OnceLock::new();
-    LIMIT.get_or_init(|| {
-        let threads = crate::limits::cores() as usize;
-        let (budget, source) = memory_budget(None, threads);
-        ReadLimit {
-            bytes: (budget / 4.0) as u64,
-            source: format!(
-                "a quarter of the {} of memory ({source})",
-                rvtol_deviation::human_bytes(budget)
-            ),
-        }
-    })
+    LIMIT.get_or_init(|| machine::whole_file_limit(CALLER))
 }
 
-/// A file's text (standard input's for `-`) of at most `limit.bytes`, or one line saying
-/// why it cannot be read. Every file read whole is read through
-/// [`rvtol_engine::input_file`].
-fn read_text_within(path: &Path, limit: &ReadLimit) -> Result<String> {
+/// A report's or baseline's text (standard input's for `-`), within [`whole_file_limit`],
+/// or one line saying why it cannot be read.
+fn read_text(path: &Path) -> Result<String> {
     if is_stdout(path) {
-        input_file::read_standard_input(limit)
+        input_file::read_standard_input(whole_file_limit())
     } else {
-        input_file::read_text(path, limit)
+        input_file::read_text(path, whole_file_limit())
     }
     .map_err(|message| BadInput(message).into())
-}
-
-/// A scenario's, report's or baseline's text (standard input's for `-`), within
-/// [`whole_file_limit`].
-fn read_text(path: &Path) -> Result<String> {
-    read_text_within(path, whole_file_limit())
-}
-
-/// The name a scenario without `name` gets: its file stem (`scenario` from standard input).
-fn fallback_name(path: &Path) -> String {
-    path.file_stem()
-        .filter(|_| !is_stdout(path))
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "scenario".to_string())
 }
 
 /// The files a command on the scenario at `path` reads: the scenario and the data files it
 /// refers to (none for standard input, which cannot be read twice).
 fn scenario_inputs(path: &Path) -> Vec<(&'static str, PathBuf)> {
-    if is_stdout(path) {
-        return Vec::new();
-    }
-    let mut inputs = vec![("the scenario file", path.to_path_buf())];
-    if let Ok(text) = input_file::read_text(path, whole_file_limit()) {
-        let folder = rvtol_engine::scenario::scenario_folder(path);
-        inputs.extend(
-            rvtol_engine::scenario::data::data_files(&text, &folder)
-                .into_iter()
-                .map(|file| ("a data file of the scenario", file)),
-        );
-    }
-    inputs
+    ScenarioSource::of_path(path).files(whole_file_limit())
 }
 
 /// Refuses, before a command's work, outputs that cannot be written or would destroy an
@@ -145,21 +123,26 @@ fn target<'a>(
     })
 }
 
-/// A scenario file's text, with the numbers of the data files it refers to written in.
-fn read_scenario_text(path: &Path) -> Result<String> {
-    let text = read_text(path)?;
-    let folder = rvtol_engine::scenario::scenario_folder(path);
-    match rvtol_engine::scenario::data::inline_data_files(&text, &folder, whole_file_limit()) {
-        Ok(inlined) => Ok(inlined.into_owned()),
-        Err(err) => Err(bad_scenario(path, err)),
+/// A source error as one line: a file that cannot be read, or the scenario's problem
+/// named after its file.
+fn unreadable(path: &Path, err: SourceError) -> anyhow::Error {
+    match err {
+        SourceError::Read(message) => BadInput(message).into(),
+        SourceError::Scenario(err) => bad_scenario(path, err),
     }
 }
 
-fn read(path: &Path) -> Result<(Scenario, String)> {
-    let text = read_scenario_text(path)?;
-    let scenario =
-        Scenario::from_json(&text, &fallback_name(path)).map_err(|err| bad_scenario(path, err))?;
-    Ok((scenario, text))
+/// A scenario file's text, with the numbers of the data files it refers to written in.
+fn read_scenario_text(path: &Path) -> Result<ScenarioText> {
+    (ScenarioSource::of_path(path))
+        .read(whole_file_limit())
+        .map_err(|err| unreadable(path, err))
+}
+
+fn read(path: &Path) -> Result<(Scenario, ScenarioText)> {
+    (ScenarioSource::of_path(path))
+        .load(whole_file_limit())
+        .map_err(|err| unreadable(path, err))
 }
 
 fn load(path: &Path) -> Result<Scenario> {
@@ -309,21 +292,36 @@ fn check_memory(
     command: &str,
     threads: usize,
 ) -> Result<()> {
-    let (budget, source) = memory_budget(execution.max_memory, threads);
-    need.check(budget, &source)
-        .map_err(|message| BadInput(format!("{command}: {message}")).into())
+    machine::check_memory(need, command, execution.max_memory, threads, CALLER)
+        .map_err(|message| BadInput(message).into())
+}
+
+/// The worker-thread count of a command ([`machine::threads`]).
+fn threads(execution: &Execution) -> Result<usize> {
+    machine::threads(execution.threads, CALLER)
+        .map_err(|refusal| BadInput(refusal.to_string()).into())
+}
+
+/// A pool of `threads` workers.
+fn thread_pool(threads: usize) -> Result<rayon::ThreadPool> {
+    machine::thread_pool(threads).map_err(|message| BadInput(message).into())
 }
 
 /// The thread pool of a Monte Carlo command, once its memory need at that thread count
-/// (`need`) fits the budget.
+/// (`need`) fits the budget ([`machine::pool_for`]).
 fn pool_for(
     execution: &Execution,
     command: &str,
     need: impl FnOnce(usize) -> MemoryNeed,
 ) -> Result<rayon::ThreadPool> {
-    let threads = threads(execution.threads)?;
-    check_memory(need(threads), execution, command, threads)?;
-    thread_pool(threads)
+    machine::pool_for(
+        command,
+        execution.threads,
+        execution.max_memory,
+        CALLER,
+        need,
+    )
+    .map_err(|message| BadInput(message).into())
 }
 
 /// The report first, then the failure of a run that lost more samples than allowed.
@@ -444,78 +442,19 @@ fn parsed(json: &str) -> serde_json::Value {
     serde_json::from_str(json).expect("the engine's JSON report parses")
 }
 
-/// A run's settings as the command line gives them (each unset one from the scenario).
-pub struct RunChoice {
-    /// `--samples`.
-    pub samples: Option<u64>,
-    /// `--seed`.
-    pub seed: Option<u64>,
-    /// `--exact-percentile-limit`.
-    pub exact_percentile_limit: u64,
-    /// `--sampling`.
-    pub sampling: Option<SamplingMethod>,
-    /// `--replicates`.
-    pub replicates: Option<u64>,
-}
-
-/// A check's error about a value the command line gave (its `option` named when `given`),
-/// else about the scenario file's value.
-fn option_or_scenario_error(
-    path: &Path,
-    err: ScenarioError,
-    options: &[(&str, &str, bool)],
-) -> anyhow::Error {
-    match options
-        .iter()
-        .find(|(key, _, given)| *given && err.path == *key)
-    {
-        Some((_, option, _)) => BadInput(format!("{option}: {}", err.message)).into(),
-        None => bad_scenario(path, err),
-    }
-}
-
-impl RunChoice {
-    /// The error of [`RunSettings::check`], named after the option when the command line
-    /// gave the value it is about.
-    fn checked_error(&self, path: &Path, err: ScenarioError) -> anyhow::Error {
-        option_or_scenario_error(
-            path,
-            err,
-            &[
-                ("samples", "--samples", self.samples.is_some()),
-                ("sampling", "--sampling", self.sampling.is_some()),
-                ("replicates", "--replicates", self.replicates.is_some()),
-            ],
-        )
-    }
-
-    /// The settings for `scenario`: what the command line says, else the scenario's
-    /// ([`Sampling::chosen`]).
-    pub fn settings(&self, scenario: &Scenario) -> RunSettings {
-        RunSettings {
-            samples: self.samples.unwrap_or(scenario.samples),
-            seed: self.seed.unwrap_or(scenario.seed),
-            exact_percentile_limit: self.exact_percentile_limit,
-            sampling: Sampling::chosen(scenario.sampling, self.sampling, self.replicates),
-        }
-    }
-}
-
 pub fn run(
     scenario_path: &Path,
-    choice: RunChoice,
+    request: RunRequest,
     to: Destinations<'_>,
     execution: &Execution,
 ) -> Result<()> {
     outputs_ok(&to.targets(&[]), &scenario_inputs(scenario_path))?;
     let scenario = load(scenario_path)?;
-    let settings = choice.settings(&scenario);
-    settings
-        .check(&scenario)
-        .map_err(|err| choice.checked_error(scenario_path, err))?;
+    let settings =
+        (request.settings(&scenario, CALLER)).map_err(|refusal| refused(scenario_path, refusal))?;
     if to.samples.is_some() {
-        rvtol_engine::evaluate::check_table_rows(&scenario, settings.samples)
-            .map_err(|message| BadInput(format!("--samples-out: {message}; run fewer samples")))?;
+        check_samples_out(&scenario, settings.samples, CALLER)
+            .map_err(|refusal| refused(scenario_path, refusal))?;
     }
     let pool = pool_for(execution, "run", |threads| {
         memory::run(&scenario, &settings, threads)
@@ -672,7 +611,7 @@ pub fn init(model: &str, params: &[String], output: Option<&Path>) -> Result<()>
 
 pub fn validate(scenario_path: &Path) -> Result<()> {
     let text = read_scenario_text(scenario_path)?;
-    match Scenario::from_json_all_problems(&text, &fallback_name(scenario_path)) {
+    match Scenario::from_json_all_problems(&text.text, &text.fallback_name) {
         Ok(scenario) => {
             let count =
                 |n: usize, noun: &str| format!("{n} {noun}{}", if n == 1 { "" } else { "s" });
@@ -709,7 +648,7 @@ pub fn validate(scenario_path: &Path) -> Result<()> {
 #[derive(Debug, Clone, clap::Args)]
 pub struct SensitivityArgs {
     /// Base samples N; the models are evaluated N·(2·groups + 2) times.
-    #[arg(long, default_value_t = 65_536, value_parser = parse_count, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = rvtol_analysis::request::sensitivity::DEFAULT_SAMPLES, value_parser = parse_count, allow_hyphen_values = true)]
     pub samples: u64,
     /// Seed of the random streams (default: the scenario's `seed`, else 1).
     #[arg(long, value_parser = parse_seed, allow_hyphen_values = true)]
@@ -735,18 +674,30 @@ pub struct SensitivityArgs {
     #[arg(long)]
     pub shapley: bool,
     /// Shapley: permutation budget (all orders when d! fits, repeated).
-    #[arg(long, default_value_t = 600, value_parser = parse_count, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = rvtol_analysis::request::sensitivity::DEFAULT_PERMUTATIONS, value_parser = parse_count, allow_hyphen_values = true)]
     pub permutations: u64,
     /// Shapley: outer draws per conditional-variance estimate.
-    #[arg(long, default_value_t = 256, value_parser = parse_count, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = rvtol_analysis::request::sensitivity::DEFAULT_OUTER, value_parser = parse_count, allow_hyphen_values = true)]
     pub outer: u64,
 }
 
-/// Bootstrap resamples of a Monte Carlo sensitivity analysis unless the command line says.
-const DEFAULT_BOOTSTRAP: u64 = 500;
-
-/// Most Shapley permutations and outer draws: their product sets the model evaluations.
-const MAX_SHAPLEY_DRAWS: u64 = 1_000_000_000;
+impl SensitivityArgs {
+    /// The analysis the command line asks for.
+    pub fn request(&self) -> SensitivityRequest {
+        SensitivityRequest {
+            samples: self.samples,
+            seed: self.seed,
+            sampling: self.sampling,
+            replicates: self.replicates,
+            bootstrap: self.bootstrap,
+            row_bootstrap_limit: self.row_bootstrap_limit,
+            shapley: self.shapley.then_some(ShapleyRequest {
+                permutations: self.permutations,
+                outer: self.outer,
+            }),
+        }
+    }
+}
 
 pub fn sensitivity(
     path: &Path,
@@ -756,9 +707,11 @@ pub fn sensitivity(
 ) -> Result<()> {
     outputs_ok(&to.targets(&[]), &scenario_inputs(path))?;
     let scenario = load(path)?;
-    let settings = sensitivity_settings(path, &scenario, &args)?;
+    let request = args.request();
+    let settings =
+        (request.settings(&scenario, CALLER)).map_err(|refusal| refused(path, refusal))?;
     let pool = pool_for(execution, "sensitivity", |threads| {
-        rvtol_analysis::memory::sensitivity(&scenario, &settings, threads)
+        memory::sensitivity(&scenario, &settings, threads)
     })?;
     let bar = Progress::new(
         "sensitivity",
@@ -770,79 +723,16 @@ pub fn sensitivity(
         .install(|| sobol_indices(&scenario, settings, &|n| bar.inc(n)))
         .map_err(|err| bad_scenario(path, err))?;
     bar.finish_and_clear();
-    let shapley = if args.shapley {
-        Some(
-            pool.install(|| shapley_effects(&scenario, shapley_settings(&args, settings.seed)))
+    let shapley = match request.shapley_settings(settings.seed) {
+        Some(shapley) => Some(
+            pool.install(|| shapley_effects(&scenario, shapley))
                 .map_err(|err| bad_scenario(path, err))?,
-        )
-    } else {
-        None
+        ),
+        None => None,
     };
     finish_sensitivity(
         path, &scenario, settings, outputs, shapley, to, execution, &pool,
     )
-}
-
-/// The analysis' settings from the command line, checked.
-fn sensitivity_settings(
-    path: &Path,
-    scenario: &Scenario,
-    args: &SensitivityArgs,
-) -> Result<SensitivitySettings> {
-    if args.samples < 2 {
-        return Err(BadInput("--samples: sensitivity needs at least 2 base samples".into()).into());
-    }
-    let sampling = Sampling::chosen(scenario.sampling, args.sampling, args.replicates);
-    if sampling.is_replicated() && args.bootstrap.is_some() {
-        return Err(BadInput(format!(
-            "--bootstrap: the intervals of a replicated {} design come from its replicates, not a bootstrap; leave --bootstrap out, or give --sampling mc",
-            sampling.method.name()
-        ))
-        .into());
-    }
-    // The base samples are the command line's (`--samples` or its default), never the
-    // scenario's.
-    sampling
-        .check(args.samples, "base samples", &scenario.input_space)
-        .map_err(|err| {
-            option_or_scenario_error(
-                path,
-                err,
-                &[
-                    ("samples", "--samples", true),
-                    ("sampling", "--sampling", args.sampling.is_some()),
-                    ("replicates", "--replicates", args.replicates.is_some()),
-                ],
-            )
-        })?;
-    let bootstrap = args.bootstrap.unwrap_or(DEFAULT_BOOTSTRAP);
-    if !(2..=1_000_000).contains(&bootstrap) {
-        return Err(BadInput("--bootstrap: must be between 2 and 1000000 resamples".into()).into());
-    }
-    if args.shapley && args.permutations.saturating_mul(args.outer) > MAX_SHAPLEY_DRAWS {
-        return Err(BadInput(format!(
-            "--permutations × --outer: at most {MAX_SHAPLEY_DRAWS} conditional draws, got {} × {}",
-            args.permutations, args.outer
-        ))
-        .into());
-    }
-    Ok(SensitivitySettings {
-        base_samples: args.samples,
-        seed: args.seed.unwrap_or(scenario.seed),
-        bootstrap: bootstrap as usize,
-        confidence: 0.95,
-        row_bootstrap_limit: args.row_bootstrap_limit,
-        sampling,
-    })
-}
-
-fn shapley_settings(args: &SensitivityArgs, seed: u64) -> ShapleySettings {
-    ShapleySettings {
-        permutations: args.permutations as usize,
-        outer: args.outer as usize,
-        inner: 3,
-        seed,
-    }
 }
 
 /// The screening, the report and its files, and the check of the rows lost to non-finite
@@ -907,14 +797,18 @@ pub fn sensitivity_shard(
     execution: &Execution,
 ) -> Result<()> {
     outputs_ok(&[partial_target(partial_path)], &scenario_inputs(path))?;
-    use rvtol_analysis::shard::{ShapleyShard, ShardCommand, ShardContent, ShardHeader};
+    use rvtol_analysis::request::shard::{sensitivity_command, shapley_shard};
+    use rvtol_analysis::shard::ShardContent;
     let (scenario, text) = read(path)?;
-    let settings = sensitivity_settings(path, &scenario, &args)?;
-    let build = build_identity()?;
+    let request = args.request();
+    let settings =
+        (request.settings(&scenario, CALLER)).map_err(|refusal| refused(path, refusal))?;
+    let build = build_identity().map_err(BadInput)?;
     let pool = pool_for(execution, "sensitivity", |threads| {
-        rvtol_analysis::memory::sensitivity(&scenario, &settings, threads)
+        memory::sensitivity(&scenario, &settings, threads)
     })?;
-    let chunks = rvtol_engine::shard_range(settings.chunk_count(), shard, shards);
+    let of = ShardOf { shard, shards };
+    let chunks = of.range(settings.chunk_count());
     let bar = Progress::new(
         "sensitivity",
         settings.samples_before_chunk(chunks.end) - settings.samples_before_chunk(chunks.start),
@@ -929,46 +823,21 @@ pub fn sensitivity_shard(
         })
         .map_err(|err| bad_scenario(path, err))?;
     bar.finish_and_clear();
-    let (shapley, shapley_shard) = if args.shapley {
-        let shapley_settings = shapley_settings(&args, settings.seed);
-        let total = rvtol_analysis::shapley::shapley_permutations(&scenario, shapley_settings)
-            .map_err(|err| bad_scenario(path, err))?;
-        let range = rvtol_engine::chunk::shard_range(total, shard, shards);
-        let partial = pool
-            .install(|| {
-                rvtol_analysis::shapley::shapley_partial(&scenario, shapley_settings, range.clone())
-            })
-            .map_err(|err| bad_scenario(path, err))?;
-        (
-            Some(partial),
-            Some(ShapleyShard {
-                budget: args.permutations,
-                outer: args.outer,
-                permutations: total,
-                range: [range.start, range.end],
-            }),
-        )
-    } else {
-        (None, None)
+    let (shapley, shapley_part) = match shapley_shard(&scenario, &request, settings.seed, of)
+        .map_err(|err| bad_scenario(path, err))?
+    {
+        Some((shapley_settings, part, range)) => {
+            let partial = pool
+                .install(|| {
+                    rvtol_analysis::shapley::shapley_partial(&scenario, shapley_settings, range)
+                })
+                .map_err(|err| bad_scenario(path, err))?;
+            (Some(partial), Some(part))
+        }
+        None => (None, None),
     };
-    let header = ShardHeader {
-        rvtol_version: env!("CARGO_PKG_VERSION").to_string(),
-        build,
-        scenario_fallback_name: fallback_name(path),
-        scenario_file: text,
-        command: ShardCommand::Sensitivity {
-            samples: settings.base_samples,
-            seed: settings.seed,
-            bootstrap: settings.bootstrap as u64,
-            row_bootstrap_limit: args.row_bootstrap_limit,
-            sampling: settings.sampling.method.name().to_string(),
-            replicates: settings.sampling.replicates,
-            shapley: shapley_shard,
-        },
-        shard,
-        shards,
-        chunks: [chunks.start, chunks.end],
-    };
+    let command = sensitivity_command(&request, &settings, shapley_part);
+    let header = of.header(build, &text, command, &chunks);
     write_bytes(
         partial_path,
         &rvtol_analysis::shard::encode(&header, &ShardContent::Sensitivity { sobol, shapley }),
@@ -997,15 +866,13 @@ pub fn baseline(
         &scenario_inputs(path),
     )?;
     let (scenario, text) = read(path)?;
-    let settings = RunSettings {
-        samples: samples.unwrap_or(scenario.samples),
-        seed: seed.unwrap_or(scenario.seed),
+    let request = BaselineRequest {
+        samples,
+        seed,
         exact_percentile_limit,
-        sampling: scenario.sampling,
     };
-    if settings.samples < 2 {
-        return Err(BadInput("--samples: a baseline needs at least 2 samples".into()).into());
-    }
+    let settings =
+        (request.settings(&scenario, CALLER)).map_err(|refusal| refused(path, refusal))?;
     let pool = pool_for(execution, "baseline", |threads| {
         memory::run(&scenario, &settings, threads)
     })?;
@@ -1017,9 +884,13 @@ pub fn baseline(
     );
     let baseline = pool
         .install(|| {
-            gate::baseline(&scenario, &text, settings, execution.max_non_finite, &|n| {
-                bar.inc(n)
-            })
+            gate::baseline(
+                &scenario,
+                &text.text,
+                settings,
+                execution.max_non_finite,
+                &|n| bar.inc(n),
+            )
         })
         .map_err(|err| bad_scenario(path, err))?;
     bar.finish_and_clear();
@@ -1070,25 +941,15 @@ pub fn check(
     recorded
         .matches(&scenario)
         .map_err(|err| bad_scenario(baseline_path, err))?;
-    for (i, text) in recorded.requirements.iter().enumerate() {
-        gate::parse_requirement(&scenario, text).map_err(|err| {
-            BadInput(format!(
-                "{}: requirements[{i}]: {err}",
-                baseline_path.display()
-            ))
-        })?;
-    }
-    for text in &options.requirements {
-        gate::parse_requirement(&scenario, text)
-            .map_err(|err| BadInput(format!("--require: {err}")))?;
-    }
-    let seed = seed.unwrap_or(recorded.seed);
-    let settings = RunSettings {
-        samples: recorded.samples,
-        seed,
-        exact_percentile_limit: recorded.exact_percentile_limit,
-        sampling: scenario.sampling,
-    };
+    check_requirements(&scenario, &recorded, options, CALLER).map_err(|err| match err {
+        RequirementError::Baseline { index, message } => BadInput(format!(
+            "{}: requirements[{index}]: {message}",
+            baseline_path.display()
+        )),
+        RequirementError::Given(refusal) => BadInput(refusal.to_string()),
+    })?;
+    let settings = check_settings(&scenario, &recorded, seed);
+    let seed = settings.seed;
     let pool = pool_for(execution, "check", |threads| {
         memory::run(&scenario, &settings, threads)
     })?;
@@ -1102,7 +963,7 @@ pub fn check(
         .install(|| {
             gate::check_with(
                 &scenario,
-                &text,
+                &text.text,
                 &recorded,
                 seed,
                 execution.max_non_finite,
@@ -1163,26 +1024,17 @@ pub fn allocate(
         &scenario_inputs(path),
     )?;
     let (scenario, text) = read(path)?;
-    let target = Target::parse(&args.target).map_err(|err| BadInput(format!("--target: {err}")))?;
-    let cost = args
-        .cost
-        .map(|name| {
-            CostKind::parse(&name).ok_or_else(|| {
-                BadInput(format!(
-                    "--cost: unknown cost model {name:?}; use reciprocal, exponential or table"
-                ))
-            })
-        })
-        .transpose()?;
-    let seed = args.seed.unwrap_or(scenario.seed);
-    let settings = AllocationSettings {
-        samples: args.samples.unwrap_or_else(|| default_samples(&target)),
-        seed,
-        verification_seed: args.verify_seed.unwrap_or(seed.wrapping_add(1)),
-        cost,
+    let request = AllocationRequest {
+        target: &args.target,
+        cost: args.cost.as_deref(),
+        samples: args.samples,
+        seed: args.seed,
+        verify_seed: args.verify_seed,
     };
+    let (target, settings) =
+        (request.settings(&scenario, CALLER)).map_err(|refusal| refused(path, refusal))?;
     let pool = pool_for(execution, "allocate", |threads| {
-        rvtol_analysis::memory::allocation(&scenario, settings.samples, threads)
+        memory::allocation(&scenario, settings.samples, threads)
     })?;
     let spinner = if execution.quiet || !std::io::stderr().is_terminal() {
         ProgressBar::hidden()
@@ -1198,9 +1050,14 @@ pub fn allocate(
     };
     let allocation = pool
         .install(|| {
-            run_allocation(&scenario, &text, &args.output, target, settings, &|n| {
-                spinner.set_position(n as u64)
-            })
+            run_allocation(
+                &scenario,
+                &text.text,
+                &args.output,
+                target,
+                settings,
+                &|n| spinner.set_position(n as u64),
+            )
         })
         .map_err(|err| bad_scenario(path, err))?;
     spinner.finish_and_clear();
@@ -1211,8 +1068,8 @@ pub fn allocate(
     let mut staged = StagedOutputs::new();
     if let Some(proposal) = write_scenario {
         if met {
-            let document =
-                proposal_document(&text, &allocation).map_err(|err| bad_scenario(path, err))?;
+            let document = proposal_document(&text.text, &allocation)
+                .map_err(|err| bad_scenario(path, err))?;
             staged.add(proposal, &document)?;
         } else {
             note(&format!(
@@ -1438,7 +1295,7 @@ pub fn evaluate(
     let scenario = load(scenario_path)?;
     // What evaluating the rows takes, from the file's size before it is read; a pipe or
     // standard input is cut where the rows would exceed the memory.
-    let threads = threads(execution.threads)?;
+    let threads = threads(execution)?;
     if let Some(metadata) = std::fs::metadata(inputs_path)
         .ok()
         .filter(|_| !is_stdout(inputs_path))
@@ -1452,7 +1309,7 @@ pub fn evaluate(
             check_memory(need, execution, "evaluate", threads)?;
         }
     }
-    let (budget, budget_source) = memory_budget(execution.max_memory, threads);
+    let (budget, budget_source) = memory_budget(execution.max_memory, threads, CALLER);
     let rows_limit = ReadLimit {
         bytes: ((budget - memory::BASE_BYTES).max(0.0)
             / memory::table_evaluation_factor(&scenario)) as u64,
@@ -1462,74 +1319,12 @@ pub fn evaluate(
         ),
     };
     let table = read_csv(inputs_path, &rows_limit, "--inputs")?;
-    let names = table.names();
-    let known_other =
-        |name: &str| name == SAMPLE_INDEX || scenario.outputs.iter().any(|o| o.name == name);
-    // Where each input column is in the file.
-    let mut position = Vec::with_capacity(scenario.columns.len());
-    let mut missing = Vec::new();
-    for column in &scenario.columns {
-        match names.iter().position(|n| *n == column.name) {
-            Some(i) => position.push(i),
-            None => missing.push(column.name.clone()),
-        }
-    }
-    if !missing.is_empty() {
-        return Err(BadInput(format!(
-            "{}: no column for the input{} {} (the header names every input column of the scenario, as `rvtol run --samples-out` writes it)",
-            table.at(1),
-            if missing.len() > 1 { "s" } else { "" },
-            missing.join(", ")
-        ))
-        .into());
-    }
-    if let Some(unknown) = names
-        .iter()
-        .find(|n| !known_other(n) && !scenario.columns.iter().any(|c| c.name == **n))
-    {
-        return Err(BadInput(format!(
-            "{}: column '{unknown}' is neither an input nor an output of the scenario",
-            table.at(1)
-        ))
-        .into());
-    }
-    let n_inputs = scenario.columns.len();
-    rvtol_engine::evaluate::check_table_rows(&scenario, table.rows.len() as u64).map_err(
-        |message| {
-            BadInput(format!(
-                "{}: {message}; split the file",
-                inputs_path.display()
-            ))
-        },
-    )?;
-    // A heading's unit is the column's: converted into the scenario's unit of that input
-    // (µm into mm), refused when it cannot be (another kind, or a unit rvtol does not know).
-    let mut factor = Vec::with_capacity(position.len());
-    for (column, &i) in scenario.columns.iter().zip(&position) {
-        factor.push(match (&table.columns[i].1, &column.unit) {
-            (Some(given), Some(wanted)) if given != wanted => {
-                rvtol_engine::scenario::units::conversion(given, wanted).ok_or_else(|| {
-                    BadInput(format!(
-                        "{}: column '{} [{given}]' is in {given}, but the input is in {wanted} and {given} does not convert to it (units rvtol knows: {})",
-                        table.at(1),
-                        column.name,
-                        rvtol_engine::scenario::units::known()
-                    ))
-                })?
-            }
-            _ => 1.0,
-        });
-    }
-    let mut values = Vec::with_capacity(table.rows.len() * n_inputs);
-    for (line, record) in &table.rows {
-        for (&i, &f) in position.iter().zip(&factor) {
-            let value = table.number(*line, record, i).map_err(BadInput)?;
-            values.push(if f == 1.0 { value } else { value * f });
-        }
-    }
-    if values.is_empty() {
-        return Err(BadInput(format!("{}: no rows", inputs_path.display())).into());
-    }
+    let values = rvtol_analysis::request::evaluate::input_rows(
+        &table,
+        &inputs_path.display().to_string(),
+        &scenario,
+    )
+    .map_err(|refusal| BadInput(refusal.to_string()))?;
     let pool = thread_pool(threads)?;
     let rows = pool.install(|| rvtol_engine::evaluate::evaluate_rows(&scenario, values));
     // Rows the models could not evaluate are lost data, as a run's samples: counted and
@@ -1547,7 +1342,9 @@ pub fn evaluate(
     }
     match output {
         Some(path) => write_bytes(path, &sample_table_bytes(path, &scenario, &rows)?),
-        None => print(&rvtol_engine::report::sample_csv(&scenario, &rows)),
+        None => print(&rvtol_analysis::request::samples::sample_csv(
+            &scenario, &rows,
+        )),
     }
 }
 
@@ -1558,146 +1355,30 @@ fn sample_table_bytes(
     scenario: &Scenario,
     table: &rvtol_engine::SampleTable,
 ) -> Result<Vec<u8>> {
-    let parquet = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("parquet"));
-    if parquet {
-        rvtol_engine::report::sample_parquet(scenario, table)
-            .map_err(|err| BadInput(format!("{}: {err}", path.display())).into())
-    } else {
-        Ok(rvtol_engine::report::sample_csv(scenario, table).into_bytes())
-    }
+    rvtol_analysis::request::samples::sample_table_bytes(path, scenario, table)
+        .map_err(|err| BadInput(format!("{}: {err}", path.display())).into())
 }
-
-/// The row index column of `run --samples-out` and `evaluate`: not a measurement, `fit`
-/// and `evaluate` leave it out.
-const SAMPLE_INDEX: &str = "sample";
 
 /// `rvtol fit`: a normal model of measured parts, as a scenario fragment.
 pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()> {
-    use rvtol_analysis::fit::{check_fragment, fit as fit_normal, fragment, PART_COMPONENTS};
-    // Diagnostics go to standard error once the fragment is written: a refused fit says
-    // only why.
-    let mut notes: Vec<String> = Vec::new();
+    use rvtol_analysis::fit::{check_fragment, fit as fit_normal, fragment};
+    use rvtol_analysis::request::fit::{fit_columns, FitColumns};
     outputs_ok(
         &[target("-o", output, Format::Json)],
         &[("the measurements", path.to_path_buf())],
     )?;
     let table = read_csv(path, whole_file_limit(), "MEASUREMENTS")?;
-    let names = table.names();
-    // A part's columns in its component order.
-    let order: Vec<usize> = match part {
-        Some(name) => {
-            if name.is_empty()
-                || !name
-                    .chars()
-                    .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
-            {
-                return Err(BadInput(format!(
-                    "--part: '{name}' is not a part name (letters, digits, _ and -)"
-                ))
-                .into());
-            }
-            let prefix = format!("{name}.");
-            let component = |n: &str| n.strip_prefix(&prefix).unwrap_or(n).to_string();
-            // A file with columns `NAME.du` … (several parts, a sample file, an export
-            // with serial numbers) gives the part those six; a file of bare `du` … must
-            // hold nothing else.
-            let qualified = names.iter().any(|n| n.starts_with(&prefix));
-            let ignored: Vec<&str> = names
-                .iter()
-                .filter(|n| (qualified && !n.starts_with(&prefix)) || **n == SAMPLE_INDEX)
-                .copied()
-                .collect();
-            if !ignored.is_empty() {
-                let shown = if ignored.len() > 6 {
-                    format!("{}, … ({} in all)", ignored[..5].join(", "), ignored.len())
-                } else {
-                    ignored.join(", ")
-                };
-                notes.push(format!(
-                    "{}: fitting {name}.du … {name}.dgamma; other columns left out: {shown}",
-                    path.display(),
-                ));
-            }
-            // Columns of other parts but none of this one: most likely a misspelt name.
-            let parts: BTreeSet<&str> = names
-                .iter()
-                .filter_map(|n| n.split_once('.'))
-                .filter(|(_, c)| PART_COMPONENTS.contains(c))
-                .map(|(p, _)| p)
-                .collect();
-            if !qualified && !parts.is_empty() {
-                return Err(BadInput(format!(
-                    "{}: no columns {name}.du … {name}.dgamma (the file has the parts {})",
-                    table.at(1),
-                    parts.into_iter().collect::<Vec<_>>().join(", ")
-                ))
-                .into());
-            }
-            if let Some(other) = names
-                .iter()
-                .find(|n| !ignored.contains(n) && !PART_COMPONENTS.contains(&component(n).as_str()))
-            {
-                return Err(BadInput(format!(
-                    "{}: column '{other}' is not a component of part {name} ({})",
-                    table.at(1),
-                    PART_COMPONENTS.join(", ")
-                ))
-                .into());
-            }
-            let mut order = Vec::new();
-            for c in PART_COMPONENTS {
-                match names.iter().position(|n| component(n) == c) {
-                    Some(i) => order.push(i),
-                    None => {
-                        return Err(BadInput(format!(
-                            "{}: no column for {name}.{c} (a part needs all six components)",
-                            table.at(1)
-                        ))
-                        .into())
-                    }
-                }
-            }
-            order
-        }
-        None => (0..names.len())
-            .filter(|&i| names[i] != SAMPLE_INDEX)
-            .collect(),
-    };
-    let mut rows = Vec::with_capacity(table.rows.len());
-    for (line, record) in &table.rows {
-        rows.push(
-            order
-                .iter()
-                .map(|&i| {
-                    table
-                        .number(*line, record, i)
-                        .map_err(|message| BadInput(message).into())
-                })
-                .collect::<Result<Vec<f64>>>()?,
-        );
-    }
-    let names: Vec<String> = order.iter().map(|&i| table.columns[i].0.clone()).collect();
-    let units: Vec<Option<String>> = order.iter().map(|&i| table.columns[i].1.clone()).collect();
-    if part.is_some() {
-        // A part's translations share one unit, its rotations one.
-        for (kind, range) in [("translation", 0..3), ("rotation", 3..6)] {
-            let first = &units[range.start];
-            if units[range.clone()].iter().any(|u| u != first) {
-                return Err(BadInput(format!(
-                    "{}: the {kind} columns of the part are in different units ({}); give them one",
-                    table.at(1),
-                    units[range]
-                        .iter()
-                        .map(|u| u.as_deref().unwrap_or("none"))
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ))
-                .into());
-            }
-        }
-    }
+    // Diagnostics go to standard error once the fragment is written: a refused fit says
+    // only why.
+    let FitColumns {
+        names,
+        units,
+        headings,
+        rows,
+        notes,
+        ..
+    } = fit_columns(&table, &path.display().to_string(), part, CALLER)
+        .map_err(|refusal| BadInput(refusal.to_string()))?;
     let fitted =
         fit_normal(&names, &rows).map_err(|err| BadInput(format!("{}: {err}", path.display())))?;
     let source = path.file_name().map_or_else(
@@ -1706,13 +1387,6 @@ pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()>
     );
     let value = fragment(&fitted, part, &units, &source);
     // What is printed must validate when pasted into a scenario.
-    let headings: Vec<String> = order
-        .iter()
-        .map(|&i| match &table.columns[i] {
-            (name, Some(unit)) => format!("{name} [{unit}]"),
-            (name, None) => name.clone(),
-        })
-        .collect();
     check_fragment(&fitted, &value, part, &headings)
         .map_err(|message| BadInput(format!("{}: {message}", path.display())))?;
     let text = serde_json::to_string_pretty(&value).expect("a fragment serialises") + "\n";
@@ -1741,27 +1415,11 @@ pub fn fit(path: &Path, part: Option<&str>, output: Option<&Path>) -> Result<()>
     Ok(())
 }
 
-/// This build's identity in shard files: the version and the SHA-256 of the executable.
-/// Shards and their merge must come from one binary: another build may draw or evaluate
-/// differently in the last bits, and the merged report would not be the run's.
-fn build_identity() -> Result<String> {
-    use sha2::{Digest, Sha256};
-    let exe = std::env::current_exe()
-        .map_err(|err| BadInput(format!("cannot find this executable to identify it: {err}")))?;
-    // Hashed as it is read: the executable is never held whole.
-    let cannot = |err: std::io::Error| BadInput(format!("{}: cannot read: {err}", exe.display()));
-    let mut hasher = Sha256::new();
-    std::io::copy(&mut std::fs::File::open(&exe).map_err(cannot)?, &mut hasher).map_err(cannot)?;
-    let digest = hasher.finalize();
-    let hex: String = digest[..8].iter().map(|b| format!("{b:02x}")).collect();
-    Ok(format!("rvtol {} sha256:{hex}", env!("CARGO_PKG_VERSION")))
-}
-
 /// `run --shard K/N --partial FILE`: computes shard K of N of the run and writes its
 /// partial result.
 pub fn run_shard(
     scenario_path: &Path,
-    choice: RunChoice,
+    request: RunRequest,
     (shard, shards): (u64, u64),
     partial_path: &Path,
     execution: &Execution,
@@ -1771,12 +1429,11 @@ pub fn run_shard(
         &scenario_inputs(scenario_path),
     )?;
     let (scenario, text) = read(scenario_path)?;
-    let settings = choice.settings(&scenario);
-    settings
-        .check(&scenario)
-        .map_err(|err| choice.checked_error(scenario_path, err))?;
-    let build = build_identity()?;
-    let chunks = rvtol_engine::shard_range(settings.chunk_count(), shard, shards);
+    let settings =
+        (request.settings(&scenario, CALLER)).map_err(|refusal| refused(scenario_path, refusal))?;
+    let build = build_identity().map_err(BadInput)?;
+    let of = ShardOf { shard, shards };
+    let chunks = of.range(settings.chunk_count());
     let pool = pool_for(execution, "run", |threads| {
         memory::run(&scenario, &settings, threads)
     })?;
@@ -1792,22 +1449,8 @@ pub fn run_shard(
         .install(|| rvtol_engine::run_chunks(&scenario, settings, chunks.clone(), &|n| bar.inc(n)))
         .map_err(|err| bad_scenario(scenario_path, err))?;
     bar.finish_and_clear();
-    let header = rvtol_analysis::shard::ShardHeader {
-        rvtol_version: env!("CARGO_PKG_VERSION").to_string(),
-        build,
-        scenario_fallback_name: fallback_name(scenario_path),
-        scenario_file: text,
-        command: rvtol_analysis::shard::ShardCommand::Run {
-            samples: settings.samples,
-            seed: settings.seed,
-            exact_percentile_limit: settings.exact_percentile_limit,
-            sampling: settings.sampling.method.name().to_string(),
-            replicates: settings.sampling.replicates,
-        },
-        shard,
-        shards,
-        chunks: [chunks.start, chunks.end],
-    };
+    let command = rvtol_analysis::request::shard::run_command(&settings);
+    let header = of.header(build, &text, command, &chunks);
     write_bytes(
         partial_path,
         &rvtol_analysis::shard::encode(&header, &rvtol_analysis::shard::ShardContent::Run(partial)),
@@ -1854,11 +1497,12 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
             .into_iter()
             .flatten()
             .any(is_stdout);
+    use rvtol_analysis::request::shard::{merged, MergeError, Merged, MergedWork};
     use rvtol_analysis::shard;
-    let build = build_identity()?;
+    let build = build_identity().map_err(BadInput)?;
     // The shard files are held decoded, about their size each, while the next is read:
     // together they take at most the memory the merge may use beyond the program's.
-    let (budget, budget_source) = memory_budget(execution.max_memory, threads(execution.threads)?);
+    let (budget, budget_source) = memory_budget(execution.max_memory, threads(execution)?, CALLER);
     let shards_limit = ReadLimit {
         bytes: (budget - memory::BASE_BYTES).max(0.0) as u64,
         source: format!(
@@ -1878,7 +1522,7 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
     }
     let assembly = shard::assemble(files, &build).map_err(BadInput)?;
     let missing_count = assembly.missing_count();
-    let header = assembly.header;
+    let header = &assembly.header;
     if args.missing {
         return if assembly.missing.is_empty() {
             Ok(())
@@ -1902,9 +1546,19 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
         .into());
     }
     let first = &args.partials[0];
-    let scenario = Scenario::from_json(&header.scenario_file, &header.scenario_fallback_name)
-        .map_err(|err| BadInput(format!("{}: its scenario: {err}", first.display())))?;
-    let threads = threads(execution.threads)?;
+    let Merged {
+        header,
+        scenario,
+        work,
+    } = merged(assembly).map_err(|err| match err {
+        MergeError::Scenario(err) => BadInput(format!("{}: its scenario: {err}", first.display())),
+        MergeError::Damaged(err) => BadInput(format!("{}: {err}", first.display())),
+        MergeError::Settings(Refusal::Scenario(err)) => {
+            BadInput(format!("{}: {err}", shown(first)))
+        }
+        MergeError::Settings(refusal) => BadInput(refusal.to_string()),
+    })?;
+    let threads = threads(execution)?;
     let pool = thread_pool(threads)?;
     // What the page's record names as the source: the shard files.
     let source = std::path::PathBuf::from(format!(
@@ -1913,19 +1567,13 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
         header.command.name(),
         first.display()
     ));
-    let settings = match header.command {
-        shard::ShardCommand::Run { .. } => header
-            .command
-            .run_settings()
-            .map_err(|err| BadInput(format!("{}: {err}", first.display())))?
-            .expect("a run command has run settings"),
-        shard::ShardCommand::Sensitivity {
-            samples,
-            seed,
-            bootstrap,
-            row_bootstrap_limit,
-            ref shapley,
-            ..
+    let (settings, partials) = match work {
+        MergedWork::Run { settings, partials } => (settings, partials),
+        MergedWork::Sensitivity {
+            settings,
+            shapley,
+            sobol,
+            permutations,
         } => {
             if args.baseline.is_some() || args.check.is_some() {
                 return Err(BadInput(
@@ -1933,63 +1581,23 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
                 )
                 .into());
             }
-            let sampling = header
-                .command
-                .sampling()
-                .map_err(|err| BadInput(format!("{}: {err}", first.display())))?;
-            let sensitivity_args = SensitivityArgs {
-                samples,
-                seed: Some(seed),
-                sampling: Some(sampling.method),
-                replicates: Some(sampling.replicates),
-                bootstrap: (!sampling.is_replicated()).then_some(bootstrap),
-                row_bootstrap_limit,
-                shapley: shapley.is_some(),
-                permutations: shapley.as_ref().map_or(0, |s| s.budget),
-                outer: shapley.as_ref().map_or(0, |s| s.outer),
-            };
-            let settings = sensitivity_settings(first, &scenario, &sensitivity_args)?;
-            let (mut sobol, mut permutations) = (Vec::new(), Vec::new());
-            for file in assembly.shards {
-                if let shard::ShardContent::Sensitivity {
-                    sobol: s,
-                    shapley: p,
-                } = file.content
-                {
-                    sobol.push(s);
-                    permutations.extend(p);
-                }
-            }
             let outputs = pool
                 .install(|| rvtol_analysis::sensitivity::merge_sobol(&scenario, settings, sobol))
                 .map_err(|err| bad_scenario(first, err))?;
-            let effects = if sensitivity_args.shapley {
-                Some(
+            let effects = match shapley {
+                Some(shapley) => Some(
                     pool.install(|| {
-                        rvtol_analysis::shapley::merge_shapley(
-                            &scenario,
-                            shapley_settings(&sensitivity_args, seed),
-                            permutations,
-                        )
+                        rvtol_analysis::shapley::merge_shapley(&scenario, shapley, permutations)
                     })
                     .map_err(|err| bad_scenario(first, err))?,
-                )
-            } else {
-                None
+                ),
+                None => None,
             };
             return finish_sensitivity(
                 &source, &scenario, settings, outputs, effects, to, execution, &pool,
             );
         }
     };
-    let partials = assembly
-        .shards
-        .into_iter()
-        .filter_map(|f| match f.content {
-            shard::ShardContent::Run(partial) => Some(partial),
-            shard::ShardContent::Sensitivity { .. } => None,
-        })
-        .collect();
     check_memory(
         memory::run(&scenario, &settings, threads),
         execution,
@@ -1999,9 +1607,7 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
     let result = rvtol_engine::merge(&scenario, settings, partials)
         .map_err(|err| bad_scenario(first, err))?;
     if let Some(path) = &args.baseline {
-        if settings.samples < 2 {
-            return Err(BadInput("a baseline needs at least 2 samples".into()).into());
-        }
+        check_baseline_samples(settings.samples).map_err(|message| BadInput(message.into()))?;
         let baseline = gate::baseline_of(
             &scenario,
             &header.scenario_file,

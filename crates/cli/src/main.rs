@@ -404,7 +404,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             partial,
             execution,
         } => {
-            let choice = RunChoice {
+            let request = rvtol_analysis::request::run::RunRequest {
                 samples,
                 seed,
                 exact_percentile_limit,
@@ -413,11 +413,11 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             };
             match (shard, partial) {
                 (Some(shard), Some(partial)) => {
-                    run_shard(&scenario, choice, shard, &partial, &execution)
+                    run_shard(&scenario, request, shard, &partial, &execution)
                 }
                 _ => run(
                     &scenario,
-                    choice,
+                    request,
                     Destinations {
                         json: json.as_deref(),
                         html: html.as_deref(),

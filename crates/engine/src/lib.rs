@@ -12,13 +12,10 @@ pub mod error;
 pub mod evaluate;
 pub mod figures;
 pub mod format;
-pub mod input_file;
-pub mod memory;
 pub mod report;
 pub mod run;
 pub mod scenario;
 pub mod stats;
-pub mod table;
 
 pub use chunk::{shard_range, Sampling};
 pub use evaluate::SampleTable;

@@ -335,7 +335,7 @@ fn shown_path(path: String) -> String {
 
 /// Parses the text into a JSON value: a syntax error (with its line and column) or a
 /// duplicate key (with its path) is the one problem.
-pub(super) fn parse_value(text: &str) -> Result<Value, ScenarioError> {
+pub fn parse_value(text: &str) -> Result<Value, ScenarioError> {
     let mut deserializer = serde_json::Deserializer::from_str(text);
     let value =
         serde_path_to_error::deserialize::<_, Checked>(&mut deserializer).map_err(|err| {

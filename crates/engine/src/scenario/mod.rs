@@ -1,47 +1,35 @@
-//! Scenario files: the only serde types of rvtol, their loading and their validation into
-//! a [`Scenario`] the run can use.
+//! Scenario texts: the only serde types of rvtol and their validation into a [`Scenario`]
+//! the run can use (reading the file and the data files it refers to is rvtol-analysis'
+//! `request::scenario`: the engine reads no file).
 //!
 //! [`file`] parses the text section by section, rejecting unknown keys, wrong types and
 //! values out of range with the JSON path of the value (`parts[0].covariance[2]`);
 //! [`compile`] checks every value once (finite, non-negative, symmetric, positive
 //! semi-definite, every model input bound, known models and outputs, each model's geometry)
 //! and builds the [`Scenario`]. Every problem is a [`ScenarioError`] naming its JSON path;
-//! `rvtol validate` reports them all, the other commands the first. [`data`] writes the
-//! numbers of the data files a scenario file refers to into its text first. The keys and
-//! units are documented in scenarios/README.md.
+//! `rvtol validate` reports them all, the other commands the first. The keys and units are
+//! documented in scenarios/README.md.
 
 pub mod allocation;
 mod compile;
-pub mod data;
 mod file;
 pub mod skeleton;
 pub mod units;
-
-use std::path::Path;
 
 use rvtol_deviation::InputSpace;
 use rvtol_models::{ConditionEffect, ErrorModel, OutputKind};
 
 use crate::chunk::Sampling;
-use crate::input_file::ReadLimit;
 use crate::stats::SpecLimits;
 use allocation::{AllocatableSource, Lever};
 
 pub use crate::error::ScenarioError;
-pub use file::{MAX_ARRAY_MEMBERS, MAX_COVARIANCE, MAX_DEVIATION, MAX_PARAMETER};
+pub use file::{parse_value, MAX_ARRAY_MEMBERS, MAX_COVARIANCE, MAX_DEVIATION, MAX_PARAMETER};
 
 /// Samples of a run when neither the scenario nor the command line sets them.
 pub const DEFAULT_SAMPLES: u64 = 1_000_000;
 /// Seed of a run when neither the scenario nor the command line sets it.
 pub const DEFAULT_SEED: u64 = 1;
-
-/// The folder a scenario file's relative data paths start from.
-pub fn scenario_folder(path: &Path) -> std::path::PathBuf {
-    match path.parent() {
-        Some(parent) if !parent.as_os_str().is_empty() => parent.to_path_buf(),
-        _ => std::path::PathBuf::from("."),
-    }
-}
 
 // ---------------------------------------------------------------------------------------
 // The validated scenario.
@@ -152,27 +140,6 @@ pub struct Scenario {
 }
 
 impl Scenario {
-    /// Reads and validates a scenario file.
-    pub fn load(path: &Path) -> Result<Scenario, ScenarioError> {
-        Scenario::read(path).map(|(scenario, _)| scenario)
-    }
-
-    /// Reads and validates a scenario file, returning its text too.
-    /// The text is the file's with the numbers of the data files it refers to written in
-    /// ([`data::inline_data_files`]); each file within [`ReadLimit::library`].
-    pub fn read(path: &Path) -> Result<(Scenario, String), ScenarioError> {
-        let limit = ReadLimit::library();
-        let text = crate::input_file::read_text(path, &limit)
-            .map_err(|message| ScenarioError::new("(file)", message))?;
-        let text = data::inline_data_files(&text, &scenario_folder(path), &limit)?.into_owned();
-        let fallback_name = path
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "scenario".to_string());
-        let scenario = Scenario::from_json(&text, &fallback_name)?;
-        Ok((scenario, text))
-    }
-
     /// Parses and validates scenario JSON text; the first problem is the error.
     pub fn from_json(text: &str, fallback_name: &str) -> Result<Scenario, ScenarioError> {
         Scenario::from_json_all_problems(text, fallback_name)

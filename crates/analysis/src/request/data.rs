@@ -17,16 +17,16 @@ use std::path::Path;
 
 use serde_json::Value;
 
-use super::file::parse_value;
-use super::ScenarioError;
-use crate::input_file::ReadLimit;
-use crate::table::CsvTable;
+use rvtol_engine::scenario::{parse_value, units, ScenarioError};
+
+use super::input_file::ReadLimit;
+use super::table::CsvTable;
 
 /// The scenario text with every CSV reference of an `empirical` distribution replaced by
 /// the column's numbers; `base` is the folder relative paths start from. An unreadable
 /// file, a missing column or a cell that is not a number is an error at the reference's
 /// JSON path. Empty cells are skipped (columns of different lengths). Each file has at
-/// most `limit.bytes` ([`crate::input_file`]).
+/// most `limit.bytes` ([`super::input_file`]).
 pub fn inline_data_files<'a>(
     text: &'a str,
     base: &Path,
@@ -72,7 +72,7 @@ pub fn inline_data_files<'a>(
                 .find(|(name, _)| *name == column)
                 .and_then(|(_, unit)| unit.clone());
             if let Some(column_unit) = column_unit {
-                let same = |a: &str, b: &str| a == b || super::units::conversion(a, b) == Some(1.0);
+                let same = |a: &str, b: &str| a == b || units::conversion(a, b) == Some(1.0);
                 match variable.get("unit").and_then(Value::as_str) {
                     None => variable["unit"] = Value::from(column_unit),
                     Some(unit) if same(unit, &column_unit) => {}

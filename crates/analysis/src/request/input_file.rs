@@ -11,7 +11,7 @@ use std::path::Path;
 use rvtol_deviation::human_bytes;
 
 /// The bound of a library caller that has no memory allowance of its own (the engine's
-/// [`crate::Scenario::load`], the Python module): 1 GiB.
+/// [`super::scenario`]'s sources, the Python module): 1 GiB.
 pub const LIBRARY_READ_LIMIT: u64 = 1 << 30;
 
 /// The most bytes a file read whole may have, and what sets that bound (for the message

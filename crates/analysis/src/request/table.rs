@@ -6,7 +6,7 @@
 use std::borrow::Cow;
 use std::path::Path;
 
-use crate::input_file::{read_text, ReadLimit};
+use super::input_file::{read_text, ReadLimit};
 
 /// A CSV file of numbers with a header: its columns as (name, unit) from `name [unit]`,
 /// and its rows with their line numbers.
@@ -21,7 +21,7 @@ pub struct CsvTable<'a> {
 
 impl<'a> CsvTable<'a> {
     /// Reads a CSV file of numbers with a header (no column twice), of at most
-    /// `limit.bytes` ([`crate::input_file`]); the error is one line.
+    /// `limit.bytes` ([`super::input_file`]); the error is one line.
     pub fn read(path: &'a Path, limit: &ReadLimit) -> Result<CsvTable<'a>, String> {
         let text = read_text(path, limit)?;
         CsvTable::parse(path, &text)
@@ -47,7 +47,7 @@ impl<'a> CsvTable<'a> {
             .map(|heading| match heading.rsplit_once(" [") {
                 Some((name, unit)) if unit.ends_with(']') => (
                     name.to_string(),
-                    Some(crate::scenario::units::canonical(
+                    Some(rvtol_engine::scenario::units::canonical(
                         unit.trim_end_matches(']'),
                     )),
                 ),

@@ -5,15 +5,20 @@
 //! The estimates count the large, sample-dependent buffers: values kept for exact
 //! percentiles or the row bootstrap, and the per-thread blocks (sampled columns, model
 //! outputs, sample matrices of the analyses). Constant overheads (sketches, model tables,
-//! the program itself) are covered by [`BASE_BYTES`].
+//! the program itself) are covered by [`BASE_BYTES`]. The ways out name the command
+//! line's options; [`MemoryNeed::check`] spells them for the caller.
 
-use crate::chunk::{BLOCK_ROWS, CHUNK_SIZE, WAVE_CHUNKS};
-use crate::run::RunSettings;
-use crate::scenario::Scenario;
 use rvtol_deviation::human_bytes;
+use rvtol_engine::chunk::{BLOCK_ROWS, CHUNK_SIZE, WAVE_CHUNKS};
+use rvtol_engine::format::group_thousands;
+use rvtol_engine::run::RunSettings;
+use rvtol_engine::scenario::{Binding, Scenario};
+
+use super::Caller;
+use crate::sensitivity::{independent_groups, IntervalMethod, SensitivitySettings};
 
 /// Bytes of one kept value.
-pub const VALUE: f64 = 8.0;
+const VALUE: f64 = 8.0;
 /// Allowance for everything that does not grow with the request (program, model tables,
 /// sketches).
 pub const BASE_BYTES: f64 = 64e6;
@@ -30,7 +35,7 @@ pub struct MemoryNeed {
 }
 
 /// How a user needs less worker memory: fewer threads while there are several.
-pub fn fewer_workers(threads: usize) -> &'static str {
+fn fewer_workers(threads: usize) -> &'static str {
     if threads > 1 {
         "use fewer threads (--threads) or fewer input columns"
     } else {
@@ -40,8 +45,8 @@ pub fn fewer_workers(threads: usize) -> &'static str {
 
 impl MemoryNeed {
     /// `Err(one line)` when the need exceeds `budget` bytes (`budget_source` says where the
-    /// budget comes from).
-    pub fn check(&self, budget: f64, budget_source: &str) -> Result<(), String> {
+    /// budget comes from), the options it names spelt for `caller`.
+    pub fn check(&self, budget: f64, budget_source: &str, caller: Caller) -> Result<(), String> {
         if self.bytes <= budget {
             return Ok(());
         }
@@ -51,20 +56,20 @@ impl MemoryNeed {
         } else {
             self.way_out.to_string()
         };
-        Err(format!(
+        Err(caller.respell(&format!(
             "needs about {} of memory ({}, and {} for the program and its tables), more than the {} available ({budget_source}): {way_out}",
             human_bytes(self.bytes),
             self.what,
             human_bytes(BASE_BYTES),
             human_bytes(budget),
-        ))
+        )))
     }
 }
 
 /// The buffers each worker thread of a run keeps: a block of sampled columns and the
 /// sampler's scratch, the chunk's output columns, one model's outputs and its constant
 /// input columns.
-pub fn run_scratch_per_thread(scenario: &Scenario) -> f64 {
+fn run_scratch_per_thread(scenario: &Scenario) -> f64 {
     let constants: usize = scenario
         .models
         .iter()
@@ -72,7 +77,7 @@ pub fn run_scratch_per_thread(scenario: &Scenario) -> f64 {
             bound
                 .bindings
                 .iter()
-                .filter(|b| matches!(b, crate::scenario::Binding::Constant(_)))
+                .filter(|b| matches!(b, Binding::Constant(_)))
                 .count()
         })
         .sum();
@@ -105,7 +110,7 @@ pub fn run(scenario: &Scenario, settings: &RunSettings, threads: usize) -> Memor
         what: if exact {
             format!(
                 "{} kept values for exact percentiles of {continuous} output{}",
-                crate::format::group_thousands((samples * continuous) as u64),
+                group_thousands((samples * continuous) as u64),
                 if continuous == 1.0 { "" } else { "s" }
             )
         } else {
@@ -119,6 +124,77 @@ pub fn run(scenario: &Scenario, settings: &RunSettings, threads: usize) -> Memor
         } else {
             fewer_workers(threads)
         },
+    }
+}
+
+/// `rvtol sensitivity`: the row bootstrap keeps N·(2G + 2) values per continuous output
+/// (twice, while one output's are concatenated); every worker holds a chunk's sample
+/// matrices A, B and a mixed one with their column-major copy, and the chunk's values.
+pub fn sensitivity(
+    scenario: &Scenario,
+    settings: &SensitivitySettings,
+    threads: usize,
+) -> MemoryNeed {
+    let variants = (2 * independent_groups(scenario).len() + 2) as f64;
+    let continuous = scenario.continuous_outputs().len() as f64;
+    let n = settings.base_samples as f64;
+    let method = settings.interval_method(scenario);
+    let rows = method == IntervalMethod::Rows;
+    let kept = match method {
+        IntervalMethod::Rows => VALUE * n * variants * (continuous + 1.0),
+        // Block sums: 2G + 3 numbers per block and output.
+        IntervalMethod::Blocks { rows } => {
+            VALUE * (n / rows as f64).ceil() * (variants + 1.0) * continuous
+        }
+        // One block per chunk.
+        IntervalMethod::Replicates => {
+            VALUE * settings.chunk_count() as f64 * (variants + 1.0) * continuous
+        }
+    };
+    let columns = scenario.input_space.n_columns() as f64;
+    let per_thread = VALUE * CHUNK_SIZE as f64 * (4.0 * columns + variants * continuous);
+    let workers = threads as f64 * per_thread;
+    let (what, way_out) = if rows {
+        (
+            format!(
+                "{} model values for the row bootstrap",
+                group_thousands((n * variants * continuous) as u64)
+            ),
+            "lower --row-bootstrap-limit (the intervals then come from the bounded-memory block bootstrap) or ask for fewer --samples",
+        )
+    } else if kept > workers {
+        (
+            format!(
+                "the sums of {} blocks of rows for the intervals",
+                group_thousands((kept / (VALUE * (variants + 1.0) * continuous.max(1.0))) as u64)
+            ),
+            "ask for fewer --samples",
+        )
+    } else {
+        (
+            format!("the sample matrices of {columns} input columns per worker thread"),
+            fewer_workers(threads),
+        )
+    };
+    MemoryNeed {
+        bytes: BASE_BYTES + kept + workers,
+        what,
+        way_out,
+    }
+}
+
+/// `rvtol allocate`: each Monte Carlo run keeps the targeted output's values (one run at a
+/// time) besides the run's per-thread buffers.
+pub fn allocation(scenario: &Scenario, samples: u64, threads: usize) -> MemoryNeed {
+    let scratch = 4.0 * threads as f64 * run_scratch_per_thread(scenario);
+    let kept = 2.0 * VALUE * samples as f64;
+    MemoryNeed {
+        bytes: BASE_BYTES + kept + scratch,
+        what: format!(
+            "{} kept values of the targeted output per Monte Carlo run",
+            group_thousands(samples)
+        ),
+        way_out: "ask for fewer --samples",
     }
 }
 
