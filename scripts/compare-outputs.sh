@@ -6,15 +6,16 @@
 #   scripts/compare-outputs.sh BINARY OUT_DIR [SCENARIO_DIR]
 #   diff -r OUT_DIR_BEFORE OUT_DIR_AFTER
 #
-# Per scenario: `run` (Monte Carlo with exact percentiles; with a quantile sketch; with an
-# rqmc design), `nominal`, `sensitivity` (Monte Carlo; Shapley effects where the scenario
-# has no Eq. 11 constraint and few sources), `baseline` and `check` against it (exact, from
-# a sketch, and of the scenario drawn by an rqmc design), a run in two shards merged; per
-# scenario with an `allocation` section, `allocate`; besides, one `evaluate` of sampled
-# rows and one `fit`; `validate` of a few thousand mutated scenarios. Every command's JSON report, its text on
-# standard output, its error line and its exit code are kept (shard files are not: they
-# carry the build's hash). Sample counts are small: the sweep takes a few minutes on two
-# cores; set RVTOL_COMPARE_SCALE=k to multiply them.
+# Per scenario: `run` (JSON, text and HTML page; Monte Carlo with exact percentiles, with a
+# quantile sketch, with an rqmc design), `nominal`, `sensitivity` (Monte Carlo; Shapley
+# effects where the scenario has no Eq. 11 constraint and few sources), `baseline` and
+# `check` against it (exact, from a sketch, and of the scenario drawn by an rqmc design), a
+# run and an analysis in two shards merged; per scenario with an `allocation` section,
+# `allocate`; besides, one `evaluate` of sampled rows, one `fit`, and `validate` of a few
+# thousand mutated scenarios. Every command's reports, its text on standard output, its
+# error line and its exit code are kept (shard files are not: they carry the build's
+# hash). Sample counts are small: the sweep takes about five minutes on two cores; set
+# RVTOL_COMPARE_SCALE=k to multiply them.
 set -u
 binary=$(realpath "$1")
 out=$2
@@ -49,14 +50,15 @@ n_sens=$((2048 * scale))
 for path in "$scenarios"/*.json; do
     s=$(basename "$path" .json)
     echo "$s" >&2
-    record "$s.run" run "$path" --samples "$n_run" --seed 7 --json "$out/$s.run.json"
+    record "$s.run" run "$path" --samples "$n_run" --seed 7 --json "$out/$s.run.json" \
+        --html "$out/$s.run.html"
     record "$s.run-sketch" run "$path" --samples "$n_run" --seed 7 \
         --exact-percentile-limit 100 --json "$out/$s.run-sketch.json"
     record "$s.run-rqmc" run "$path" --samples $((8 * 512 * scale)) --seed 7 \
         --sampling rqmc --replicates 8 --json "$out/$s.run-rqmc.json"
     record_plain "$s.nominal" nominal "$path" --json "$out/$s.nominal.json"
     record "$s.sensitivity" sensitivity "$path" --samples "$n_sens" --seed 7 \
-        --bootstrap 40 --json "$out/$s.sensitivity.json"
+        --bootstrap 40 --json "$out/$s.sensitivity.json" --html "$out/$s.sensitivity.html"
     case $s in
     shapley-linear-gaussian | allocation-linear | ishigami | sobol-g | linear-stack-correlated)
         record "$s.shapley" sensitivity "$path" --samples "$n_sens" --seed 7 --bootstrap 40 \
@@ -99,7 +101,7 @@ done
 alloc() {
     local name=$1 scenario=$2 output=$3 target=$4 samples=$5
     record "$name" allocate "$scenarios/$scenario.json" --output "$output" --target "$target" \
-        --samples "$samples" --json "$out/$name.json"
+        --samples "$samples" --json "$out/$name.json" --html "$out/$name.html"
 }
 alloc allocation-linear.allocate allocation-linear gap_mm "sd <= 0.02" $((20000 * scale))
 alloc allocation-linear.allocate-ppm allocation-linear gap_mm "ppm_out <= 2000" $((20000 * scale))
@@ -170,7 +172,7 @@ for mutant in "$work"/mutants/*.json; do
 done >"$out/validate-mutants.txt" 2>&1
 
 for f in "$out"/*; do
-    case $f in *.stdout | *.stderr | *.json | *.xml) sed -i -e "s#$work#WORK#g" -e "s#$out#OUT#g" \
+    case $f in *.stdout | *.stderr | *.json | *.xml | *.html) sed -i -e "s#$work#WORK#g" -e "s#$out#OUT#g" \
         -e "s#$scenarios#SCENARIOS#g" "$f" ;; esac
 done
 exit 0

@@ -15,7 +15,8 @@ use rvtol_analysis::allocation::report::AllocationReport;
 use rvtol_analysis::gate;
 use rvtol_analysis::request::allocation::AllocationRequest;
 use rvtol_analysis::request::gate::{
-    check_baseline_samples, check_requirements, check_settings, BaselineRequest, RequirementError,
+    baseline_matches, check_baseline_samples, check_requirements, check_settings, BaselineRequest,
+    RequirementError,
 };
 use rvtol_analysis::request::input_file::{self, ReadLimit};
 use rvtol_analysis::request::machine::{self, memory_budget};
@@ -1476,6 +1477,102 @@ pub struct MergeArgs {
     pub options: gate::CheckOptions,
 }
 
+/// The shard files at `paths`, decoded. They are held decoded, about their size each,
+/// while the next is read: together they take at most the memory the merge may use beyond
+/// the program's.
+fn read_shards(
+    paths: &[PathBuf],
+    execution: &Execution,
+) -> Result<Vec<(String, rvtol_analysis::shard::ShardFile)>> {
+    let (budget, budget_source) = memory_budget(execution.max_memory, threads(execution)?, CALLER);
+    let shards_limit = ReadLimit {
+        bytes: (budget - memory::BASE_BYTES).max(0.0) as u64,
+        source: format!(
+            "the memory left for the shard files, of the {} available ({budget_source}), less the files read before it",
+            rvtol_deviation::human_bytes(budget)
+        ),
+    };
+    let mut read_so_far = 0u64;
+    let mut files = Vec::with_capacity(paths.len());
+    for path in paths {
+        let bytes =
+            input_file::read_bytes(path, &shards_limit.less(read_so_far)).map_err(BadInput)?;
+        read_so_far += bytes.len() as u64;
+        let file = rvtol_analysis::shard::decode(&bytes)
+            .map_err(|err| BadInput(format!("{}: {err}", path.display())))?;
+        files.push((path.display().to_string(), file));
+    }
+    Ok(files)
+}
+
+/// A run merged from its shards, for a baseline or a check.
+struct MergedRun<'a> {
+    scenario: &'a Scenario,
+    scenario_text: &'a str,
+    settings: rvtol_engine::RunSettings,
+    result: rvtol_engine::RunResult,
+}
+
+/// `merge --check BASELINE`: the merged run checked against the baseline (whose samples
+/// and percentile limit the shards must have run).
+fn merge_check(
+    merged: MergedRun<'_>,
+    baseline_path: &Path,
+    args: &MergeArgs,
+    json: Option<&Path>,
+    stdout_taken: bool,
+    execution: &Execution,
+    pool: &rayon::ThreadPool,
+) -> Result<()> {
+    let baseline_text = read_text(baseline_path)?;
+    let recorded = gate::Baseline::from_json(&baseline_text)
+        .map_err(|err| bad_scenario(baseline_path, err))?;
+    baseline_matches(&recorded, &merged.settings)
+        .map_err(|message| BadInput(format!("{}: {message}", baseline_path.display())))?;
+    let result = std::sync::Mutex::new(Some(merged.result));
+    let report = pool
+        .install(|| {
+            gate::check_result(
+                merged.scenario,
+                merged.scenario_text,
+                &recorded,
+                merged.settings.seed,
+                execution.max_non_finite,
+                &args.options,
+                // The settings are the shards' (checked above): the check's run is
+                // the merged one.
+                &|_| {
+                    result
+                        .lock()
+                        .ok()
+                        .and_then(|mut r| r.take())
+                        .ok_or_else(|| ScenarioError::new("(merge)", "one run per check"))
+                },
+            )
+        })
+        .map_err(|err| bad_scenario(baseline_path, err))?;
+    let mut staged = StagedOutputs::new();
+    if let Some(junit) = &args.junit {
+        staged.add(junit, &report.to_junit())?;
+    }
+    stage_report(
+        &mut staged,
+        json,
+        stdout_taken,
+        || report.to_json(),
+        || report.to_text(),
+    )?;
+    staged.commit()?;
+    if report.passed {
+        Ok(())
+    } else {
+        Err(
+            Failed("figures moved beyond their baseline bands or requirements violated".into())
+                .into(),
+        )
+    }
+}
+
 /// `rvtol merge`: checks the shard files for coverage and identity and folds them into the
 /// run's report (or a baseline, or a check against one).
 pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Result<()> {
@@ -1500,26 +1597,7 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
     use rvtol_analysis::request::shard::{merged, MergeError, Merged, MergedWork};
     use rvtol_analysis::shard;
     let build = build_identity().map_err(BadInput)?;
-    // The shard files are held decoded, about their size each, while the next is read:
-    // together they take at most the memory the merge may use beyond the program's.
-    let (budget, budget_source) = memory_budget(execution.max_memory, threads(execution)?, CALLER);
-    let shards_limit = ReadLimit {
-        bytes: (budget - memory::BASE_BYTES).max(0.0) as u64,
-        source: format!(
-            "the memory left for the shard files, of the {} available ({budget_source}), less the files read before it",
-            rvtol_deviation::human_bytes(budget)
-        ),
-    };
-    let mut read_so_far = 0u64;
-    let mut files = Vec::with_capacity(args.partials.len());
-    for path in &args.partials {
-        let bytes =
-            input_file::read_bytes(path, &shards_limit.less(read_so_far)).map_err(BadInput)?;
-        read_so_far += bytes.len() as u64;
-        let file =
-            shard::decode(&bytes).map_err(|err| BadInput(format!("{}: {err}", path.display())))?;
-        files.push((path.display().to_string(), file));
-    }
+    let files = read_shards(&args.partials, execution)?;
     let assembly = shard::assemble(files, &build).map_err(BadInput)?;
     let missing_count = assembly.missing_count();
     let header = &assembly.header;
@@ -1631,66 +1709,21 @@ pub fn merge(args: MergeArgs, to: Destinations<'_>, execution: &Execution) -> Re
         ));
     }
     if let Some(baseline_path) = &args.check {
-        let baseline_text = read_text(baseline_path)?;
-        let recorded = gate::Baseline::from_json(&baseline_text)
-            .map_err(|err| bad_scenario(baseline_path, err))?;
-        if (recorded.samples, recorded.exact_percentile_limit)
-            != (settings.samples, settings.exact_percentile_limit)
-        {
-            return Err(BadInput(format!(
-                "{}: a baseline of {} samples (exact percentiles up to {} values), the shards ran {} ({}): run the shards with --samples {} --exact-percentile-limit {}",
-                baseline_path.display(),
-                recorded.samples,
-                recorded.exact_percentile_limit,
-                settings.samples,
-                settings.exact_percentile_limit,
-                recorded.samples,
-                recorded.exact_percentile_limit
-            ))
-            .into());
-        }
-        let result = std::sync::Mutex::new(Some(result));
-        let report = pool
-            .install(|| {
-                gate::check_result(
-                    &scenario,
-                    &header.scenario_file,
-                    &recorded,
-                    settings.seed,
-                    execution.max_non_finite,
-                    &args.options,
-                    // The settings are the shards' (checked above): the check's run is
-                    // the merged one.
-                    &|_| {
-                        result
-                            .lock()
-                            .ok()
-                            .and_then(|mut r| r.take())
-                            .ok_or_else(|| ScenarioError::new("(merge)", "one run per check"))
-                    },
-                )
-            })
-            .map_err(|err| bad_scenario(baseline_path, err))?;
-        let mut staged = StagedOutputs::new();
-        if let Some(junit) = &args.junit {
-            staged.add(junit, &report.to_junit())?;
-        }
-        stage_report(
-            &mut staged,
+        let merged = MergedRun {
+            scenario: &scenario,
+            scenario_text: &header.scenario_file,
+            settings,
+            result,
+        };
+        return merge_check(
+            merged,
+            baseline_path,
+            &args,
             to.json,
             stdout_taken,
-            || report.to_json(),
-            || report.to_text(),
-        )?;
-        staged.commit()?;
-        return if report.passed {
-            Ok(())
-        } else {
-            Err(
-                Failed("figures moved beyond their baseline bands or requirements violated".into())
-                    .into(),
-            )
-        };
+            execution,
+            &pool,
+        );
     }
     let failure = non_finite_failure(first, &scenario, &result, execution);
     let report = pool.install(|| RunReport::new(&scenario, result));

@@ -156,6 +156,21 @@ impl RunReport {
     /// per continuous output.
     pub fn to_text(&self) -> String {
         let mut lines = Vec::new();
+        self.header_lines(&mut lines);
+        lines.push(String::new());
+        let name_width = name_column_width(self.outputs.iter().map(|o| o.name.as_str()));
+        self.table_lines(&mut lines, name_width);
+        self.interval_lines(&mut lines, name_width);
+        self.capability_lines(&mut lines);
+        self.accounting_lines(&mut lines);
+        self.histogram_lines(&mut lines);
+        let mut text = lines.join("\n");
+        text.push('\n');
+        text
+    }
+
+    /// The first lines: the run, its sampling and its constraint.
+    fn header_lines(&self, lines: &mut Vec<String>) {
         let method = match self.percentile_method.relative_error {
             Some(alpha) => {
                 format!("percentiles from a sketch (error ≤ {alpha:e} × distance from the centre)")
@@ -197,8 +212,10 @@ impl RunReport {
                 ),
             });
         }
-        lines.push(String::new());
-        let name_width = name_column_width(self.outputs.iter().map(|o| o.name.as_str()));
+    }
+
+    /// The table of every output's mean, sd, percentiles and range.
+    fn table_lines(&self, lines: &mut Vec<String>, name_width: usize) {
         lines.push(format!(
             "{:<name_width$}  {:<8} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10}",
             "output", "unit", "mean", "sd", "P0.135", "P50", "P99.865", "min", "max"
@@ -229,6 +246,11 @@ impl RunReport {
                 format_sig(o.max),
             ));
         }
+    }
+
+    /// The intervals of the continuous outputs' figures: a replicated run's from its
+    /// replicates, else the percentiles' distribution-free ones.
+    fn interval_lines(&self, lines: &mut Vec<String>, name_width: usize) {
         let continuous: Vec<&OutputFigures> = self
             .outputs
             .iter()
@@ -296,6 +318,10 @@ impl RunReport {
                 ));
             }
         }
+    }
+
+    /// The capability of every output with spec limits.
+    fn capability_lines(&self, lines: &mut Vec<String>) {
         let with_spec: Vec<&OutputFigures> = self
             .outputs
             .iter()
@@ -346,6 +372,10 @@ impl RunReport {
                 }
             }
         }
+    }
+
+    /// The samples lost (not finite) and those an indicator excluded or flagged.
+    fn accounting_lines(&self, lines: &mut Vec<String>) {
         for o in &self.outputs {
             if o.non_finite > 0 {
                 lines.push(format!(
@@ -376,6 +406,10 @@ impl RunReport {
                 ));
             }
         }
+    }
+
+    /// A text histogram per continuous output.
+    fn histogram_lines(&self, lines: &mut Vec<String>) {
         for o in self.outputs.iter().filter(|o| o.kind == "continuous") {
             lines.push(String::new());
             lines.push(format!("{} ({})", o.name, o.unit));
@@ -390,9 +424,6 @@ impl RunReport {
             };
             lines.extend(histogram.render_text(40));
         }
-        let mut text = lines.join("\n");
-        text.push('\n');
-        text
     }
 }
 

@@ -86,3 +86,22 @@ pub fn check_settings(scenario: &Scenario, recorded: &Baseline, seed: Option<u64
         sampling: scenario.sampling,
     }
 }
+
+/// Whether a run of `settings` (a merge of shards) can be checked against `recorded`: the
+/// same samples and exact-percentile limit; the error says how to run the shards.
+pub fn baseline_matches(recorded: &Baseline, settings: &RunSettings) -> Result<(), String> {
+    if (recorded.samples, recorded.exact_percentile_limit)
+        != (settings.samples, settings.exact_percentile_limit)
+    {
+        return Err(format!(
+            "a baseline of {} samples (exact percentiles up to {} values), the shards ran {} ({}): run the shards with --samples {} --exact-percentile-limit {}",
+            recorded.samples,
+            recorded.exact_percentile_limit,
+            settings.samples,
+            settings.exact_percentile_limit,
+            recorded.samples,
+            recorded.exact_percentile_limit
+        ));
+    }
+    Ok(())
+}
