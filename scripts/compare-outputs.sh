@@ -45,6 +45,12 @@ record_plain() {
     echo $? >"$out/$name.code"
 }
 
+# Scenarios written to the work folder (an rqmc variant, mutants) find the shared files
+# they name (reducers/) beside them.
+for shared in "$scenarios"/*/; do
+    [ -d "$shared" ] && cp -r "$shared" "$work/"
+done
+
 n_run=$((20000 * scale))
 n_sens=$((2048 * scale))
 for path in "$scenarios"/*.json; do
@@ -128,6 +134,9 @@ record_plain init init geometric_hysteresis -o "$out/init.json"
 # compiler's messages and their order). Deterministic: each scalar and each key of every
 # shipped scenario changed in a few ways.
 mkdir -p "$work/mutants"
+for shared in "$scenarios"/*/; do
+    [ -d "$shared" ] && cp -r "$shared" "$work/mutants/"
+done
 python3 - "$scenarios" "$work/mutants" <<'PY'
 import copy, json, os, sys
 source, target = sys.argv[1], sys.argv[2]

@@ -605,8 +605,7 @@ fn allocate_with_too_few_samples_for_the_tail() {
 fn shipped_with(file: &str, change: impl FnOnce(&mut Value)) -> String {
     let path = common::workspace_dir().join("scenarios").join(file);
     let mut scenario: Value =
-        serde_json::from_str(&std::fs::read_to_string(path).expect("shipped scenario"))
-            .expect("shipped scenario is JSON");
+        serde_json::from_str(&rvtol_tests::shipped_text(path)).expect("shipped scenario is JSON");
     change(&mut scenario);
     serde_json::to_string_pretty(&scenario).expect("serialisable")
 }
@@ -614,12 +613,12 @@ fn shipped_with(file: &str, change: impl FnOnce(&mut Value)) -> String {
 #[test]
 fn contact_with_fewer_pins_than_teeth_plus_one() {
     let contents = shipped_with("rv80e-contact.json", |s| {
-        s["models"][0]["params"]["cycloid_teeth"] = json!(40)
+        s["reducer"]["params"]["cycloid_teeth"] = json!(40)
     });
     assert_bad_scenario(
         "contact-pins",
         &contents,
-        Some("models[0].params.cycloid_teeth"),
+        Some("reducer.params.cycloid_teeth"),
         &["pin_count − 1"],
     );
 }
@@ -627,12 +626,12 @@ fn contact_with_fewer_pins_than_teeth_plus_one() {
 #[test]
 fn transmission_error_with_k1_at_or_above_one() {
     let contents = shipped_with("rv40e-transmission.json", |s| {
-        s["models"][0]["params"]["eccentricity_mm"] = json!(1.6)
+        s["reducer"]["params"]["eccentricity_mm"] = json!(1.6)
     });
     assert_bad_scenario(
         "te-k1",
         &contents,
-        Some("models[0].params.eccentricity_mm"),
+        Some("reducer.params.eccentricity_mm"),
         &["K1", "below 1"],
     );
 }
@@ -653,12 +652,12 @@ fn transmission_error_with_too_few_points() {
 #[test]
 fn contact_with_zero_face_width() {
     let contents = shipped_with("rv80e-contact.json", |s| {
-        s["models"][0]["params"]["disc_face_width_mm"] = json!(0.0)
+        s["reducer"]["params"]["disc_face_width_mm"] = json!(0.0)
     });
     assert_bad_scenario(
         "contact-face-width",
         &contents,
-        Some("models[0].params.disc_face_width_mm"),
+        Some("reducer.params.disc_face_width_mm"),
         &["must be positive"],
     );
 }
@@ -679,12 +678,12 @@ fn elastic_with_negative_stiffness() {
 #[test]
 fn torsion_with_zero_rated_torque() {
     let contents = shipped_with("rv20e-torsion.json", |s| {
-        s["models"][0]["params"]["rated_torque_nm"] = json!(0.0)
+        s["reducer"]["params"]["rated_torque_nm"] = json!(0.0)
     });
     assert_bad_scenario(
         "torsion-rated",
         &contents,
-        Some("models[0].params.rated_torque_nm"),
+        Some("reducer.params.rated_torque_nm"),
         &["must be positive"],
     );
 }
@@ -768,7 +767,7 @@ fn init_refuses_every_parameter_validate_would_refuse() {
 
 /// The shipped geometric RV-20E with `change` applied to its JSON.
 fn rv20e_lost_motion_with(change: impl FnOnce(&mut Value)) -> String {
-    let text = std::fs::read_to_string(common::scenario("rv20e-lost-motion.json")).unwrap();
+    let text = rvtol_tests::shipped_text(common::scenario("rv20e-lost-motion.json"));
     let mut scenario: Value = serde_json::from_str(&text).unwrap();
     change(&mut scenario);
     serde_json::to_string_pretty(&scenario).expect("serialisable")
@@ -788,6 +787,8 @@ fn a_reducer_parameter_given_twice_or_taken_by_no_model_is_refused() {
         Some("models[0].params.pin_count"),
         &["also given in reducer.params", "defined once"],
     );
+    // A shared reducer file holds the keys of every model of its reducer; a key no model
+    // of rvtol takes is still refused.
     let unused = rv20e_lost_motion_with(|s| {
         s["reducer"]["params"]["needle_row_count"] = json!(15);
     });
@@ -795,6 +796,26 @@ fn a_reducer_parameter_given_twice_or_taken_by_no_model_is_refused() {
         "reducer key no model takes",
         &unused,
         Some("reducer.params.needle_row_count"),
+        &["no model of rvtol takes it", "reducers/rv20e.json"],
+    );
+    // A section of the scenario's own holds what its models take: the torsion curve's
+    // journal diameter is refused there.
+    let inline = rv20e_lost_motion_with(|s| {
+        let reducer = s["reducer"].as_object_mut().unwrap();
+        reducer.remove("file");
+        let params = reducer["params"].as_object_mut().unwrap();
+        let entry = rvtol_models::find("rv_lost_motion").unwrap();
+        params.retain(|key, _| entry.params.iter().any(|spec| spec.name == key));
+        params.insert("crank_journal_diameter_mm".into(), json!(15.0));
+        reducer["sources"]
+            .as_object_mut()
+            .unwrap()
+            .retain(|key, _| entry.params.iter().any(|spec| spec.name == key));
+    });
+    assert_bad_scenario(
+        "inline reducer key no model of the scenario takes",
+        &inline,
+        Some("reducer.params.crank_journal_diameter_mm"),
         &["no model of this scenario takes it", "rv_lost_motion"],
     );
     let source = rv20e_lost_motion_with(|s| {

@@ -125,28 +125,29 @@ fn rv20e_nominal_matches_document_000() {
     // (Δu = Δv = Δτ/2, tilts Δτ/L1), which changes the terms below 1e-4 arcmin. The
     // manufacturing errors are at the design point, zero: the scenario's own nominal is the
     // mean of every input, and the mean of a magnitude (a Rayleigh runout) is not zero.
-    let mut document: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(scenario_path("rv20e-hysteresis.json")).unwrap(),
-    )
-    .unwrap();
+    let (_, text) =
+        rvtol_analysis::request::scenario::read(&scenario_path("rv20e-hysteresis.json")).unwrap();
+    let mut document: serde_json::Value = serde_json::from_str(&text).unwrap();
     for (name, binding) in document["models"][0]["inputs"].as_object_mut().unwrap() {
-        if binding.is_string()
-            && !name.starts_with("input_shaft")
-            && name != "crank_bearing_clearance_mm"
-        {
+        let variable = binding.as_str().is_some_and(|b| !b.starts_with("reducer."));
+        if variable && !name.starts_with("input_shaft") && name != "crank_bearing_clearance_mm" {
             *binding = 0.0.into();
         }
     }
-    // Document 000's reading of its Eq. 16 (the physical default puts the design's flanks in
-    // overlap, docs/models.md §2).
+    // Document 000's reading of its Eq. 16 with its printed K1 = 0.72 (the physical default
+    // puts the design's flanks in overlap, docs/models.md §2; the reducer derives 0.692).
     document["models"][0]["params"]["reading"] = "document_000".into();
+    document["models"][0]["params"]["curtate_ratio"] = 0.72.into();
     let scenario = Scenario::from_json(&document.to_string(), "design").unwrap();
     let values = nominal(&scenario).unwrap();
     let get = |name: &str| values[scenario.output_index(name).unwrap()].unwrap();
     assert!((get("hysteresis_arcmin") - 0.5467).abs() < 0.01 * 0.5467);
     assert!((get("involute_stage_arcmin") - 0.02633).abs() < 0.00001);
     assert!((get("crank_bearing_arcmin") - 0.25002).abs() < 0.0001);
-    assert_eq!(get("interference"), 0.0);
+    // The preload rule judges the profile (docs/models.md §14.5): Table 9's modification
+    // overlaps by 1.34 µm, within the limit: preloaded, and the lost motion conforms.
+    assert_eq!(get("preloaded"), 1.0);
+    assert_eq!(get("over_preloaded"), 0.0);
 }
 
 #[test]
@@ -174,7 +175,10 @@ fn golden_values_pin_the_random_stream() {
     // hole clearance became magnitudes (Rayleigh and folded laws) and the cycloid stage took
     // its physical reading (Eq. 13–15 backlash, λ to the output), and again when the
     // magnitude laws took their normals from the ziggurat in bulk (one block per column
-    // after the inverse-CDF scalars) instead of one inverse-CDF uniform each.
+    // after the inverse-CDF scalars) instead of one inverse-CDF uniform each, and again
+    // when the scenario took its reducer from scenarios/reducers/rv20e.json (K1 derived,
+    // 0.692, not the printed 0.72) and the preload rule of every model (the count is now
+    // of over-preloaded assemblies, no longer of every preloaded one).
     let scenario = load("rv20e-hysteresis.json");
     let settings = RunSettings {
         samples: 20_000,
@@ -184,24 +188,24 @@ fn golden_values_pin_the_random_stream() {
     };
     let result = run(&scenario, settings, &|_| {}).unwrap();
     let hysteresis = &result.outputs[scenario.output_index("hysteresis_arcmin").unwrap()];
-    let interference = &result.outputs[scenario.output_index("interference").unwrap()];
+    let over = &result.outputs[scenario.output_index("over_preloaded").unwrap()];
     let golden = format!(
         "{:.12} {:.12} {:.12} {}",
         hysteresis.moments.mean,
         hysteresis.moments.sd(),
         hysteresis.moments.max,
-        interference.nonzero
+        over.nonzero
     );
     assert_eq!(golden, GOLDEN);
 }
 
-const GOLDEN: &str = "0.367167897651 0.216661525931 2.100229557574 14861";
+const GOLDEN: &str = "0.393324775635 0.248388298473 2.234156165160 7184";
 
 /// A copy of a shipped scenario with every variable's numbers multiplied by `factor` and
 /// written in `unit`.
 fn rewritten_in(file: &str, unit: &str, factor: f64) -> String {
     let mut document: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(scenario_path(file)).unwrap()).unwrap();
+        serde_json::from_str(&rvtol_tests::shipped_text(scenario_path(file))).unwrap();
     for variable in document["variables"].as_array_mut().unwrap() {
         variable["unit"] = unit.into();
         for (_, parameters) in variable["distribution"].as_object_mut().unwrap() {
@@ -298,9 +302,9 @@ fn unit_conversion_follows_the_bound_input_and_names_the_unit_in_errors() {
         "{err}"
     );
     // Another kind of unit is still refused at the binding.
-    let mut wrong: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(scenario_path("rv20e-hysteresis.json")).unwrap(),
-    )
+    let mut wrong: serde_json::Value = serde_json::from_str(&rvtol_tests::shipped_text(
+        scenario_path("rv20e-hysteresis.json"),
+    ))
     .unwrap();
     wrong["variables"][0]["unit"] = "arcsec".into();
     let err = Scenario::from_json(&wrong.to_string(), "wrong")

@@ -35,7 +35,7 @@ fn one_line(output: &Output, code: i32) -> String {
 
 fn shipped(file: &str) -> Value {
     let path = workspace_dir().join("scenarios").join(file);
-    serde_json::from_str(&std::fs::read_to_string(path).expect("read")).expect("parse")
+    serde_json::from_str(&rvtol_tests::shipped_text(path)).expect("parse")
 }
 
 fn with(file: &str, change: impl FnOnce(&mut Value)) -> String {
@@ -680,16 +680,16 @@ fn impossible_geometry_is_refused() {
     assert_refused(
         "hardening-eccentricity",
         &with("rv20e-hysteresis.json", |s| {
-            s["models"][0]["params"]["eccentricity_mm"] = Value::from(60.0);
+            s["reducer"]["params"]["eccentricity_mm"] = Value::from(60.0);
         }),
-        &["models[0].params.eccentricity_mm", "e·z_p/r_p = 46.15"],
+        &["reducer.params.eccentricity_mm", "e·z_p/r_p = 46.15"],
     );
     assert_refused(
         "hardening-pin-radius",
         &with("rv80e-contact.json", |s| {
-            s["models"][0]["params"]["pin_radius_mm"] = Value::from(1000.0);
+            s["reducer"]["params"]["pin_radius_mm"] = Value::from(1000.0);
         }),
-        &["models[0].params.pin_radius_mm", "overlap their neighbours"],
+        &["reducer.params.pin_radius_mm", "overlap their neighbours"],
     );
     // Pins that fit between their neighbours but are larger than the profile's smallest
     // convex curvature radius (7.52 mm for the RV-80E: r_p·(1 + K1)³/(K1·(z_p + 1) + 1 +
@@ -697,13 +697,10 @@ fn impossible_geometry_is_refused() {
     assert_refused(
         "hardening-undercut",
         &with("rv80e-contact.json", |s| {
-            s["models"][0]["params"]["pin_radius_mm"] = Value::from(5.5);
-            s["models"][0]["params"]["eccentricity_mm"] = Value::from(1.85);
+            s["reducer"]["params"]["pin_radius_mm"] = Value::from(5.5);
+            s["reducer"]["params"]["eccentricity_mm"] = Value::from(1.85);
         }),
-        &[
-            "models[0].params.pin_radius_mm",
-            "undercut the disc profile",
-        ],
+        &["reducer.params.pin_radius_mm", "undercut the disc profile"],
     );
 }
 

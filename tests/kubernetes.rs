@@ -109,6 +109,13 @@ fn indexed_job_pods_compute_the_run() {
     std::fs::create_dir_all(&data).unwrap();
     let file = scenario("rv80e-contact.json");
     std::fs::copy(&file, data.join("scenario.json")).unwrap();
+    // With the reducer file it names, beside it as in the repository (the recipe's note).
+    std::fs::create_dir_all(data.join("reducers")).unwrap();
+    std::fs::copy(
+        workspace_dir().join("scenarios/reducers/rv80e.json"),
+        data.join("reducers/rv80e.json"),
+    )
+    .unwrap();
     // The pods' own options, with fewer samples.
     let args = ("RVTOL_ARGS", "--samples 30000".to_string());
     // The indices in reverse, as pods finish in any order.

@@ -86,3 +86,15 @@ pub fn run_with_threads(
         .unwrap();
     rvtol_engine::report::RunReport::new(scenario, result).to_json()
 }
+
+/// A shipped scenario's text as rvtol loads it from its file: the reducer file and the data
+/// files it names written in (so the text stands alone, wherever it is written or parsed).
+pub fn shipped_text(path: impl AsRef<std::path::Path>) -> String {
+    let path = path.as_ref();
+    let text = std::fs::read_to_string(path).expect("shipped scenario");
+    let limit = rvtol_analysis::request::input_file::ReadLimit::library();
+    let folder = rvtol_analysis::request::scenario::scenario_folder(path);
+    rvtol_analysis::request::data::inline_data_files(&text, &folder, &limit)
+        .expect("shipped scenario's files")
+        .into_owned()
+}

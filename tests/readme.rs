@@ -162,7 +162,8 @@ fn edit(arguments: &[String], tmp: &Path, root: &Path, example: usize) {
         "README.md:{example}: edit SOURCE POINTER VALUE > DEST"
     );
     let resolve = |p: &str| -> PathBuf { root.join(p.replace("{tmp}", &tmp.to_string_lossy())) };
-    let text = std::fs::read_to_string(resolve(&arguments[0])).expect("edit source");
+    // The copy stands alone: the reducer file it names is written in, as rvtol reads it.
+    let text = rvtol_tests::shipped_text(resolve(&arguments[0]));
     let mut scenario: serde_json::Value = serde_json::from_str(&text).expect("source is JSON");
     let value: serde_json::Value = serde_json::from_str(&arguments[2]).expect("value is JSON");
     *scenario

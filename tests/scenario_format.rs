@@ -106,7 +106,7 @@ fn an_array_draws_what_its_members_as_variables_draw() {
 fn the_shipped_transmission_scenarios_use_arrays() {
     // 40 pins × (radial, tangential) and 39 tooth spaces per disc as four arrays: the
     // file lists 28 variables for 182 quantities, each array one source.
-    let text = std::fs::read_to_string(scenario_path("rv40e-transmission.json")).unwrap();
+    let text = rvtol_tests::shipped_text(scenario_path("rv40e-transmission.json"));
     let document: Value = serde_json::from_str(&text).unwrap();
     assert_eq!(document["variables"].as_array().unwrap().len(), 28);
     let te = Scenario::from_json(&text, "te").unwrap();
@@ -347,9 +347,9 @@ fn an_empirical_run_is_the_same_bytes_on_1_2_and_4_threads() {
 fn empirical_values_in_micrometres_are_converted_to_the_models_millimetres() {
     // linear_stack takes any unit, so the conversion is seen through an RV-20E input in mm:
     // the pin radius error written as measured values in µm.
-    let mut document: Value = serde_json::from_str(
-        &std::fs::read_to_string(scenario_path("rv20e-hysteresis.json")).unwrap(),
-    )
+    let mut document: Value = serde_json::from_str(&rvtol_tests::shipped_text(scenario_path(
+        "rv20e-hysteresis.json",
+    )))
     .unwrap();
     let variable = variable_mut(&mut document, "pin_radius_error");
     variable["unit"] = "µm".into();
@@ -456,7 +456,7 @@ fn a_csv_column_is_read_relative_to_the_scenario_and_written_into_its_text() {
     let path = dir.write("no-unit.json", &no_unit.to_string());
     assert_eq!(load(&path).unwrap().columns[0].unit.as_deref(), Some("mm"));
     // A text without a CSV reference is returned as it is.
-    let plain = std::fs::read_to_string(scenario_path("rv20e-hysteresis.json")).unwrap();
+    let plain = rvtol_tests::shipped_text(scenario_path("rv20e-hysteresis.json"));
     let (_, text) =
         rvtol_analysis::request::scenario::read(&scenario_path("rv20e-hysteresis.json")).unwrap();
     assert_eq!(text, plain);
@@ -755,9 +755,10 @@ fn variable_mut<'a>(document: &'a mut Value, name: &str) -> &'a mut Value {
 
 #[test]
 fn a_reducer_section_is_its_parameters_given_to_each_model() {
-    // scenarios/rv20e-lost-motion.json defines its reducer once in `reducer`; the same
-    // parameters written into the model's `params` give the same run, bit for bit.
-    let text = std::fs::read_to_string(scenario_path("rv20e-lost-motion.json")).unwrap();
+    // scenarios/rv20e-lost-motion.json names its reducer file (scenarios/reducers/rv20e.json,
+    // written into the text when loaded); the same parameters written into the model's
+    // `params` give the same run, bit for bit.
+    let text = rvtol_tests::shipped_text(scenario_path("rv20e-lost-motion.json"));
     let shared: Value = serde_json::from_str(&text).unwrap();
     let mut inline = shared.clone();
     let reducer = inline
@@ -765,8 +766,12 @@ fn a_reducer_section_is_its_parameters_given_to_each_model() {
         .unwrap()
         .remove("reducer")
         .expect("the scenario has a reducer section");
+    // The shared file holds every model's keys: the model takes those it knows.
+    let entry = rvtol_models::find("rv_lost_motion").unwrap();
     for (key, value) in reducer["params"].as_object().unwrap() {
-        inline["models"][0]["params"][key] = value.clone();
+        if entry.params.iter().any(|spec| spec.name == key) {
+            inline["models"][0]["params"][key] = value.clone();
+        }
     }
     let results: Vec<Vec<u64>> = [shared, inline]
         .iter()

@@ -438,7 +438,7 @@ fn screening_of_a_linear_stack_is_exact() {
 
 #[test]
 fn user_defined_groups_replace_their_members() {
-    let text = std::fs::read_to_string(scenario_path("rv20e-hysteresis.json")).unwrap();
+    let text = rvtol_tests::shipped_text(scenario_path("rv20e-hysteresis.json"));
     let grouped = text.replacen(
         "\"spec_limits\"",
         "\"sensitivity_groups\": [{ \"name\": \"cycloid_gear\", \"members\": [\"cycloid_radial_runout\", \"cycloid_cumulative_pitch_error\"] }],\n  \"spec_limits\"",

@@ -6,7 +6,7 @@
 
 use rvtol_engine::report::RunReport;
 use rvtol_engine::{run, RunSettings};
-use rvtol_models::{ErrorModel, ModelParams, ParamValue, RealFft, TransmissionError};
+use rvtol_models::{ErrorModel, ModelParams, RealFft, TransmissionError};
 use rvtol_tests::scenario_path;
 
 fn report(file: &str, samples: u64) -> serde_json::Value {
@@ -133,19 +133,8 @@ fn physical_scenario_runs_with_every_sample_counted() {
 /// The RV40E model of the physical scenario at N points per revolution, with pin and
 /// tooth-space errors.
 fn rv40e(points: usize) -> TransmissionError {
-    let scenario: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(scenario_path("rv40e-transmission.json")).unwrap(),
-    )
-    .unwrap();
-    let mut params = ModelParams::new();
-    for (key, value) in scenario["models"][0]["params"].as_object().unwrap() {
-        let value = match value {
-            serde_json::Value::String(text) => ParamValue::Text(text.clone()),
-            number => ParamValue::Number(number.as_f64().unwrap()),
-        };
-        params.insert(key.clone(), value);
-    }
-    let params = params.with_number("points_per_revolution", points as f64);
+    let params = crate::common::model_params("rv40e-transmission.json")
+        .with_number("points_per_revolution", points as f64);
     TransmissionError::from_params(&params).unwrap()
 }
 
@@ -388,6 +377,9 @@ fn disc_windows_move_as_the_exact_profile_windows_do() {
         .with_number("cycloid_teeth", zc)
         .with_number("pin_circle_radius_mm", r_p)
         .with_number("eccentricity_mm", e)
+        .with_number("pin_radius_mm", 2.0)
+        .with_number("disc_face_width_mm", 8.0)
+        .with_number("rated_torque_nm", 167.0)
         .with_number("pin_position_errors", 1.0);
     let model = TransmissionError::from_params(&params).unwrap();
     let kappa = zc / (zp + 9.0 / 27.0);

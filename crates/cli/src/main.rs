@@ -92,7 +92,7 @@ enum Command {
         /// .parquet, which chooses the format ("-": CSV on stdout instead of the table).
         #[arg(long, value_name = "PATH")]
         samples_out: Option<PathBuf>,
-        /// Exact percentiles while samples × outputs stays at or below this many values;
+        /// Exact percentiles while samples × continuous outputs stays at or below this many values;
         /// a bounded-memory sketch beyond it.
         #[arg(long, value_name = "VALUES", default_value_t = DEFAULT_EXACT_PERCENTILE_LIMIT, value_parser = parse_count, allow_hyphen_values = true)]
         exact_percentile_limit: u64,
@@ -202,7 +202,7 @@ enum Command {
         /// Seed (default: the scenario's `seed`, else 1).
         #[arg(long, value_parser = parse_seed, allow_hyphen_values = true)]
         seed: Option<u64>,
-        /// Exact percentiles while samples × outputs stays at or below this many values;
+        /// Exact percentiles while samples × continuous outputs stays at or below this many values;
         /// a bounded-memory sketch beyond it (recorded in the baseline for the check).
         #[arg(long, value_name = "VALUES", default_value_t = DEFAULT_EXACT_PERCENTILE_LIMIT, value_parser = parse_count, allow_hyphen_values = true)]
         exact_percentile_limit: u64,

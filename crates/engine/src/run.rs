@@ -398,10 +398,12 @@ impl<'a> Plan<'a> {
         only_output: Option<usize>,
     ) -> Result<Plan<'a>, ScenarioError> {
         let points = point_set(scenario, settings)?;
+        // Only continuous outputs keep their values (an indicator's percentiles are its
+        // counts), so only they count against the limit.
         let kept_outputs = if only_output.is_some() {
             1
         } else {
-            scenario.outputs.len() as u64
+            scenario.continuous_outputs().len() as u64
         };
         let exact =
             settings.samples.saturating_mul(kept_outputs.max(1)) <= settings.exact_percentile_limit;

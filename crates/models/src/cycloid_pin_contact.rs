@@ -71,6 +71,12 @@
 //! force over a crank turn is T_c/(m·a_w) + |(F_x, F_y)|/m (003's "simplified" F_n(θ)
 //! drops the cross term and is not used).
 //!
+//! Preload (docs/models.md §14.8): at zero torque the same clearances are balanced by the
+//! one rule of every model (`crate::preload`), both discs alike: the overlap, the largest
+//! pin force and the no-load torque, `preloaded` and `over_preloaded` (the largest pin force
+//! above the rated one of the modification as ground brought to zero play). A contact model
+//! another model embeds (`of_disc`) has no rule and no such outputs.
+//!
 //! Left out: the friction forces' own resultant (below μ·|F| and across the load), the
 //! disc's and pins' bending, per-flank differences beyond the clearances (a negative torque
 //! loads the mirrored flank with the same clearances: |T|).
@@ -101,10 +107,7 @@ const DISC_KEYS: [&str; 12] = [
     "planet_teeth",
     "disc_torque_balance",
 ];
-/// Palmgren's line-contact coefficient, mm·N^−0.9·mm^0.8.
-const PALMGREN: f64 = 3.84e-5;
-/// Line contacts in series per pin: disc–pin and pin–housing.
-const CONTACTS_PER_PIN: f64 = 2.0;
+use crate::preload::{self, PreloadRule, CONTACTS_PER_PIN, PALMGREN};
 
 /// The fixed inputs, in order.
 const FIXED_INPUTS: [(&str, &str, &str); 7] = [
@@ -211,13 +214,13 @@ const PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "sun_teeth",
         unit: "",
-        description: "z1, sun teeth, for the ratio i = 1 + (z2/z1)·z_p of the torque balance (003: 12); not read when disc_torque_balance is 0",
+        description: "z1, sun teeth, for the ratio i = 1 + (z2/z1)·z_p of the torque balance and the no-load torque of a preload (003: 12)",
         default: None,
     },
     ParamSpec {
         name: "planet_teeth",
         unit: "",
-        description: "z2, planet teeth (003: 36); not read when disc_torque_balance is 0",
+        description: "z2, planet teeth (003: 36)",
         default: None,
     },
     ParamSpec {
@@ -226,6 +229,11 @@ const PARAMS: &[ParamSpec] = &[
         description: "1: a disc carries share·(z_c/z_p)·(1 − 1/i)·|T| (torque balance); 0: share·|T| as 003 and 004 print it",
         default: Some(1.0),
     },
+    preload::FRICTION,
+    preload::PARAMS[0],
+    preload::PARAMS[1],
+    preload::PARAMS[2],
+    preload::PARAMS[3],
     ParamSpec {
         name: "pin_position_errors",
         unit: "",
@@ -253,6 +261,7 @@ pub const ENTRY: ModelEntry = ModelEntry {
             .with_number("planet_teeth", 36.0)
             .with_number("crank_count", 3.0)
             .with_number("crank_circle_radius_mm", 42.0)
+            .with_number("rated_torque_nm", 784.0)
     },
     example_inputs: &[("output_torque_nm", 800.0)],
 };
@@ -278,6 +287,8 @@ pub struct CycloidPinContact {
     levers: Vec<f64>,
     /// Per pin, the friction arm h_i (module comment), mm.
     slip_arms: Vec<f64>,
+    /// The preload rule (not for a contact model another model embeds).
+    rule: Option<PreloadRule>,
     inputs: Vec<InputSpec>,
     outputs: Vec<OutputSpec>,
 }
@@ -306,6 +317,11 @@ pub struct ContactSolution {
 impl CycloidPinContact {
     /// Builds the model from its parameters.
     pub fn from_params(params: &ModelParams) -> Result<Self, ModelError> {
+        Self::build(params, true)
+    }
+
+    /// Builds the model, with the preload rule and its outputs when `judged`.
+    fn build(params: &ModelParams, judged: bool) -> Result<Self, ModelError> {
         let stage = CycloidStage::from_params(params, MAX_PINS)?;
         let pins = stage.pins;
         let pin_radius = params.positive("pin_radius_mm", None)?;
@@ -340,6 +356,20 @@ impl CycloidPinContact {
             ));
         }
         let per_pin = params.flag("pin_position_errors", false)?;
+        let rule = if judged {
+            let sun = params.count("sun_teeth", None)? as f64;
+            let planet = params.count("planet_teeth", None)? as f64;
+            let ratio = 1.0 + planet / sun * pins as f64;
+            Some(PreloadRule::from_params(
+                params,
+                &stage,
+                pin_radius,
+                face_width,
+                (ratio, torque_factor),
+            )?)
+        } else {
+            None
+        };
         params.reject_unknown(&PARAMS.iter().map(|p| p.name).collect::<Vec<_>>())?;
         let mut inputs: Vec<InputSpec> = FIXED_INPUTS
             .iter()
@@ -385,6 +415,7 @@ impl CycloidPinContact {
             geometry: Vec::new(),
             levers: Vec::new(),
             slip_arms: Vec::new(),
+            rule,
             inputs,
             outputs: vec![
                 output("max_pin_force_n", "N", "largest pin force F_max"),
@@ -395,6 +426,9 @@ impl CycloidPinContact {
                 output("pin_force_y_n", "N", "resultant of the forces on the pins, along the eccentricity (003's F_y)"),
             ],
         };
+        if model.rule.is_some() {
+            model.outputs.extend(preload::outputs());
+        }
         model.geometry = (0..pins).map(|i| model.pin_geometry(i)).collect();
         model.levers = model.geometry.iter().map(|pin| pin.factors.lever).collect();
         model.slip_arms = (0..pins)
@@ -429,11 +463,12 @@ impl CycloidPinContact {
         cranks: usize,
         crank_circle_radius: f64,
     ) -> Result<Self, ModelError> {
-        Self::from_params(
+        Self::build(
             &params
                 .subset(&DISC_KEYS)
                 .with_number("crank_count", cranks as f64)
                 .with_number("crank_circle_radius_mm", crank_circle_radius),
+            false,
         )
     }
 
@@ -872,6 +907,22 @@ impl ErrorModel for CycloidPinContact {
         outputs[3] = solved.max_crank_bearing_force;
         outputs[4] = solved.resultant.0;
         outputs[5] = solved.resultant.1;
+        if let Some(rule) = &self.rule {
+            let clearances = &solved.clearances[..self.stage.pins];
+            let (forward, reverse) = self.flank_contacts(clearances);
+            let overlapping = forward < reverse;
+            let load = if overlapping {
+                rule.of_clearances(clearances)
+            } else {
+                preload::Preload::NONE
+            };
+            let class = rule.classify(&load, (overlapping, false), (inputs[1], inputs[2]));
+            outputs[6] = load.overlap_um;
+            outputs[7] = load.pin_force;
+            outputs[8] = load.no_load_torque;
+            outputs[9] = class.preloaded();
+            outputs[10] = class.over();
+        }
     }
 }
 
@@ -904,7 +955,7 @@ mod tests {
     #[test]
     fn a_non_finite_row_gives_nan_outputs() {
         let model = rv80e(0.5);
-        let mut out = [0.0; 6];
+        let mut out = [0.0; 11];
         for bad in [f64::NAN, f64::INFINITY] {
             model.evaluate(&row(800.0, bad, -0.008), &mut out);
             assert!(out.iter().all(|v| v.is_nan()), "{out:?}");
@@ -939,7 +990,7 @@ mod tests {
             "{f_max} vs {closed}"
         );
         // 19 loaded pins: the ones with 0 < φ < π.
-        let mut out = [0.0; 6];
+        let mut out = [0.0; 11];
         model.evaluate(&row(800.0, 0.0, 0.0), &mut out);
         assert_eq!(out[1], 19.0);
         assert_eq!(out[0], f_max);
@@ -963,7 +1014,7 @@ mod tests {
             .map(|(f, l)| f * l)
             .sum();
         assert!((moment - 440_000.0).abs() < 1e-9 * 440_000.0, "{moment}");
-        let mut out = [0.0; 6];
+        let mut out = [0.0; 11];
         model.evaluate(&inputs, &mut out);
         assert!((8.0..=11.0).contains(&out[1]), "engaged {}", out[1]);
         // Modification concentrates the load: F_max above the unmodified 752 N.
@@ -1140,7 +1191,9 @@ mod tests {
     }
 
     #[test]
-    fn torque_balance_needs_the_tooth_counts_unless_it_is_off() {
+    fn the_tooth_counts_are_required_by_the_torque_balance_and_the_preload_rule() {
+        // The ratio i sets the torque balance's λ and the no-load torque of a preload (its
+        // pin friction reaches the input divided by i): both readings need the teeth.
         let without = (ENTRY.example_params)();
         let mut params = ModelParams::new();
         for spec in PARAMS.iter().filter(|p| p.name != "sun_teeth") {
@@ -1150,9 +1203,12 @@ mod tests {
         }
         let err = CycloidPinContact::from_params(&params).unwrap_err();
         assert_eq!(err.key, "sun_teeth");
-        let printed = params.with_number("disc_torque_balance", 0.0);
+        let printed = params.clone().with_number("disc_torque_balance", 0.0);
+        let err = CycloidPinContact::from_params(&printed).unwrap_err();
+        assert_eq!(err.key, "sun_teeth");
+        let with_teeth = printed.with_number("sun_teeth", 12.0);
         assert_eq!(
-            CycloidPinContact::from_params(&printed)
+            CycloidPinContact::from_params(&with_teeth)
                 .unwrap()
                 .torque_factor(),
             1.0

@@ -13,6 +13,7 @@ mod cycloid_pin_contact;
 mod geometric_hysteresis;
 mod linear_stack;
 mod params;
+mod preload;
 mod reducer;
 mod spectrum;
 mod stiffness;

@@ -58,9 +58,12 @@
 //! - Preload. A cycloid stage whose flanks overlap has no free play: both flanks carry
 //!   load at zero torque (their preload), the reverse flank unloads as the torque rises,
 //!   and the curve starts stiffer; with friction its loop has a width at zero torque. The
-//!   `preloaded` indicator counts such samples and `preload_pin_force_n` gives the largest
-//!   pin force at zero torque. 000's involute and crank-bearing terms, when negative (an
-//!   interference fit), add no free play and are not stiffened.
+//!   preload is judged by the one rule of every model (`crate::preload`, docs/models.md
+//!   §14.8) on the same profile: its overlap, largest pin force and no-load torque at zero
+//!   torque, `preloaded`, and `over_preloaded` (the largest pin force above the design's at
+//!   rated torque, or a jammed gear stage), which flags `lost_motion_arcmin` and
+//!   `clearance_arcmin` non-conforming. 000's involute and crank-bearing terms, when
+//!   negative (an interference fit), add no free play and are not stiffened.
 //! - Friction: Coulomb at the pins (μ_p, h_i the arm of the contact's tangent about the
 //!   disc centre) and at the needle rows (μ_b, rolling-bearing coefficient on the journal
 //!   radius); the support and main bearings and the seals are left out. Friction
@@ -84,10 +87,11 @@
 
 use crate::cycloid_pin_contact::CycloidPinContact;
 use crate::geometric_hysteresis::{self, GeometricHysteresis};
+use crate::preload::{self, Preload, PreloadRule};
 use crate::stiffness::{Carrier, ChainTerms, CrankShaft, CrankSide, InvoluteStage, RollerRow};
 use crate::{
-    Curve, CurveStyle, ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputKind,
-    OutputSpec, ParamSpec, Series, ARCMIN_PER_RAD,
+    ConditionEffect, Curve, CurveStyle, ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams,
+    OutputCondition, OutputKind, OutputSpec, ParamSpec, Series, ARCMIN_PER_RAD,
 };
 use rvtol_deviation::{Rounded, Shown};
 
@@ -114,7 +118,7 @@ const OWN_INPUTS: [(&str, &str, &str); 1] = [(
 )];
 
 /// The outputs, in order.
-const OUTPUTS: [(&str, &str, &str, OutputKind); 7] = [
+const OUTPUTS: [(&str, &str, &str, OutputKind); 5] = [
     (
         "lost_motion_arcmin",
         "arcmin",
@@ -143,18 +147,6 @@ const OUTPUTS: [(&str, &str, &str, OutputKind); 7] = [
         "angle_at_rated_arcmin",
         "arcmin",
         "output angle at rated torque on the loading branch: c/2 + E(T_r; +)",
-        OutputKind::Continuous,
-    ),
-    (
-        "preloaded",
-        "fraction",
-        "1 when the cycloid stage's flanks overlap (no free play, both flanks loaded at zero torque)",
-        OutputKind::Indicator,
-    ),
-    (
-        "preload_pin_force_n",
-        "N",
-        "largest pin force at zero torque (0 without preload)",
         OutputKind::Continuous,
     ),
 ];
@@ -412,6 +404,9 @@ const PARAMS: &[ParamSpec] = &[
         description: "T_r, rated output torque (RV-20E catalogue: 167)",
         default: None,
     },
+    preload::PARAMS[1],
+    preload::PARAMS[2],
+    preload::PARAMS[3],
 ];
 
 /// Registry entry.
@@ -438,6 +433,8 @@ pub struct TorsionCurve {
     hysteresis: GeometricHysteresis,
     /// Load sharing of one disc, m cranks on the crank circle, no per-pin errors.
     contact: CycloidPinContact,
+    /// The one preload rule (docs/models.md §14.5).
+    rule: PreloadRule,
     side: CrankSide,
     rated_torque: f64,
     pin_friction: f64,
@@ -461,8 +458,8 @@ struct RowState {
     free_play: f64,
     /// The cycloid stage overlaps.
     preloaded: bool,
-    /// Largest pin force at zero torque, N.
-    preload_force: f64,
+    /// The involute or crank-bearing stage has a negative clearance.
+    jammed: bool,
     /// Needle stiffness factor 1 + x_k.
     needle_factor: f64,
 }
@@ -683,9 +680,35 @@ impl TorsionCurve {
                     }),
             )
             .collect();
+        let rule = PreloadRule::from_params(
+            params,
+            contact.stage(),
+            params.positive("pin_radius_mm", None)?,
+            contact.face_width(),
+            (hysteresis.ratio(), contact.torque_factor()),
+        )?;
+        let lost_motion = Some(OutputCondition {
+            indicator: preload::OVER_PRELOADED,
+            effect: ConditionEffect::NonConforming,
+        });
+        let mut outputs: Vec<OutputSpec> = OUTPUTS
+            .iter()
+            .map(|&(name, unit, description, kind)| OutputSpec {
+                name: name.into(),
+                unit: unit.into(),
+                description,
+                kind,
+                condition: match name {
+                    "lost_motion_arcmin" | "clearance_arcmin" => lost_motion,
+                    _ => None,
+                },
+            })
+            .collect();
+        outputs.extend(preload::outputs());
         Ok(TorsionCurve {
             hysteresis,
             contact,
+            rule,
             side,
             rated_torque,
             pin_friction,
@@ -694,16 +717,7 @@ impl TorsionCurve {
             crank_turn: sun / planet,
             consistent_clearance,
             inputs,
-            outputs: OUTPUTS
-                .iter()
-                .map(|&(name, unit, description, kind)| OutputSpec {
-                    name: name.into(),
-                    unit: unit.into(),
-                    description,
-                    kind,
-                    condition: None,
-                })
-                .collect(),
+            outputs,
         })
     }
 
@@ -722,14 +736,12 @@ impl TorsionCurve {
         &self.side
     }
 
-    /// 000's outputs for a row: [hysteresis, involute, cycloid, crank, interference, …]
+    /// 000's stage outputs for a row: [hysteresis, involute, cycloid, crank, overlap]
     /// (`geometric_hysteresis`'s order).
-    fn hysteresis_outputs(&self, x: &[f64]) -> [f64; geometric_hysteresis::OUTPUT_COUNT] {
+    fn hysteresis_outputs(&self, x: &[f64]) -> [f64; 5] {
         let mut row = [0.0; geometric_hysteresis::INPUT_COUNT];
         row[..HYSTERESIS_INPUTS].copy_from_slice(&x[..HYSTERESIS_INPUTS]);
-        let mut out = [0.0; geometric_hysteresis::OUTPUT_COUNT];
-        self.hysteresis.evaluate(&row, &mut out);
-        out
+        self.hysteresis.stage_outputs(&row)
     }
 
     /// The contact row of the one profile (module comment): (T, Δr_rp', Δr_p', δr_p,
@@ -739,8 +751,7 @@ impl TorsionCurve {
         for i in OTHER_TERMS {
             others[i] = x[i];
         }
-        let mut out = [0.0; geometric_hysteresis::OUTPUT_COUNT];
-        self.hysteresis.evaluate(&others, &mut out);
+        let out = self.hysteresis.stage_outputs(&others);
         // 000's cycloid term of these inputs alone (Kn·δe vanishes without modification),
         // arcmin at the disc, as an equidistant amount: backlash 2δ/(e·z_c).
         let equivalent = 0.5 * out[2] / ARCMIN_PER_RAD * self.side.pitch_radius;
@@ -780,12 +791,12 @@ impl TorsionCurve {
         let free_play =
             (stages[1].max(0.0) + stages[3].max(0.0)) / ARCMIN_PER_RAD + cycloid.max(0.0);
         let width = self.contact.face_width();
-        let (reference, preload_force) = if play >= 0.0 {
-            (forward, 0.0)
+        let reference = if play >= 0.0 {
+            forward
         } else {
-            let zero = self.contact.share_load(&clearances, width, 0.0, 0.0);
-            let largest = zero.forces.iter().cloned().fold(0.0, f64::max);
-            (zero.rotation, largest)
+            self.contact
+                .share_load(&clearances, width, 0.0, 0.0)
+                .rotation
         };
         let preloaded = if self.consistent_clearance {
             play < 0.0
@@ -797,7 +808,7 @@ impl TorsionCurve {
             reference,
             free_play,
             preloaded,
-            preload_force,
+            jammed: stages[1] < 0.0 || stages[3] < 0.0,
             needle_factor,
         })
     }
@@ -914,14 +925,28 @@ impl ErrorModel for TorsionCurve {
         };
         let at_rated = self.elastic(&state, rated, true);
         let at_half = self.elastic(&state, 0.5 * rated, true);
+        let load = if state.preloaded {
+            self.rule
+                .of_clearances(&state.clearances[..self.contact.stage().pins])
+        } else {
+            Preload::NONE
+        };
+        let class = self.rule.classify(
+            &load,
+            (state.preloaded, state.jammed),
+            (x[EQUIDISTANT], x[SHIFT]),
+        );
         let values = [
             lost_motion,
             c + 2.0 * at_zero,
             (rated - 0.5 * rated) / (at_rated - at_half),
             c,
             0.5 * c + at_rated,
-            if state.preloaded { 1.0 } else { 0.0 },
-            state.preload_force,
+            load.overlap_um,
+            load.pin_force,
+            load.no_load_torque,
+            class.preloaded(),
+            class.over(),
         ];
         if values.iter().all(|v| v.is_finite()) {
             out.copy_from_slice(&values);
@@ -1056,8 +1081,8 @@ mod tests {
         x
     }
 
-    fn eval(model: &TorsionCurve, x: &[f64]) -> [f64; 7] {
-        let mut out = [0.0; 7];
+    fn eval(model: &TorsionCurve, x: &[f64]) -> [f64; 10] {
+        let mut out = [0.0; 10];
         model.evaluate(x, &mut out);
         out
     }
@@ -1097,7 +1122,7 @@ mod tests {
         // involute and crank-bearing terms (0.02633 + 0.25002 arcmin, 000 §5.2).
         let out = eval(&model, &nominal());
         assert!(continuous(-0.010, -0.012) < 0.0);
-        assert_eq!(out[5], 1.0);
+        assert_eq!(out[8], 1.0);
         assert!((out[3] - (0.02633 + 0.25002)).abs() < 1e-4, "{}", out[3]);
         assert!(out[6] > 0.0);
     }
@@ -1148,7 +1173,7 @@ mod tests {
         for x in [nominal(), with_play(), perturbed()] {
             let out = eval(&model, &x);
             let c = out[3];
-            let preloaded = out[5] == 1.0;
+            let preloaded = out[8] == 1.0;
             let (l3, u3) = (lag(&model, &x, 5.01, true), lag(&model, &x, 5.01, false));
             let (e50, e100) = (lag(&model, &x, 83.5, true), lag(&model, &x, 167.0, true));
             let zero = if preloaded {
@@ -1300,7 +1325,12 @@ mod tests {
         let model = rv20e();
         let preloaded = nominal();
         let out = eval(&model, &preloaded);
-        assert_eq!(out[5], 1.0);
+        assert_eq!(out[8], 1.0);
+        // 1.34 µm per flank and about 152 N at zero torque (validation.md), within the
+        // design's 365 N at rated torque: preloaded within the limit.
+        assert!((out[5] - 1.34).abs() < 0.01, "{}", out[5]);
+        assert!((out[6] - 152.0).abs() < 2.0, "{}", out[6]);
+        assert_eq!(out[9], 0.0);
         let frictionless = with("pin_friction_coefficient", 0.0).unwrap();
         // Frictionless: E(0) = 0 on both branches, hysteresis loss = c.
         assert_eq!(lag(&frictionless, &preloaded, 0.0, true), 0.0);
@@ -1407,8 +1437,8 @@ mod tests {
         assert_eq!(b.chain.disc_bore, 0.0);
         assert!(a.chain.disc_bore > 0.0);
         assert!(a.chain.support > b.chain.support && a.chain.carrier > b.chain.carrier);
-        let mut out = [0.0; 7];
-        let mut out_rigid = [0.0; 7];
+        let mut out = [0.0; 10];
+        let mut out_rigid = [0.0; 10];
         soft.evaluate(&x, &mut out);
         rigid.evaluate(&x, &mut out_rigid);
         assert!(out[2] < out_rigid[2] && out[4] > out_rigid[4]);
@@ -1566,8 +1596,11 @@ mod tests {
             proptest::prop_assert!(c >= 0.0);
             proptest::prop_assert!(out[0] > c && out[4] > 0.5 * c && out[2] > 0.0);
             proptest::prop_assert!(out[1] >= c);
-            proptest::prop_assert!(out[5] == 0.0 || out[5] == 1.0);
-            proptest::prop_assert!((out[6] > 0.0) == (out[5] == 1.0));
+            proptest::prop_assert!(out[8] == 0.0 || out[8] == 1.0);
+            proptest::prop_assert!(out[9] == 0.0 || out[9] == 1.0);
+            proptest::prop_assert!(out[9] <= out[8]);
+            proptest::prop_assert!((out[6] > 0.0) == (out[8] == 1.0));
+            proptest::prop_assert!((out[5] > 0.0) == (out[6] > 0.0));
         }
     }
 
@@ -1576,9 +1609,10 @@ mod tests {
         let entry = crate::find("torsion_curve").unwrap();
         let model = (entry.build)(&(entry.example_params)()).unwrap();
         assert_eq!(model.inputs().len(), 19);
-        assert_eq!(model.outputs().len(), 7);
+        assert_eq!(model.outputs().len(), 10);
         assert_eq!(model.inputs()[0].name, "common_normal_upper_deviation_mm");
         assert_eq!(model.inputs()[18].name, "crank_bearing_stiffness_error");
-        assert_eq!(model.outputs()[5].kind, OutputKind::Indicator);
+        assert_eq!(model.outputs()[8].kind, OutputKind::Indicator);
+        assert_eq!(model.outputs()[9].name, "over_preloaded");
     }
 }

@@ -68,6 +68,7 @@ use std::cell::RefCell;
 use std::f64::consts::PI;
 
 use crate::cycloid::CycloidStage;
+use crate::preload::{self, PreloadRule};
 use crate::spectrum::RealFft;
 use crate::{
     Curve, CurveStyle, ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputKind,
@@ -264,6 +265,13 @@ const PARAMS: &[ParamSpec] = &[
         description: "L_s, axial distance from the input shaft's deviation reference to the sun's mid-plane (physical reading; input shaft tilts act there)",
         default: Some(0.0),
     },
+    preload::PIN_RADIUS,
+    preload::FACE_WIDTH,
+    preload::FRICTION,
+    preload::PARAMS[0],
+    preload::PARAMS[1],
+    preload::PARAMS[2],
+    preload::PARAMS[3],
 ];
 
 /// Registry entry.
@@ -283,6 +291,10 @@ fn rv40e_params() -> ModelParams {
     ModelParams::new()
         .with_number("crank_circle_radius_mm", 36.0)
         .with_number("disc_spacing_mm", 12.0)
+        .with_number("pin_radius_mm", 3.0)
+        .with_number("disc_face_width_mm", 10.0)
+        .with_number("pin_friction_coefficient", 0.02)
+        .with_number("rated_torque_nm", 412.0)
         .with_number("sun_teeth", 9.0)
         .with_number("planet_teeth", 27.0)
         .with_number("module_mm", 2.0)
@@ -424,6 +436,8 @@ pub struct TransmissionError {
     outputs: Vec<OutputSpec>,
     /// The physical reading's data; None for document 002's literal reading.
     physical: Option<Box<Physical>>,
+    /// The one preload rule (docs/models.md §14.5), with the physical reading.
+    preload_rule: Option<PreloadRule>,
 }
 
 /// Per-thread work state of the first-contact search, refilled for every row: the per-pin
@@ -579,6 +593,30 @@ impl TransmissionError {
             }
             Some((crank_radius, spacing, sun_offset))
         };
+        // The preload rule judges where the discs do not fit (physical reading only; 002's
+        // literal reading reads the keys a reducer file gives it and leaves them).
+        let preload_rule = if literal {
+            for key in ["pin_radius_mm", "disc_face_width_mm", "rated_torque_nm"] {
+                params.number(key, Some(0.0))?;
+            }
+            for spec in &preload::PARAMS[1..] {
+                params.number(spec.name, Some(0.0))?;
+            }
+            params.number(preload::FRICTION.name, Some(0.0))?;
+            None
+        } else {
+            let pin_radius = params.positive("pin_radius_mm", None)?;
+            stage.check_pin_radius("pin_radius_mm", pin_radius)?;
+            let face_width = params.positive("disc_face_width_mm", None)?;
+            let lambda = cycloid_teeth as f64 / pins as f64 * (1.0 - 1.0 / ratio);
+            Some(PreloadRule::from_params(
+                params,
+                &stage,
+                pin_radius,
+                face_width,
+                (ratio, lambda),
+            )?)
+        };
         params.reject_unknown(&PARAMS.iter().map(|p| p.name).collect::<Vec<_>>())?;
         let (inputs, outputs) = if literal {
             literal_specs(cranks, pins, cycloid_teeth, per_pin, per_tooth)
@@ -704,6 +742,7 @@ impl TransmissionError {
             inputs,
             outputs,
             physical,
+            preload_rule,
         })
     }
 

@@ -19,14 +19,27 @@ import rvtol
 
 ROOT = pathlib.Path(__file__).resolve().parents[3]
 SCENARIO = json.loads((ROOT / "scenarios" / "rv20e-hysteresis.json").read_text())
+# The reducer the scenario names (scenarios/reducers/rv20e.json), defined once there.
+REDUCER = json.loads((ROOT / "scenarios" / SCENARIO["reducer"]["file"]).read_text())["params"]
 MODEL = "geometric_hysteresis"
-PARAMS = SCENARIO["models"][0]["params"]
-INPUTS = [name for name, _unit in next(m for m in rvtol.models() if m["name"] == MODEL)["inputs"]]
+ENTRY = next(m for m in rvtol.models() if m["name"] == MODEL)
+# The model's parameters: the reducer's that it takes, then the scenario's own.
+PARAMS = {key: value for key, value in REDUCER.items() if key in ENTRY["params"]}
+PARAMS.update(SCENARIO["models"][0]["params"])
+INPUTS = [name for name, _unit in ENTRY["inputs"]]
+
+
+def _fixed(value):
+    """A constant binding's value: a number, a reducer parameter, or 0 for a variable."""
+    if isinstance(value, (int, float)):
+        return value
+    if value.startswith("reducer."):
+        return REDUCER[value[len("reducer."):]]
+    return 0.0
+
+
 # The scenario's constant inputs (design values); the input shaft's components are 0.
-FIXED = {
-    name: (value if isinstance(value, (int, float)) else 0.0)
-    for name, value in SCENARIO["models"][0]["inputs"].items()
-}
+FIXED = {name: _fixed(value) for name, value in SCENARIO["models"][0]["inputs"].items()}
 # Table 9's δ-terms (mm): name -> (mean, sd).
 VARIED = {
     "pin_circle_radius_error_mm": (0.0, 0.010 / 3),

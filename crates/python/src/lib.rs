@@ -392,8 +392,8 @@ fn allocate<'py>(
     parsed(py, &json)
 }
 
-/// The models: a list of dicts with `name`, `summary`, `inputs` and `outputs` (each a list of
-/// (name, unit)).
+/// The models: a list of dicts with `name`, `summary`, `params` (the parameters' names),
+/// `inputs` and `outputs` (each a list of (name, unit)).
 #[pyfunction]
 fn models(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
     let list = PyList::empty(py);
@@ -402,6 +402,8 @@ fn models(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
         let item = PyDict::new(py);
         item.set_item("name", entry.name)?;
         item.set_item("summary", entry.summary)?;
+        let params: Vec<&str> = entry.params.iter().map(|p| p.name).collect();
+        item.set_item("params", PyList::new(py, params)?)?;
         let pairs = |ports: Vec<(String, String)>| PyList::new(py, ports);
         item.set_item(
             "inputs",

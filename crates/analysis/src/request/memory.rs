@@ -93,9 +93,7 @@ fn run_scratch_per_thread(scenario: &Scenario) -> f64 {
 pub fn run(scenario: &Scenario, settings: &RunSettings, threads: usize) -> MemoryNeed {
     let continuous = scenario.continuous_outputs().len() as f64;
     let samples = settings.samples as f64;
-    let exact = settings
-        .samples
-        .saturating_mul(scenario.outputs.len().max(1) as u64)
+    let exact = settings.samples.saturating_mul(continuous.max(1.0) as u64)
         <= settings.exact_percentile_limit;
     let kept = if exact {
         let in_flight = samples.min((WAVE_CHUNKS as usize * CHUNK_SIZE) as f64);

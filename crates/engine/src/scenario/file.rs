@@ -72,6 +72,10 @@ pub(super) struct ReducerFile {
     /// estimate and its rule).
     #[serde(default)]
     pub(super) sources: serde_json::Map<String, serde_json::Value>,
+    /// The reducer file the section was read from (written in when the scenario is loaded,
+    /// `data.rs`): a shared definition holds the keys of every model of its reducer.
+    #[serde(default)]
+    pub(super) file: Option<String>,
 }
 
 #[derive(Debug, Deserialize)]

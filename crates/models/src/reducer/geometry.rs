@@ -16,15 +16,12 @@
 use std::f64::consts::PI;
 
 use crate::cycloid::CycloidStage;
+use crate::preload::{slip_arm, LEVER_FLOOR};
 use crate::{ModelError, ModelParams};
 use rvtol_deviation::Shown;
 
 /// Most cranks of a reducer.
 pub(crate) const MAX_CRANKS: usize = 3;
-/// Palmgren's line-contact constant (mm, N): δ = 3.84·10⁻⁵·F^0.9/L^0.8, two contacts in
-/// series per pin (disc–pin, pin–housing); the same law as `cycloid_pin_contact`.
-pub(crate) const PALMGREN: f64 = 3.84e-5;
-pub(crate) const CONTACTS_PER_PIN: f64 = 2.0;
 
 /// The reducer, checked once.
 #[derive(Debug, Clone)]
@@ -50,10 +47,6 @@ pub(crate) struct Reducer {
     pub cranks: usize,
     /// L, mm.
     pub face_width: f64,
-    /// μ at the pins.
-    pub pin_friction: f64,
-    /// T_r, N·m.
-    pub rated_torque: f64,
     /// r_m, the circle on which a cumulative pitch deviation is measured, mm.
     pub pitch_radius: f64,
 }
@@ -63,7 +56,7 @@ impl Reducer {
     pub fn from_params(params: &ModelParams) -> Result<Self, ModelError> {
         let sun_teeth = params.count("sun_teeth", None)? as f64;
         let planet_teeth = params.count("planet_teeth", None)? as f64;
-        let stage = CycloidStage::from_params(params, super::preload::MAX_PINS)?;
+        let stage = CycloidStage::from_params(params, crate::preload::MAX_PINS)?;
         let pin_radius = params.positive("pin_radius_mm", None)?;
         stage.check_pin_radius("pin_radius_mm", pin_radius)?;
         let equidistant = params.number("equidistant_modification_mm", None)?;
@@ -97,13 +90,6 @@ impl Reducer {
                 format!("must be 2 or 3, got {cranks}"),
             ));
         }
-        let pin_friction = params.number("pin_friction_coefficient", Some(0.0))?;
-        if !(0.0..1.0).contains(&pin_friction) {
-            return Err(ModelError::new(
-                "pin_friction_coefficient",
-                format!("must lie in [0, 1), got {}", Shown(pin_friction)),
-            ));
-        }
         let pin_circle = stage.pin_circle_radius;
         let pitch_radius =
             params.positive("pitch_measuring_radius_mm", Some(pin_circle - pin_radius))?;
@@ -121,8 +107,6 @@ impl Reducer {
             sun_position: params.number("sun_gear_axial_position_mm", Some(0.0))?,
             cranks,
             face_width: params.positive("disc_face_width_mm", None)?,
-            pin_friction,
-            rated_torque: params.positive("rated_torque_nm", None)?,
             pitch_radius,
         })
     }
@@ -130,16 +114,6 @@ impl Reducer {
     /// e·z_c, mm: the lever of the pitch point about the disc centre.
     pub fn pitch_lever(&self) -> f64 {
         self.stage.eccentricity * self.stage.teeth as f64
-    }
-
-    /// The pin contact's approach δ(F) = 2·3.84·10⁻⁵·F^0.9/L^0.8, mm.
-    pub fn approach(&self, force: f64) -> f64 {
-        CONTACTS_PER_PIN * PALMGREN * force.powf(0.9) / self.face_width.powf(0.8)
-    }
-
-    /// The force F with δ(F) = `approach`, N.
-    pub fn force_at(&self, approach: f64) -> f64 {
-        (approach * self.face_width.powf(0.8) / (CONTACTS_PER_PIN * PALMGREN)).powf(1.0 / 0.9)
     }
 }
 
@@ -291,12 +265,6 @@ impl Grid {
         }
     }
 
-    /// z_p.
-    #[inline]
-    pub fn pins(&self) -> usize {
-        self.pins
-    }
-
     /// Where disc d's pins sit at grid point k: the first column entry of their residue
     /// (r·z_p) and the rotation `start`: pin i meets entry (start + i) mod z_p. Pin i is at
     /// slot j = 2q·i + c with c = 2·z_c·k + d·M (mod 2M), so r = c mod 2q, start = c div 2q.
@@ -308,17 +276,11 @@ impl Grid {
     }
 }
 
-/// Levers below this fraction of e (pins within about 1e-12 rad of φ = 0 or π) hold no
-/// turn of the disc and are left out of the windows, as in `transmission_error`.
-const LEVER_FLOOR: f64 = 1e-12;
-
 /// The slot at φ.
 fn slot(reducer: &Reducer, phi: f64) -> Slot {
     let stage = &reducer.stage;
     let (sin, cos) = phi.sin_cos();
     let f = stage.pin_factors_at(sin, cos);
-    let k1 = stage.k1();
-    let s = (1.0 + k1 * k1 - 2.0 * k1 * cos).sqrt();
     let (r_p, e) = (stage.pin_circle_radius, stage.eccentricity);
     let polar = (r_p * sin).atan2(r_p * cos - e).sin_cos();
     Slot {
@@ -329,7 +291,7 @@ fn slot(reducer: &Reducer, phi: f64) -> Slot {
         eccentric: f.eccentric,
         tangential: f.tangential,
         polar: (polar.1, polar.0),
-        slip_arm: ((r_p * (k1 * cos - 1.0) - e * (k1 - cos)) / s + reducer.pin_radius).abs(),
+        slip_arm: slip_arm(stage, reducer.pin_radius, cos),
         design_gap: reducer.equidistant * f.equidistant + reducer.shift * f.shift,
     }
 }

@@ -3,6 +3,7 @@
 //! Names shared with `transmission_error`'s physical reading mean the same quantity in the
 //! same frame.
 
+use crate::preload;
 use crate::{ConditionEffect, InputSpec, OutputCondition, OutputKind, OutputSpec};
 
 /// Reducer-wide inputs, in order.
@@ -148,14 +149,10 @@ pub(crate) fn inputs(cranks: usize, pins: usize) -> Vec<InputSpec> {
     specs
 }
 
-/// Names of the indicators.
-pub(crate) const PRELOADED: &str = "preloaded";
-pub(crate) const OVER_PRELOADED: &str = "over_preloaded";
-
 /// The outputs, in order.
 pub(crate) fn outputs() -> Vec<OutputSpec> {
     let condition = Some(OutputCondition {
-        indicator: OVER_PRELOADED,
+        indicator: preload::OVER_PRELOADED,
         effect: ConditionEffect::NonConforming,
     });
     let output = |name: &str, unit: &str, description: &'static str, kind, condition| OutputSpec {
@@ -165,16 +162,13 @@ pub(crate) fn outputs() -> Vec<OutputSpec> {
         kind,
         condition,
     };
-    use OutputKind::{Continuous, Indicator};
-    vec![
+    use OutputKind::Continuous;
+    let mut outputs = vec![
         output("lost_motion_arcmin", "arcmin", "free play at the output with the input locked, at the worst of the M output angles: the two discs' common window plus the involute stage's backlash", Continuous, condition),
         output("lost_motion_mean_arcmin", "arcmin", "the same, averaged over the M output angles of one revolution", Continuous, condition),
         output("lost_motion_least_arcmin", "arcmin", "the same, at the best of the M output angles", Continuous, condition),
         output("involute_stage_arcmin", "arcmin", "involute stage backlash at the output, signed (000 Eq. 5, 12)", Continuous, None),
-        output("preload_overlap_um", "µm", "largest approach of a pin contact at zero torque, at the output angle of the narrowest window: the overlap a flank takes up (0 when free)", Continuous, None),
-        output("preload_pin_force_n", "N", "largest pin force at zero torque, at the output angle of the largest overlap (0 when free)", Continuous, None),
-        output("no_load_torque_nm", "N·m", "drag torque at the input from the pin friction under the preload (0 when free)", Continuous, None),
-        output(PRELOADED, "fraction", "1 when the flanks overlap somewhere on the revolution or the involute stage interferes", Indicator, None),
-        output(OVER_PRELOADED, "fraction", "1 when the preload exceeds the limit (pin force, overlap or no-load torque) or the involute stage interferes: the assembly does not conform", Indicator, None),
-    ]
+    ];
+    outputs.extend(preload::outputs());
+    outputs
 }

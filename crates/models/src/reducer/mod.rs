@@ -32,18 +32,17 @@
 
 mod geometry;
 mod layout;
-mod preload;
 mod windows;
 
-use rvtol_deviation::{point_displacement, Shown};
+use rvtol_deviation::point_displacement;
 
+use crate::preload::{self, DiscPins, Preload, PreloadRule};
 use crate::{
     ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputSpec, ParamSpec,
     ARCMIN_PER_RAD,
 };
 use geometry::{Grid, Reducer};
 use layout::Layout;
-use preload::{DiscPins, Preload};
 use windows::{
     disc_window, offset_and_shift, pin_gap, row_terms, turned_pitch, RowTable, RowTerms,
 };
@@ -64,13 +63,13 @@ const PARAMS: &[ParamSpec] = &[
     ParamSpec { name: "sun_gear_axial_position_mm", unit: "mm", description: "z of the sun mesh from the input shaft's deviation reference point", default: Some(0.0) },
     ParamSpec { name: "crank_count", unit: "1", description: "m, cranks (2 or 3) on the crank circle, evenly spaced", default: Some(2.0) },
     ParamSpec { name: "disc_face_width_mm", unit: "mm", description: "L, the disc's face width (the pin contacts' length)", default: None },
-    ParamSpec { name: "pin_friction_coefficient", unit: "1", description: "μ at the pin contacts, for the no-load torque", default: Some(0.0) },
-    ParamSpec { name: "rated_torque_nm", unit: "N·m", description: "T_r, rated output torque (sets the default preload limit)", default: None },
+    preload::FRICTION,
+    preload::PARAMS[0],
     ParamSpec { name: "pitch_measuring_radius_mm", unit: "mm", description: "r_m, the circle on which the cumulative pitch deviation is measured (default r_p − r_rp)", default: None },
     ParamSpec { name: "positions_per_pin", unit: "1", description: "q, output angles per pin pitch (M = q·z_p over a revolution)", default: Some(4.0) },
-    ParamSpec { name: "preload_limit_pin_force_n", unit: "N", description: "largest pin force at zero torque allowed (default: the largest pin force at rated torque of the design)", default: None },
-    ParamSpec { name: "preload_limit_overlap_um", unit: "µm", description: "largest overlap per flank allowed (default: no limit on it)", default: None },
-    ParamSpec { name: "preload_limit_no_load_torque_nm", unit: "N·m", description: "largest no-load torque at the input allowed (default: no limit on it)", default: None },
+    preload::PARAMS[1],
+    preload::PARAMS[2],
+    preload::PARAMS[3],
 ];
 
 /// Most points per pin pitch.
@@ -94,23 +93,13 @@ thread_local! {
     static TABLE: std::cell::RefCell<RowTable> = std::cell::RefCell::new(RowTable::default());
 }
 
-/// The limits of the preload class.
-#[derive(Debug, Clone, Copy)]
-struct Limits {
-    pin_force: f64,
-    overlap_um: f64,
-    no_load_torque: f64,
-}
-
 /// The model with its reducer and grid.
 #[derive(Debug, Clone)]
 pub struct RvLostMotion {
     reducer: Reducer,
     grid: Grid,
     layout: Layout,
-    limits: Limits,
-    /// The largest pin force at rated torque of the design, N.
-    rated_pin_force: f64,
+    rule: PreloadRule,
     /// 10800/π / (2·r1·i·a0·cos α).
     involute_scale: f64,
     inputs: Vec<InputSpec>,
@@ -149,22 +138,13 @@ impl RvLostMotion {
             ));
         }
         let grid = Grid::new(&reducer, per_pin as usize);
-        let limit = |key: &str, default: f64| -> Result<f64, ModelError> {
-            let value = params.number(key, Some(default))?;
-            if value < 0.0 {
-                return Err(ModelError::new(
-                    key,
-                    format!("must not be negative, got {}", Shown(value)),
-                ));
-            }
-            Ok(value)
-        };
-        let rated = preload::rated_pin_force(&reducer, &grid);
-        let limits = Limits {
-            pin_force: limit("preload_limit_pin_force_n", rated)?,
-            overlap_um: limit("preload_limit_overlap_um", f64::INFINITY)?,
-            no_load_torque: limit("preload_limit_no_load_torque_nm", f64::INFINITY)?,
-        };
+        let rule = PreloadRule::from_params(
+            params,
+            &reducer.stage,
+            reducer.pin_radius,
+            reducer.face_width,
+            (reducer.ratio, reducer.lambda),
+        )?;
         params.reject_unknown(&PARAMS.iter().map(|p| p.name).collect::<Vec<_>>())?;
         let involute_scale = ARCMIN_PER_RAD
             / (2.0
@@ -178,8 +158,7 @@ impl RvLostMotion {
             outputs: layout::outputs(),
             layout,
             grid,
-            limits,
-            rated_pin_force: rated,
+            rule,
             involute_scale,
             reducer,
         })
@@ -187,7 +166,8 @@ impl RvLostMotion {
 
     /// The largest pin force at rated torque of the design, N (the default limit).
     pub fn rated_pin_force(&self) -> f64 {
-        self.rated_pin_force
+        self.rule
+            .rated_pin_force(self.reducer.equidistant, self.reducer.shift)
     }
 
     /// M = q·z_p, the output angles over a revolution.
@@ -316,15 +296,15 @@ impl ErrorModel for RvLostMotion {
         let involute = self.involute(x) + 0.0;
         let free_involute = involute.max(0.0);
         let preload = if narrowest < 0.0 {
-            preload::zero_torque(&self.reducer, &self.pins_at(&terms, x, at))
+            preload::zero_torque(self.rule.contact(), &self.pins_at(&terms, x, at))
         } else {
             Preload::NONE
         };
-        let preloaded = narrowest < 0.0 || involute < 0.0;
-        let over = involute < 0.0
-            || preload.pin_force > self.limits.pin_force
-            || preload.overlap_um > self.limits.overlap_um
-            || preload.no_load_torque > self.limits.no_load_torque;
+        let class = self.rule.classify(
+            &preload,
+            (narrowest < 0.0, involute < 0.0),
+            (self.reducer.equidistant, self.reducer.shift),
+        );
         out[0] = widest.max(0.0) * ARCMIN_PER_RAD + free_involute;
         out[1] = sum * ARCMIN_PER_RAD + free_involute;
         out[2] = least.max(0.0) * ARCMIN_PER_RAD + free_involute;
@@ -332,8 +312,8 @@ impl ErrorModel for RvLostMotion {
         out[4] = preload.overlap_um;
         out[5] = preload.pin_force;
         out[6] = preload.no_load_torque;
-        out[7] = f64::from(u8::from(preloaded));
-        out[8] = f64::from(u8::from(over));
+        out[7] = class.preloaded();
+        out[8] = class.over();
     }
 }
 

@@ -272,6 +272,9 @@ fn the_windows_are_those_of_the_transmission_error_geometry() {
             .with_number("cycloid_teeth", 39.0)
             .with_number("pin_circle_radius_mm", 52.0)
             .with_number("eccentricity_mm", 0.9)
+            .with_number("pin_radius_mm", 2.0)
+            .with_number("disc_face_width_mm", 8.0)
+            .with_number("rated_torque_nm", 167.0)
             .with_number("pin_position_errors", 1.0),
     )
     .expect("valid");

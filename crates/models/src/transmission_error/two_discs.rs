@@ -55,7 +55,11 @@
 //! the single-flank test): TE = max_d κ·(C_d − K_d); load-shared (both discs loaded, equal
 //! stiffness): TE = mean_d κ·(C_d − K_d). The windows of the two discs must overlap at every
 //! point: where they do not, the profile interferes (a negative play), the sample has no
-//! transmission error and the indicator `profile_interference` is 1.
+//! rigid transmission error and the indicator `profile_interference` is 1. Its preload is
+//! then judged by the one rule of every model (`crate::preload`, docs/models.md §14.8) at
+//! the point where the discs fit least: both discs' pins from the exact geometry, each at
+//! its crank offset C_d, balanced at zero torque (overlap, largest pin force, no-load
+//! torque, `preloaded`, `over_preloaded`).
 //!
 //! The curve is tabulated at N points (a drive table of the l < 0 slots and a coast table
 //! of the l > 0 slots per fractional pin pitch of disc 1, disc 2's slots found at the phase
@@ -69,6 +73,7 @@ use std::f64::consts::PI;
 
 use super::{smallest, smallest_ratio, PinTable, TransmissionError, MAX_CRANKS};
 use crate::cycloid::{CycloidStage, PinFactors};
+use crate::preload::{slip_arm, zero_torque, DiscPins, LEVER_FLOOR};
 use crate::spectrum::OrderDft;
 use crate::{ConditionEffect, InputSpec, OutputCondition, OutputKind, OutputSpec};
 
@@ -531,6 +536,13 @@ impl TransmissionError {
         terms.q_mean[d].0 + sigma * (terms.v[d].0 * c - terms.v[d].1 * s)
     }
 
+    /// [sin, cos] of z_p·Θ and of (i − 1)·Θ: the crank's and the sun's angles at Θ.
+    pub(super) fn angles_at(&self, theta: f64) -> [f64; 4] {
+        let (s, c) = (self.pins as f64 * theta).sin_cos();
+        let (ss, cs) = ((self.ratio() - 1.0) * theta).sin_cos();
+        [s, c, ss, cs]
+    }
+
     /// The clearance ratio g/|l| of pin `pin` (0-based) on disc d at Θ, with its lever's
     /// sign, from the geometry (no tables): the reference the tables must reproduce. `d_r`
     /// is the disc's displacement along its eccentric at Θ ([`Self::along`]).
@@ -611,11 +623,7 @@ impl TransmissionError {
         coast: bool,
     ) -> Exact {
         let ph = self.physical();
-        let angles = {
-            let (s, c) = (self.pins as f64 * theta).sin_cos();
-            let (ss, cs) = ((self.ratio() - 1.0) * theta).sin_cos();
-            [s, c, ss, cs]
-        };
+        let angles = self.angles_at(theta);
         let (offsets, involute) = self.crank_offsets(terms, angles);
         let mut windows = [(0.0, 0.0); 2];
         let mut winners = [0; 2];
@@ -708,11 +716,7 @@ impl TransmissionError {
         theta: f64,
     ) -> Option<f64> {
         let ph = self.physical();
-        let angles = {
-            let (s, c) = (self.pins as f64 * theta).sin_cos();
-            let (ss, cs) = ((self.ratio() - 1.0) * theta).sin_cos();
-            [s, c, ss, cs]
-        };
+        let angles = self.angles_at(theta);
         let (offsets, _) = self.crank_offsets(terms, angles);
         let one = |d: usize, pin: usize| {
             let d_r = Self::along(terms, d, angles[0], angles[1]);
@@ -816,6 +820,7 @@ impl TransmissionError {
             ..
         } = scratch;
         let mut clear = true;
+        scratch.narrowest = (f64::INFINITY, 0);
         // Pin errors in lane order: lane_radial[q][m] = δr of pin (q − m·Δ) mod z_p, Δ the
         // stride of the pin shift between a lane group's consecutive points. A tangential
         // pin error's ratio is −δt·K1/(a·z_c) in every drive slot (see `lane_lags`).
@@ -1084,6 +1089,9 @@ impl TransmissionError {
                     }
                     if !overlap(high, drive_end) {
                         clear = false;
+                        if high - drive_end < scratch.narrowest.0 {
+                            scratch.narrowest = (high - drive_end, j);
+                        }
                     }
                 }
                 curve[j] = if first_contact {
@@ -1308,6 +1316,9 @@ pub(super) struct TwoDiscScratch {
     pub tooth: [Vec<f64>; 2],
     pub drive: [Vec<f64>; 2],
     pub coast: [Vec<f64>; 2],
+    /// Where the discs fit least: (upper − lower end of the common window, rad at the
+    /// output; the point j), among the points where they do not fit.
+    pub narrowest: (f64, usize),
 }
 
 /// The sizes the tables of the physical reading are built for.
@@ -1669,11 +1680,13 @@ pub(super) fn specs(
         OutputSpec {
             name: INTERFERENCE.into(),
             unit: "fraction".into(),
-            description: "1 when the two discs' angular windows between the pins fail to overlap somewhere on the revolution (a profile that interferes: no transmission error)",
+            description: "1 when the two discs' angular windows between the pins fail to overlap somewhere on the revolution (a profile that interferes: no rigid transmission error)",
             kind: OutputKind::Indicator,
             condition: None,
         },
     ];
+    let mut outputs = outputs;
+    outputs.extend(crate::preload::outputs());
     (inputs, outputs)
 }
 
@@ -1726,6 +1739,10 @@ fn lane_squares(quads: &[[f64; 4]], mean: f64) -> [f64; 4] {
     squares
 }
 
+/// The transmission error's own outputs, before the interference indicator and the preload
+/// rule's five.
+const TE_OUTPUTS: usize = 8;
+
 /// Name of the interference indicator.
 pub(super) const INTERFERENCE: &str = "profile_interference";
 
@@ -1738,16 +1755,19 @@ impl TransmissionError {
         scratch: &mut TwoDiscScratch,
         outputs: &mut [f64],
     ) {
-        let n_out = outputs.len();
         if inputs.iter().any(|v| !v.is_finite()) {
             outputs.iter_mut().for_each(|o| *o = f64::NAN);
             return;
         }
         let terms = self.row_terms(inputs);
         curve.resize(self.points, 0.0);
+        outputs[TE_OUTPUTS + 1..].fill(0.0);
         if !self.physical_curve(inputs, &terms, scratch, curve, None) {
-            outputs[..n_out - 1].iter_mut().for_each(|o| *o = f64::NAN);
-            outputs[n_out - 1] = 1.0;
+            outputs[..TE_OUTPUTS].iter_mut().for_each(|o| *o = f64::NAN);
+            outputs[TE_OUTPUTS] = 1.0;
+            let theta = 2.0 * PI * scratch.narrowest.1 as f64 / self.points as f64;
+            let judged = self.judge_preload(inputs, &terms, theta);
+            outputs[TE_OUTPUTS + 1..].copy_from_slice(&judged);
             return;
         }
         let n = self.points;
@@ -1791,10 +1811,51 @@ impl TransmissionError {
         for (out, order) in outputs[3..8].iter_mut().zip(orders) {
             *out = order * to_arcsec;
         }
-        outputs[8] = 0.0;
-        if !outputs[..8].iter().all(|v| v.is_finite()) {
+        outputs[TE_OUTPUTS] = 0.0;
+        if !outputs[..TE_OUTPUTS].iter().all(|v| v.is_finite()) {
             outputs.iter_mut().for_each(|o| *o = f64::NAN);
         }
+    }
+
+    /// The preload rule's five outputs at the output angle Θ where the discs fit least
+    /// (docs/models.md §14.5): both discs' pins from the exact geometry, each disc at its
+    /// crank offset C_d, balanced at zero torque.
+    fn judge_preload(&self, inputs: &[f64], terms: &RowTerms, theta: f64) -> [f64; 5] {
+        let Some(rule) = &self.preload_rule else {
+            return [f64::NAN; 5];
+        };
+        let ph = self.physical();
+        let angles = self.angles_at(theta);
+        let (offsets, _) = self.crank_offsets(terms, angles);
+        let discs = [0, 1].map(|d| {
+            let d_r = Self::along(terms, d, angles[0], angles[1]);
+            let mut disc = DiscPins::new(offsets[d], 0.0);
+            for pin in 0..self.pins {
+                let phi = 2.0 * PI * pin as f64 / self.pins as f64
+                    + self.cycloid_teeth as f64 * theta
+                    + d as f64 * PI;
+                let (sin, cos) = phi.rem_euclid(2.0 * PI).sin_cos();
+                let (ratio, lever) =
+                    self.exact_ratio_at(inputs, terms, d, pin, theta, d_r, (sin, cos));
+                if lever.abs() > LEVER_FLOOR * self.eccentricity {
+                    disc.push(
+                        ratio * lever.abs(),
+                        lever,
+                        slip_arm(&ph.stage, rule.pin_radius(), cos),
+                    );
+                }
+            }
+            disc
+        });
+        let load = zero_torque(rule.contact(), &discs);
+        let class = rule.classify(&load, (true, false), (inputs[4], inputs[5]));
+        [
+            load.overlap_um,
+            load.pin_force,
+            load.no_load_torque,
+            class.preloaded(),
+            class.over(),
+        ]
     }
 
     /// The curve's extremes refined on the exact geometry, rad. Near the maximum (a smooth
@@ -2187,7 +2248,7 @@ mod tests {
     fn perfect_reducer_has_no_error() {
         let model = with(params());
         let out = outputs(&model, &row(&model, &[]));
-        assert_eq!(out, vec![0.0; 9]);
+        assert_eq!(out, vec![0.0; 14]);
     }
 
     #[test]
@@ -2491,18 +2552,25 @@ mod tests {
         let out = outputs(&model, &row(&model, &set));
         assert_eq!(out[8], 1.0);
         assert!(out[..8].iter().all(|v| v.is_nan()), "{out:?}");
+        // The preload rule judges it (docs/models.md §14.5): preloaded, with a finite pin
+        // force at zero torque; 20 µm of one disc's profile is far over the limit.
+        assert_eq!((out[12], out[13]), (1.0, 1.0), "{out:?}");
+        assert!(out[9] > 0.0 && out[10] > 0.0 && out[11] >= 0.0, "{out:?}");
         let mut set = MODIFIED.to_vec();
         set.push(("profile_normal_error_mm_1", -0.005));
         let out = outputs(&model, &row(&model, &set));
         assert_eq!(out[8], 0.0);
         assert!(out[..8].iter().all(|v| v.is_finite()), "{out:?}");
-        for spec in model.outputs() {
-            let expected =
-                (spec.kind == crate::OutputKind::Continuous).then_some(crate::OutputCondition {
-                    indicator: INTERFERENCE,
-                    effect: crate::ConditionEffect::Excluded,
-                });
+        assert_eq!(out[9..], [0.0; 5]);
+        for spec in &model.outputs()[..8] {
+            let expected = Some(crate::OutputCondition {
+                indicator: INTERFERENCE,
+                effect: crate::ConditionEffect::Excluded,
+            });
             assert_eq!(spec.condition, expected, "{}", spec.name);
         }
+        assert!(model.outputs()[8..]
+            .iter()
+            .all(|spec| spec.condition.is_none()));
     }
 }

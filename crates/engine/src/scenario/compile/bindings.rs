@@ -1,7 +1,8 @@
 //! How one model input is bound (the `models[i].inputs` of the file): by its own key or by
 //! the one `*` pattern that matches it (a family of indexed inputs, `pin_error_mm_*`), to a
-//! number (which the model may refuse, `check_constant`) or to a named column of the input
-//! space (an array's member by the star's index), whose unit must be the input's.
+//! number (which the model may refuse, `check_constant`), to a parameter of the reducer
+//! (`"reducer.KEY"`, a design value the model takes as an input) or to a named column of the
+//! input space (an array's member by the star's index), whose unit must be the input's.
 
 use rvtol_models::{ErrorModel, InputSpec};
 use serde_json::Value;
@@ -35,6 +36,14 @@ impl Compiler<'_> {
                         .map(|()| Some(Binding::Constant(v)))
                         .map_err(|reason| ScenarioError::new(binding_path, reason))
                 }
+            }
+            serde_json::Value::String(name) if name.starts_with(REDUCER_BINDING) => {
+                reducer_binding(self.file, name, binding_path).and_then(|v| {
+                    model
+                        .check_constant(position, v)
+                        .map(|()| Some(Binding::Constant(v)))
+                        .map_err(|reason| ScenarioError::new(binding_path, reason))
+                })
             }
             serde_json::Value::String(name) => {
                 // A pattern bound to an array takes the member of its index; an
@@ -120,6 +129,42 @@ impl Compiler<'_> {
                 format!("expected a number or a variable name, got {other}"),
             )),
         }
+    }
+}
+
+/// How an input names a parameter of the `reducer` section (`"reducer.KEY"`): a design value
+/// a model takes as an input (a modification the torsion curve also draws errors about).
+pub(super) const REDUCER_BINDING: &str = "reducer.";
+
+/// The value of the reducer parameter `name` (`reducer.KEY`) an input at `at` is bound to.
+fn reducer_binding(
+    file: &ScenarioFile,
+    name: &str,
+    at: &str,
+) -> Result<f64, ScenarioError> {
+    let key = &name[REDUCER_BINDING.len()..];
+    let Some(reducer) = &file.reducer else {
+        return Err(ScenarioError::new(
+            at,
+            format!("binds {name:?}, but the scenario has no reducer section"),
+        ));
+    };
+    match reducer.params.get(key) {
+        Some(serde_json::Value::Number(n)) => match n.as_f64() {
+            Some(v) if v.is_finite() => Ok(v),
+            _ => Err(ScenarioError::new(
+                at,
+                format!("{name} must be a finite number"),
+            )),
+        },
+        Some(other) => Err(ScenarioError::new(
+            at,
+            format!("binds {name:?}, which is {other}, not a number"),
+        )),
+        None => Err(ScenarioError::new(
+            at,
+            format!("binds {name:?}, but reducer.params has no {key:?}"),
+        )),
     }
 }
 

@@ -9,7 +9,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use rvtol_models::{ModelEntry, ModelParams, ParamValue};
 
 use super::super::file::{ModelFile, ReducerFile, ScenarioFile};
-use super::bindings::{input_binding, InputBinding};
+use super::bindings::{input_binding, InputBinding, REDUCER_BINDING};
 use super::models::BuiltModel;
 use super::Compiler;
 use crate::error::ScenarioError;
@@ -76,7 +76,8 @@ fn build_model(path: &str, model_file: &ModelFile, reducer: Option<&ReducerFile>
 }
 
 /// The `reducer` section's own checks: each of its parameters is taken by some model of
-/// the scenario, and each source names one of its parameters and is a text.
+/// the scenario (by some model of rvtol when the reducer comes from a shared file, which
+/// defines it for every model), and each source names one of its parameters and is a text.
 fn check_reducer(file: &ScenarioFile) -> Vec<ScenarioError> {
     let Some(reducer) = &file.reducer else {
         return Vec::new();
@@ -87,11 +88,30 @@ fn check_reducer(file: &ScenarioFile) -> Vec<ScenarioError> {
         .filter_map(|(_, model)| rvtol_models::find(&model.model))
         .collect();
     let mut problems = Vec::new();
+    // Keys an input is bound to (`reducer.KEY`) are taken too.
+    let bound: BTreeSet<&str> = file
+        .models
+        .iter()
+        .flat_map(|(_, model)| model.inputs.values())
+        .filter_map(|value| value.as_str()?.strip_prefix(REDUCER_BINDING))
+        .collect();
+    let takes = |e: &&ModelEntry, key: &str| {
+        bound.contains(key) || e.params.iter().any(|spec| spec.name == key)
+    };
     for key in reducer.params.keys() {
-        if !entries
-            .iter()
-            .any(|e| e.params.iter().any(|spec| spec.name == key))
-        {
+        if reducer.file.is_some() {
+            if !rvtol_models::all().iter().any(|e| takes(&e, key)) {
+                problems.push(ScenarioError::new(
+                    format!("reducer.params.{key}"),
+                    format!(
+                        "no model of rvtol takes it (in {}; `rvtol models` lists their parameters)",
+                        reducer.file.as_deref().unwrap_or_default()
+                    ),
+                ));
+            }
+            continue;
+        }
+        if !entries.iter().any(|e| takes(e, key)) {
             let names: Vec<&str> = entries.iter().map(|e| e.name).collect();
             problems.push(ScenarioError::new(
                 format!("reducer.params.{key}"),

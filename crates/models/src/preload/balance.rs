@@ -1,6 +1,6 @@
-//! Preload judged by its physics (docs/models.md §14.5): where the two discs' windows fail
-//! to overlap, the flanks are squeezed at zero torque. At the output angle of the largest
-//! overlap, the discs settle where their pins' moments balance:
+//! The zero-torque balance of two discs whose flanks overlap (docs/models.md §14.5): where
+//! the two discs' windows fail to overlap, the flanks are squeezed at zero torque. At the
+//! output angle of the largest overlap, the discs settle where their pins' moments balance:
 //! ```text
 //! disc d turned by y_d against its pins: pin i deforms by d_i = l_i·y_d − g_i (> 0: loaded)
 //! moment (per unit contact stiffness)  T_d(y) = Σ_i max(0, l_i·y − g_i)·l_i   (increasing)
@@ -19,7 +19,7 @@
 //! i times. Left out of T_0: the friction of the crank bearings, support and main bearings
 //! and seals under the preload's forces.
 
-use super::geometry::{Grid, Reducer};
+use super::{PinContact, Preload};
 
 /// Most pins of a disc (the stage's own limit).
 pub(crate) const MAX_PINS: usize = 200;
@@ -113,29 +113,8 @@ impl DiscPins {
     }
 }
 
-/// The preload of an assembly at one output angle.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct Preload {
-    /// The largest approach of a pin contact at zero torque (the overlap a flank takes up),
-    /// µm.
-    pub overlap_um: f64,
-    /// The largest pin force at zero torque, N.
-    pub pin_force: f64,
-    /// The no-load torque at the input, N·m.
-    pub no_load_torque: f64,
-}
-
-impl Preload {
-    /// No preload.
-    pub const NONE: Preload = Preload {
-        overlap_um: 0.0,
-        pin_force: 0.0,
-        no_load_torque: 0.0,
-    };
-}
-
 /// The zero-torque balance of the two discs.
-pub(crate) fn zero_torque(reducer: &Reducer, discs: &[DiscPins; 2]) -> Preload {
+pub(crate) fn zero_torque(contact: &PinContact, discs: &[DiscPins; 2]) -> Preload {
     // Σ_d τ_d(u) rises with u; beyond these ends every disc pushes one way.
     let lo = discs
         .iter()
@@ -164,7 +143,7 @@ pub(crate) fn zero_torque(reducer: &Reducer, discs: &[DiscPins; 2]) -> Preload {
     if largest <= 0.0 {
         return Preload::NONE;
     }
-    let pin_force = reducer.force_at(largest);
+    let pin_force = contact.force_at(largest);
     let stiffness = pin_force / largest;
     let mut drag = 0.0;
     for (p, y) in discs.iter().zip(turns) {
@@ -178,67 +157,152 @@ pub(crate) fn zero_torque(reducer: &Reducer, discs: &[DiscPins; 2]) -> Preload {
     Preload {
         overlap_um: 1000.0 * largest,
         pin_force,
-        no_load_torque: reducer.pin_friction * drag / reducer.ratio / 1000.0,
+        no_load_torque: contact.friction * drag / contact.ratio / 1000.0,
     }
 }
 
-/// The largest pin force at rated torque of the design's profile brought to zero play (no
-/// deviations; the pins' radius changed until the window closes: neither play nor
-/// preload, which a limit taken from a preloaded design's own rated forces would not be),
-/// one disc carrying half of λ·T_r, over one pin pitch of the grid, N: the default preload
-/// limit. The secant stiffness K = F_max/δ(F_max) is iterated to its fixed point, as the
-/// contact model does (Li Lixing's method).
-pub(crate) fn rated_pin_force(reducer: &Reducer, grid: &Grid) -> f64 {
-    let disc_torque = 0.5 * reducer.lambda * reducer.rated_torque * 1000.0;
-    let mut largest: f64 = 0.0;
-    for k in 0..grid.per_pin {
-        let mut pins = design_pins(grid, k);
-        // The play with every gap changed by c rises with c: close it.
-        let play = |c: f64| {
-            let mut moved = pins.clone();
-            moved.gaps[..moved.len].iter_mut().for_each(|g| *g += c);
-            moved.lag() + moved.lead()
+/// The zero-torque balance of two discs alike (no offset between them, no slack), whose
+/// pins have the gaps `gaps`, levers `levers` and slip arms `arms`: each disc settles where
+/// its own moment vanishes, T(y) = Σ max(0, l_i·y − g_i)·l_i = 0 in [L, −K] (L the drive
+/// flank's lag, K the coast flank's lead, L + K < 0 where the flanks overlap); the same
+/// preload as [`zero_torque`] of the pair. T is increasing and piecewise linear: Newton's
+/// step lands on the root once it has the loaded set, kept within the bracket (bisection
+/// where it would leave it). None when the flanks do not overlap.
+pub(crate) fn alike(contact: &PinContact, gaps: &[f64], pins: &AlikePins) -> Option<Preload> {
+    let (lag, lead) = pins.flanks(gaps);
+    // NaN gaps give a NaN play: no overlap to balance.
+    if (lag + lead).is_nan() || lag + lead >= 0.0 {
+        return None;
+    }
+    let (levers, arms) = (&pins.lever[..], &pins.arm[..]);
+    let (mut lo, mut hi) = (lag, -lead);
+    let mut y = 0.5 * (lo + hi);
+    for _ in 0..100 {
+        // Branch-free over the pins (the loaded set changes from row to row).
+        let (mut moment, mut slope, mut size) = (0.0, 0.0, 0.0);
+        for (g, l) in gaps.iter().zip(levers) {
+            let d = (l * y - g).max(0.0);
+            moment += d * l;
+            size += (d * l).abs();
+            slope += if d > 0.0 { l * l } else { 0.0 };
+        }
+        // The two flanks' moments cancel to rounding: y is the root.
+        if moment.abs() <= 1e-13 * size {
+            break;
+        }
+        if moment < 0.0 {
+            lo = y;
+        } else {
+            hi = y;
+        }
+        let newton = y - moment / slope;
+        let next = if newton > lo && newton < hi {
+            newton
+        } else {
+            0.5 * (lo + hi)
         };
-        let scale = pins.gaps().iter().fold(1e-6_f64, |a, g| a.max(g.abs()));
-        let closing = root(play, -4.0 * scale, 4.0 * scale);
-        let len = pins.len;
-        pins.gaps[..len].iter_mut().for_each(|g| *g += closing);
-        let lo = pins.lag().min(-pins.lead());
-        let mut force = 4.0 * disc_torque / (reducer.stage.pins as f64 * reducer.pitch_lever());
-        for _ in 0..200 {
-            let stiffness = force / reducer.approach(force);
-            let target = disc_torque / stiffness;
-            let hi = lo.abs() + 1.0;
-            let y = root(|y| target - pins.moment(y), lo - 1.0, hi);
-            let deformation = pins
-                .gaps()
-                .iter()
-                .zip(pins.levers())
-                .map(|(g, l)| l * y - g)
-                .fold(0.0_f64, f64::max);
-            let next = stiffness * deformation;
-            let settled = (next - force).abs() <= 1e-12 * next;
-            force = next;
-            if settled {
-                break;
+        let settled = (next - y).abs() <= 1e-15 * (hi - lo).abs().max(y.abs());
+        y = next;
+        if settled {
+            break;
+        }
+    }
+    let mut largest = 0.0_f64;
+    for (g, l) in gaps.iter().zip(levers) {
+        largest = largest.max(l * y - g);
+    }
+    if largest.is_nan() || largest <= 0.0 {
+        return Some(Preload::NONE);
+    }
+    let pin_force = contact.force_at(largest);
+    let stiffness = pin_force / largest;
+    let mut drag = 0.0;
+    for ((g, l), h) in gaps.iter().zip(levers).zip(arms) {
+        let d = l * y - g;
+        if d > 0.0 {
+            drag += stiffness * d * h;
+        }
+    }
+    Some(Preload {
+        overlap_um: 1000.0 * largest,
+        pin_force,
+        no_load_torque: contact.friction * 2.0 * drag / contact.ratio / 1000.0,
+    })
+}
+
+/// The pins of a disc whose preload [`alike`] balances: levers l, their inverses 1/l and
+/// slip arms h (mm), the drive flank's (l > 0) first.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct AlikePins {
+    pub lever: Vec<f64>,
+    pub inverse: Vec<f64>,
+    pub arm: Vec<f64>,
+}
+
+impl AlikePins {
+    /// Adds a pin (lever non-zero).
+    pub fn push(&mut self, lever: f64, arm: f64) {
+        self.lever.push(lever);
+        self.inverse.push(1.0 / lever);
+        self.arm.push(arm);
+    }
+
+    /// (L, K): the smallest g/l over l > 0 and the smallest −g/l over l < 0, rad.
+    pub fn flanks(&self, gaps: &[f64]) -> (f64, f64) {
+        let (mut lag, mut lead) = (f64::INFINITY, f64::INFINITY);
+        for (g, r) in gaps.iter().zip(&self.inverse) {
+            let ratio = g * r;
+            if *r > 0.0 {
+                lag = lag.min(ratio);
+            } else {
+                lead = lead.min(-ratio);
             }
         }
-        largest = largest.max(force);
+        (lag, lead)
     }
-    largest
 }
 
-/// Disc 1's pins at grid point k with the design gaps only (the pins with a lever).
-fn design_pins(grid: &Grid, k: usize) -> DiscPins {
-    let mut pins = DiscPins::new(0.0, 0.0);
-    let (base, _) = grid.placement(k, 0);
-    let columns = &grid.columns;
-    for j in base..base + grid.pins() {
-        if columns.inverse_lever[j] != 0.0 {
-            pins.push(columns.design_gap[j], columns.lever[j], columns.slip_arm[j]);
+/// The largest pin force of one disc carrying `disc_torque` (N·mm) on the pins `pins` (of a
+/// stage of `pin_count` pins whose pitch point has the lever `pitch_lever`) brought to zero play (every gap changed by one amount until the window closes: neither
+/// play nor preload), N. The secant stiffness K = F_max/δ(F_max) is iterated to its fixed
+/// point, as the contact model does (Li Lixing's method).
+pub(crate) fn closed_pin_force(
+    contact: &PinContact,
+    disc_torque: f64,
+    (pin_count, pitch_lever): (usize, f64),
+    mut pins: DiscPins,
+) -> f64 {
+    // The play with every gap changed by c rises with c: close it.
+    let play = |c: f64| {
+        let mut moved = pins.clone();
+        moved.gaps[..moved.len].iter_mut().for_each(|g| *g += c);
+        moved.lag() + moved.lead()
+    };
+    let scale = pins.gaps().iter().fold(1e-6_f64, |a, g| a.max(g.abs()));
+    let closing = root(play, -4.0 * scale, 4.0 * scale);
+    let len = pins.len;
+    pins.gaps[..len].iter_mut().for_each(|g| *g += closing);
+    let lo = pins.lag().min(-pins.lead());
+    let mut force = 4.0 * disc_torque / (pin_count as f64 * pitch_lever);
+    for _ in 0..200 {
+        let stiffness = force / contact.approach(force);
+        let target = disc_torque / stiffness;
+        let hi = lo.abs() + 1.0;
+        let y = root(|y| target - pins.moment(y), lo - 1.0, hi);
+        let deformation = pins
+            .gaps()
+            .iter()
+            .zip(pins.levers())
+            .map(|(g, l)| l * y - g)
+            .fold(0.0_f64, f64::max);
+        let next = stiffness * deformation;
+        let settled = (next - force).abs() <= 1e-12 * next;
+        force = next;
+        if settled {
+            break;
         }
     }
-    pins
+    force
 }
 
 /// A root of f on [lo, hi] where f(lo) ≥ 0 ≥ f(hi) (or the reverse) by the Illinois
