@@ -25,4 +25,5 @@ mod scenario_format;
 mod sensitivity;
 mod shard;
 mod stiffness;
+mod structure;
 mod transmission_error;
