@@ -1,6 +1,7 @@
-//! One function per command: read the scenario, check what the request needs against the
-//! machine ([`crate::limits`]), call the engine, print or write the report
-//! ([`crate::output`]). The engine computes; nothing here does statistics.
+//! One function per command: make its request through rvtol-analysis' `request` (the
+//! scenario read, the settings with their defaults and limits, what it needs against the
+//! machine), call the engine or the analysis, print or write the report
+//! ([`crate::output`]). The library computes and decides; nothing here does statistics.
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
