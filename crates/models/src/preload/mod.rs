@@ -1,5 +1,5 @@
 //! The one preload rule (docs/models.md §14.5): every model of a whole reducer
-//! (`rv_lost_motion`, `geometric_hysteresis`'s physical reading, `torsion_curve`,
+//! (`rv_lost_motion`, `geometric_hysteresis` in both readings, `torsion_curve`,
 //! `cycloid_pin_contact`, `transmission_error`'s physical reading) judges an overlap of the
 //! cycloid stage by the same physics, the same contact law and the same limit, so the same
 //! reducer with the same deviations gets the same class in every model.
