@@ -137,11 +137,7 @@ impl Compiler<'_> {
 pub(super) const REDUCER_BINDING: &str = "reducer.";
 
 /// The value of the reducer parameter `name` (`reducer.KEY`) an input at `at` is bound to.
-fn reducer_binding(
-    file: &ScenarioFile,
-    name: &str,
-    at: &str,
-) -> Result<f64, ScenarioError> {
+fn reducer_binding(file: &ScenarioFile, name: &str, at: &str) -> Result<f64, ScenarioError> {
     let key = &name[REDUCER_BINDING.len()..];
     let Some(reducer) = &file.reducer else {
         return Err(ScenarioError::new(
