@@ -1,5 +1,5 @@
 //! The parsers of the numbers and names on the command line: counts (`1e6` allowed),
-//! seeds, shares, memory sizes, sampling methods. (What a command may ask of this machine,
+//! seeds, shares, memory sizes, sampling methods, shards. (What a command may ask of this machine,
 //! its threads and its memory budget, is rvtol-analysis' `request::machine`, shared with
 //! the Python module.)
 
@@ -99,6 +99,11 @@ pub fn parse_sampling(text: &str) -> Result<rvtol_deviation::SamplingMethod, Str
             SamplingMethod::NAMES.join(", ")
         )
     })
+}
+
+/// `--shard`: `K/N` (0 <= K < N), as rvtol-analysis' shard format reads it.
+pub fn parse_shard(text: &str) -> Result<(u64, u64), String> {
+    rvtol_analysis::shard::parse_shard(text)
 }
 
 #[cfg(test)]

@@ -1,15 +1,20 @@
 //! `rvtol evaluate`'s rows: the scenario's input columns found by their headings in a
 //! table of rows (as `run --samples-out` writes it: the index and the outputs may be
 //! there too, nothing else), each converted from its heading's unit into the input's, as
-//! one row-major block ([`input_rows`]).
+//! one row-major block ([`input_rows`]), read within what the memory allows
+//! ([`rows_limit`]).
 
+use rvtol_deviation::human_bytes;
 use rvtol_engine::evaluate::check_table_rows;
 use rvtol_engine::scenario::units;
 use rvtol_engine::Scenario;
 
+use super::input_file::ReadLimit;
+use super::machine::memory_budget;
+use super::memory;
 use super::samples::SAMPLE_INDEX;
 use super::table::CsvTable;
-use super::Refusal;
+use super::{Caller, Refusal};
 
 /// The rows of `table` (the file `shown` as messages name it) as the scenario's input
 /// columns, row-major.
@@ -75,4 +80,26 @@ pub fn input_rows(table: &CsvTable, shown: &str, scenario: &Scenario) -> Result<
         return Err(Refusal::Input(format!("{shown}: no rows")));
     }
     Ok(values)
+}
+
+/// The bound of the rows `evaluate` reads: what the memory budget (`max_memory` or what the
+/// machine has, within the process's limits, with `threads` workers) allows for rows read,
+/// evaluated and written out ([`memory::table_evaluation_factor`] bytes per byte of the
+/// file). A file is checked against it before it is read (`memory::table_evaluation`); a
+/// pipe or standard input is cut at it.
+pub fn rows_limit(
+    scenario: &Scenario,
+    max_memory: Option<f64>,
+    threads: usize,
+    caller: Caller,
+) -> ReadLimit {
+    let (budget, budget_source) = memory_budget(max_memory, threads, caller);
+    ReadLimit {
+        bytes: ((budget - memory::BASE_BYTES).max(0.0) / memory::table_evaluation_factor(scenario))
+            as u64,
+        source: format!(
+            "what the {} of memory available ({budget_source}) allows for rows read, evaluated and written out; split the rows into smaller files",
+            human_bytes(budget)
+        ),
+    }
 }

@@ -1,19 +1,28 @@
 //! Sharded requests: what shard K of N of a run or a sensitivity analysis writes in its
 //! file's header (the scenario text, the command's settings, K/N, its chunks and Shapley
 //! permutations, the build that computed it), and a checked set of shard files turned back
-//! into the request they share and the partials the merges fold ([`merged`]).
+//! into the request they share and the partials the merges fold ([`merged`]); the files
+//! read within the memory a merge may take ([`read_shards`]).
 
 use std::ops::Range;
+use std::path::PathBuf;
+
+use rvtol_deviation::human_bytes;
 
 use rvtol_engine::chunk::shard_range;
 use rvtol_engine::{RunPartial, RunSettings, Scenario, ScenarioError};
 
+use super::input_file::{read_bytes, ReadLimit};
+use super::machine::memory_budget;
+use super::memory::BASE_BYTES;
 use super::scenario::ScenarioText;
 use super::sensitivity::{SensitivityRequest, ShapleyRequest};
 use super::{Caller, Refusal};
 use crate::sensitivity::{SensitivitySettings, SobolPartial};
 use crate::shapley::{shapley_permutations, ShapleyPartial, ShapleySettings};
-use crate::shard::{Assembly, ShapleyShard, ShardCommand, ShardContent, ShardHeader};
+use crate::shard::{
+    decode, Assembly, ShapleyShard, ShardCommand, ShardContent, ShardFile, ShardHeader,
+};
 
 /// This build's identity in shard files: the version and the SHA-256 of the running
 /// executable. Shards and their merge must come from one binary: another build may draw or
@@ -226,4 +235,36 @@ pub fn merged(assembly: Assembly) -> Result<Merged, MergeError> {
         scenario,
         work,
     })
+}
+
+/// The bound of the shard files a merge reads: the memory budget (`max_memory` or what the
+/// machine has, within the process's limits, with `threads` workers) less the program's.
+/// The files are held decoded, about their size each, while the next is read, so each file
+/// is read within what the ones before it left ([`read_shards`]).
+pub fn shards_limit(max_memory: Option<f64>, threads: usize, caller: Caller) -> ReadLimit {
+    let (budget, budget_source) = memory_budget(max_memory, threads, caller);
+    ReadLimit {
+        bytes: (budget - BASE_BYTES).max(0.0) as u64,
+        source: format!(
+            "the memory left for the shard files, of the {} available ({budget_source}), less the files read before it",
+            human_bytes(budget)
+        ),
+    }
+}
+
+/// The shard files at `paths`, decoded, with their paths as messages name them; together
+/// within `limit` ([`shards_limit`]). Its error is one line.
+pub fn read_shards(
+    paths: &[PathBuf],
+    limit: &ReadLimit,
+) -> Result<Vec<(String, ShardFile)>, String> {
+    let mut read_so_far = 0u64;
+    let mut files = Vec::with_capacity(paths.len());
+    for path in paths {
+        let bytes = read_bytes(path, &limit.less(read_so_far))?;
+        read_so_far += bytes.len() as u64;
+        let file = decode(&bytes).map_err(|err| format!("{}: {err}", path.display()))?;
+        files.push((path.display().to_string(), file));
+    }
+    Ok(files)
 }
