@@ -19,6 +19,14 @@
 //!   b₁,p (n·b₁,p/6 ~ χ² with p(p + 1)(p + 2)/6 degrees of freedom) and kurtosis b₂,p
 //!   ((b₂,p − p(p + 2))/√(8p(p + 2)/n) ~ N(0, 1), two-sided), when the sample covariance is
 //!   non-singular and at most [`MARDIA_MAX_PARTS`] parts are given.
+//!   Why not statrs' `stats_tests::anderson_darling` (statrs is a dependency): it tests
+//!   against a distribution the caller passes, with the same A*² and the same D'Agostino &
+//!   Stephens branches, but takes ln(1 − F(x)) directly, which becomes ln 0 = −∞ for a
+//!   part beyond about 8σ (here ln Φ(−z), exact in that tail); sorts with
+//!   `partial_cmp().unwrap()` (a panic on NaN, here `total_cmp`); has no n ≥ 8 floor and no
+//!   cut where the last branch's quadratic turns upward (A* ≥ 153, here p = 0). Switching
+//!   would change the printed statistics in the last bits and lose those guards; the 25
+//!   lines stay.
 //! - What is printed validates ([`check_fragment`]): the fragment, pasted into a scenario,
 //!   loads as `rvtol validate` loads it, or the fit is refused with one line naming the
 //!   column (its heading) the problem comes from: a heading that is no variable name, a

@@ -143,9 +143,45 @@ fn default_exact_percentile_limit() -> u64 {
     DEFAULT_EXACT_PERCENTILE_LIMIT
 }
 
+/// A baseline file that cannot be read, or that does not fit the scenario it is checked
+/// against, with the JSON path of the problem in the baseline file.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{path}: {message}")]
+pub struct BaselineError {
+    /// JSON path of the offending value in the baseline file.
+    pub path: String,
+    /// What is wrong, in one line.
+    pub message: String,
+}
+
+impl BaselineError {
+    /// A new error at `path`.
+    pub fn new(path: impl Into<String>, message: impl Into<String>) -> Self {
+        BaselineError {
+            path: path.into(),
+            message: message.into(),
+        }
+    }
+}
+
+/// Why a check against a baseline cannot be made.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CheckError {
+    /// The scenario's problem (its run refused, its text not JSON).
+    #[error(transparent)]
+    Scenario(#[from] ScenarioError),
+    /// The baseline's problem.
+    #[error(transparent)]
+    Baseline(#[from] BaselineError),
+    /// A requirement given with the check (the command line's `--require`) that does not
+    /// parse.
+    #[error("--require: {0}")]
+    Requirement(String),
+}
+
 impl Baseline {
     /// Parses a baseline file, with the JSON path of any problem.
-    pub fn from_json(text: &str) -> Result<Baseline, ScenarioError> {
+    pub fn from_json(text: &str) -> Result<Baseline, BaselineError> {
         // A scenario or a report given for a baseline is named as such, not by its first
         // key; a damaged baseline is left to the field-by-field messages.
         if let Ok(serde_json::Value::Object(map)) = serde_json::from_str(text) {
@@ -159,7 +195,7 @@ impl Baseline {
                 None
             };
             if let Some(looks_like) = looks_like {
-                return Err(ScenarioError::new(
+                return Err(BaselineError::new(
                     "(root)",
                     format!(
                         "not a baseline but {looks_like} (no `figures`): `rvtol baseline SCENARIO -o FILE` writes one"
@@ -173,25 +209,25 @@ impl Baseline {
                 let path = err.path().to_string();
                 let inner = err.into_inner();
                 if inner.is_syntax() || inner.is_eof() {
-                    ScenarioError::new("JSON syntax", inner.to_string())
+                    BaselineError::new("JSON syntax", inner.to_string())
                 } else {
-                    ScenarioError::new(
+                    BaselineError::new(
                         if path == "." { "(root)".into() } else { path },
                         inner.to_string(),
                     )
                 }
             })?;
         if baseline.samples == 0 {
-            return Err(ScenarioError::new("samples", "must be at least 1"));
+            return Err(BaselineError::new("samples", "must be at least 1"));
         }
         if !(baseline.z.is_finite() && baseline.z > 0.0) {
-            return Err(ScenarioError::new(
+            return Err(BaselineError::new(
                 "z",
                 format!("must be a positive number, got {}", Shown(baseline.z)),
             ));
         }
         if baseline.figures.is_empty() {
-            return Err(ScenarioError::new(
+            return Err(BaselineError::new(
                 "figures",
                 "is empty: a check against no figures would pass whatever the scenario does; write the baseline again with rvtol baseline",
             ));
@@ -203,7 +239,7 @@ impl Baseline {
                 ("upper", figure.upper),
             ] {
                 if !value.is_finite() {
-                    return Err(ScenarioError::new(
+                    return Err(BaselineError::new(
                         format!("figures[{i}].{key}"),
                         "must be a finite number",
                     ));
@@ -215,7 +251,7 @@ impl Baseline {
             ] {
                 if let Some(t) = tolerance {
                     if !(t.is_finite() && t >= 0.0) {
-                        return Err(ScenarioError::new(
+                        return Err(BaselineError::new(
                             format!("figures[{i}].{key}"),
                             format!("must be a finite number ≥ 0, got {}", Shown(t)),
                         ));
@@ -223,7 +259,7 @@ impl Baseline {
                 }
             }
             if !(figure.lower <= figure.value && figure.value <= figure.upper) {
-                return Err(ScenarioError::new(
+                return Err(BaselineError::new(
                     format!("figures[{i}]"),
                     "needs lower ≤ value ≤ upper",
                 ));
@@ -235,9 +271,9 @@ impl Baseline {
     /// Checks that this baseline belongs to `scenario`: the same scenario name, and every
     /// figure names an output of it and a figure that output has. A mismatch is bad input
     /// (the wrong file), not a moved figure.
-    pub fn matches(&self, scenario: &Scenario) -> Result<(), ScenarioError> {
+    pub fn matches(&self, scenario: &Scenario) -> Result<(), BaselineError> {
         if self.scenario != scenario.name {
-            return Err(ScenarioError::new(
+            return Err(BaselineError::new(
                 "scenario",
                 format!(
                     "the baseline records scenario {:?}, not {:?}: check a scenario against its own baseline (rvtol baseline writes one)",
@@ -247,7 +283,7 @@ impl Baseline {
         }
         for (i, figure) in self.figures.iter().enumerate() {
             let Some(output) = scenario.outputs.iter().find(|o| o.name == figure.output) else {
-                return Err(ScenarioError::new(
+                return Err(BaselineError::new(
                     format!("figures[{i}].output"),
                     format!(
                         "the scenario has no output {:?}; write the baseline again with rvtol baseline",
@@ -264,7 +300,7 @@ impl Baseline {
                     .collect(),
             };
             if !known.contains(&figure.figure.as_str()) {
-                return Err(ScenarioError::new(
+                return Err(BaselineError::new(
                     format!("figures[{i}].figure"),
                     format!(
                         "{:?} is not a figure of {} (figures: {})",
@@ -409,7 +445,7 @@ pub fn figures_of(
         push("sd", value.sd, half);
         let out = acc.out_of_spec(info.flagged_conform);
         let (min, max) = (acc.moments.min, acc.moments.max);
-        let order = OrderStatistics::new(acc.distribution, n, min, max)
+        let order = OrderStatistics::new(acc.kept, n, min, max)
             .expect("the gate keeps the distribution of every continuous output");
         for (name, percent) in GATED_PERCENTS {
             let (_, low, high) = order.percentile_with_interval(percent, z);
@@ -788,7 +824,7 @@ pub fn check(
     seed: u64,
     max_non_finite: f64,
     progress: &(dyn Fn(u64) + Sync),
-) -> Result<CheckReport, ScenarioError> {
+) -> Result<CheckReport, CheckError> {
     check_with(
         scenario,
         scenario_text,
@@ -813,7 +849,7 @@ pub fn check_with(
     max_non_finite: f64,
     options: &CheckOptions,
     progress: &(dyn Fn(u64) + Sync),
-) -> Result<CheckReport, ScenarioError> {
+) -> Result<CheckReport, CheckError> {
     check_result(
         scenario,
         scenario_text,
@@ -835,7 +871,7 @@ pub fn check_result(
     max_non_finite: f64,
     options: &CheckOptions,
     result_of: &dyn Fn(RunSettings) -> Result<RunResult, ScenarioError>,
-) -> Result<CheckReport, ScenarioError> {
+) -> Result<CheckReport, CheckError> {
     baseline.matches(scenario)?;
     let current: serde_json::Value = serde_json::from_str(scenario_text)
         .map_err(|err| ScenarioError::new("JSON syntax", err.to_string()))?;
@@ -844,14 +880,14 @@ pub fn check_result(
         requirements.push(
             parse_requirement(scenario, text)
                 .map(|parsed| (text.clone(), parsed))
-                .map_err(|err| ScenarioError::new(format!("requirements[{i}]"), err))?,
+                .map_err(|err| BaselineError::new(format!("requirements[{i}]"), err))?,
         );
     }
     for text in &options.requirements {
         requirements.push(
             parse_requirement(scenario, text)
                 .map(|parsed| (text.clone(), parsed))
-                .map_err(|err| ScenarioError::new("--require", err))?,
+                .map_err(CheckError::Requirement)?,
         );
     }
     let z = band_z(baseline.figures.len() + requirements.len()).max(baseline.z);

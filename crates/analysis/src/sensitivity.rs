@@ -66,6 +66,7 @@ use rvtol_engine::chunk::{Sampling, CHUNK_SIZE};
 use rvtol_engine::evaluate::ChunkEvaluator;
 use rvtol_engine::scenario::{InputGroup, Scenario, ScenarioError};
 use rvtol_engine::stats::{replicate_standard_error, student_t_quantile};
+use rvtol_engine::{FoldError, MergeError};
 
 /// First bootstrap stream (far above the 2k, 2k + 1 streams of the sample matrices).
 const BOOTSTRAP_STREAM_BASE: u64 = 1 << 62;
@@ -634,9 +635,9 @@ pub fn merge_sobol(
     scenario: &Scenario,
     settings: SensitivitySettings,
     mut partials: Vec<SobolPartial>,
-) -> Result<Vec<OutputSensitivity>, ScenarioError> {
+) -> Result<Vec<OutputSensitivity>, FoldError> {
     let plan = sobol_plan(scenario, settings)?;
-    let broken = |message: String| Err(ScenarioError::new("(merge)", message));
+    let broken = |message: String| Err(MergeError::new(message).into());
     partials.sort_by_key(|p| (p.chunks.start, p.chunks.end));
     let n_chunks = settings.chunk_count();
     let mut next = 0;
@@ -715,11 +716,11 @@ pub fn merge_sobol(
                     _ => return broken("a partial's block sums do not fit the analysis".into()),
                 }
             }
-            if plan.method == IntervalMethod::Replicates {
-                indices_from_replicates(scenario, &plan, settings, &chunks)
+            Ok(if plan.method == IntervalMethod::Replicates {
+                indices_from_replicates(scenario, &plan, settings, &chunks)?
             } else {
-                indices_from_blocks(scenario, &plan, settings, &chunks)
-            }
+                indices_from_blocks(scenario, &plan, settings, &chunks)?
+            })
         }
     }
 }
@@ -931,7 +932,7 @@ pub fn sobol_indices(
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Vec<OutputSensitivity>, ScenarioError> {
     let partial = sobol_chunks(scenario, settings, 0..settings.chunk_count(), progress)?;
-    merge_sobol(scenario, settings, vec![partial])
+    merge_sobol(scenario, settings, vec![partial]).map_err(FoldError::of_own_partial)
 }
 
 /// Rows of a cache block of the row bootstrap: the estimator terms of a block (2G + 2

@@ -32,6 +32,7 @@ use rvtol_deviation::ConditionalSampler;
 use rvtol_engine::chunk::CHUNK_SIZE;
 use rvtol_engine::evaluate::ChunkEvaluator;
 use rvtol_engine::scenario::{InputGroup, Scenario, ScenarioError};
+use rvtol_engine::{FoldError, MergeError};
 
 const SHAPLEY_STREAM_BASE: u64 = 1 << 61;
 /// Rows of the run that estimates Var Y.
@@ -165,7 +166,7 @@ pub fn shapley_effects(
 ) -> Result<Vec<(String, Vec<ShapleyEffect>)>, ScenarioError> {
     let n = shapley_permutations(scenario, settings)?;
     let partial = shapley_partial(scenario, settings, 0..n)?;
-    merge_shapley(scenario, settings, vec![partial])
+    merge_shapley(scenario, settings, vec![partial]).map_err(FoldError::of_own_partial)
 }
 
 /// Runs permutations `permutations` of the estimate (a shard of it), and the variance run
@@ -280,9 +281,9 @@ pub fn merge_shapley(
     scenario: &Scenario,
     settings: ShapleySettings,
     mut partials: Vec<ShapleyPartial>,
-) -> Result<Vec<(String, Vec<ShapleyEffect>)>, ScenarioError> {
+) -> Result<Vec<(String, Vec<ShapleyEffect>)>, FoldError> {
     let plan = shapley_plan(scenario, settings)?;
-    let broken = |message: String| Err(ScenarioError::new("(merge)", message));
+    let broken = |message: String| Err(MergeError::new(message).into());
     partials.sort_by_key(|p| (p.permutations.start, p.permutations.end));
     let (players, continuous) = (&plan.players, &plan.continuous);
     let d = players.len();

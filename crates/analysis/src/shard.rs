@@ -38,9 +38,7 @@ use crate::sensitivity::{BlockSums, SobolChunks, SobolPartial};
 use crate::shapley::ShapleyPartial;
 use rvtol_deviation::ConstraintCounts;
 use rvtol_engine::chunk::{shard_range, Sampling, SamplingMethod};
-use rvtol_engine::run::{
-    Distribution, OutputAccumulator, PercentileMethod, RunPartial, RunSettings,
-};
+use rvtol_engine::run::{KeptValues, OutputAccumulator, PercentileMethod, RunPartial, RunSettings};
 use rvtol_engine::stats::{Moments, QuantileSketch, SketchParts};
 
 /// First bytes of a shard file.
@@ -327,12 +325,12 @@ fn write_outputs(out: &mut Writer, outputs: &[OutputAccumulator]) {
         ] {
             out.u64(count);
         }
-        match &output.distribution {
-            Distribution::Values(values) => {
+        match &output.kept {
+            KeptValues::Values(values) => {
                 out.u8(0);
                 out.f64s(values);
             }
-            Distribution::Sketch {
+            KeptValues::Sketch {
                 sketch,
                 center,
                 scale,
@@ -351,8 +349,8 @@ fn write_outputs(out: &mut Writer, outputs: &[OutputAccumulator]) {
                     }
                 }
             }
-            Distribution::Indicator => out.u8(2),
-            Distribution::Dropped => out.u8(3),
+            KeptValues::Indicator => out.u8(2),
+            KeptValues::Dropped => out.u8(3),
         }
     }
 }
@@ -644,7 +642,7 @@ fn check_counts(
     samples: u64,
 ) -> Result<(), String> {
     let wide = |count: u64| count as u128;
-    let indicator = matches!(acc.distribution, Distribution::Indicator);
+    let indicator = matches!(acc.kept, KeptValues::Indicator);
     if indicator {
         if finite != 0 || wide(acc.non_finite) + wide(acc.nonzero) > rows {
             return Err(format!(
@@ -682,8 +680,8 @@ fn check_counts(
         }
         _ => {}
     }
-    match &acc.distribution {
-        Distribution::Values(values) => {
+    match &acc.kept {
+        KeptValues::Values(values) => {
             if values.len() as u128 != finite {
                 return Err(format!("{} values kept of {finite} finite", values.len()));
             }
@@ -691,7 +689,7 @@ fn check_counts(
                 return Err(format!("value {position} is NaN"));
             }
         }
-        Distribution::Sketch {
+        KeptValues::Sketch {
             sketch,
             center,
             scale,
@@ -710,7 +708,7 @@ fn check_counts(
                 ));
             }
         }
-        Distribution::Indicator | Distribution::Dropped => {}
+        KeptValues::Indicator | KeptValues::Dropped => {}
     }
     Ok(())
 }
@@ -775,8 +773,8 @@ fn read_outputs(input: &mut Reader) -> Result<Vec<OutputAccumulator>, String> {
         for count in &mut counts {
             *count = input.u64()?;
         }
-        let distribution = match input.u8()? {
-            0 => Distribution::Values(input.f64s()?),
+        let kept = match input.u8()? {
+            0 => KeptValues::Values(input.f64s()?),
             1 => {
                 let (center, scale) = (input.f64()?, input.f64()?);
                 let relative_accuracy = input.f64()?;
@@ -795,14 +793,14 @@ fn read_outputs(input: &mut Reader) -> Result<Vec<OutputAccumulator>, String> {
                     negative,
                 })
                 .map_err(|err| damaged(&format!("sketch: {err}")))?;
-                Distribution::Sketch {
+                KeptValues::Sketch {
                     sketch,
                     center,
                     scale,
                 }
             }
-            2 => Distribution::Indicator,
-            3 => Distribution::Dropped,
+            2 => KeptValues::Indicator,
+            3 => KeptValues::Dropped,
             tag => return Err(damaged(&format!("distribution {tag}"))),
         };
         let [non_finite, first, excluded, flagged, flagged_within_spec, below_lower, above_upper, nonzero] =
@@ -817,7 +815,7 @@ fn read_outputs(input: &mut Reader) -> Result<Vec<OutputAccumulator>, String> {
             below_lower,
             above_upper,
             nonzero,
-            distribution,
+            kept,
         });
     }
     Ok(outputs)

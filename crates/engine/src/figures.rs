@@ -13,7 +13,7 @@ use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
 
 use crate::format::{format_sig, group_thousands};
-use crate::run::{replicated_sd, Distribution, OutputAccumulator, ReplicateFigures, RunResult};
+use crate::run::{replicated_sd, KeptValues, OutputAccumulator, ReplicateFigures, RunResult};
 use crate::scenario::{OutputInfo, Scenario};
 use crate::stats::quantile_sketch::bucket_representative;
 use crate::stats::{
@@ -448,8 +448,8 @@ fn percentile_figures(acc: &mut OutputAccumulator) -> PercentileFigures {
             .iter()
             .map(|p| binomial_rank_interval(n_values, p.1 / 100.0, CONFIDENCE))
     };
-    match &mut acc.distribution {
-        Distribution::Values(values) => {
+    match &mut acc.kept {
+        KeptValues::Values(values) => {
             let percents: Vec<f64> = PERCENTS.iter().map(|p| p.1).collect();
             let histogram = Histogram::from_values(values, min, max, HISTOGRAM_BINS);
             let found = percentiles_type7_with_intervals(values, &percents, CONFIDENCE);
@@ -463,7 +463,7 @@ fn percentile_figures(acc: &mut OutputAccumulator) -> PercentileFigures {
                 histogram,
             }
         }
-        Distribution::Sketch {
+        KeptValues::Sketch {
             sketch,
             center,
             scale,
@@ -501,10 +501,10 @@ fn percentile_figures(acc: &mut OutputAccumulator) -> PercentileFigures {
                 histogram: histogram_of_standardised_sketch(sketch, *center, *scale, min, max),
             }
         }
-        Distribution::Dropped => {
+        KeptValues::Dropped => {
             unreachable!("a run for a report keeps every output's distribution")
         }
-        Distribution::Indicator => {
+        KeptValues::Indicator => {
             let zeros = m.n - acc.nonzero;
             let value = |rank: usize| if (rank as u64) < zeros { 0.0 } else { 1.0 };
             PercentileFigures {
@@ -693,13 +693,13 @@ pub enum OrderStatistics {
 impl OrderStatistics {
     /// The order statistics of an output's kept values (`n` of them within [`min`,
     /// `max`]); `None` for an indicator or a dropped output, which keep none.
-    pub fn new(distribution: Distribution, n: u64, min: f64, max: f64) -> Option<OrderStatistics> {
-        match distribution {
-            Distribution::Values(mut values) => {
+    pub fn new(kept: KeptValues, n: u64, min: f64, max: f64) -> Option<OrderStatistics> {
+        match kept {
+            KeptValues::Values(mut values) => {
                 values.sort_unstable_by(f64::total_cmp);
                 Some(OrderStatistics::Exact(values))
             }
-            Distribution::Sketch {
+            KeptValues::Sketch {
                 sketch,
                 center,
                 scale,
@@ -711,7 +711,7 @@ impl OrderStatistics {
                 min,
                 max,
             }),
-            Distribution::Indicator | Distribution::Dropped => None,
+            KeptValues::Indicator | KeptValues::Dropped => None,
         }
     }
 

@@ -23,6 +23,7 @@ pub mod scenario;
 pub mod stats;
 
 pub use chunk::{shard_range, Sampling};
+pub use error::{FoldError, MergeError};
 pub use evaluate::SampleTable;
 pub use report::{NominalReport, RunReport};
 pub use run::{

@@ -38,6 +38,7 @@ use rvtol_deviation::{ConstraintCounts, PointSet, SamplerScratch};
 use rvtol_models::{ConditionEffect, Curve, OutputKind};
 
 use crate::chunk::{waves, Sampling, BLOCK_ROWS, CHUNK_SIZE};
+use crate::error::MergeError;
 use crate::evaluate::{check_table_rows, ChunkEvaluator, SampleTable};
 use crate::scenario::{Scenario, ScenarioError};
 use crate::stats::{values_at_ranks, Moments, QuantileSketch, SpecLimits, PERCENTS};
@@ -150,9 +151,11 @@ pub enum PercentileMethod {
     },
 }
 
-/// Where an output's values went during the run.
+/// What a run keeps of an output's values for its percentiles and histogram: the values
+/// themselves, a sketch of them, or nothing. Kept values, not a probability law (the
+/// scenario's laws are rvtol-deviation's `ScalarDistribution`).
 #[derive(Debug, Clone)]
-pub enum Distribution {
+pub enum KeptValues {
     /// Every finite value (exact percentiles).
     Values(Vec<f64>),
     /// A quantile sketch of the standardised values (x − center)/scale, so its relative
@@ -205,11 +208,11 @@ pub struct OutputAccumulator {
     /// Samples whose value was non-zero (the events of an indicator output).
     pub nonzero: u64,
     /// Values or sketch, for percentiles and the histogram.
-    pub distribution: Distribution,
+    pub kept: KeptValues,
 }
 
 impl OutputAccumulator {
-    fn new(distribution: Distribution) -> OutputAccumulator {
+    fn new(kept: KeptValues) -> OutputAccumulator {
         OutputAccumulator {
             moments: Moments::new(),
             non_finite: 0,
@@ -220,7 +223,7 @@ impl OutputAccumulator {
             below_lower: 0,
             above_upper: 0,
             nonzero: 0,
-            distribution,
+            kept,
         }
     }
 
@@ -299,7 +302,7 @@ fn replicate_entry(
 fn absorb_replicates(
     mine: &mut ReplicateAccumulators,
     other: ReplicateAccumulators,
-) -> Result<(), ScenarioError> {
+) -> Result<(), MergeError> {
     for (replicate, outputs) in other {
         match mine.binary_search_by_key(&replicate, |(r, _)| *r) {
             Ok(at) => absorb_counts(&mut mine[at].1, outputs)?,
@@ -434,7 +437,7 @@ impl<'a> Plan<'a> {
     /// Empty accumulators of every output.
     fn new_accumulators(&self) -> Vec<OutputAccumulator> {
         (0..self.scenario.outputs.len())
-            .map(|o| OutputAccumulator::new(self.new_distribution(o)))
+            .map(|o| OutputAccumulator::new(self.new_kept_values(o)))
             .collect()
     }
 
@@ -476,7 +479,9 @@ impl<'a> Plan<'a> {
         partial.chunks = chunks;
         for worker in workers {
             partial.constraint_counts.add(&worker.constraint_counts);
-            absorb_replicates(&mut partial.replicates, worker.replicates)?;
+            // The workers' chunks of one wave, of one plan: they always fold.
+            absorb_replicates(&mut partial.replicates, worker.replicates)
+                .expect("a wave's workers fold");
             partial.chunk_moments.extend(worker.chunk_moments);
         }
         partial
@@ -498,16 +503,16 @@ impl<'a> Plan<'a> {
         }
     }
 
-    fn new_distribution(&self, output: usize) -> Distribution {
+    fn new_kept_values(&self, output: usize) -> KeptValues {
         if self.indicator[output] {
-            Distribution::Indicator
+            KeptValues::Indicator
         } else if self.only_output.is_some_and(|o| o != output) {
-            Distribution::Dropped
+            KeptValues::Dropped
         } else if self.exact {
-            Distribution::Values(Vec::new())
+            KeptValues::Values(Vec::new())
         } else {
             let (center, scale) = self.sketch_frames[output];
-            Distribution::Sketch {
+            KeptValues::Sketch {
                 sketch: QuantileSketch::new(SKETCH_RELATIVE_ACCURACY),
                 center,
                 scale,
@@ -693,8 +698,8 @@ impl<'a> Plan<'a> {
             if let Some((flags, ConditionEffect::NonConforming)) = flags {
                 acc.flagged += flags.iter().filter(|&&flag| is_set(flag)).count() as u64;
             }
-            match &mut acc.distribution {
-                Distribution::Values(all) => {
+            match &mut acc.kept {
+                KeptValues::Values(all) => {
                     match flags {
                         // The values a conformity target reads: a flagged sample lies beyond
                         // every limit.
@@ -710,14 +715,14 @@ impl<'a> Plan<'a> {
                         _ => all.extend_from_slice(kept),
                     }
                 }
-                Distribution::Sketch {
+                KeptValues::Sketch {
                     sketch,
                     center,
                     scale,
                 } => {
                     sketch.insert_standardised(kept, *center, 1.0 / *scale);
                 }
-                Distribution::Indicator | Distribution::Dropped => {}
+                KeptValues::Indicator | KeptValues::Dropped => {}
             }
         }
         worker.chunk_moments.push((chunk, moments));
@@ -790,7 +795,7 @@ pub fn run(
 
 /// [`run`] for a caller that needs the distribution of one output only (the allocation):
 /// the other outputs keep their moments and counts but no values or sketch
-/// ([`Distribution::Dropped`]), so memory grows with one output's values. The values kept
+/// ([`KeptValues::Dropped`]), so memory grows with one output's values. The values kept
 /// are those a conformity target reads: a sample flagged non-conforming by the output's
 /// indicator (and not allowed to conform by its spec) is kept as +∞, beyond every limit,
 /// so a percentile target counts it as the worst assembly it is; the moments keep the real
@@ -812,10 +817,12 @@ fn run_keeping(
 ) -> Result<RunResult, ScenarioError> {
     let plan = Plan::for_run(scenario, settings, only_output)?;
     let mut merger = RunMerger::new(scenario, settings);
+    // The run's own waves, in order and of one plan: they always fold.
+    const FOLDS: &str = "a run's own waves fold in order";
     for wave in waves(0..settings.chunk_count()) {
-        merger.add(plan.run_wave(wave, progress)?)?;
+        merger.add(plan.run_wave(wave, progress)?).expect(FOLDS);
     }
-    merger.finish()
+    Ok(merger.finish().expect(FOLDS))
 }
 
 /// The statistics of a contiguous range of a run's chunks: what one shard of a run
@@ -852,7 +859,8 @@ impl RunPartial {
             ));
         }
         self.constraint_counts.add(&next.constraint_counts);
-        absorb_replicates(&mut self.replicates, next.replicates)?;
+        // The next wave of the same plan (checked above): it always folds.
+        absorb_replicates(&mut self.replicates, next.replicates).expect("a run's waves fold");
         self.chunk_moments.extend(next.chunk_moments);
         self.chunks.end = next.chunks.end;
         Ok(())
@@ -894,7 +902,7 @@ pub fn merge(
     scenario: &Scenario,
     settings: RunSettings,
     mut partials: Vec<RunPartial>,
-) -> Result<RunResult, ScenarioError> {
+) -> Result<RunResult, MergeError> {
     partials.sort_by_key(|p| (p.chunks.start, p.chunks.end));
     let mut merger = RunMerger::new(scenario, settings);
     for partial in partials {
@@ -939,8 +947,8 @@ impl<'a> RunMerger<'a> {
     }
 
     /// Adds the partial of the chunks that follow those added so far.
-    fn add(&mut self, partial: RunPartial) -> Result<(), ScenarioError> {
-        let broken = |message: String| Err(ScenarioError::new("(merge)", message));
+    fn add(&mut self, partial: RunPartial) -> Result<(), MergeError> {
+        let broken = |message: String| Err(MergeError::new(message));
         if partial.chunks.start != self.next_chunk {
             return broken(if partial.chunks.start < self.next_chunk {
                 format!(
@@ -988,7 +996,7 @@ impl<'a> RunMerger<'a> {
                 slot @ None => {
                     let mut outputs = outputs;
                     for output in &mut outputs {
-                        if let Distribution::Values(values) = &mut output.distribution {
+                        if let KeptValues::Values(values) = &mut output.kept {
                             values.reserve_exact(points.saturating_sub(values.len()));
                         }
                     }
@@ -1014,16 +1022,13 @@ impl<'a> RunMerger<'a> {
         Ok(())
     }
 
-    fn finish(self) -> Result<RunResult, ScenarioError> {
+    fn finish(self) -> Result<RunResult, MergeError> {
         let n_chunks = self.settings.chunk_count();
         let missing = || {
-            ScenarioError::new(
-                "(merge)",
-                format!(
-                    "chunks {}..{n_chunks} are missing",
-                    self.next_chunk.min(n_chunks)
-                ),
-            )
+            MergeError::new(format!(
+                "chunks {}..{n_chunks} are missing",
+                self.next_chunk.min(n_chunks)
+            ))
         };
         if self.next_chunk != n_chunks || self.replicates.iter().any(Option::is_none) {
             return Err(missing());
@@ -1064,7 +1069,7 @@ impl<'a> RunMerger<'a> {
         let mut outputs = replicates.next().expect("at least one replicate");
         if !figures.is_empty() {
             for output in &mut outputs {
-                if let Distribution::Values(values) = &mut output.distribution {
+                if let KeptValues::Values(values) = &mut output.kept {
                     values.reserve_exact(self.settings.samples as usize - values.len());
                 }
             }
@@ -1101,8 +1106,8 @@ fn replicate_figures(
     flagged_conform: bool,
 ) -> ReplicateFigures {
     let percents: Vec<f64> = PERCENTS.iter().map(|p| p.1 / 100.0).collect();
-    let (percentiles, percentile_bias_bounds) = match &mut acc.distribution {
-        Distribution::Values(values) => {
+    let (percentiles, percentile_bias_bounds) = match &mut acc.kept {
+        KeptValues::Values(values) => {
             let n = values.len() as f64;
             // Hazen's and Weibull's ranks of each percentile, read in one pass.
             let positions: Vec<f64> = percents
@@ -1120,7 +1125,7 @@ fn replicate_figures(
                 })
                 .unzip()
         }
-        Distribution::Sketch {
+        KeptValues::Sketch {
             sketch,
             center,
             scale,
@@ -1133,7 +1138,7 @@ fn replicate_figures(
                 (value, value.map(|_| 0.0))
             })
             .unzip(),
-        Distribution::Indicator | Distribution::Dropped => {
+        KeptValues::Indicator | KeptValues::Dropped => {
             (vec![None; percents.len()], vec![None; percents.len()])
         }
     };
@@ -1169,24 +1174,24 @@ fn unbias_replicate_sds(figures: &mut [Vec<ReplicateFigures>]) {
 fn absorb_counts(
     outputs: &mut [OutputAccumulator],
     other: Vec<OutputAccumulator>,
-) -> Result<(), ScenarioError> {
-    let mismatch = || ScenarioError::new("(merge)", "the partials' output statistics differ");
+) -> Result<(), MergeError> {
+    let mismatch = || MergeError::new("the partials' output statistics differ");
     if outputs.len() != other.len() {
         return Err(mismatch());
     }
     for (output, part) in outputs.iter_mut().zip(other) {
         output.add_counts(&part);
-        match (&mut output.distribution, part.distribution) {
-            (Distribution::Values(all), Distribution::Values(part)) => all.extend_from_slice(&part),
-            (Distribution::Indicator, Distribution::Indicator)
-            | (Distribution::Dropped, Distribution::Dropped) => {}
+        match (&mut output.kept, part.kept) {
+            (KeptValues::Values(all), KeptValues::Values(part)) => all.extend_from_slice(&part),
+            (KeptValues::Indicator, KeptValues::Indicator)
+            | (KeptValues::Dropped, KeptValues::Dropped) => {}
             (
-                Distribution::Sketch {
+                KeptValues::Sketch {
                     sketch: all,
                     center,
                     scale,
                 },
-                Distribution::Sketch {
+                KeptValues::Sketch {
                     sketch: part,
                     center: part_center,
                     scale: part_scale,
@@ -1195,7 +1200,7 @@ fn absorb_counts(
                 && scale.to_bits() == part_scale.to_bits() =>
             {
                 all.merge(&part)
-                    .map_err(|err| ScenarioError::new("(merge)", err.to_string()))?
+                    .map_err(|err| MergeError::new(err.to_string()))?
             }
             _ => return Err(mismatch()),
         }

@@ -31,7 +31,7 @@ use rvtol_models::OutputKind;
 use serde_json::Value;
 
 use rvtol_engine::figures::{percentile_of_sorted_with_interval, symmetric95, CONFIDENCE, Z95};
-use rvtol_engine::run::{run_for_output, Distribution, RunSettings};
+use rvtol_engine::run::{run_for_output, KeptValues, RunSettings};
 use rvtol_engine::scenario::allocation::{self as spec, AllocatableSource, CostKind};
 use rvtol_engine::scenario::{Scenario, ScenarioError};
 use rvtol_engine::stats::{
@@ -731,7 +731,7 @@ impl Problem<'_> {
         // Flagged samples are +∞ among the kept values (run_for_output): the interpolated
         // fraction above the upper limit counts them already.
         let hidden_out = accumulator.non_finite + accumulator.excluded;
-        let Distribution::Values(mut values) = accumulator.distribution else {
+        let KeptValues::Values(mut values) = accumulator.kept else {
             unreachable!("allocation runs keep every value");
         };
         values.sort_unstable_by(f64::total_cmp);

@@ -1667,7 +1667,7 @@ fn a_shard_count_beyond_the_bound_is_refused_and_merge_holds_nothing_per_declare
 
 #[test]
 fn impossible_statistics_in_a_re_checksummed_shard_file_are_refused_naming_it() {
-    use rvtol_engine::run::Distribution;
+    use rvtol_engine::run::KeptValues;
     let dir = scratch("shard-statistics");
     let (first, second) = (dir.join("0.part"), dir.join("1.part"));
     hysteresis_shard(0, 2, &first);
@@ -1696,7 +1696,7 @@ fn impossible_statistics_in_a_re_checksummed_shard_file_are_refused_naming_it() 
         (
             "a NaN value",
             Box::new(|p| {
-                let Distribution::Values(values) = &mut p.replicates[0].1[0].distribution else {
+                let KeptValues::Values(values) = &mut p.replicates[0].1[0].kept else {
                     panic!("exact percentiles keep the values");
                 };
                 values[7] = f64::NAN;
