@@ -1,5 +1,6 @@
 //! The shape of the code, checked: every Rust file opens with its `//!` documentation,
-//! and no crate has a module import cycle.
+//! no crate has a module import cycle, and no function outside the tests spans more than
+//! 200 lines (a few named ones excepted while other work holds their files).
 //!
 //! A crate's modules are its files, found from its roots through `mod NAME;`
 //! declarations. Module A imports module B when A's code (its `#[cfg(test)]` modules left
@@ -74,8 +75,14 @@ fn every_rust_file_opens_with_its_module_documentation() {
     );
 }
 
-/// Source text with comments, string and character literals blanked (lengths kept, so
-/// nothing inside them looks like a path).
+/// The line breaks of a blanked comment or literal, so that the stripped text keeps the
+/// source's lines.
+fn push_lines(out: &mut String, blanked: &str) {
+    out.extend(std::iter::repeat_n('\n', blanked.matches('\n').count()));
+}
+
+/// Source text with comments, string and character literals blanked (their line breaks
+/// kept, so the lines stay; nothing inside them looks like a path).
 fn strip(source: &str) -> String {
     let bytes = source.as_bytes();
     let mut out = String::with_capacity(source.len());
@@ -108,6 +115,7 @@ fn strip(source: &str) -> String {
                 }
             }
             out.push(' ');
+            push_lines(&mut out, &source[i..j.min(bytes.len())]);
             i = j;
             continue;
         }
@@ -122,6 +130,7 @@ fn strip(source: &str) -> String {
                     .find(&close)
                     .map_or(bytes.len(), |k| body + k + close.len());
                 out.push_str("\"\"");
+                push_lines(&mut out, &source[i..end]);
                 i = end;
                 continue;
             }
@@ -132,6 +141,7 @@ fn strip(source: &str) -> String {
                 j += if bytes[j] == b'\\' { 2 } else { 1 };
             }
             out.push_str("\"\"");
+            push_lines(&mut out, &source[i..(j + 1).min(bytes.len())]);
             i = j + 1;
             continue;
         }
@@ -749,4 +759,153 @@ fn the_cycle_finder_sees_a_cycle_through_a_group_and_a_re_export() {
     assert_eq!(list("a"), vec!["outer::inner"]);
     assert_eq!(list("outer"), vec!["outer::inner"]);
     assert_eq!(list("outer::inner"), vec!["a"]);
+}
+
+/// Most lines a function outside the tests may span, from its `fn` line to its closing
+/// brace (its documentation and attributes not counted): a longer one is cut where its
+/// code has seams, so that a contributor adds to a function that fits on a few screens.
+const MAX_FUNCTION_LINES: usize = 200;
+
+/// Functions allowed beyond [`MAX_FUNCTION_LINES`] for now: (file, function, why). Each
+/// names the issue that holds its file; the entry goes when the function is cut.
+const LONG_FUNCTIONS_ALLOWED: &[(&str, &str, &str)] = &[
+    (
+        "crates/models/src/transmission_error.rs",
+        "from_params",
+        "issue 29 (the loaded contact solution) is changing this file; issue 30's step 4 (the \
+         model as a folder, each reading its own type) cuts it after that lands",
+    ),
+    (
+        "crates/models/src/transmission_error/two_discs.rs",
+        "physical_curve",
+        "issue 29 is changing this file; issue 30's step 4 cuts it after that lands",
+    ),
+    (
+        "crates/models/src/torsion_curve.rs",
+        "from_params",
+        "issue 29 (the compliance chain completed) is changing this file; cut after it lands",
+    ),
+];
+
+/// Every function of `code` (comments and literals blanked by [`strip`], which keeps the
+/// lines) with the lines it spans.
+fn function_lengths(code: &str) -> Vec<(String, usize)> {
+    let bytes = code.as_bytes();
+    let mut found = Vec::new();
+    let mut from = 0;
+    while let Some(k) = code[from..].find("fn ") {
+        let at = from + k;
+        from = at + 3;
+        if at > 0 && ident_char(code[..at].chars().next_back().expect("not at the start")) {
+            continue;
+        }
+        let name: String = code[at + 3..]
+            .trim_start()
+            .chars()
+            .take_while(|&c| ident_char(c))
+            .collect();
+        if name.is_empty() {
+            continue;
+        }
+        // The body opens at the first `{` outside parentheses and brackets (an array type
+        // `[f64; 6]` has a `;`); a `;` there first is a declaration without a body.
+        let mut depth = 0i32;
+        let mut open = None;
+        for (j, &b) in bytes.iter().enumerate().skip(at) {
+            match b {
+                b'(' | b'[' => depth += 1,
+                b')' | b']' => depth -= 1,
+                b'{' if depth == 0 => {
+                    open = Some(j);
+                    break;
+                }
+                b';' if depth == 0 => break,
+                _ => {}
+            }
+        }
+        let Some(open) = open else {
+            continue;
+        };
+        let mut braces = 0i32;
+        let mut close = code.len();
+        for (j, &b) in bytes.iter().enumerate().skip(open) {
+            match b {
+                b'{' => braces += 1,
+                b'}' => {
+                    braces -= 1;
+                    if braces == 0 {
+                        close = j;
+                        break;
+                    }
+                }
+                _ => {}
+            }
+        }
+        let lines = code[at..close].matches('\n').count() + 1;
+        found.push((name, lines));
+    }
+    found
+}
+
+#[test]
+fn no_function_outside_the_tests_exceeds_200_lines() {
+    let root = workspace();
+    let mut files = Vec::new();
+    rust_files(&root.join("crates"), &mut files);
+    rust_files(&root.join("benches"), &mut files);
+    let mut too_long = Vec::new();
+    let mut allowed_seen = BTreeSet::new();
+    for path in &files {
+        let shown = path
+            .strip_prefix(&root)
+            .unwrap_or(path)
+            .display()
+            .to_string();
+        // Integration tests (a crate's tests/ folder) and test modules in their own file.
+        if shown.contains("/tests/") || shown.ends_with("/tests.rs") {
+            continue;
+        }
+        let text = std::fs::read_to_string(path).expect("a source file reads");
+        let (code, _) = without_tests(&strip(&text));
+        for (name, lines) in function_lengths(&code) {
+            if lines <= MAX_FUNCTION_LINES {
+                continue;
+            }
+            if LONG_FUNCTIONS_ALLOWED
+                .iter()
+                .any(|(file, function, _)| *file == shown && *function == name)
+            {
+                allowed_seen.insert((shown.clone(), name));
+            } else {
+                too_long.push(format!("{shown}: fn {name} ({lines} lines)"));
+            }
+        }
+    }
+    assert!(
+        too_long.is_empty(),
+        "functions over {MAX_FUNCTION_LINES} lines (cut them where the code has seams): {}",
+        too_long.join(", ")
+    );
+    // An entry whose function was cut (or renamed) goes.
+    let stale: Vec<String> = LONG_FUNCTIONS_ALLOWED
+        .iter()
+        .filter(|(file, function, _)| {
+            !allowed_seen.contains(&(file.to_string(), function.to_string()))
+        })
+        .map(|(file, function, _)| format!("{file}: fn {function}"))
+        .collect();
+    assert!(
+        stale.is_empty(),
+        "allowed long functions that are no longer over {MAX_FUNCTION_LINES} lines (remove their entries): {}",
+        stale.join(", ")
+    );
+}
+
+#[test]
+fn the_function_lengths_are_counted_from_fn_to_the_closing_brace() {
+    let code = "pub fn short(x: [f64; 6]) -> f64 {\n    x[0]\n}\nfn two() {\n    let f = |a: u8| { a };\n    f(1);\n}\ntrait T { fn declared(&self); }\n";
+    assert_eq!(
+        function_lengths(code),
+        vec![("short".to_string(), 3), ("two".to_string(), 4)]
+    );
 }
