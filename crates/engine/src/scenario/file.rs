@@ -18,8 +18,8 @@ use serde::de::{self, DeserializeOwned, MapAccess, SeqAccess, Visitor};
 use serde::{Deserialize, Deserializer};
 use serde_json::Value;
 
+use super::allocation::AllocationFile;
 use super::ScenarioError;
-use crate::allocation::spec::AllocationFile;
 use rvtol_deviation::Shown;
 
 /// Largest magnitude of a deviation's parameter (a mean, sd, bound or band limit; mm or
@@ -339,7 +339,7 @@ fn shown_path(path: String) -> String {
 
 /// Parses the text into a JSON value: a syntax error (with its line and column) or a
 /// duplicate key (with its path) is the one problem.
-pub(super) fn parse_value(text: &str) -> Result<Value, ScenarioError> {
+pub fn parse_value(text: &str) -> Result<Value, ScenarioError> {
     let mut deserializer = serde_json::Deserializer::from_str(text);
     let value =
         serde_path_to_error::deserialize::<_, Checked>(&mut deserializer).map_err(|err| {
