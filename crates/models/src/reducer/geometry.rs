@@ -325,24 +325,7 @@ pub(crate) fn needle_lever_at(
         let centres: Vec<(f64, f64)> = cranks.iter().map(|&(sb, cb)| (u * sb, -u * cb)).collect();
         largest_along(y, &centres) / pitch_lever + u / crank_radius
     };
-    let (mut lo, mut hi) = (-1.0_f64, 1.0_f64);
-    let golden = 0.5 * (5.0_f64.sqrt() - 1.0);
-    let (mut a, mut b) = (hi - golden * (hi - lo), lo + golden * (hi - lo));
-    let (mut fa, mut fb) = (value(a), value(b));
-    for _ in 0..200 {
-        if fa < fb {
-            lo = a;
-            (a, fa) = (b, fb);
-            b = lo + golden * (hi - lo);
-            fb = value(b);
-        } else {
-            hi = b;
-            (b, fb) = (a, fa);
-            a = hi - golden * (hi - lo);
-            fa = value(a);
-        }
-    }
-    fa.max(fb)
+    golden_max(value, (-1.0, 1.0), 200)
 }
 
 /// The needle rows' slack of one disc (disc angle, rad) when crank k's bore centre is free
@@ -407,8 +390,8 @@ fn two_crank_slack(
 
 /// Any crank count: golden-section search over u = ρ·a_w of the largest t·ŷ over the
 /// circles' intersection (concave in u; −∞ where the circles do not meet, an interval
-/// about u = 0, which is always feasible: the search steps towards 0 when both of its
-/// points are infeasible). 90 steps: 0.618⁹⁰ of the interval, below 1e-18 of a radius.
+/// about u = 0, which is always feasible). 90 steps: 0.618⁹⁰ of the interval, below
+/// 1e-18 of a radius.
 pub(crate) fn any_crank_slack(
     across: (f64, f64),
     cranks: &[(f64, f64)],
@@ -427,11 +410,17 @@ pub(crate) fn any_crank_slack(
     };
     // |u|·|ĵ_j − ĵ_k| ≤ ρ_j + ρ_k for any two cranks, and |ĵ_j − ĵ_k| ≥ √3 for m ≤ 3.
     let reach = 2.0 * radii.iter().fold(0.0_f64, |a, &r| a.max(r)) / 3.0_f64.sqrt();
-    let (mut lo, mut hi) = (-reach, reach);
+    golden_max(value, (-reach, reach), 90).max(value(0.0))
+}
+
+/// The largest value of a concave `value` over (lo, hi) by golden-section search in
+/// `steps` steps; where `value` is −∞ (infeasible) outside an interval that holds 0, a step
+/// whose two points are both infeasible moves towards 0.
+fn golden_max(value: impl Fn(f64) -> f64, (mut lo, mut hi): (f64, f64), steps: u32) -> f64 {
     let golden = 0.5 * (5.0_f64.sqrt() - 1.0);
     let (mut a, mut b) = (hi - golden * (hi - lo), lo + golden * (hi - lo));
     let (mut fa, mut fb) = (value(a), value(b));
-    for _ in 0..90 {
+    for _ in 0..steps {
         if fa == f64::NEG_INFINITY && fb == f64::NEG_INFINITY {
             // The feasible interval holds 0 and neither point.
             if b <= 0.0 {
@@ -455,7 +444,7 @@ pub(crate) fn any_crank_slack(
             fa = value(a);
         }
     }
-    fa.max(fb).max(value(0.0))
+    fa.max(fb)
 }
 
 /// The largest y·t over the intersection of circles (centre, radius) (−∞ when empty):
