@@ -400,13 +400,14 @@ pub(crate) fn any_crank_slack(
     pitch_lever: f64,
 ) -> f64 {
     let y = (across.1, across.0);
+    let m = cranks.len().min(MAX_CRANKS);
     let value = |u: f64| {
-        let circles: Vec<((f64, f64), f64)> = cranks
-            .iter()
-            .zip(radii)
-            .map(|(&(sb, cb), &r)| ((u * sb, -u * cb), r.max(0.0)))
-            .collect();
-        largest_along_circles(y, &circles) / pitch_lever + u / crank_radius
+        // On the stack: the search evaluates this 90 times per slack, per sample.
+        let mut circles = [((0.0, 0.0), 0.0); MAX_CRANKS];
+        for (circle, (&(sb, cb), &r)) in circles.iter_mut().zip(cranks.iter().zip(radii)) {
+            *circle = ((u * sb, -u * cb), r.max(0.0));
+        }
+        largest_along_circles(y, &circles[..m]) / pitch_lever + u / crank_radius
     };
     // |u|·|ĵ_j − ĵ_k| ≤ ρ_j + ρ_k for any two cranks, and |ĵ_j − ĵ_k| ≥ √3 for m ≤ 3.
     let reach = 2.0 * radii.iter().fold(0.0_f64, |a, &r| a.max(r)) / 3.0_f64.sqrt();

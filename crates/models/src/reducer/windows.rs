@@ -109,8 +109,8 @@ pub(crate) fn row_terms(reducer: &Reducer, grid: &Grid, layout: &Layout, x: &[f6
     }
     for (k, &(sb, cb)) in grid.crank_angles.iter().enumerate() {
         let crank = layout.crank(k);
-        let (b_r, b_t, tau_r, tau_t) = (x[crank], x[crank + 1], x[crank + 2], x[crank + 3]);
-        let deviation = x[crank + 4];
+        // Its inputs in layout.rs's PER_CRANK order: axis, tilt, needle clearance deviation.
+        let [b_r, b_t, tau_r, tau_t, deviation] = [0, 1, 2, 3, 4].map(|i| x[crank + i]);
         terms.needle_radii[k] = 0.5 * (x[layout.needle_clearance] + deviation).max(0.0);
         terms.needle_even &= deviation == 0.0;
         for d in 0..2 {
