@@ -11,12 +11,12 @@ use rvtol_analysis::request::gate::{baseline_matches, check_baseline_samples};
 use rvtol_analysis::request::memory;
 use rvtol_analysis::request::shard::{build_identity, read_shards, shards_limit};
 use rvtol_analysis::request::Refusal;
-use rvtol_engine::{RunReport, Scenario};
+use rvtol_engine::Scenario;
 
 use super::sensitivity::finish_sensitivity;
 use super::{
-    check_memory, html_page, non_finite_failure, outputs_ok, problem_of_file, read_text, shown,
-    stage_report, target, thread_pool, threads, Destinations, Execution, CALLER,
+    check_memory, html_page, outputs_ok, problem_of_file, read_text, shown, stage_report,
+    staged_run_report, target, thread_pool, threads, Destinations, Execution, CALLER,
 };
 use crate::output::{is_stdout, print, write_report, Format, StagedOutputs};
 use crate::{BadInput, Failed};
@@ -291,22 +291,7 @@ pub fn merge(args: MergeArgs) -> Result<()> {
             &pool,
         );
     }
-    let failure = non_finite_failure(first, &scenario, &result, execution);
-    let report = pool.install(|| RunReport::new(&scenario, result));
-    let json = report.to_json();
-    let mut staged = StagedOutputs::new();
-    stage_report(
-        &mut staged,
-        to.json,
-        to.on_stdout(),
-        || json.clone(),
-        || report.to_text(),
-    )?;
-    if failure.is_err() {
-        // The report shows what was lost; no file is replaced by a failed merge.
-        staged.print_only()?;
-        return failure;
-    }
+    let (mut staged, json) = staged_run_report(first, &scenario, result, (&to, execution), &pool)?;
     if let Some(html) = to.html {
         let page = html_page(html, &source, &scenario, rvtol_report::Kind::Run, &json)?;
         staged.add(html, &page)?;

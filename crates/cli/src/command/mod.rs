@@ -181,6 +181,35 @@ fn emit(
     staged.commit()
 }
 
+/// A run's report (`run` and `merge`): its JSON and text staged; when the run lost more
+/// samples than `--max-non-finite` allows, the text printed and the failure returned, no
+/// file replaced (the report shows what was lost). Gives the staged outputs, for the
+/// caller's other files, and the JSON.
+fn staged_run_report(
+    path: &Path,
+    scenario: &Scenario,
+    result: rvtol_engine::RunResult,
+    (to, execution): (&Destinations, &Execution),
+    pool: &rayon::ThreadPool,
+) -> Result<(StagedOutputs, String)> {
+    let failure = non_finite_failure(path, scenario, &result, execution);
+    let report = pool.install(|| rvtol_engine::RunReport::new(scenario, result));
+    let json = report.to_json();
+    let mut staged = StagedOutputs::new();
+    stage_report(
+        &mut staged,
+        to.json,
+        to.on_stdout(),
+        || json.clone(),
+        || report.to_text(),
+    )?;
+    if let Err(failed) = failure {
+        staged.print_only()?;
+        return Err(failed);
+    }
+    Ok((staged, json))
+}
+
 /// [`emit`] into a command's staged outputs, replaced with the others at its end.
 fn stage_report(
     staged: &mut StagedOutputs,

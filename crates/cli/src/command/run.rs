@@ -10,15 +10,14 @@ use rvtol_analysis::request::memory;
 use rvtol_analysis::request::run::{check_samples_out, RunRequest};
 use rvtol_analysis::request::shard::{build_identity, ShardOf};
 use rvtol_deviation::SamplingMethod;
-use rvtol_engine::{run as run_scenario, RunReport, DEFAULT_EXACT_PERCENTILE_LIMIT};
+use rvtol_engine::{run as run_scenario, DEFAULT_EXACT_PERCENTILE_LIMIT};
 
 use super::{
-    html_page, load, non_finite_failure, outputs_ok, partial_target, pool_for, problem_of_file,
-    read, refused, sample_table_bytes, scenario_inputs, stage_report, Destinations, Execution,
-    CALLER,
+    html_page, load, outputs_ok, partial_target, pool_for, problem_of_file, read, refused,
+    sample_table_bytes, scenario_inputs, staged_run_report, Destinations, Execution, CALLER,
 };
 use crate::limits::{parse_count, parse_sampling, parse_seed, parse_shard};
-use crate::output::{note, print, write_bytes, StagedOutputs};
+use crate::output::{note, print, write_bytes};
 use crate::progress::Progress;
 use crate::BadInput;
 
@@ -118,22 +117,8 @@ pub fn run(args: RunArgs) -> Result<()> {
         .map_err(|err| problem_of_file(scenario_path, err))?;
     bar.finish_and_clear();
     let elapsed = started.elapsed();
-    let failure = non_finite_failure(scenario_path, &scenario, &result, execution);
-    let report = pool.install(|| RunReport::new(&scenario, result));
-    let json = report.to_json();
-    let mut staged = StagedOutputs::new();
-    stage_report(
-        &mut staged,
-        to.json,
-        to.on_stdout(),
-        || json.clone(),
-        || report.to_text(),
-    )?;
-    if failure.is_err() {
-        // The report shows what was lost; no file is replaced by a failed run.
-        staged.print_only()?;
-        return failure;
-    }
+    let (mut staged, json) =
+        staged_run_report(scenario_path, &scenario, result, (&to, execution), &pool)?;
     if let Some(path) = to.samples {
         let table = pool
             .install(|| rvtol_engine::sample_table(&scenario, settings))
