@@ -6,7 +6,7 @@
 
 use rvtol_engine::report::RunReport;
 use rvtol_engine::{run, RunSettings, Scenario};
-use rvtol_models::{ErrorModel, ModelParams, RealFft, TransmissionError};
+use rvtol_models::{ErrorModel, ModelParams, ParamValue, RealFft, TransmissionError};
 use rvtol_tests::scenario_path;
 
 fn report(file: &str, samples: u64) -> serde_json::Value {
@@ -380,7 +380,9 @@ fn disc_windows_move_as_the_exact_profile_windows_do() {
         .with_number("pin_radius_mm", 2.0)
         .with_number("disc_face_width_mm", 8.0)
         .with_number("rated_torque_nm", 167.0)
-        .with_number("pin_position_errors", 1.0);
+        .with_number("pin_position_errors", 1.0)
+        // The rigid windows are what the exact profile's are compared with.
+        .with("disc_contact", ParamValue::Text("first_contact".into()));
     let model = TransmissionError::from_params(&params).unwrap();
     let kappa = zc / (zp + 9.0 / 27.0);
     let k1 = e * zp / r_p;

@@ -101,6 +101,14 @@ impl PinContact {
     pub fn force_at(&self, approach: f64) -> f64 {
         (approach * self.face_width.powf(0.8) / (CONTACTS_PER_PIN * PALMGREN)).powf(1.0 / 0.9)
     }
+
+    /// The secant stiffness K = F(δ)/δ of a pin at the approach δ > 0 (N/mm) and its
+    /// derivative dK/dδ = (1/0.9 − 1)·K/δ (F ∝ δ^(1/0.9)): Li Lixing's common stiffness of
+    /// the most loaded pin, as the load sharing and the zero-torque balance take it.
+    pub fn secant_stiffness(&self, approach: f64) -> (f64, f64) {
+        let stiffness = self.force_at(approach) / approach;
+        (stiffness, (1.0 / 0.9 - 1.0) * stiffness / approach)
+    }
 }
 
 /// The preload of an assembly.

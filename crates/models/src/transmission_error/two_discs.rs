@@ -71,6 +71,7 @@
 
 use std::f64::consts::PI;
 
+use super::loaded::LoadedScratch;
 use super::{smallest, smallest_ratio, PinTable, TransmissionError, MAX_CRANKS};
 use crate::cycloid::{CycloidStage, PinFactors};
 use crate::preload::{slip_arm, zero_torque, DiscPins, LEVER_FLOOR};
@@ -573,6 +574,25 @@ impl TransmissionError {
         pin: usize,
         theta: f64,
         d_r: f64,
+        angle: (f64, f64),
+    ) -> (f64, f64) {
+        let (g, lever) = self.exact_gap_at(inputs, terms, d, pin, theta, d_r, angle);
+        (g / lever.abs(), lever)
+    }
+
+    /// The gap g (mm, along the pin's normal; negative: an overlap) and the lever l (mm) of
+    /// pin `pin` on disc d at Θ, (sin φ, cos φ) of the pin given: the clearance the windows'
+    /// ratios g/|l| are made of.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    pub(super) fn exact_gap_at(
+        &self,
+        inputs: &[f64],
+        terms: &RowTerms,
+        d: usize,
+        pin: usize,
+        theta: f64,
+        d_r: f64,
         (sin, cos): (f64, f64),
     ) -> (f64, f64) {
         let ph = self.physical();
@@ -604,7 +624,7 @@ impl TransmissionError {
             + terms.profile[d]
             - terms.err_rrp
             + tooth;
-        (g / factors.lever.abs(), factors.lever)
+        (g, factors.lever)
     }
 
     /// The whole physical geometry at Θ, pin by pin: the reference of the tabulated curve
@@ -1603,8 +1623,8 @@ pub(super) fn specs(
     cranks: usize,
     pins: usize,
     teeth: usize,
-    per_pin: bool,
-    per_tooth: bool,
+    (per_pin, per_tooth): (bool, bool),
+    loaded: bool,
 ) -> (Vec<InputSpec>, Vec<OutputSpec>) {
     let input = |name: String, unit: &str, description: &'static str| InputSpec {
         name,
@@ -1657,9 +1677,18 @@ pub(super) fn specs(
             }
         }
     }
-    let condition = Some(OutputCondition {
-        indicator: INTERFERENCE,
-        effect: ConditionEffect::Excluded,
+    // The rigid readings have no transmission error where the discs do not fit; the loaded
+    // reading has one, which an over-preload makes non-conforming (docs/models.md §14.8).
+    let condition = Some(if loaded {
+        OutputCondition {
+            indicator: crate::preload::OVER_PRELOADED,
+            effect: ConditionEffect::NonConforming,
+        }
+    } else {
+        OutputCondition {
+            indicator: INTERFERENCE,
+            effect: ConditionEffect::Excluded,
+        }
     });
     let output = |name: String, description: &'static str| OutputSpec {
         name,
@@ -1692,18 +1721,18 @@ pub(super) fn specs(
 
 /// Per lane of a curve's quadruples (the points j ≡ lane mod 4, in index order): the
 /// smallest and the largest value, the quadruple at which each first occurs, and the sum.
-struct LaneStats {
-    lo: [f64; 4],
-    hi: [f64; 4],
+pub(super) struct LaneStats {
+    pub lo: [f64; 4],
+    pub hi: [f64; 4],
     lo_at: [usize; 4],
     hi_at: [usize; 4],
-    sum: [f64; 4],
+    pub sum: [f64; 4],
 }
 
 /// [`LaneStats`] of a curve in one pass. Not inlined: inlined, LLVM vectorised the minima
 /// and maxima but summed the lanes one by one (a chain of dependent scalar additions).
 #[inline(never)]
-fn lane_stats(quads: &[[f64; 4]]) -> LaneStats {
+pub(super) fn lane_stats(quads: &[[f64; 4]]) -> LaneStats {
     let (mut lo, mut hi, mut sum) = ([f64::INFINITY; 4], [f64::NEG_INFINITY; 4], [0.0; 4]);
     let (mut lo_at, mut hi_at) = ([0; 4], [0; 4]);
     for (q, quad) in quads.iter().enumerate() {
@@ -1729,7 +1758,7 @@ fn lane_stats(quads: &[[f64; 4]]) -> LaneStats {
 /// Per lane, Σ (v − mean)², in index order. Not inlined, for the same reason as
 /// [`lane_stats`].
 #[inline(never)]
-fn lane_squares(quads: &[[f64; 4]], mean: f64) -> [f64; 4] {
+pub(super) fn lane_squares(quads: &[[f64; 4]], mean: f64) -> [f64; 4] {
     let mut squares = [0.0; 4];
     for quad in quads {
         for lane in 0..4 {
@@ -1741,7 +1770,7 @@ fn lane_squares(quads: &[[f64; 4]], mean: f64) -> [f64; 4] {
 
 /// The transmission error's own outputs, before the interference indicator and the preload
 /// rule's five.
-const TE_OUTPUTS: usize = 8;
+pub(super) const TE_OUTPUTS: usize = 8;
 
 /// Name of the interference indicator.
 pub(super) const INTERFERENCE: &str = "profile_interference";
@@ -1752,7 +1781,7 @@ impl TransmissionError {
         &self,
         inputs: &[f64],
         curve: &mut Vec<f64>,
-        scratch: &mut TwoDiscScratch,
+        (scratch, loaded): (&mut TwoDiscScratch, &mut LoadedScratch),
         outputs: &mut [f64],
     ) {
         if inputs.iter().any(|v| !v.is_finite()) {
@@ -1768,6 +1797,14 @@ impl TransmissionError {
             let theta = 2.0 * PI * scratch.narrowest.1 as f64 / self.points as f64;
             let judged = self.judge_preload(inputs, &terms, theta);
             outputs[TE_OUTPUTS + 1..].copy_from_slice(&judged);
+            if self.loaded.is_some() {
+                self.evaluate_loaded(inputs, &terms, loaded, curve, outputs);
+            }
+            return;
+        }
+        if self.loaded.is_some() {
+            outputs[TE_OUTPUTS] = 0.0;
+            self.evaluate_loaded(inputs, &terms, loaded, curve, outputs);
             return;
         }
         let n = self.points;
@@ -2053,8 +2090,14 @@ mod tests {
     use super::*;
     use crate::{ErrorModel, ModelParams, ParamValue, ARCSEC_PER_RAD};
 
+    /// The RV40E in the rigid first contact (the readings these tests check; the loaded
+    /// reading's are in loaded/tests.rs).
     fn params() -> ModelParams {
-        super::super::rv40e_params()
+        text(
+            super::super::rv40e_params(),
+            "disc_contact",
+            "first_contact",
+        )
     }
 
     fn with(params: ModelParams) -> TransmissionError {
