@@ -688,6 +688,7 @@ impl TransmissionError {
                     rule,
                     (cranks, crank_radius),
                     (ratio, lambda),
+                    points,
                 )?))
             }
             _ => None,

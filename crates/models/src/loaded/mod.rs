@@ -33,7 +33,7 @@
 //! or the rigid first contact) with doubling steps. Every loop is capped; a point that does
 //! not converge is an [`Unconverged`] with its cause, never a hang.
 
-use crate::preload::PinContact;
+use crate::preload::{PinContact, SecantLaw};
 
 #[cfg(test)]
 mod tests;
@@ -47,6 +47,11 @@ const ANGLE_TOLERANCE: f64 = 1e-13;
 /// A disc's turn is settled to this width, rad (finer than the carrier's, so that the
 /// outer function is smooth at its resolution).
 const TURN_TOLERANCE: f64 = 1e-16;
+/// Steps of the fast path (both discs' turns by Newton's iteration) before the
+/// safeguarded iteration takes over.
+const FAST_STEPS: u32 = 8;
+/// The torque balance is met to this fraction of the output's moment.
+const MOMENT_TOLERANCE: f64 = 1e-12;
 /// First step of the outer bracket's search where the warm start gives none, rad.
 const FIRST_STEP: f64 = 1e-7;
 
@@ -63,7 +68,7 @@ pub(crate) struct LoadedDisc<'a> {
 
 impl LoadedDisc<'_> {
     /// M(y) and dM/dy (module comment): N·mm and N·mm/rad. Zero where no pin is loaded.
-    pub fn moment(&self, contact: &PinContact, y: f64) -> (f64, f64) {
+    pub fn moment(&self, law: &SecantLaw, y: f64) -> (f64, f64) {
         let (mut sum, mut slope) = (0.0, 0.0);
         let (mut largest, mut lever_of_largest) = (0.0_f64, 0.0);
         for (g, l) in self.gaps.iter().zip(self.levers) {
@@ -80,7 +85,7 @@ impl LoadedDisc<'_> {
             return (0.0, 0.0);
         }
         // M = K(d_max)·Σ d_i·l_i, dM/dy = K·Σ l_i² + K'(d_max)·l_max·Σ d_i·l_i.
-        let (stiffness, derivative) = contact.secant_stiffness(largest);
+        let (stiffness, derivative) = law.stiffness(largest);
         (
             stiffness * sum,
             stiffness * slope + derivative * lever_of_largest * sum,
@@ -156,14 +161,22 @@ impl Solution {
 /// The two discs' loaded contact (module comment).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct TwoDiscs {
-    /// The pins' contact law.
-    pub contact: PinContact,
+    /// The pins' secant law (of the contact law `PinContact`).
+    pub law: SecantLaw,
     /// c, a disc's turn against the other through the crank side per N·mm of its own pin
     /// moment, rad/(N·mm) (0: rigid cranks).
     pub compliance: f64,
 }
 
 impl TwoDiscs {
+    /// The solver for the pins' contact law `contact` and the crank side's compliance c.
+    pub fn new(contact: &PinContact, compliance: f64) -> TwoDiscs {
+        TwoDiscs {
+            law: contact.secant_law(),
+            compliance,
+        }
+    }
+
     /// The solution at one position for the total pin moment `target` = M* (N·mm), warm
     /// started from `warm` (the previous point's, or [`Solution::COLD`]).
     pub fn solve(
@@ -177,6 +190,11 @@ impl TwoDiscs {
         };
         if !(target.is_finite() && discs.iter().all(finite)) {
             return Err(Unconverged::NoBracket);
+        }
+        if warm.carrier.is_finite() {
+            if let Some(solution) = self.newton_pair(discs, target, warm) {
+                return Ok(solution);
+            }
         }
         let sign = if target < 0.0 { -1.0 } else { 1.0 };
         let start = if warm.carrier.is_finite() {
@@ -226,6 +244,49 @@ impl TwoDiscs {
         })
     }
 
+    /// The fast path from a warm start: Newton's iteration on both discs' turns at once,
+    /// R_1 = M_1(y_1) + M_2(y_2) − M* and R_2 = (C_1 + y_1 + c·M_1) − (C_2 + y_2 + c·M_2),
+    /// a few steps where the loaded pins stay the same from one point to the next. None
+    /// (and the safeguarded iteration takes over) when it has not settled within
+    /// [`FAST_STEPS`] steps, or meets a singular or non-finite step.
+    fn newton_pair(
+        &self,
+        discs: &[LoadedDisc; 2],
+        target: f64,
+        warm: &Solution,
+    ) -> Option<Solution> {
+        let c = self.compliance;
+        let mut turns = warm.turns;
+        for step in 0..FAST_STEPS {
+            let [(m1, a1), (m2, a2)] = [0, 1].map(|d| discs[d].moment(&self.law, turns[d]));
+            let r1 = m1 + m2 - target;
+            let x1 = discs[0].offset + turns[0] + c * m1;
+            let x2 = discs[1].offset + turns[1] + c * m2;
+            let r2 = x1 - x2;
+            if r1.abs() <= MOMENT_TOLERANCE * target.abs().max(1.0) && r2.abs() <= ANGLE_TOLERANCE {
+                return Some(Solution {
+                    carrier: 0.5 * (x1 + x2),
+                    turns,
+                    moments: [m1, m2],
+                    iterations: step + 1,
+                });
+            }
+            // J = [[a1, a2], [1 + c·a1, −(1 + c·a2)]]; J·Δ = −R.
+            let (b1, b2) = (1.0 + c * a1, 1.0 + c * a2);
+            let det = -a1 * b2 - a2 * b1;
+            if det == 0.0 || !det.is_finite() {
+                return None;
+            }
+            let d1 = (r1 * b2 + a2 * r2) / det;
+            let d2 = (r1 * b1 - a1 * r2) / det;
+            if !(d1.is_finite() && d2.is_finite()) {
+                return None;
+            }
+            turns = [turns[0] + d1, turns[1] + d2];
+        }
+        None
+    }
+
     /// Disc d's turn y with y + c·M(y) = `reach` (= x − C_d), from the guess `guess`:
     /// (y, M(y), M'(y)).
     fn settle(
@@ -236,7 +297,7 @@ impl TwoDiscs {
     ) -> Result<(f64, f64, f64), Unconverged> {
         let c = self.compliance;
         let h = |y: f64| {
-            let (m, dm) = disc.moment(&self.contact, y);
+            let (m, dm) = disc.moment(&self.law, y);
             (y + c * m - reach, 1.0 + c * dm, m, dm)
         };
         let (h0, _, m0, dm0) = h(guess);
@@ -374,8 +435,9 @@ pub(crate) fn one_disc(
     if !start.is_finite() {
         return Err(Unconverged::NoBracket);
     }
+    let law = contact.secant_law();
     let mut f = |y: f64| -> Result<(f64, f64), Unconverged> {
-        let (m, dm) = disc.moment(contact, y);
+        let (m, dm) = disc.moment(&law, y);
         Ok((m - target, dm))
     };
     outer_root(&mut f, start)

@@ -111,6 +111,24 @@ fn law() -> PinContact {
 }
 
 #[test]
+fn the_secant_law_is_the_contact_laws() {
+    // K(δ) = F(δ)/δ of PinContact (δ(F) = 2·3.84e-5·F^0.9/L^0.8) to a few ulps, and its
+    // derivative K/(9δ) against a central difference.
+    let contact = law();
+    let secant = contact.secant_law();
+    for approach in [1e-5, 3.3e-4, 2e-3, 0.02] {
+        let (k, dk) = secant.stiffness(approach);
+        let exact = contact.force_at(approach) / approach;
+        assert!((k / exact - 1.0).abs() < 1e-14, "{k} {exact}");
+        assert!((contact.approach(k * approach) / approach - 1.0).abs() < 1e-13);
+        let h = 1e-6 * approach;
+        let difference =
+            (secant.stiffness(approach + h).0 - secant.stiffness(approach - h).0) / (2.0 * h);
+        assert!((dk / difference - 1.0).abs() < 1e-6, "{dk} {difference}");
+    }
+}
+
+#[test]
 fn two_discs_balance_the_torque_and_share_one_carrier_angle() {
     // Two discs with different clearances and offsets, a crank compliance c: the solution
     // must satisfy M_1 + M_2 = M* and x = C_d + y_d + c·M_d for both discs to rounding.
@@ -129,10 +147,7 @@ fn two_discs_balance_the_torque_and_share_one_carrier_angle() {
             offset: -2e-5,
         },
     ];
-    let solver = TwoDiscs {
-        contact: law(),
-        compliance: 2e-9,
-    };
+    let solver = TwoDiscs::new(&law(), 2e-9);
     for target in [-50_000.0, -1_000.0, 3_000.0] {
         let s = solver.solve(&discs, target, &Solution::COLD).unwrap();
         let sum = s.moments[0] + s.moments[1];
@@ -141,7 +156,7 @@ fn two_discs_balance_the_torque_and_share_one_carrier_angle() {
             "{sum} vs {target}"
         );
         for (d, disc) in discs.iter().enumerate() {
-            let (m, _) = disc.moment(&solver.contact, s.turns[d]);
+            let (m, _) = disc.moment(&solver.law, s.turns[d]);
             assert!((m - s.moments[d]).abs() <= 1e-12 * target.abs());
             let x = disc.offset + s.turns[d] + solver.compliance * m;
             assert!((x - s.carrier).abs() < 1e-12, "{x} vs {}", s.carrier);
@@ -163,15 +178,12 @@ fn alike_discs_carry_half_each() {
         levers: &levers,
         offset: 3e-5,
     };
-    let solver = TwoDiscs {
-        contact: law(),
-        compliance: 5e-9,
-    };
+    let solver = TwoDiscs::new(&law(), 5e-9);
     let target = -20_000.0;
     let s = solver
         .solve(&[disc, disc], target, &Solution::COLD)
         .unwrap();
-    let alone = one_disc(&solver.contact, &disc, 0.5 * target).unwrap();
+    let alone = one_disc(&law(), &disc, 0.5 * target).unwrap();
     for d in 0..2 {
         assert!((s.moments[d] / (0.5 * target) - 1.0).abs() < 1e-9);
         assert!((s.turns[d] - alone).abs() < 1e-13);
@@ -206,10 +218,7 @@ fn a_light_load_tends_to_the_first_contact() {
         .iter()
         .map(|d| d.offset + d.first_touch(-1.0))
         .fold(f64::NEG_INFINITY, f64::max);
-    let solver = TwoDiscs {
-        contact: law(),
-        compliance: 2e-9,
-    };
+    let solver = TwoDiscs::new(&law(), 2e-9);
     let gap = |target: f64| {
         let s = solver.solve(&discs, target, &Solution::COLD).unwrap();
         assert_eq!(s.moments[1], 0.0);
@@ -237,10 +246,7 @@ fn an_overlapping_pair_is_solved_on_both_flanks() {
         offset: 2e-4,
         ..disc
     };
-    let solver = TwoDiscs {
-        contact: law(),
-        compliance: 2e-9,
-    };
+    let solver = TwoDiscs::new(&law(), 2e-9);
     for target in [-1e-3, -5_000.0] {
         let s = solver
             .solve(&[disc, twisted], target, &Solution::COLD)
@@ -273,10 +279,7 @@ fn a_point_without_a_solution_fails_with_its_cause() {
         levers: &levers,
         offset: 0.0,
     };
-    let solver = TwoDiscs {
-        contact: law(),
-        compliance: 1e-9,
-    };
+    let solver = TwoDiscs::new(&law(), 1e-9);
     let failed = solver.solve(&[disc, disc], -100.0, &Solution::COLD);
     assert_eq!(failed, Err(Unconverged::NoBracket));
     assert!(failed

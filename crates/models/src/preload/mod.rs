@@ -102,12 +102,30 @@ impl PinContact {
         (approach * self.face_width.powf(0.8) / (CONTACTS_PER_PIN * PALMGREN)).powf(1.0 / 0.9)
     }
 
-    /// The secant stiffness K = F(δ)/δ of a pin at the approach δ > 0 (N/mm) and its
-    /// derivative dK/dδ = (1/0.9 − 1)·K/δ (F ∝ δ^(1/0.9)): Li Lixing's common stiffness of
-    /// the most loaded pin, as the load sharing and the zero-torque balance take it.
-    pub fn secant_stiffness(&self, approach: f64) -> (f64, f64) {
-        let stiffness = self.force_at(approach) / approach;
-        (stiffness, (1.0 / 0.9 - 1.0) * stiffness / approach)
+    /// The secant law of a pin: K(δ) = F(δ)/δ = C·δ^(1/9) (F ∝ δ^(1/0.9)), Li Lixing's
+    /// common stiffness of the most loaded pin, as the load sharing and the zero-torque
+    /// balance take it; the coefficient C = (L^0.8/(2·3.84·10⁻⁵))^(1/0.9), N/mm^(10/9).
+    pub fn secant_law(&self) -> SecantLaw {
+        SecantLaw {
+            coefficient: self.force_at(1.0),
+        }
+    }
+}
+
+/// K(δ) = C·δ^(1/9) and its derivative ([`PinContact::secant_law`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct SecantLaw {
+    /// C, N/mm^(10/9): the force at an approach of 1 mm.
+    pub coefficient: f64,
+}
+
+impl SecantLaw {
+    /// K at the approach δ > 0 (N/mm) and dK/dδ = K/(9·δ); δ^(1/9) as two cube roots
+    /// (within an ulp or two of `powf`, a third of its time).
+    #[inline]
+    pub fn stiffness(&self, approach: f64) -> (f64, f64) {
+        let stiffness = self.coefficient * approach.cbrt().cbrt();
+        (stiffness, stiffness / (9.0 * approach))
     }
 }
 

@@ -27,7 +27,7 @@
 
 use std::f64::consts::PI;
 
-use super::two_discs::{lane_squares, lane_stats, RowTerms, TE_OUTPUTS};
+use super::two_discs::{lane_squares, lane_stats, modification, RowTerms, TE_OUTPUTS};
 use super::TransmissionError;
 use crate::cycloid::CycloidStage;
 use crate::loaded::{LoadedDisc, Solution, TwoDiscs, Unconverged};
@@ -51,6 +51,7 @@ pub(super) fn build(
     rule: &PreloadRule,
     (cranks, crank_radius): (usize, f64),
     (ratio, lambda): (f64, f64),
+    points: usize,
 ) -> Result<Loaded, ModelError> {
     let rated = params.positive("rated_torque_nm", None)?;
     let torque = params.number("load_torque_nm", Some(DEFAULT_LOAD_FRACTION * rated))?;
@@ -82,11 +83,9 @@ pub(super) fn build(
     Ok(Loaded {
         torque,
         target: -2.0 * disc_torque,
-        solver: TwoDiscs {
-            contact: *rule.contact(),
-            compliance: side.disc_compliance(disc_torque),
-        },
+        solver: TwoDiscs::new(rule.contact(), side.disc_compliance(disc_torque)),
         nominal: 0.0,
+        table: PinPhases::new(stage, points),
     })
 }
 
@@ -101,13 +100,124 @@ pub(super) struct Loaded {
     pub solver: TwoDiscs,
     /// ⟨κ·x⟩ of the perfect reducer at T, rad at the output.
     pub nominal: f64,
+    /// The pins' factors at every place the curve's points put them.
+    pub table: PinPhases,
 }
 
-/// Per-thread work state of the loaded curve: both discs' gaps and levers at one point.
+/// The pins' factors at every fractional pin pitch the curve's points and the two discs
+/// put them at: pin slot s of phase p sits at φ = 2π(s + p/P)/z_p from its disc's
+/// eccentric, P = 2N/g phases (g = gcd(z_c·z_p, N); the factor 2 for disc 2, half a
+/// revolution of the eccentric on, which is half a pitch for an odd pin count). Entry
+/// p·z_p + s; the tooth space of a slot as round(t) and round(t + ½), t = z_c·λ/2π − p/P
+/// (λ the slot's polar angle about the disc centre from the eccentric): the geometry of
+/// `exact_gap_at` without its square roots and arc tangents at every point.
+#[derive(Debug, Clone, Default)]
+pub(super) struct PinPhases {
+    /// P.
+    phases: usize,
+    /// Entry p·z_p + s, one slot's factors together (a point reads its slots in a row).
+    slots: Vec<SlotFactors>,
+}
+
+/// One slot's factors (two_discs.rs: `exact_gap_at`) and tooth space.
+#[derive(Debug, Clone, Copy)]
+struct SlotFactors {
+    lever: f64,
+    equidistant: f64,
+    shift: f64,
+    eccentric: f64,
+    radial: f64,
+    tangential: f64,
+    /// round(t), round(t + ½).
+    tooth: [i32; 2],
+}
+
+impl PinPhases {
+    /// The table of the stage for N points per revolution.
+    fn new(stage: &CycloidStage, points: usize) -> PinPhases {
+        let (zp, zc) = (stage.pins, stage.teeth);
+        let phases = 2 * points / gcd(zc * zp, points);
+        let mut table = PinPhases {
+            phases,
+            ..PinPhases::default()
+        };
+        let (r_p, e) = (stage.pin_circle_radius, stage.eccentricity);
+        for p in 0..phases {
+            let fraction = p as f64 / phases as f64;
+            for slot in 0..zp {
+                let phi = 2.0 * PI * (slot as f64 + fraction) / zp as f64;
+                let (sin, cos) = phi.sin_cos();
+                let factors = stage.pin_factors_at(sin, cos);
+                let (equidistant, shift) = modification(&factors);
+                let polar = (r_p * sin).atan2(r_p * cos - e);
+                let t = zc as f64 * polar / (2.0 * PI) - fraction;
+                table.slots.push(SlotFactors {
+                    lever: factors.lever,
+                    equidistant,
+                    shift,
+                    eccentric: factors.eccentric,
+                    radial: factors.radial,
+                    tangential: factors.tangential,
+                    tooth: [t.round() as i32, (t + 0.5).round() as i32],
+                });
+            }
+        }
+        table
+    }
+}
+
+fn gcd(a: usize, b: usize) -> usize {
+    if b == 0 {
+        a
+    } else {
+        gcd(b, a % b)
+    }
+}
+
+/// Per-thread work state of the loaded curve: both discs' gaps and levers at one point,
+/// and the pins near contact the solver is given first.
 #[derive(Debug, Default)]
 pub(super) struct LoadedScratch {
     gaps: [Vec<f64>; 2],
     levers: [Vec<f64>; 2],
+    near_gaps: [Vec<f64>; 2],
+    near_levers: [Vec<f64>; 2],
+}
+
+/// The pins within this turn of contact at the previous point's solution (rad, disc
+/// frame; 2″, some twenty times a point's step on a busy curve) are the solver's first
+/// set; the solution is then checked against every pin.
+const NEAR_TURN: f64 = 1e-5;
+
+impl LoadedScratch {
+    /// Keeps in the near set the pins of each disc that come into contact within
+    /// [`NEAR_TURN`] of the turns `turns`.
+    fn select_near(&mut self, turns: [f64; 2]) {
+        for (d, turn) in turns.into_iter().enumerate() {
+            let (gaps, levers) = (&mut self.near_gaps[d], &mut self.near_levers[d]);
+            gaps.clear();
+            levers.clear();
+            for (g, l) in self.gaps[d].iter().zip(&self.levers[d]) {
+                if l * turn + l.abs() * NEAR_TURN - g > 0.0 {
+                    gaps.push(*g);
+                    levers.push(*l);
+                }
+            }
+        }
+    }
+
+    /// Whether every pin in contact at the turns `turns` is in the near set.
+    fn near_holds(&self, turns: [f64; 2]) -> bool {
+        (0..2).all(|d| {
+            let count = |gaps: &[f64], levers: &[f64]| {
+                gaps.iter()
+                    .zip(levers)
+                    .filter(|(g, l)| *l * turns[d] - *g > 0.0)
+                    .count()
+            };
+            count(&self.gaps[d], &self.levers[d]) == count(&self.near_gaps[d], &self.near_levers[d])
+        })
+    }
 }
 
 impl TransmissionError {
@@ -131,24 +241,120 @@ impl TransmissionError {
         let loaded = self.loaded();
         let kappa = self.physical().kappa;
         let mut warm = Solution::COLD;
-        let n = curve.len() as f64;
         for (j, value) in curve.iter_mut().enumerate() {
-            let theta = 2.0 * PI * j as f64 / n;
-            let offsets = self.loaded_pins(inputs, terms, theta, scratch);
-            let discs = [0, 1].map(|d| LoadedDisc {
-                gaps: &scratch.gaps[d],
-                levers: &scratch.levers[d],
-                offset: offsets[d],
-            });
-            warm = loaded.solver.solve(&discs, loaded.target, &warm)?;
+            let offsets = self.loaded_pins(inputs, terms, j, scratch);
+            // The pins near contact first (a few of the z_p), then every pin where the
+            // solution touches one outside them or there is no previous solution.
+            let mut solved = None;
+            if warm.carrier.is_finite() {
+                scratch.select_near(warm.turns);
+                let near = [0, 1].map(|d| LoadedDisc {
+                    gaps: &scratch.near_gaps[d],
+                    levers: &scratch.near_levers[d],
+                    offset: offsets[d],
+                });
+                if let Ok(solution) = loaded.solver.solve(&near, loaded.target, &warm) {
+                    if scratch.near_holds(solution.turns) {
+                        solved = Some(solution);
+                    }
+                }
+            }
+            warm = match solved {
+                Some(solution) => solution,
+                None => {
+                    let all = [0, 1].map(|d| LoadedDisc {
+                        gaps: &scratch.gaps[d],
+                        levers: &scratch.levers[d],
+                        offset: offsets[d],
+                    });
+                    loaded.solver.solve(&all, loaded.target, &warm)?
+                }
+            };
             *value = kappa * warm.carrier - loaded.nominal;
         }
         Ok(())
     }
 
-    /// Both discs' pins at Θ from the exact geometry (gaps and levers into `scratch`, the
-    /// pins whose lever holds a turn), and their crank offsets C_d.
+    /// Both discs' pins at point j of N from the table (gaps and levers into `scratch`, the
+    /// pins whose lever holds a turn), and their crank offsets C_d: the geometry of
+    /// `exact_gap_at`, pin by pin.
     fn loaded_pins(
+        &self,
+        inputs: &[f64],
+        terms: &RowTerms,
+        j: usize,
+        scratch: &mut LoadedScratch,
+    ) -> [f64; 2] {
+        let table = &self.loaded().table;
+        let ph = self.physical();
+        let (n, zp, zc) = (self.points, self.pins, self.cycloid_teeth);
+        let theta = 2.0 * PI * j as f64 / n as f64;
+        let angles = self.angles_at(theta);
+        let (offsets, _) = self.crank_offsets(terms, angles);
+        let floor = LEVER_FLOOR * self.eccentricity;
+        for d in 0..2 {
+            // Disc d's pins in half-pitch units of 1/(2N): q = 2·z_c·z_p·j + d·z_p·N.
+            let q = 2 * zc * zp * j + d * zp * n;
+            let (whole, rest) = (q / (2 * n), q % (2 * n));
+            let phase = rest * table.phases / (2 * n);
+            let d_r = Self::along(terms, d, angles[0], angles[1]);
+            let constant = terms.profile[d] - terms.err_rrp;
+            let (gaps, levers) = (&mut scratch.gaps[d], &mut scratch.levers[d]);
+            gaps.clear();
+            levers.clear();
+            let base = phase * zp;
+            // Slot s holds pin (s − k) mod z_p; tooth spaces shifted by k (mod z_c), and by
+            // half a revolution of the eccentric on disc 2. Indices step without divisions.
+            let mut pin = (zp - whole % zp) % zp;
+            let tooth_shift = (d * (zp / 2)) as i64 - (whole % zc) as i64;
+            for factors in &table.slots[base..base + zp] {
+                let lever = factors.lever;
+                let this_pin = pin;
+                pin = if pin + 1 == zp { 0 } else { pin + 1 };
+                if lever.abs() <= floor {
+                    continue;
+                }
+                let pin = this_pin;
+                let (pin_r, pin_t) = if self.per_pin {
+                    (inputs[ph.pin_base + pin], inputs[ph.pin_base + zp + pin])
+                } else {
+                    (0.0, 0.0)
+                };
+                let tooth = if self.per_tooth {
+                    // round(t + d·z_p/2) − k: for an odd z_p, disc 2's half pitch rounds
+                    // with t + ½.
+                    let [round, half] = factors.tooth;
+                    let rounded = if d == 1 && zp % 2 == 1 { half } else { round };
+                    let mut space = i64::from(rounded) + tooth_shift;
+                    while space < 0 {
+                        space += zc as i64;
+                    }
+                    while space >= zc as i64 {
+                        space -= zc as i64;
+                    }
+                    inputs[ph.tooth_base + d * zc + space as usize]
+                } else {
+                    0.0
+                };
+                gaps.push(
+                    terms.d_rp * factors.equidistant
+                        + terms.d_p * factors.shift
+                        + d_r * factors.eccentric
+                        + (terms.err_rp + pin_r) * factors.radial
+                        + pin_t * factors.tangential
+                        + constant
+                        + tooth,
+                );
+                levers.push(lever);
+            }
+        }
+        offsets
+    }
+
+    /// [`Self::loaded_pins`] from the geometry pin by pin (`exact_gap_at`): the reference
+    /// of the table.
+    #[cfg(test)]
+    fn exact_loaded_pins(
         &self,
         inputs: &[f64],
         terms: &RowTerms,
@@ -157,27 +363,16 @@ impl TransmissionError {
     ) -> [f64; 2] {
         let angles = self.angles_at(theta);
         let (offsets, _) = self.crank_offsets(terms, angles);
-        let (pitch_sin, pitch_cos) = (2.0 * PI / self.pins as f64).sin_cos();
         for d in 0..2 {
             let d_r = Self::along(terms, d, angles[0], angles[1]);
-            let start = (self.cycloid_teeth as f64 * theta + d as f64 * PI).rem_euclid(2.0 * PI);
+            let start = self.cycloid_teeth as f64 * theta + d as f64 * PI;
             let (gaps, levers) = (&mut scratch.gaps[d], &mut scratch.levers[d]);
             gaps.clear();
             levers.clear();
-            let mut previous = (0.0, 1.0);
             for pin in 0..self.pins {
-                // Exact sin_cos every 8 pins, the rotation between (as `exact_flanks`).
-                let (sin, cos) = if pin % 8 == 0 {
-                    (start + 2.0 * PI * pin as f64 / self.pins as f64).sin_cos()
-                } else {
-                    let (sin, cos) = previous;
-                    (
-                        sin * pitch_cos + cos * pitch_sin,
-                        cos * pitch_cos - sin * pitch_sin,
-                    )
-                };
-                previous = (sin, cos);
-                let (gap, lever) = self.exact_gap_at(inputs, terms, d, pin, theta, d_r, (sin, cos));
+                let phi = (start + 2.0 * PI * pin as f64 / self.pins as f64).rem_euclid(2.0 * PI);
+                let (gap, lever) =
+                    self.exact_gap_at(inputs, terms, d, pin, theta, d_r, phi.sin_cos());
                 if lever.abs() > LEVER_FLOOR * self.eccentricity {
                     gaps.push(gap);
                     levers.push(lever);

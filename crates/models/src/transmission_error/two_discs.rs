@@ -1395,7 +1395,7 @@ impl Physical {
 /// 1 − sin φ/S and −(1 − K1·cos φ − √(1 − K1²)·sin φ)/S, the radial (1 − K1·cos φ)/S):
 /// 2 − equidistant and −2·radial − shift, no root or division of its own.
 #[inline(always)]
-fn modification(factors: &PinFactors) -> (f64, f64) {
+pub(super) fn modification(factors: &PinFactors) -> (f64, f64) {
     (
         2.0 - factors.equidistant,
         -2.0 * factors.radial - factors.shift,

@@ -233,3 +233,56 @@ fn bad_load_parameters_name_their_key() {
     );
     assert!(TransmissionError::from_params(&text(bare, "disc_contact", "first_contact")).is_ok());
 }
+
+#[test]
+fn the_table_is_the_geometry_pin_by_pin() {
+    // The gaps, levers and crank offsets the loaded curve reads from its table equal the
+    // physical reading's geometry pin by pin (exact_gap_at), at every point, for 40 and 41
+    // pins (an odd count puts disc 2 half a pitch off), with pin and tooth-space errors.
+    for (pins, teeth) in [(40.0, 39.0), (41.0, 40.0)] {
+        let model = with(
+            rv40e_params()
+                .with_number("pin_count", pins)
+                .with_number("cycloid_teeth", teeth)
+                .with_number("pin_position_errors", 1.0)
+                .with_number("tooth_profile_errors", 1.0),
+        );
+        let mut next = xorshift(5);
+        let inputs: Vec<f64> = model
+            .inputs()
+            .iter()
+            .map(|i| (if i.unit == "rad" { 0.004 / 12.0 } else { 0.004 }) * next())
+            .collect();
+        let terms = model.row_terms(&inputs);
+        let (mut table, mut exact) = (LoadedScratch::default(), LoadedScratch::default());
+        let n = model.points;
+        for j in (0..n).step_by(7) {
+            let a = model.loaded_pins(&inputs, &terms, j, &mut table);
+            let theta = 2.0 * PI * j as f64 / n as f64;
+            let b = model.exact_loaded_pins(&inputs, &terms, theta, &mut exact);
+            assert_eq!(a, b);
+            for d in 0..2 {
+                // The same pins (the table starts at slot 0, the geometry at pin 0), compared
+                // as sets of (lever, gap) pairs; the geometry's angle φ = z_c·Θ + … is off
+                // by its rounding (1e-14 rad at Θ near 2π), which moves a lever by up to
+                // 1e-12 mm near φ = 0 or π.
+                let sorted = |s: &LoadedScratch| {
+                    let mut v: Vec<(f64, f64)> = s.levers[d]
+                        .iter()
+                        .cloned()
+                        .zip(s.gaps[d].iter().cloned())
+                        .filter(|(l, _)| l.abs() > 1e-9)
+                        .collect();
+                    v.sort_by(|x, y| x.0.total_cmp(&y.0));
+                    v
+                };
+                let (x, y) = (sorted(&table), sorted(&exact));
+                assert_eq!(x.len(), y.len(), "{pins} pins, point {j}");
+                for ((l1, g1), (l2, g2)) in x.iter().zip(&y) {
+                    assert!((l1 - l2).abs() < 1e-9, "{pins} pins, point {j}: {l1} {l2}");
+                    assert!((g1 - g2).abs() < 1e-12, "{pins} pins, point {j}: {g1} {g2}");
+                }
+            }
+        }
+    }
+}
