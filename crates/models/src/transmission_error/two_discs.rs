@@ -2007,6 +2007,19 @@ impl TransmissionError {
                 .map(|j| (degrees(j), value(j) * ARCSEC_PER_RAD))
                 .collect(),
         };
+        // The loaded reading's curve first (its torque in the label), the rigid first
+        // contact and its stages after it.
+        let (loaded_series, total_label) =
+            match (self.load_torque(), self.loaded_curve_arcsec(inputs)) {
+                (Some(torque), Some(loaded)) => (
+                    Some(Series {
+                        label: format!("total under load ({} N·m)", rvtol_deviation::Shown(torque)),
+                        points: (0..n).map(|j| (degrees(j), loaded[j])).collect(),
+                    }),
+                    "rigid first contact",
+                ),
+                _ => (None, "total"),
+            };
         let exact_stages = self.exact_curve_stages(inputs, SPECTRUM_POINTS);
         let exact: Vec<f64> = exact_stages
             .iter()
@@ -2039,8 +2052,10 @@ impl TransmissionError {
                 x_label: "output angle (deg)".into(),
                 y_label: "transmission error (arcsec)".into(),
                 style: CurveStyle::Lines,
-                series: vec![
-                    series("total", &|j| curve[j]),
+                series: loaded_series
+                    .into_iter()
+                    .chain([
+                    series(total_label, &|j| curve[j]),
                     series("involute stage (common to the cranks)", &|j| stages[j][0]),
                     series(
                         "cranks (translation and four-bar, mean of the discs)",
@@ -2050,7 +2065,8 @@ impl TransmissionError {
                         "cycloid–pin contact (first contact over both discs)",
                         &|j| stages[j][2],
                     ),
-                ],
+                ])
+                .collect(),
             },
             Curve {
                 name: "transmission_error_detail".into(),
