@@ -116,7 +116,20 @@ fn every_shipped_scenario_merges_to_the_run_bit_for_bit() {
     // Three full chunks and a partial one: 64 shards leave most of them empty.
     let samples = 3 * CHUNK_SIZE as u64 + 1234;
     for file in shipped() {
-        let scenario = Scenario::load(&scenario_path(&file)).unwrap();
+        // The transmission error in its rigid first contact: the merge does not depend on
+        // the model's reading, and under load (the shipped default, about 100 times the
+        // cost) the 64 shards' pilot chunks alone would take an hour of CPU. The loaded
+        // reading's same-bits-for-any-thread-count is tests/cli.rs's.
+        let scenario = if file == "rv40e-transmission.json" {
+            let text = rvtol_tests::shipped_text(scenario_path(&file)).replace(
+                "\"disc_contact\": \"loaded\"",
+                "\"disc_contact\": \"first_contact\"",
+            );
+            assert!(text.contains("\"disc_contact\": \"first_contact\""));
+            Scenario::from_json(&text, &file).unwrap()
+        } else {
+            Scenario::load(&scenario_path(&file)).unwrap()
+        };
         // Exact percentiles, then the sketch (a limit of 0 values forces it).
         for exact_percentile_limit in [u64::MAX, 0] {
             let settings = RunSettings {

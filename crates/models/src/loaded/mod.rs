@@ -32,6 +32,11 @@
 //! bracket is found by stepping out from the warm start (the previous point's solution,
 //! or the rigid first contact) with doubling steps. Every loop is capped; a point that does
 //! not converge is an [`Unconverged`] with its cause, never a hang.
+//!
+//! From a warm start (the previous point of a curve) a fast path comes first: Newton's
+//! iteration on both turns at once (R_1 = M_1 + M_2 − M*, R_2 = x_1 − x_2), which settles in
+//! a few steps where the loaded pins stay; where it does not within [`FAST_STEPS`], the
+//! safeguarded iteration above takes over. Both stop at the same tolerances.
 
 use crate::preload::{PinContact, SecantLaw};
 
@@ -144,7 +149,7 @@ pub(crate) struct Solution {
     pub turns: [f64; 2],
     /// M_d, each disc's pin moment, N·mm.
     pub moments: [f64; 2],
-    /// Evaluations of the torque balance.
+    /// Evaluations of the torque balance (the fast path: of both discs' moments).
     pub iterations: u32,
 }
 

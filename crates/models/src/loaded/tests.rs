@@ -161,9 +161,24 @@ fn two_discs_balance_the_torque_and_share_one_carrier_angle() {
             let x = disc.offset + s.turns[d] + solver.compliance * m;
             assert!((x - s.carrier).abs() < 1e-12, "{x} vs {}", s.carrier);
         }
-        // Warm started from its own solution it stays there.
+        // Warm started from its own solution it stays there; from a point 1e-6 rad off
+        // (the fast path: both turns by Newton's iteration) it reaches the safeguarded
+        // iteration's solution to their tolerance.
         let again = solver.solve(&discs, target, &s).unwrap();
         assert!((again.carrier - s.carrier).abs() < 1e-12);
+        assert_eq!(again.iterations, 1);
+        let off = Solution {
+            turns: [s.turns[0] + 1e-6, s.turns[1] - 2e-6],
+            ..s
+        };
+        let fast = solver.solve(&discs, target, &off).unwrap();
+        assert!(fast.iterations <= FAST_STEPS, "{}", fast.iterations);
+        assert!(
+            (fast.carrier - s.carrier).abs() < 1e-12,
+            "{} {}",
+            fast.carrier,
+            s.carrier
+        );
     }
 }
 
