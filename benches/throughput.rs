@@ -16,14 +16,15 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rvtol_benches::scenario_path;
 use rvtol_deviation::{SamplerScratch, Ziggurat, ZigguratScratch};
-use rvtol_engine::run::BLOCK_ROWS;
+use rvtol_engine::chunk::BLOCK_ROWS;
 use rvtol_engine::stats::{Moments, QuantileSketch};
 use rvtol_engine::{run, RunSettings, Scenario};
 
 const ROWS: usize = 4096;
 
 fn rv20e() -> Scenario {
-    Scenario::load(&scenario_path("rv20e-hysteresis.json")).expect("shipped scenario loads")
+    rvtol_analysis::request::scenario::load(&scenario_path("rv20e-hysteresis.json"))
+        .expect("shipped scenario loads")
 }
 
 fn normals(c: &mut Criterion) {
@@ -217,7 +218,8 @@ fn models(c: &mut Criterion) {
         ("rv40e-torsion.json", 256, "torsion_curve_rv40e"),
         ("rv80e-torsion.json", 256, "torsion_curve_rv80e"),
     ] {
-        let scenario = Scenario::load(&scenario_path(file)).expect("shipped scenario loads");
+        let scenario = rvtol_analysis::request::scenario::load(&scenario_path(file))
+            .expect("shipped scenario loads");
         let inputs = model_rows(&scenario, rows);
         let input_slices: Vec<&[f64]> = inputs.iter().map(Vec::as_slice).collect();
         let bound = &scenario.models[0];
@@ -237,7 +239,8 @@ fn models(c: &mut Criterion) {
 /// transmission scenario. Target ≤ 500 µs per sample at 4096 points.
 fn loaded_transmission_error(c: &mut Criterion) {
     let scenario =
-        Scenario::load(&scenario_path("rv40e-transmission.json")).expect("shipped scenario loads");
+        rvtol_analysis::request::scenario::load(&scenario_path("rv40e-transmission.json"))
+            .expect("shipped scenario loads");
     let rows = 8;
     let columns = model_rows(&scenario, rows);
     let inputs: Vec<Vec<f64>> = (0..rows)

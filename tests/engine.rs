@@ -10,7 +10,7 @@ use rvtol_tests::{linear_closed_form, run_with_threads, scenario_path, SIGMA_BOU
 use statrs::distribution::{ContinuousCDF, Normal};
 
 fn load(file: &str) -> Scenario {
-    Scenario::load(&scenario_path(file)).unwrap()
+    rvtol_analysis::request::scenario::load(&scenario_path(file)).unwrap()
 }
 
 #[test]
@@ -72,7 +72,7 @@ fn sketch_percentiles_of_a_normal_output_lie_within_their_bound() {
     let report = RunReport::new(&scenario, result);
     let output = &report.outputs[0];
     let standard = Normal::new(0.0, 1.0).unwrap();
-    for (key, percent) in rvtol_engine::report::PERCENTS {
+    for (key, percent) in rvtol_engine::figures::PERCENTS {
         let p = percent / 100.0;
         let z = standard.inverse_cdf(p);
         let exact = mean + sd * z;
@@ -125,7 +125,8 @@ fn rv20e_nominal_matches_document_000() {
     // (Δu = Δv = Δτ/2, tilts Δτ/L1), which changes the terms below 1e-4 arcmin. The
     // manufacturing errors are at the design point, zero: the scenario's own nominal is the
     // mean of every input, and the mean of a magnitude (a Rayleigh runout) is not zero.
-    let (_, text) = Scenario::read(&scenario_path("rv20e-hysteresis.json")).unwrap();
+    let (_, text) =
+        rvtol_analysis::request::scenario::read(&scenario_path("rv20e-hysteresis.json")).unwrap();
     let mut document: serde_json::Value = serde_json::from_str(&text).unwrap();
     for (name, binding) in document["models"][0]["inputs"].as_object_mut().unwrap() {
         let variable = binding.as_str().is_some_and(|b| !b.starts_with("reducer."));

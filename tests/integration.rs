@@ -1,28 +1,20 @@
-//! rvtol's end-to-end, scenario, statistical and golden-value tests, one module per
-//! concern, built as one test binary (one link step; `cargo test --release --test
-//! integration <module>::` runs one file's tests).
+//! rvtol's library tests that span crates: scenarios run through the engine and the
+//! analyses, statistical and golden-value tests, the physical models against their
+//! documents, the code's shape. One module per concern, built as one test binary (one
+//! link step; `cargo test --release -p rvtol-tests --test integration <module>::` runs
+//! one file's tests). The tests that drive the `rvtol` binary are the CLI package's
+//! (crates/cli/tests/end_to_end/).
 
 mod common;
 
-mod allocate;
-mod bad_input;
 mod capability_intervals;
-mod cli;
 mod engine;
-mod fit;
-mod gate;
-mod hardening;
-mod kubernetes;
 mod lost_motion;
 mod msrv;
-mod mutation;
 mod percentile_intervals;
-mod readme;
-mod report;
 mod sampler;
 mod sampling;
-mod scenario_format;
 mod sensitivity;
-mod shard;
 mod stiffness;
+mod structure;
 mod transmission_error;

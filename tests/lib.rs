@@ -92,9 +92,9 @@ pub fn run_with_threads(
 pub fn shipped_text(path: impl AsRef<std::path::Path>) -> String {
     let path = path.as_ref();
     let text = std::fs::read_to_string(path).expect("shipped scenario");
-    let limit = rvtol_engine::input_file::ReadLimit::library();
-    let folder = rvtol_engine::scenario::scenario_folder(path);
-    rvtol_engine::scenario::data::inline_data_files(&text, &folder, &limit)
+    let limit = rvtol_analysis::request::input_file::ReadLimit::library();
+    let folder = rvtol_analysis::request::scenario::scenario_folder(path);
+    rvtol_analysis::request::data::inline_data_files(&text, &folder, &limit)
         .expect("shipped scenario's files")
         .into_owned()
 }

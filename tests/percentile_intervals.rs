@@ -10,7 +10,8 @@
 //! it falls below 380 − 3.5·√(400·0.95·0.05) = 364.7 with probability below 3·10⁻⁴ per
 //! percentile. Fewer means the intervals undercover.
 
-use rvtol_engine::report::{RunReport, PERCENTS};
+use rvtol_engine::figures::PERCENTS;
+use rvtol_engine::report::RunReport;
 use rvtol_engine::{run, RunSettings, Scenario};
 use statrs::distribution::{ContinuousCDF, Normal};
 

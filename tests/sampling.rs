@@ -10,13 +10,13 @@
 //! standard deviation √(S·0.95·0.05) of 0.95·S.
 
 use rvtol_deviation::SamplingMethod;
+use rvtol_engine::chunk::Sampling;
 use rvtol_engine::report::RunReport;
-use rvtol_engine::run::Sampling;
 use rvtol_engine::{merge, run, run_chunks, shard_range, RunSettings, Scenario};
 use rvtol_tests::{linear_closed_form, run_with_threads, scenario_path, SIGMA_BOUND};
 
 fn load(file: &str) -> Scenario {
-    Scenario::load(&scenario_path(file)).unwrap()
+    rvtol_analysis::request::scenario::load(&scenario_path(file)).unwrap()
 }
 
 fn settings(method: SamplingMethod, replicates: u64, samples: u64, seed: u64) -> RunSettings {
@@ -329,7 +329,7 @@ fn coverage_failures(
     seeds: u64,
     truth: &Truth,
 ) -> Vec<String> {
-    use rvtol_engine::report::PERCENTS;
+    use rvtol_engine::figures::PERCENTS;
     let o = scenario
         .outputs
         .iter()
@@ -407,7 +407,7 @@ fn triangular_output() -> (Scenario, Truth) {
     let truth = Truth {
         mean: (a + b + c) / 3.0,
         sd: ((a * a + b * b + c * c - a * b - a * c - b * c) / 18.0).sqrt(),
-        percentiles: rvtol_engine::report::PERCENTS
+        percentiles: rvtol_engine::figures::PERCENTS
             .iter()
             .map(|p| quantile(p.1 / 100.0))
             .collect(),
@@ -422,7 +422,7 @@ fn stack_output() -> (Scenario, Truth) {
     let scenario = load("linear-stack-correlated.json");
     let (mean, sd) = linear_closed_form(&scenario);
     let normal = Normal::new(mean, sd).unwrap();
-    let percentiles = rvtol_engine::report::PERCENTS
+    let percentiles = rvtol_engine::figures::PERCENTS
         .iter()
         .map(|p| normal.inverse_cdf(p.1 / 100.0))
         .collect();
@@ -468,7 +468,7 @@ fn rv20e_output() -> (Scenario, Truth) {
     );
     let mut halves = vec![(half(r.mean.map(Some)), half(t.mean.map(Some)))];
     halves.push((half(r.sd.map(Some)), half(t.sd.map(Some))));
-    for (key, _) in rvtol_engine::report::PERCENTS {
+    for (key, _) in rvtol_engine::figures::PERCENTS {
         halves.push((
             half(r.percentiles.get(key).unwrap()),
             half(t.percentiles.get(key).unwrap()),
@@ -483,7 +483,7 @@ fn rv20e_output() -> (Scenario, Truth) {
     let truth = Truth {
         mean: reference.mean,
         sd: reference.sd,
-        percentiles: rvtol_engine::report::PERCENTS
+        percentiles: rvtol_engine::figures::PERCENTS
             .iter()
             .map(|(key, _)| reference.percentiles.get(key).unwrap())
             .collect(),

@@ -7,12 +7,12 @@
 //! (six intervals). The tests therefore check the coverage over many seeds against its
 //! binomial distribution (precision policy, tests/lib.rs), and every interval's width.
 
-use rvtol_deviation::SamplingMethod;
-use rvtol_engine::sensitivity::{
+use rvtol_analysis::sensitivity::{
     independent_groups, sobol_indices, IntervalMethod, SensitivitySettings,
     DEFAULT_ROW_BOOTSTRAP_LIMIT,
 };
-use rvtol_engine::sensitivity_report::SensitivityReport;
+use rvtol_analysis::sensitivity_report::SensitivityReport;
+use rvtol_deviation::SamplingMethod;
 use rvtol_engine::{Sampling, Scenario};
 use rvtol_models::{Ishigami, ModelParams, ParamValue, SobolG};
 use rvtol_tests::{scenario_path, SIGMA_BOUND};
@@ -43,7 +43,7 @@ fn coverage_with(
     closed_form: impl Fn(&str) -> (f64, f64),
     settings: impl Fn(u64) -> SensitivitySettings,
 ) -> (u64, u64, f64) {
-    let scenario = Scenario::load(&scenario_path(file)).unwrap();
+    let scenario = rvtol_analysis::request::scenario::load(&scenario_path(file)).unwrap();
     let (mut covered, mut total, mut widest) = (0u64, 0u64, 0.0f64);
     for seed in 1..=seeds {
         let outputs = sobol_indices(&scenario, settings(seed), &|_| {}).unwrap();
@@ -81,7 +81,8 @@ fn block_bootstrap_intervals_cover_the_closed_form_too() {
     // With the row-bootstrap limit below N·(2G + 2) the intervals come from resampled blocks
     // of rows (2^16 base samples: 64-row blocks, 1024 of them); their coverage must hold at
     // the same nominal rate, and their width stay that of the row bootstrap (< 0.02).
-    let scenario = Scenario::load(&scenario_path("ishigami.json")).unwrap();
+    let scenario =
+        rvtol_analysis::request::scenario::load(&scenario_path("ishigami.json")).unwrap();
     let blocks = SensitivitySettings {
         row_bootstrap_limit: 1,
         ..settings(1)
@@ -164,7 +165,7 @@ fn estimates_over_seeds(
     seeds: u64,
     settings: impl Fn(u64) -> SensitivitySettings,
 ) -> std::collections::BTreeMap<(String, bool), Vec<(f64, f64)>> {
-    let scenario = Scenario::load(&scenario_path(file)).unwrap();
+    let scenario = rvtol_analysis::request::scenario::load(&scenario_path(file)).unwrap();
     let mut all = std::collections::BTreeMap::new();
     for seed in 1..=seeds {
         let outputs = sobol_indices(&scenario, settings(seed), &|_| {}).unwrap();
@@ -243,7 +244,8 @@ fn rqmc_intervals_shrink_faster_than_monte_carlo() {
 
 #[test]
 fn replicated_designs_are_refused_where_they_do_not_fit() {
-    let scenario = Scenario::load(&scenario_path("ishigami.json")).unwrap();
+    let scenario =
+        rvtol_analysis::request::scenario::load(&scenario_path("ishigami.json")).unwrap();
     let refused = |settings: SensitivitySettings| {
         sobol_indices(&scenario, settings, &|_| {})
             .unwrap_err()
@@ -280,13 +282,16 @@ fn replicated_designs_are_refused_where_they_do_not_fit() {
 fn correlated_sources_form_one_group_and_a_part_is_one_group() {
     // linear-stack-correlated.json correlates bearing_width with spacer_width and the
     // carrier's dw with bore_depth: two groups remain (a part's six components stay together).
-    let scenario = Scenario::load(&scenario_path("linear-stack-correlated.json")).unwrap();
+    let scenario =
+        rvtol_analysis::request::scenario::load(&scenario_path("linear-stack-correlated.json"))
+            .unwrap();
     let names: Vec<String> = independent_groups(&scenario)
         .into_iter()
         .map(|g| g.name)
         .collect();
     assert_eq!(names, ["carrier+bore_depth", "bearing_width+spacer_width"]);
-    let scenario = Scenario::load(&scenario_path("rv20e-hysteresis.json")).unwrap();
+    let scenario =
+        rvtol_analysis::request::scenario::load(&scenario_path("rv20e-hysteresis.json")).unwrap();
     let groups = independent_groups(&scenario);
     assert_eq!(groups.len(), 10);
     assert_eq!(groups[0].name, "input_shaft");
@@ -295,7 +300,8 @@ fn correlated_sources_form_one_group_and_a_part_is_one_group() {
 
 #[test]
 fn report_is_byte_identical_for_1_and_2_threads() {
-    let scenario = Scenario::load(&scenario_path("rv20e-hysteresis.json")).unwrap();
+    let scenario =
+        rvtol_analysis::request::scenario::load(&scenario_path("rv20e-hysteresis.json")).unwrap();
     for sampling in [
         Sampling::MONTE_CARLO,
         Sampling {
@@ -366,8 +372,10 @@ fn linear_gaussian_shapley(a: &[f64], cov: &nalgebra::DMatrix<f64>) -> Vec<f64> 
 
 #[test]
 fn shapley_effects_of_a_linear_gaussian_model_match_the_closed_form() {
-    use rvtol_engine::shapley::{shapley_effects, ShapleySettings};
-    let scenario = Scenario::load(&scenario_path("shapley-linear-gaussian.json")).unwrap();
+    use rvtol_analysis::shapley::{shapley_effects, ShapleySettings};
+    let scenario =
+        rvtol_analysis::request::scenario::load(&scenario_path("shapley-linear-gaussian.json"))
+            .unwrap();
     let (_, _, cov) = scenario.input_space.gaussian_specification();
     let exact = linear_gaussian_shapley(&[1.0, 1.0, 0.5], &cov);
     assert!((exact.iter().sum::<f64>() - 1.0).abs() < 1e-12);
@@ -394,9 +402,11 @@ fn screening_of_a_linear_stack_is_exact() {
     // For y = c + aᵀx the central difference is the coefficient (to rounding), gᵀΣg is the
     // closed-form variance 8.957994e-5 mm² (tests/engine.rs), the Euler shares sum to 1 and
     // the regression fits exactly (R² = 1).
-    use rvtol_engine::screening::screening;
-    use rvtol_engine::shapley::players;
-    let scenario = Scenario::load(&scenario_path("linear-stack-correlated.json")).unwrap();
+    use rvtol_analysis::screening::screening;
+    use rvtol_analysis::shapley::players;
+    let scenario =
+        rvtol_analysis::request::scenario::load(&scenario_path("linear-stack-correlated.json"))
+            .unwrap();
     let result = screening(&scenario, &players(&scenario), 20_000, 3).unwrap();
     let output = &result[0];
     assert!((output.linearised_variance - 8.957994e-5).abs() < 1e-11);

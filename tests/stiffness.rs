@@ -4,7 +4,6 @@
 //! unequal cranks, what the disc's shift along its eccentric would change, and the
 //! nominal figures of the three torsion scenarios (docs/models.md §10, §11, §13).
 
-use rvtol_engine::Scenario;
 use rvtol_models::{
     assembly_preload, disc_web_compliance, hub_tilt_stiffness, net_force_compliance, BoltedJoint,
     Carrier, CrankElasticError, CrankShaft, CycloidPinContact, EndCompliance, ErrorModel,
@@ -12,6 +11,7 @@ use rvtol_models::{
 };
 use rvtol_tests::scenario_path;
 use std::f64::consts::PI;
+use std::path::PathBuf;
 
 /// The numeric parameters of the first model of a shipped scenario.
 fn params_of(file: &str) -> ModelParams {
@@ -23,7 +23,7 @@ fn params_of(file: &str) -> ModelParams {
 /// (pin-hole clearance, runout, cumulative pitch error), whose design value is 0 while the
 /// mean of their laws (folded normal, Rayleigh) is not.
 fn nominal_inputs(file: &str) -> Vec<f64> {
-    let scenario = Scenario::load(&scenario_path(file)).unwrap();
+    let scenario = rvtol_analysis::request::scenario::load(&scenario_path(file)).unwrap();
     let mut row = scenario.input_space.mean_row();
     for (column, info) in scenario.columns.iter().enumerate() {
         if [
@@ -826,7 +826,7 @@ fn runs_table() -> String {
     let reports: Vec<serde_json::Value> = CATALOGUE
         .iter()
         .map(|(_, file, _)| {
-            let scenario = Scenario::load(&scenario_path(file)).unwrap();
+            let scenario = rvtol_analysis::request::scenario::load(&scenario_path(file)).unwrap();
             let settings = rvtol_engine::RunSettings {
                 samples: scenario.samples,
                 seed: scenario.seed,
@@ -901,4 +901,66 @@ fn runs_table() -> String {
         )
     });
     table
+}
+
+/// The content between `<!-- torsion-table: NAME -->` and the next
+/// `<!-- /torsion-table -->` in `text`, for each NAME: its byte range.
+fn torsion_blocks(text: &str, name: &str) -> Vec<std::ops::Range<usize>> {
+    let open = format!("<!-- torsion-table: {name} -->\n");
+    let mut found = Vec::new();
+    let mut search = 0;
+    while let Some(at) = text[search..].find(&open) {
+        let start = search + at + open.len();
+        let end = start
+            + text[start..]
+                .find("<!-- /torsion-table -->")
+                .expect("a torsion table is closed by <!-- /torsion-table -->");
+        found.push(start..end);
+        search = end;
+    }
+    found
+}
+
+#[test]
+fn torsion_tables_are_the_models_figures() {
+    // The torsion curve's figures against the catalogue, its terms' shares and the shipped
+    // scenarios' runs, in README.md and docs/models.md §13, as this module computes
+    // them from the three shipped torsion scenarios. RVTOL_README_BLESS=1 rewrites them.
+    let [figures, terms, runs] = torsion_tables();
+    let bless = std::env::var_os("RVTOL_README_BLESS").is_some();
+    let mut stale = Vec::new();
+    for file in ["README.md", "docs/models.md"] {
+        let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("..")
+            .join(file);
+        let text = std::fs::read_to_string(&path).unwrap();
+        let mut updated = text.clone();
+        let mut blocks: Vec<(std::ops::Range<usize>, &str)> = Vec::new();
+        for (name, table) in [("figures", &figures), ("terms", &terms), ("runs", &runs)] {
+            blocks.extend(
+                torsion_blocks(&text, name)
+                    .into_iter()
+                    .map(|r| (r, table.as_str())),
+            );
+        }
+        assert!(
+            blocks.len() >= 2,
+            "{file} shows the torsion figures and terms tables"
+        );
+        blocks.sort_by_key(|(r, _)| std::cmp::Reverse(r.start));
+        for (range, table) in blocks {
+            if text[range.clone()] != *table {
+                stale.push(file);
+                updated.replace_range(range, table);
+            }
+        }
+        if bless && updated != text {
+            std::fs::write(&path, updated).unwrap();
+        }
+    }
+    assert!(
+        bless || stale.is_empty(),
+        "the torsion tables of {stale:?} differ from the model's figures; after a deliberate \
+         change rerun with RVTOL_README_BLESS=1 and update the prose"
+    );
 }

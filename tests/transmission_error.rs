@@ -5,12 +5,12 @@
 //! disc's window against the exact profile windows of tests/data/exact_profile_windows.csv.
 
 use rvtol_engine::report::RunReport;
-use rvtol_engine::{run, RunSettings, Scenario};
+use rvtol_engine::{run, RunSettings};
 use rvtol_models::{ErrorModel, ModelParams, ParamValue, RealFft, TransmissionError};
 use rvtol_tests::scenario_path;
 
 fn report(file: &str, samples: u64) -> serde_json::Value {
-    let scenario = Scenario::load(&scenario_path(file)).unwrap();
+    let scenario = rvtol_analysis::request::scenario::load(&scenario_path(file)).unwrap();
     let settings = RunSettings {
         samples,
         seed: scenario.seed,

@@ -8,7 +8,7 @@ docs/models.md §2) in its default "physical" reading (or "document_000" when th
 asks for it), so that its speed can be compared with rvtol's. It is not bit-identical to
 rvtol (different random streams); the statistics agree within Monte Carlo error.
 
-Distributions (as crates/engine/src/scenario/compile.rs maps the scenario file):
+Distributions (as crates/engine/src/scenario/compile/ maps the scenario file):
   tolerance_band {lower L, upper U, cp, mean_shift}  N((L+U)/2 + shift, ((U-L)/(6 cp))^2)
   normal {mean, sd}                                   N(mean, sd^2)
   folded_normal {lower, upper, cp, mean_shift}        |X|, X the tolerance-band normal above

@@ -1,12 +1,8 @@
-//! Helpers shared by the end-to-end tests: locating (building) the `rvtol` binary, running
-//! it, and scenario files in the temporary directory that remove themselves.
+//! Helpers shared by the library tests: the workspace's folder and the parameters a
+//! shipped scenario hands its first model. (The end-to-end tests, which run the `rvtol`
+//! binary, have their own helpers in crates/cli/tests/end_to_end/common.rs.)
 
-#![allow(dead_code)]
-
-use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-use std::sync::OnceLock;
 
 /// The workspace root (the parent of this package, `tests/`).
 pub fn workspace_dir() -> PathBuf {
@@ -14,84 +10,6 @@ pub fn workspace_dir() -> PathBuf {
         .parent()
         .expect("tests/ has a parent directory")
         .to_path_buf()
-}
-
-/// A shipped scenario's path as a command-line argument.
-pub fn scenario(file: &str) -> String {
-    workspace_dir()
-        .join("scenarios")
-        .join(file)
-        .display()
-        .to_string()
-}
-
-/// Path of the `rvtol` binary, built once per test process.
-///
-/// Binaries of another package are not exposed through `CARGO_BIN_EXE_*`, so the first
-/// call runs `cargo build -q -p rvtol --bin rvtol` (with `--release` when this test is
-/// built without debug assertions) and returns `<target>/<debug|release>/rvtol`, where
-/// `<target>` is `CARGO_TARGET_DIR` (relative to the workspace when relative) or
-/// `<workspace>/target`.
-pub fn rvtol_binary() -> &'static Path {
-    static BINARY: OnceLock<PathBuf> = OnceLock::new();
-    BINARY.get_or_init(|| {
-        let workspace = workspace_dir();
-        let release = !cfg!(debug_assertions);
-        let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
-        let mut build = Command::new(cargo);
-        build
-            .current_dir(&workspace)
-            .args(["build", "-q", "-p", "rvtol", "--bin", "rvtol"]);
-        if release {
-            build.arg("--release");
-        }
-        let status = build.status().expect("cannot start cargo to build rvtol");
-        assert!(status.success(), "cargo build of rvtol failed: {status}");
-        let target = match std::env::var_os("CARGO_TARGET_DIR") {
-            Some(dir) => workspace.join(dir),
-            None => workspace.join("target"),
-        };
-        let binary = target
-            .join(if release { "release" } else { "debug" })
-            .join(format!("rvtol{}", std::env::consts::EXE_SUFFIX));
-        assert!(binary.is_file(), "no rvtol binary at {}", binary.display());
-        binary
-    })
-}
-
-/// Runs `rvtol` with `args` and returns its exit status and captured output.
-pub fn run_rvtol<S: AsRef<OsStr>>(args: &[S]) -> Output {
-    Command::new(rvtol_binary())
-        .args(args)
-        .output()
-        .expect("cannot start rvtol")
-}
-
-/// A scenario file in the temporary directory, removed when dropped.
-pub struct TempScenario {
-    path: PathBuf,
-}
-
-impl TempScenario {
-    /// Writes `contents` to `<temp>/rvtol-<label>-<pid>.json`; `label` must be unique
-    /// among the tests of one process.
-    pub fn new(label: &str, contents: &str) -> Self {
-        let path = std::env::temp_dir().join(format!("rvtol-{label}-{}.json", std::process::id()));
-        std::fs::write(&path, contents)
-            .unwrap_or_else(|err| panic!("cannot write {}: {err}", path.display()));
-        TempScenario { path }
-    }
-
-    /// Its path.
-    pub fn path(&self) -> &Path {
-        &self.path
-    }
-}
-
-impl Drop for TempScenario {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.path);
-    }
 }
 
 /// The parameters the engine hands to the first model of a shipped scenario: the model's

@@ -19,8 +19,8 @@ use std::sync::Arc;
 use rand::{Rng, RngExt};
 
 use crate::error::DeviationError;
-use crate::scalar::unit_scale;
 use crate::shown::Shown;
+use crate::unit::unit_scale;
 
 /// Mean and variance (divisor n) of the values.
 fn moments(values: &[f64]) -> (f64, f64) {

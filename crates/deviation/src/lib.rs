@@ -33,6 +33,7 @@ mod part;
 mod points;
 mod scalar;
 mod shown;
+mod unit;
 
 pub use cholesky::{
     factorise_covariance, pivoted_cholesky, smallest_eigenvalue, CholeskyFactor,
@@ -48,7 +49,6 @@ pub use inverse_normal::standard_normal_inverse;
 pub use normal::{Ziggurat, ZigguratScratch};
 pub use part::{check_covariance, PartSpec, SixDof};
 pub use points::{PointSet, SamplingMethod, MAX_SOBOL_DIMENSIONS};
-pub use scalar::{
-    standard_normal_mass, unit_scale, ScalarDistribution, FOLDED_QUANTILE, RAYLEIGH_QUANTILE,
-};
+pub use scalar::{standard_normal_mass, ScalarDistribution, FOLDED_QUANTILE, RAYLEIGH_QUANTILE};
 pub use shown::{human_bytes, index_list, Rounded, Shown};
+pub use unit::unit_scale;

@@ -43,6 +43,7 @@ use statrs::function::erf::{erfc, erfc_inv};
 
 use crate::error::DeviationError;
 use crate::inverse_normal::standard_normal_inverse;
+use crate::unit::unit_scale;
 
 /// The distribution of one scalar error parameter.
 #[derive(Debug, Clone, PartialEq)]
@@ -146,19 +147,6 @@ pub fn standard_normal_mass(a: f64, b: f64) -> f64 {
 /// Φ⁻¹(p) for p in (0, 1).
 fn standard_normal_quantile(p: f64) -> f64 {
     -std::f64::consts::SQRT_2 * erfc_inv(2.0 * p)
-}
-
-/// x·f for a change of unit by the factor f, computed as x / (1/f) when 1/f is a whole
-/// number (µm to mm divides by 1000): a decimal written in the file (−0.72 µm) then lands
-/// on the double nearest its converted decimal (−0.00072 mm), not one a rounding away.
-#[inline]
-pub fn unit_scale(x: f64, f: f64) -> f64 {
-    let inverse = 1.0 / f;
-    if inverse.fract() == 0.0 && inverse.abs() < 9.0e15 {
-        x / inverse
-    } else {
-        x * f
-    }
 }
 
 impl ScalarDistribution {

@@ -13,8 +13,41 @@
 
 use rvtol_models::ConditionEffect;
 
-use crate::run::{model_of_output, CHUNK_SIZE};
+use crate::chunk::CHUNK_SIZE;
 use crate::scenario::{Binding, Scenario, ScenarioError};
+
+/// The drawn inputs and the models' outputs of every sample of a run, one row per sample
+/// in sample order: the values [`run`] draws and evaluates for the same seed, whatever
+/// the thread count.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SampleTable {
+    /// Rows (samples).
+    pub rows: usize,
+    /// Input-space columns per row ([`Scenario::columns`] order).
+    pub n_inputs: usize,
+    /// Outputs per row ([`Scenario::outputs`] order).
+    pub n_outputs: usize,
+    /// Row-major inputs, `rows × n_inputs`.
+    pub inputs: Vec<f64>,
+    /// Row-major outputs, `rows × n_outputs`.
+    pub outputs: Vec<f64>,
+}
+
+/// Most values (rows × (inputs + outputs)) a [`SampleTable`] holds: 160 MB of numbers.
+pub const MAX_SAMPLE_TABLE_VALUES: u64 = 20_000_000;
+
+/// Whether a [`SampleTable`] of `rows` rows of `scenario` (its inputs and outputs) stays
+/// within [`MAX_SAMPLE_TABLE_VALUES`]; the error says how many rows fit.
+pub fn check_table_rows(scenario: &Scenario, rows: u64) -> Result<(), String> {
+    let columns = (scenario.input_space.n_columns() + scenario.outputs.len()).max(1) as u64;
+    let most = MAX_SAMPLE_TABLE_VALUES / columns;
+    if rows > most {
+        return Err(format!(
+            "at most {most} rows of this scenario ({columns} columns, {MAX_SAMPLE_TABLE_VALUES} values), asked {rows}"
+        ));
+    }
+    Ok(())
+}
 
 /// Model inputs whose slices are gathered on the stack (larger models use one heap
 /// buffer per block).
@@ -125,7 +158,7 @@ impl<'a> ChunkEvaluator<'a> {
 /// values per row: a designed experiment, measured assemblies, another sampler's design),
 /// in blocks of [`CHUNK_SIZE`] rows in parallel (the current rayon pool); each row's
 /// outputs depend on that row alone.
-pub fn evaluate_rows(scenario: &Scenario, inputs: Vec<f64>) -> crate::SampleTable {
+pub fn evaluate_rows(scenario: &Scenario, inputs: Vec<f64>) -> SampleTable {
     use rayon::prelude::*;
     let n_inputs = scenario.input_space.n_columns();
     let n_outputs = scenario.outputs.len();
@@ -145,7 +178,7 @@ pub fn evaluate_rows(scenario: &Scenario, inputs: Vec<f64>) -> crate::SampleTabl
             },
         )
         .collect();
-    crate::SampleTable {
+    SampleTable {
         rows,
         n_inputs,
         n_outputs,
@@ -166,7 +199,7 @@ pub struct NonFiniteRows {
 
 /// Per output of `scenario`, the rows of `table` whose value is not finite (a row its
 /// output's [`ConditionEffect::Excluded`] indicator flags has no value and is not counted).
-pub fn non_finite_rows(scenario: &Scenario, table: &crate::SampleTable) -> Vec<NonFiniteRows> {
+pub fn non_finite_rows(scenario: &Scenario, table: &SampleTable) -> Vec<NonFiniteRows> {
     let n = table.n_outputs;
     (0..n)
         .map(|o| {
@@ -191,7 +224,7 @@ pub fn non_finite_rows(scenario: &Scenario, table: &crate::SampleTable) -> Vec<N
 /// N rows (S %, first in ROW)`, `row` naming a row index as the caller's file has it.
 pub fn non_finite_lines(
     scenario: &Scenario,
-    table: &crate::SampleTable,
+    table: &SampleTable,
     lost: &[NonFiniteRows],
     row: &dyn Fn(usize) -> String,
 ) -> Vec<(usize, String)> {
@@ -204,9 +237,9 @@ pub fn non_finite_lines(
                 format!(
                     "{} is not finite for {} of {} rows ({} %, first in {})",
                     scenario.outputs[o].name,
-                    crate::report::group_thousands(l.count as u64),
-                    crate::report::group_thousands(table.rows as u64),
-                    crate::report::format_sig(100.0 * l.count as f64 / table.rows as f64),
+                    crate::format::group_thousands(l.count as u64),
+                    crate::format::group_thousands(table.rows as u64),
+                    crate::format::format_sig(100.0 * l.count as f64 / table.rows as f64),
                     row(l.first.unwrap_or(0))
                 ),
             )
@@ -214,12 +247,12 @@ pub fn non_finite_lines(
         .collect()
 }
 
-/// As a run's [`crate::run::check_non_finite`], for given rows: the first output that lost
+/// As a run's `run::check_non_finite`, for given rows: the first output that lost
 /// more than `max_share` of the rows to non-finite values is an error naming its model's
 /// JSON path, the count, the share and the first such row (`row` names it).
 pub fn check_non_finite_rows(
     scenario: &Scenario,
-    table: &crate::SampleTable,
+    table: &SampleTable,
     max_share: f64,
     row: &dyn Fn(usize) -> String,
 ) -> Result<(), ScenarioError> {
@@ -228,7 +261,7 @@ pub fn check_non_finite_rows(
         let share = lost[o].count as f64 / table.rows as f64;
         if share > max_share {
             return Err(ScenarioError::new(
-                model_of_output(scenario, o),
+                scenario.model_of_output(o),
                 format!(
                     "{line}, more than the allowed {} %: the model cannot evaluate these inputs; correct the rows, or accept a share with --max-non-finite",
                     rvtol_deviation::Shown(100.0 * max_share)

@@ -1,31 +1,33 @@
-//! rvtol-engine: from a scenario file to statistics.
+//! rvtol-engine, the run core: from a scenario's text to each output's figures.
 //!
-//! Data flows one way: [`scenario`] loads and validates the JSON into a [`Scenario`]
-//! (input space + bound models + outputs); [`run`] draws chunks in parallel under the
-//! reproducibility contract and folds model outputs into [`stats`] accumulators;
-//! [`report`] turns the result into JSON and text. Nothing downstream reaches back into
-//! the scenario or the sampler, and the engine never prints.
+//! Data flows one way, and the modules are layered the same way (no module imports one
+//! that imports it back): on the ground floor [`error`], [`format`] (numbers as every report
+//! prints them), [`chunk`] (the chunk-and-stream contract) and [`stats`]; then [`scenario`],
+//! which validates the JSON into a [`Scenario`] (input space + bound models + outputs),
+//! section by section; [`evaluate`], the models on a block of rows; [`run`], which draws
+//! chunks in parallel under the reproducibility contract and folds model outputs into
+//! accumulators; [`figures`], every output's figures with their intervals, computed once;
+//! [`report`], which renders them as JSON and text. Nothing downstream reaches back into
+//! the scenario or the sampler; the engine reads no file and never prints. The analyses
+//! that use a run (sensitivity, the gate, the allocation, the fit, shards) and the
+//! requests the front-ends make are rvtol-analysis, above.
 
-pub mod allocation;
+pub mod chunk;
+pub mod error;
 pub mod evaluate;
-pub mod fit;
-pub mod gate;
-pub mod input_file;
-pub mod memory;
+pub mod figures;
+pub mod format;
 pub mod report;
 pub mod run;
 pub mod scenario;
-pub mod screening;
-pub mod sensitivity;
-pub mod sensitivity_report;
-pub mod shapley;
-pub mod shard;
 pub mod stats;
-pub mod table;
 
+pub use chunk::{shard_range, Sampling};
+pub use error::{FoldError, MergeError};
+pub use evaluate::SampleTable;
 pub use report::{NominalReport, RunReport};
 pub use run::{
-    merge, nominal, nominal_curves, run, run_chunks, sample_table, shard_range, RunPartial,
-    RunResult, RunSettings, SampleTable, Sampling, DEFAULT_EXACT_PERCENTILE_LIMIT,
+    merge, nominal, nominal_curves, run, run_chunks, sample_table, RunPartial, RunResult,
+    RunSettings, DEFAULT_EXACT_PERCENTILE_LIMIT,
 };
 pub use scenario::{Scenario, ScenarioError};

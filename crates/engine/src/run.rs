@@ -34,21 +34,15 @@ use std::ops::Range;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
-pub use rvtol_deviation::SamplingMethod;
 use rvtol_deviation::{ConstraintCounts, PointSet, SamplerScratch};
 use rvtol_models::{ConditionEffect, Curve, OutputKind};
 
-use crate::evaluate::ChunkEvaluator;
+use crate::chunk::{waves, Sampling, BLOCK_ROWS, CHUNK_SIZE};
+use crate::error::MergeError;
+use crate::evaluate::{check_table_rows, ChunkEvaluator, SampleTable};
 use crate::scenario::{Scenario, ScenarioError};
 use crate::stats::{values_at_ranks, Moments, QuantileSketch, SpecLimits, PERCENTS};
 
-/// Samples per chunk (part of the reproducibility contract: changing it changes results).
-pub const CHUNK_SIZE: usize = 4096;
-/// Rows sampled and evaluated at a time inside a chunk (part of the stream layout): small
-/// enough that a block's rows, model inputs and outputs stay in the core's caches.
-pub const BLOCK_ROWS: usize = 64;
-/// Chunks per wave: bounds the memory of in-flight partial results.
-pub const WAVE_CHUNKS: u64 = 1024;
 /// Relative accuracy of the quantile sketch used beyond the exact-percentile limit.
 pub const SKETCH_RELATIVE_ACCURACY: f64 = 1e-3;
 /// Default memory cap for exact percentiles: values kept over all outputs (8 bytes each).
@@ -66,174 +60,6 @@ pub struct RunSettings {
     pub exact_percentile_limit: u64,
     /// How the rows are drawn.
     pub sampling: Sampling,
-}
-
-/// How a run's rows (and a sensitivity analysis' matrices A and B,
-/// [`crate::sensitivity`]) are drawn: the method and its independent randomizations.
-///
-/// Monte Carlo has one (its rows are independent; the report's intervals come from them).
-/// A Latin hypercube or scrambled Sobol' run of N samples is R independent replicates of
-/// n = N/R points (replicate r holds samples r·n … (r+1)·n − 1); its statistics are those
-/// of all N rows, and each figure's interval comes from the spread of its R replicate
-/// values (Student t with R − 1 degrees of freedom), the rows of one replicate not being
-/// independent.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Sampling {
-    /// The method.
-    pub method: SamplingMethod,
-    /// Independent randomizations (1 for Monte Carlo).
-    pub replicates: u64,
-}
-
-impl Default for Sampling {
-    fn default() -> Sampling {
-        Sampling::MONTE_CARLO
-    }
-}
-
-impl Sampling {
-    /// Plain Monte Carlo.
-    pub const MONTE_CARLO: Sampling = Sampling {
-        method: SamplingMethod::MonteCarlo,
-        replicates: 1,
-    };
-    /// Replicates of a Latin hypercube or RQMC run unless the scenario says.
-    pub const DEFAULT_REPLICATES: u64 = 16;
-    /// Fewest replicates: an interval from R values needs R − 1 ≥ 1 degrees of freedom.
-    pub const MIN_REPLICATES: u64 = 2;
-    /// Most replicates (each keeps its own statistics).
-    pub const MAX_REPLICATES: u64 = 1024;
-
-    /// The method with its default replicates.
-    pub fn of(method: SamplingMethod) -> Sampling {
-        match method {
-            SamplingMethod::MonteCarlo => Sampling::MONTE_CARLO,
-            _ => Sampling {
-                method,
-                replicates: Sampling::DEFAULT_REPLICATES,
-            },
-        }
-    }
-
-    /// The sampling a caller asks for over `scenario`'s: the method given, else the
-    /// scenario's; the replicates given, else the scenario's when the method is the
-    /// scenario's, else the method's default.
-    pub fn chosen(
-        scenario: Sampling,
-        method: Option<SamplingMethod>,
-        replicates: Option<u64>,
-    ) -> Sampling {
-        let method = method.unwrap_or(scenario.method);
-        let mut sampling = if method == scenario.method {
-            scenario
-        } else {
-            Sampling::of(method)
-        };
-        if let Some(replicates) = replicates {
-            sampling.replicates = replicates;
-        }
-        sampling
-    }
-
-    /// Whether the rows come from replicated point sets (Latin hypercube or RQMC).
-    pub fn is_replicated(&self) -> bool {
-        self.method != SamplingMethod::MonteCarlo
-    }
-}
-
-impl Sampling {
-    /// Rows per replicate of `samples` rows (all of them for Monte Carlo).
-    pub fn replicate_points(&self, samples: u64) -> u64 {
-        samples / self.replicates.max(1)
-    }
-
-    fn chunks_per_replicate(&self, samples: u64) -> u64 {
-        self.replicate_points(samples).div_ceil(CHUNK_SIZE as u64)
-    }
-
-    /// Number of chunks of `samples` rows: each replicate's rows in chunks of
-    /// [`CHUNK_SIZE`] (the last one of each replicate shorter), replicate after replicate.
-    pub fn chunk_count(&self, samples: u64) -> u64 {
-        self.replicates.max(1) * self.chunks_per_replicate(samples)
-    }
-
-    /// Chunk `chunk` of `samples` rows as (replicate, its first row within the replicate,
-    /// its first row overall, rows).
-    pub fn chunk_rows(&self, samples: u64, chunk: u64) -> (u64, u64, u64, usize) {
-        let per = self.chunks_per_replicate(samples).max(1);
-        let (replicate, local) = (chunk / per, chunk % per);
-        let n = self.replicate_points(samples);
-        let first = local * CHUNK_SIZE as u64;
-        let rows = (n - first).min(CHUNK_SIZE as u64) as usize;
-        (replicate, first, replicate * n + first, rows)
-    }
-
-    /// Rows of `samples` in the chunks before `chunk` (for progress).
-    pub fn rows_before_chunk(&self, samples: u64, chunk: u64) -> u64 {
-        if chunk >= self.chunk_count(samples) {
-            return samples;
-        }
-        self.chunk_rows(samples, chunk).2
-    }
-
-    /// Checks this sampling of `samples` rows (`what` names that count in messages)
-    /// against the scenario: for a replicated method, replicates within their range
-    /// dividing the rows, points per replicate within the method's limit, and an input
-    /// space it can draw; Monte Carlo has one replicate (one line each, naming the
-    /// setting).
-    pub fn check(
-        &self,
-        samples: u64,
-        what: &str,
-        scenario: &Scenario,
-    ) -> Result<(), ScenarioError> {
-        let Sampling { method, replicates } = *self;
-        if !self.is_replicated() {
-            if replicates != 1 {
-                return Err(ScenarioError::new(
-                    "replicates",
-                    "Monte Carlo rows are independent and have no replicates: give replicates with \"sampling\": \"lhs\" or \"rqmc\"",
-                ));
-            }
-            return Ok(());
-        }
-        if !(Sampling::MIN_REPLICATES..=Sampling::MAX_REPLICATES).contains(&replicates) {
-            return Err(ScenarioError::new(
-                "replicates",
-                format!(
-                    "must lie in {}..={}, got {replicates}",
-                    Sampling::MIN_REPLICATES,
-                    Sampling::MAX_REPLICATES
-                ),
-            ));
-        }
-        if !samples.is_multiple_of(replicates) || samples < 2 * replicates {
-            return Err(ScenarioError::new(
-                "samples",
-                format!(
-                    "{samples} {what} do not split into {replicates} replicates of equal size (at least 2 points each): give a multiple of {replicates}{}",
-                    if method == SamplingMethod::Rqmc {
-                        format!(", best {replicates} × a power of two such as {}", replicates * (samples / replicates).max(2).next_power_of_two())
-                    } else {
-                        String::new()
-                    }
-                ),
-            ));
-        }
-        if self.replicate_points(samples) > method.max_points() {
-            return Err(ScenarioError::new(
-                "samples",
-                format!(
-                    "{} points per replicate, {} takes at most {}: give more replicates",
-                    self.replicate_points(samples),
-                    method.name(),
-                    method.max_points()
-                ),
-            ));
-        }
-        scenario.input_space.quasi_dimensions()?;
-        Ok(())
-    }
 }
 
 impl RunSettings {
@@ -264,7 +90,7 @@ impl RunSettings {
         if self.samples == 0 {
             return Err(ScenarioError::new("samples", "must be at least 1"));
         }
-        self.sampling.check(self.samples, "samples", scenario)
+        (self.sampling).check(self.samples, "samples", &scenario.input_space)
     }
 }
 
@@ -325,9 +151,11 @@ pub enum PercentileMethod {
     },
 }
 
-/// Where an output's values went during the run.
+/// What a run keeps of an output's values for its percentiles and histogram: the values
+/// themselves, a sketch of them, or nothing. Kept values, not a probability law (the
+/// scenario's laws are rvtol-deviation's `ScalarDistribution`).
 #[derive(Debug, Clone)]
-pub enum Distribution {
+pub enum KeptValues {
     /// Every finite value (exact percentiles).
     Values(Vec<f64>),
     /// A quantile sketch of the standardised values (x − center)/scale, so its relative
@@ -380,11 +208,11 @@ pub struct OutputAccumulator {
     /// Samples whose value was non-zero (the events of an indicator output).
     pub nonzero: u64,
     /// Values or sketch, for percentiles and the histogram.
-    pub distribution: Distribution,
+    pub kept: KeptValues,
 }
 
 impl OutputAccumulator {
-    fn new(distribution: Distribution) -> OutputAccumulator {
+    fn new(kept: KeptValues) -> OutputAccumulator {
         OutputAccumulator {
             moments: Moments::new(),
             non_finite: 0,
@@ -395,7 +223,7 @@ impl OutputAccumulator {
             below_lower: 0,
             above_upper: 0,
             nonzero: 0,
-            distribution,
+            kept,
         }
     }
 
@@ -474,7 +302,7 @@ fn replicate_entry(
 fn absorb_replicates(
     mine: &mut ReplicateAccumulators,
     other: ReplicateAccumulators,
-) -> Result<(), ScenarioError> {
+) -> Result<(), MergeError> {
     for (replicate, outputs) in other {
         match mine.binary_search_by_key(&replicate, |(r, _)| *r) {
             Ok(at) => absorb_counts(&mut mine[at].1, outputs)?,
@@ -609,7 +437,7 @@ impl<'a> Plan<'a> {
     /// Empty accumulators of every output.
     fn new_accumulators(&self) -> Vec<OutputAccumulator> {
         (0..self.scenario.outputs.len())
-            .map(|o| OutputAccumulator::new(self.new_distribution(o)))
+            .map(|o| OutputAccumulator::new(self.new_kept_values(o)))
             .collect()
     }
 
@@ -651,7 +479,9 @@ impl<'a> Plan<'a> {
         partial.chunks = chunks;
         for worker in workers {
             partial.constraint_counts.add(&worker.constraint_counts);
-            absorb_replicates(&mut partial.replicates, worker.replicates)?;
+            // The workers' chunks of one wave, of one plan: they always fold.
+            absorb_replicates(&mut partial.replicates, worker.replicates)
+                .expect("a wave's workers fold");
             partial.chunk_moments.extend(worker.chunk_moments);
         }
         partial
@@ -673,16 +503,16 @@ impl<'a> Plan<'a> {
         }
     }
 
-    fn new_distribution(&self, output: usize) -> Distribution {
+    fn new_kept_values(&self, output: usize) -> KeptValues {
         if self.indicator[output] {
-            Distribution::Indicator
+            KeptValues::Indicator
         } else if self.only_output.is_some_and(|o| o != output) {
-            Distribution::Dropped
+            KeptValues::Dropped
         } else if self.exact {
-            Distribution::Values(Vec::new())
+            KeptValues::Values(Vec::new())
         } else {
             let (center, scale) = self.sketch_frames[output];
-            Distribution::Sketch {
+            KeptValues::Sketch {
                 sketch: QuantileSketch::new(SKETCH_RELATIVE_ACCURACY),
                 center,
                 scale,
@@ -868,8 +698,8 @@ impl<'a> Plan<'a> {
             if let Some((flags, ConditionEffect::NonConforming)) = flags {
                 acc.flagged += flags.iter().filter(|&&flag| is_set(flag)).count() as u64;
             }
-            match &mut acc.distribution {
-                Distribution::Values(all) => {
+            match &mut acc.kept {
+                KeptValues::Values(all) => {
                     match flags {
                         // The values a conformity target reads: a flagged sample lies beyond
                         // every limit.
@@ -885,55 +715,22 @@ impl<'a> Plan<'a> {
                         _ => all.extend_from_slice(kept),
                     }
                 }
-                Distribution::Sketch {
+                KeptValues::Sketch {
                     sketch,
                     center,
                     scale,
                 } => {
                     sketch.insert_standardised(kept, *center, 1.0 / *scale);
                 }
-                Distribution::Indicator | Distribution::Dropped => {}
+                KeptValues::Indicator | KeptValues::Dropped => {}
             }
         }
         worker.chunk_moments.push((chunk, moments));
     }
 }
 
-/// The drawn inputs and the models' outputs of every sample of a run, one row per sample
-/// in sample order: the values [`run`] draws and evaluates for the same seed, whatever
-/// the thread count.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SampleTable {
-    /// Rows (samples).
-    pub rows: usize,
-    /// Input-space columns per row ([`Scenario::columns`] order).
-    pub n_inputs: usize,
-    /// Outputs per row ([`Scenario::outputs`] order).
-    pub n_outputs: usize,
-    /// Row-major inputs, `rows × n_inputs`.
-    pub inputs: Vec<f64>,
-    /// Row-major outputs, `rows × n_outputs`.
-    pub outputs: Vec<f64>,
-}
-
-/// Most values (rows × (inputs + outputs)) a [`SampleTable`] holds: 160 MB of numbers.
-pub const MAX_SAMPLE_TABLE_VALUES: u64 = 20_000_000;
-
-/// Whether a [`SampleTable`] of `rows` rows of `scenario` (its inputs and outputs) stays
-/// within [`MAX_SAMPLE_TABLE_VALUES`]; the error says how many rows fit.
-pub fn check_table_rows(scenario: &Scenario, rows: u64) -> Result<(), String> {
-    let columns = (scenario.input_space.n_columns() + scenario.outputs.len()).max(1) as u64;
-    let most = MAX_SAMPLE_TABLE_VALUES / columns;
-    if rows > most {
-        return Err(format!(
-            "at most {most} rows of this scenario ({columns} columns, {MAX_SAMPLE_TABLE_VALUES} values), asked {rows}"
-        ));
-    }
-    Ok(())
-}
-
 /// Draws and evaluates every sample of the run `settings` describes, keeping each row
-/// ([`SampleTable`]); at most [`MAX_SAMPLE_TABLE_VALUES`] values. Uses the current rayon
+/// ([`SampleTable`]); at most [`crate::evaluate::MAX_SAMPLE_TABLE_VALUES`] values. Uses the current rayon
 /// thread pool; the chunks' rows are joined in chunk order.
 pub fn sample_table(
     scenario: &Scenario,
@@ -998,7 +795,7 @@ pub fn run(
 
 /// [`run`] for a caller that needs the distribution of one output only (the allocation):
 /// the other outputs keep their moments and counts but no values or sketch
-/// ([`Distribution::Dropped`]), so memory grows with one output's values. The values kept
+/// ([`KeptValues::Dropped`]), so memory grows with one output's values. The values kept
 /// are those a conformity target reads: a sample flagged non-conforming by the output's
 /// indicator (and not allowed to conform by its spec) is kept as +∞, beyond every limit,
 /// so a percentile target counts it as the worst assembly it is; the moments keep the real
@@ -1020,24 +817,12 @@ fn run_keeping(
 ) -> Result<RunResult, ScenarioError> {
     let plan = Plan::for_run(scenario, settings, only_output)?;
     let mut merger = RunMerger::new(scenario, settings);
+    // The run's own waves, in order and of one plan: they always fold.
+    const FOLDS: &str = "a run's own waves fold in order";
     for wave in waves(0..settings.chunk_count()) {
-        merger.add(plan.run_wave(wave, progress)?)?;
+        merger.add(plan.run_wave(wave, progress)?).expect(FOLDS);
     }
-    merger.finish()
-}
-
-/// The `shard`-th of `shards` contiguous ranges of `0..total`, as equal as whole items
-/// allow (chunks of a run, permutations of a Shapley estimate).
-pub fn shard_range(total: u64, shard: u64, shards: u64) -> Range<u64> {
-    let at = |k: u64| (k as u128 * total as u128 / shards.max(1) as u128) as u64;
-    at(shard.min(shards))..at((shard + 1).min(shards))
-}
-
-/// Consecutive ranges of at most [`WAVE_CHUNKS`] chunks covering `chunks`.
-fn waves(chunks: Range<u64>) -> impl Iterator<Item = Range<u64>> {
-    (chunks.start..chunks.end)
-        .step_by(WAVE_CHUNKS as usize)
-        .map(move |start| start..(start + WAVE_CHUNKS).min(chunks.end))
+    Ok(merger.finish().expect(FOLDS))
 }
 
 /// The statistics of a contiguous range of a run's chunks: what one shard of a run
@@ -1074,7 +859,8 @@ impl RunPartial {
             ));
         }
         self.constraint_counts.add(&next.constraint_counts);
-        absorb_replicates(&mut self.replicates, next.replicates)?;
+        // The next wave of the same plan (checked above): it always folds.
+        absorb_replicates(&mut self.replicates, next.replicates).expect("a run's waves fold");
         self.chunk_moments.extend(next.chunk_moments);
         self.chunks.end = next.chunks.end;
         Ok(())
@@ -1116,7 +902,7 @@ pub fn merge(
     scenario: &Scenario,
     settings: RunSettings,
     mut partials: Vec<RunPartial>,
-) -> Result<RunResult, ScenarioError> {
+) -> Result<RunResult, MergeError> {
     partials.sort_by_key(|p| (p.chunks.start, p.chunks.end));
     let mut merger = RunMerger::new(scenario, settings);
     for partial in partials {
@@ -1161,8 +947,8 @@ impl<'a> RunMerger<'a> {
     }
 
     /// Adds the partial of the chunks that follow those added so far.
-    fn add(&mut self, partial: RunPartial) -> Result<(), ScenarioError> {
-        let broken = |message: String| Err(ScenarioError::new("(merge)", message));
+    fn add(&mut self, partial: RunPartial) -> Result<(), MergeError> {
+        let broken = |message: String| Err(MergeError::new(message));
         if partial.chunks.start != self.next_chunk {
             return broken(if partial.chunks.start < self.next_chunk {
                 format!(
@@ -1210,7 +996,7 @@ impl<'a> RunMerger<'a> {
                 slot @ None => {
                     let mut outputs = outputs;
                     for output in &mut outputs {
-                        if let Distribution::Values(values) = &mut output.distribution {
+                        if let KeptValues::Values(values) = &mut output.kept {
                             values.reserve_exact(points.saturating_sub(values.len()));
                         }
                     }
@@ -1236,16 +1022,13 @@ impl<'a> RunMerger<'a> {
         Ok(())
     }
 
-    fn finish(self) -> Result<RunResult, ScenarioError> {
+    fn finish(self) -> Result<RunResult, MergeError> {
         let n_chunks = self.settings.chunk_count();
         let missing = || {
-            ScenarioError::new(
-                "(merge)",
-                format!(
-                    "chunks {}..{n_chunks} are missing",
-                    self.next_chunk.min(n_chunks)
-                ),
-            )
+            MergeError::new(format!(
+                "chunks {}..{n_chunks} are missing",
+                self.next_chunk.min(n_chunks)
+            ))
         };
         if self.next_chunk != n_chunks || self.replicates.iter().any(Option::is_none) {
             return Err(missing());
@@ -1286,7 +1069,7 @@ impl<'a> RunMerger<'a> {
         let mut outputs = replicates.next().expect("at least one replicate");
         if !figures.is_empty() {
             for output in &mut outputs {
-                if let Distribution::Values(values) = &mut output.distribution {
+                if let KeptValues::Values(values) = &mut output.kept {
                     values.reserve_exact(self.settings.samples as usize - values.len());
                 }
             }
@@ -1323,8 +1106,8 @@ fn replicate_figures(
     flagged_conform: bool,
 ) -> ReplicateFigures {
     let percents: Vec<f64> = PERCENTS.iter().map(|p| p.1 / 100.0).collect();
-    let (percentiles, percentile_bias_bounds) = match &mut acc.distribution {
-        Distribution::Values(values) => {
+    let (percentiles, percentile_bias_bounds) = match &mut acc.kept {
+        KeptValues::Values(values) => {
             let n = values.len() as f64;
             // Hazen's and Weibull's ranks of each percentile, read in one pass.
             let positions: Vec<f64> = percents
@@ -1342,7 +1125,7 @@ fn replicate_figures(
                 })
                 .unzip()
         }
-        Distribution::Sketch {
+        KeptValues::Sketch {
             sketch,
             center,
             scale,
@@ -1355,7 +1138,7 @@ fn replicate_figures(
                 (value, value.map(|_| 0.0))
             })
             .unzip(),
-        Distribution::Indicator | Distribution::Dropped => {
+        KeptValues::Indicator | KeptValues::Dropped => {
             (vec![None; percents.len()], vec![None; percents.len()])
         }
     };
@@ -1391,24 +1174,24 @@ fn unbias_replicate_sds(figures: &mut [Vec<ReplicateFigures>]) {
 fn absorb_counts(
     outputs: &mut [OutputAccumulator],
     other: Vec<OutputAccumulator>,
-) -> Result<(), ScenarioError> {
-    let mismatch = || ScenarioError::new("(merge)", "the partials' output statistics differ");
+) -> Result<(), MergeError> {
+    let mismatch = || MergeError::new("the partials' output statistics differ");
     if outputs.len() != other.len() {
         return Err(mismatch());
     }
     for (output, part) in outputs.iter_mut().zip(other) {
         output.add_counts(&part);
-        match (&mut output.distribution, part.distribution) {
-            (Distribution::Values(all), Distribution::Values(part)) => all.extend_from_slice(&part),
-            (Distribution::Indicator, Distribution::Indicator)
-            | (Distribution::Dropped, Distribution::Dropped) => {}
+        match (&mut output.kept, part.kept) {
+            (KeptValues::Values(all), KeptValues::Values(part)) => all.extend_from_slice(&part),
+            (KeptValues::Indicator, KeptValues::Indicator)
+            | (KeptValues::Dropped, KeptValues::Dropped) => {}
             (
-                Distribution::Sketch {
+                KeptValues::Sketch {
                     sketch: all,
                     center,
                     scale,
                 },
-                Distribution::Sketch {
+                KeptValues::Sketch {
                     sketch: part,
                     center: part_center,
                     scale: part_scale,
@@ -1417,7 +1200,7 @@ fn absorb_counts(
                 && scale.to_bits() == part_scale.to_bits() =>
             {
                 all.merge(&part)
-                    .map_err(|err| ScenarioError::new("(merge)", err.to_string()))?
+                    .map_err(|err| MergeError::new(err.to_string()))?
             }
             _ => return Err(mismatch()),
         }
@@ -1476,19 +1259,6 @@ fn indicator_moments(events: u64, n: u64) -> Moments {
     }
 }
 
-/// The JSON path and name of the model that produces output `output`: `models[i] (name)`.
-pub fn model_of_output(scenario: &Scenario, output: usize) -> String {
-    scenario
-        .models
-        .iter()
-        .enumerate()
-        .find(|(_, bound)| {
-            (bound.first_output..bound.first_output + bound.model.outputs().len()).contains(&output)
-        })
-        .map(|(i, bound)| format!("models[{i}] ({})", bound.model.name()))
-        .unwrap_or_else(|| "models".to_string())
-}
-
 /// Checks that no output lost more than `max_share` of its samples to non-finite values
 /// (the model could not evaluate them), and that every output has a value at all (its
 /// indicator did not exclude every sample): the first output that fails is an error naming
@@ -1505,25 +1275,25 @@ pub fn check_non_finite(
                 .condition
                 .map_or(String::new(), |(k, _)| scenario.outputs[k].name.clone());
             return Err(ScenarioError::new(
-                model_of_output(scenario, o),
+                scenario.model_of_output(o),
                 format!(
                     "{} has no value: {indicator} excludes {} of {} samples and the model could not evaluate the rest; the scenario describes an assembly that cannot be built",
                     scenario.outputs[o].name,
-                    crate::report::group_thousands(acc.excluded),
-                    crate::report::group_thousands(result.samples),
+                    crate::format::group_thousands(acc.excluded),
+                    crate::format::group_thousands(result.samples),
                 ),
             ));
         }
         let share = acc.non_finite as f64 / result.samples as f64;
         if acc.non_finite > 0 && share > max_share {
             return Err(ScenarioError::new(
-                model_of_output(scenario, o),
+                scenario.model_of_output(o),
                 format!(
                     "{} is not finite for {} of {} samples ({} %, first at sample {}), more than the allowed {} %: the model cannot evaluate the inputs the scenario draws there; narrow the distributions to the model's domain, or accept a share with --max-non-finite",
                     scenario.outputs[o].name,
-                    crate::report::group_thousands(acc.non_finite),
-                    crate::report::group_thousands(result.samples),
-                    crate::report::format_sig(100.0 * share),
+                    crate::format::group_thousands(acc.non_finite),
+                    crate::format::group_thousands(result.samples),
+                    crate::format::format_sig(100.0 * share),
                     acc.first_non_finite.unwrap_or(0),
                     rvtol_deviation::Shown(100.0 * max_share),
                 ),
@@ -1560,7 +1330,7 @@ pub fn nominal(scenario: &Scenario) -> Result<Vec<Option<f64>>, ScenarioError> {
                 Ok(Some(values[o]))
             } else {
                 Err(ScenarioError::new(
-                    model_of_output(scenario, o),
+                    scenario.model_of_output(o),
                     format!(
                         "{} is {} at the nominal point (every deviation at its mean): the model cannot evaluate the scenario's nominal design",
                         scenario.outputs[o].name,

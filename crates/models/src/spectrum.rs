@@ -20,6 +20,13 @@
 //! reports: with the curve folded to a quarter revolution it costs K·N/2 multiplications
 //! and additions for K orders, against the FFT's O(N·log N) complex operations for all of
 //! them (for N = 4096 and five orders, an eighth of the FFT's time).
+//!
+//! Why not `realfft` (over `rustfft`), which computes the same real-to-complex transform
+//! with the same packing: its planner picks the algorithm at run time from the CPU's
+//! features (AVX and FMA, SSE4.1, Neon), and those algorithms add in other orders, so
+//! the spectrum's last bits, and the transmission error's outputs through them, would
+//! depend on the machine the run is on; a run must give the same bits everywhere. The
+//! split-column form and the direct DFT of a few orders are not offered by it either.
 
 use std::f64::consts::PI;
 

@@ -1,25 +1,38 @@
 //! rvtol from Python: the module `rvtol`, built with maturin (crates/python/pyproject.toml).
 //!
-//! A thin layer over rvtol-engine: every function computes exactly what the command of the
-//! same name computes (the same engine calls, the same JSON report, so the same bits for
-//! the same seed) and hands the report over as a Python dict (the JSON parsed by Python's
-//! `json`), arrays as numpy arrays. The work runs with the interpreter's lock released, on
-//! a rayon pool of `threads` threads (default: all cores). Errors are `ValueError` with the
-//! command line's one-line message (the JSON path of the scenario value).
+//! A thin layer over rvtol-engine and rvtol-analysis: every function makes the request the
+//! command of the same name makes (rvtol-analysis' `request`: the same defaults, limits and
+//! checks, the memory it needs against `max_memory` or what the machine has) and computes
+//! what it computes (the same calls, the same JSON report, so the same bits for the same
+//! seed), and hands the report over as a Python dict (the JSON parsed by Python's `json`),
+//! arrays as numpy arrays. The work runs with the interpreter's lock released, on a rayon
+//! pool of `threads` threads (default: all cores). Errors are `ValueError` with the command
+//! line's one-line message, options spelt as this module's keywords (a scenario value by
+//! its JSON path).
 
 use numpy::{PyArray2, PyReadonlyArray2, ToPyArray};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-use rvtol_engine::allocation::report::AllocationReport;
-use rvtol_engine::allocation::spec::{CostKind, Target};
-use rvtol_engine::allocation::{allocate as run_allocation, default_samples, AllocationSettings};
-use rvtol_engine::run::{Sampling, SamplingMethod};
-use rvtol_engine::sensitivity::{sobol_indices, SensitivitySettings};
-use rvtol_engine::sensitivity_report::SensitivityReport;
-use rvtol_engine::shapley::{shapley_effects, ShapleySettings};
-use rvtol_engine::{RunReport, RunSettings, DEFAULT_EXACT_PERCENTILE_LIMIT};
+use rvtol_analysis::allocation::allocate as run_allocation;
+use rvtol_analysis::allocation::report::AllocationReport;
+use rvtol_analysis::request::allocation::AllocationRequest;
+use rvtol_analysis::request::input_file::ReadLimit;
+use rvtol_analysis::request::run::{check_samples_out, sampling_method, RunRequest};
+use rvtol_analysis::request::scenario::{ScenarioSource, SourceError};
+use rvtol_analysis::request::sensitivity::{
+    SensitivityRequest, ShapleyRequest, DEFAULT_OUTER, DEFAULT_PERMUTATIONS, DEFAULT_SAMPLES,
+};
+use rvtol_analysis::request::{machine, memory, Caller};
+use rvtol_analysis::sensitivity::sobol_indices;
+use rvtol_analysis::sensitivity_report::SensitivityReport;
+use rvtol_analysis::shapley::shapley_effects;
+use rvtol_engine::chunk::SamplingMethod;
+use rvtol_engine::{RunReport, DEFAULT_EXACT_PERCENTILE_LIMIT};
+
+/// The Python module's spelling of options in the library's messages.
+const CALLER: Caller = Caller::Python;
 
 /// A validated scenario: `Scenario(path)` reads a scenario file, `Scenario(dict)` takes
 /// the scenario as a dict (as the JSON file would hold it).
@@ -38,41 +51,40 @@ fn value_error(message: impl std::fmt::Display) -> PyErr {
 /// numbers of the data files it refers to written in (paths relative to the file's
 /// folder, or to the working directory for a dict), as the command line reads it.
 fn scenario_text(source: &Bound<'_, PyAny>) -> PyResult<(String, String)> {
-    use rvtol_engine::input_file::{read_text, ReadLimit};
-    use rvtol_engine::scenario::{data::inline_data_files, scenario_folder};
-    let limit = ReadLimit::library();
-    if let Ok(path) = source.extract::<std::path::PathBuf>() {
-        let text = read_text(&path, &limit).map_err(value_error)?;
-        let name = path
-            .file_stem()
-            .map_or("scenario".to_string(), |s| s.to_string_lossy().into_owned());
-        let text = inline_data_files(&text, &scenario_folder(&path), &limit)
-            .map_err(value_error)?
-            .into_owned();
-        return Ok((text, name));
-    }
-    if source.is_instance_of::<PyDict>() {
+    let source = if let Ok(path) = source.extract::<std::path::PathBuf>() {
+        ScenarioSource::File(path)
+    } else if source.is_instance_of::<PyDict>() {
         let json = source.py().import("json")?;
         let text: String = json.call_method1("dumps", (source,))?.extract()?;
-        let text = inline_data_files(&text, std::path::Path::new("."), &limit)
-            .map_err(value_error)?
-            .into_owned();
-        return Ok((text, "scenario".to_string()));
-    }
-    Err(PyTypeError::new_err(
-        "a scenario is a path (str or os.PathLike) or a dict",
-    ))
+        ScenarioSource::Text {
+            text,
+            folder: std::path::PathBuf::from("."),
+        }
+    } else {
+        return Err(PyTypeError::new_err(
+            "a scenario is a path (str or os.PathLike) or a dict",
+        ));
+    };
+    let text = source
+        .read(&ReadLimit::library())
+        .map_err(|err| match err {
+            SourceError::Read(message) => value_error(message),
+            SourceError::Scenario(err) => value_error(err),
+        })?;
+    Ok((text.text, text.fallback_name))
 }
 
-/// A rayon pool of `threads` threads (all cores when None).
-fn pool(threads: Option<usize>) -> PyResult<rayon::ThreadPool> {
-    if threads == Some(0) {
-        return Err(value_error("threads: must be at least 1"));
-    }
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads.unwrap_or(0))
-        .build()
-        .map_err(|err| value_error(format!("threads: {err}")))
+/// A rayon pool of `threads` threads (all cores when None) for `command`, once what it
+/// needs in memory at that thread count fits the budget (`max_memory` or what the machine
+/// has).
+fn pool(
+    command: &str,
+    threads: Option<usize>,
+    max_memory: Option<f64>,
+    need: impl FnOnce(usize) -> memory::MemoryNeed,
+) -> PyResult<rayon::ThreadPool> {
+    machine::pool_for(command, threads.map(|n| n as u64), max_memory, CALLER, need)
+        .map_err(value_error)
 }
 
 /// A JSON document as a Python object.
@@ -150,10 +162,11 @@ fn evaluate_rows<'py>(
                 .join(", ")
         )));
     }
-    rvtol_engine::run::check_table_rows(scenario, rows as u64)
+    rvtol_engine::evaluate::check_table_rows(scenario, rows as u64)
         .map_err(|message| value_error(format!("inputs: {message}")))?;
     let values: Vec<f64> = array.iter().copied().collect();
-    let pool = pool(threads)?;
+    let threads = machine::threads(threads.map(|n| n as u64), CALLER).map_err(value_error)?;
+    let pool = machine::thread_pool(threads).map_err(value_error)?;
     let table =
         py.detach(|| pool.install(|| rvtol_engine::evaluate::evaluate_rows(scenario, values)));
     let outputs = numpy::ndarray::Array2::from_shape_vec((rows, table.n_outputs), table.outputs)
@@ -194,11 +207,12 @@ fn evaluate<'py>(
 /// arrays, one row per sample), `input_names`, `output_names`. `samples`, `seed`,
 /// `sampling` ("mc", "lhs" or "rqmc") and `replicates` default to the scenario's. A run
 /// whose share of non-finite values exceeds `max_non_finite` raises after nothing is
-/// returned.
+/// returned; one that needs more memory than `max_memory` bytes (default: what the machine
+/// has) raises before it starts.
 #[pyfunction]
 #[pyo3(signature = (scenario, samples = None, seed = None, *, sampling = None, replicates = None,
     samples_out = false, exact_percentile_limit = DEFAULT_EXACT_PERCENTILE_LIMIT,
-    max_non_finite = 0.0, threads = None))]
+    max_non_finite = 0.0, threads = None, max_memory = None))]
 #[allow(clippy::too_many_arguments)]
 fn run<'py>(
     py: Python<'py>,
@@ -211,20 +225,23 @@ fn run<'py>(
     exact_percentile_limit: u64,
     max_non_finite: f64,
     threads: Option<usize>,
+    max_memory: Option<f64>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let s = &scenario.inner;
-    let settings = RunSettings {
-        samples: samples.unwrap_or(s.samples),
-        seed: seed.unwrap_or(s.seed),
+    let request = RunRequest {
+        samples,
+        seed,
         exact_percentile_limit,
-        sampling: chosen_sampling(s, sampling, replicates)?,
+        sampling: method(sampling)?,
+        replicates,
     };
-    settings.check(s).map_err(value_error)?;
+    let settings = request.settings(s, CALLER).map_err(value_error)?;
     if samples_out {
-        rvtol_engine::run::check_table_rows(s, settings.samples)
-            .map_err(|message| value_error(format!("samples_out: {message}; run fewer samples")))?;
+        check_samples_out(s, settings.samples, CALLER).map_err(value_error)?;
     }
-    let pool = pool(threads)?;
+    let pool = pool("run", threads, max_memory, |threads| {
+        memory::run(s, &settings, threads)
+    })?;
     let (json, table) = py
         .detach(|| {
             pool.install(|| -> Result<_, rvtol_engine::ScenarioError> {
@@ -263,36 +280,26 @@ fn run<'py>(
     Ok((report, out).into_pyobject(py)?.into_any())
 }
 
-/// The sampling `sampling` (a method name) and `replicates` ask for over the scenario's
-/// ([`Sampling::chosen`]).
-fn chosen_sampling(
-    scenario: &rvtol_engine::Scenario,
-    sampling: Option<&str>,
-    replicates: Option<u64>,
-) -> PyResult<Sampling> {
-    let method = sampling
-        .map(|name| {
-            SamplingMethod::parse(name).ok_or_else(|| {
-                value_error(format!(
-                    "sampling: unknown method {name:?}, expected one of {}",
-                    SamplingMethod::NAMES.join(", ")
-                ))
-            })
-        })
-        .transpose()?;
-    Ok(Sampling::chosen(scenario.sampling, method, replicates))
+/// The sampling method a name asks for (`None`: the scenario's).
+fn method(sampling: Option<&str>) -> PyResult<Option<SamplingMethod>> {
+    sampling
+        .map(|name| sampling_method(name, CALLER).map_err(value_error))
+        .transpose()
 }
 
 /// Sobol' first-order and total indices with their intervals, the linearised screening
 /// and, with `shapley=True`, Shapley effects (as `rvtol sensitivity`): the JSON report as
 /// a dict. `sampling` ("mc", "lhs" or "rqmc") and `replicates` default to the scenario's;
 /// Monte Carlo intervals come from `bootstrap` resamples (default 500), those of an lhs or
-/// rqmc design from its replicates.
+/// rqmc design from its replicates. The limits are the command line's (at least 2 base
+/// samples, 2 to 1,000,000 resamples, at most 10⁹ Shapley draws, the memory it needs
+/// within `max_memory` bytes or what the machine has).
 #[pyfunction]
-#[pyo3(signature = (scenario, samples = 65_536, seed = None, *, sampling = None,
+#[pyo3(signature = (scenario, samples = DEFAULT_SAMPLES, seed = None, *, sampling = None,
     replicates = None, bootstrap = None,
-    row_bootstrap_limit = rvtol_engine::sensitivity::DEFAULT_ROW_BOOTSTRAP_LIMIT,
-    shapley = false, permutations = 600, outer = 256, threads = None))]
+    row_bootstrap_limit = rvtol_analysis::sensitivity::DEFAULT_ROW_BOOTSTRAP_LIMIT,
+    shapley = false, permutations = DEFAULT_PERMUTATIONS, outer = DEFAULT_OUTER,
+    threads = None, max_memory = None))]
 #[allow(clippy::too_many_arguments)]
 fn sensitivity<'py>(
     py: Python<'py>,
@@ -301,46 +308,39 @@ fn sensitivity<'py>(
     seed: Option<u64>,
     sampling: Option<&str>,
     replicates: Option<u64>,
-    bootstrap: Option<usize>,
+    bootstrap: Option<u64>,
     row_bootstrap_limit: u64,
     shapley: bool,
-    permutations: usize,
-    outer: usize,
+    permutations: u64,
+    outer: u64,
     threads: Option<usize>,
+    max_memory: Option<f64>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let s = &scenario.inner;
-    let sampling = chosen_sampling(s, sampling, replicates)?;
-    if sampling.is_replicated() && bootstrap.is_some() {
-        return Err(value_error(format!(
-            "bootstrap: the intervals of a replicated {} design come from its replicates, not a bootstrap; leave bootstrap out, or give sampling=\"mc\"",
-            sampling.method.name()
-        )));
-    }
-    let settings = SensitivitySettings {
-        base_samples: samples,
-        seed: seed.unwrap_or(s.seed),
-        bootstrap: bootstrap.unwrap_or(500),
-        confidence: 0.95,
+    let request = SensitivityRequest {
+        samples,
+        seed,
+        sampling: method(sampling)?,
+        replicates,
+        bootstrap,
         row_bootstrap_limit,
-        sampling,
+        shapley: shapley.then_some(ShapleyRequest {
+            permutations,
+            outer,
+        }),
     };
-    let pool = pool(threads)?;
+    let settings = request.settings(s, CALLER).map_err(value_error)?;
+    let shapley = request.shapley_settings(settings.seed);
+    let pool = pool("sensitivity", threads, max_memory, |threads| {
+        memory::sensitivity(s, &settings, threads)
+    })?;
     let json = py
         .detach(|| {
             pool.install(|| -> Result<String, rvtol_engine::ScenarioError> {
                 let outputs = sobol_indices(s, settings, &|_| {})?;
-                let effects = if shapley {
-                    Some(shapley_effects(
-                        s,
-                        ShapleySettings {
-                            permutations,
-                            outer,
-                            inner: 3,
-                            seed: settings.seed,
-                        },
-                    )?)
-                } else {
-                    None
+                let effects = match shapley {
+                    Some(shapley) => Some(shapley_effects(s, shapley)?),
+                    None => None,
                 };
                 Ok(SensitivityReport::complete(s, settings, outputs, effects)?.to_json())
             })
@@ -354,7 +354,7 @@ fn sensitivity<'py>(
 /// dict (its `status` says met, not verified or infeasible).
 #[pyfunction]
 #[pyo3(signature = (scenario, output, target, *, cost = None, samples = None, seed = None,
-    verify_seed = None, threads = None))]
+    verify_seed = None, threads = None, max_memory = None))]
 #[allow(clippy::too_many_arguments)]
 fn allocate<'py>(
     py: Python<'py>,
@@ -366,26 +366,20 @@ fn allocate<'py>(
     seed: Option<u64>,
     verify_seed: Option<u64>,
     threads: Option<usize>,
+    max_memory: Option<f64>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let s = &scenario.inner;
-    let target = Target::parse(target).map_err(|err| value_error(format!("target: {err}")))?;
-    let cost = cost
-        .map(|name| {
-            CostKind::parse(name).ok_or_else(|| {
-                value_error(format!(
-                    "cost: unknown cost model {name:?}; use reciprocal, exponential or table"
-                ))
-            })
-        })
-        .transpose()?;
-    let seed = seed.unwrap_or(s.seed);
-    let settings = AllocationSettings {
-        samples: samples.unwrap_or_else(|| default_samples(&target)),
-        seed,
-        verification_seed: verify_seed.unwrap_or(seed.wrapping_add(1)),
+    let request = AllocationRequest {
+        target,
         cost,
+        samples,
+        seed,
+        verify_seed,
     };
-    let pool = pool(threads)?;
+    let (target, settings) = request.settings(s, CALLER).map_err(value_error)?;
+    let pool = pool("allocate", threads, max_memory, |threads| {
+        memory::allocation(s, settings.samples, threads)
+    })?;
     let text = &scenario.text;
     let json = py
         .detach(|| {

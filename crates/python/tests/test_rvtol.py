@@ -215,6 +215,18 @@ def test_readme_example_runs_and_prints_what_it_says(capsys, monkeypatch):
     assert printed == expected
 
 
+def test_the_limits_are_the_command_lines():
+    scenario = rvtol.Scenario(scenario_path("shapley-linear-gaussian.json"))
+    with pytest.raises(ValueError, match="samples: sensitivity needs at least 2 base samples"):
+        rvtol.sensitivity(scenario, samples=1)
+    with pytest.raises(ValueError, match="bootstrap: must be between 2 and 1000000 resamples"):
+        rvtol.sensitivity(scenario, bootstrap=1)
+    with pytest.raises(ValueError, match="permutations × outer: at most 1000000000 conditional draws"):
+        rvtol.sensitivity(scenario, shapley=True, permutations=100000, outer=100000)
+    with pytest.raises(ValueError, match=r"run: needs about .* \(max_memory\): allow at least"):
+        rvtol.run(scenario, samples=1000, max_memory=1e6)
+
+
 def test_run_with_replicated_sampling_is_the_command_line_report(tmp_path):
     path = scenario_path("rv20e-hysteresis.json")
     expected = cli_json(tmp_path, "run", path, "--samples", "32768", "--sampling", "rqmc", "--replicates", "8")

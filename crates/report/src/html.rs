@@ -1,13 +1,13 @@
 //! The page's HTML: escaping, number formatting, tables and the page frame with its
 //! style sheet. Pure string building; the same input gives the same bytes.
 
-pub use rvtol_engine::report::escape_markup as escape;
+pub use rvtol_engine::format::escape_markup as escape;
 
-/// A figure as the text report writes it ([`rvtol_engine::report::format_sig`]: 5
+/// A figure as the text report writes it ([`rvtol_engine::format::format_sig`]: 5
 /// significant digits), "n/a" when absent or not finite.
 pub fn number(value: Option<f64>) -> String {
     match value {
-        Some(v) if v.is_finite() => rvtol_engine::report::format_sig(v),
+        Some(v) if v.is_finite() => rvtol_engine::format::format_sig(v),
         _ => "n/a".into(),
     }
 }

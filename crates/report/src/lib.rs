@@ -19,8 +19,8 @@ use serde_json::Value;
 
 use chart::{BarRow, Cumulative, Limits, Marker};
 use html::{escape, figure, interval, number, table};
-use rvtol_engine::allocation::spec::TargetFigure;
-use rvtol_engine::report::group_thousands as thousands;
+use rvtol_analysis::target::TargetFigure;
+use rvtol_engine::format::group_thousands as thousands;
 
 /// What the page is a record of.
 #[derive(Debug, Clone, Default)]
@@ -777,67 +777,7 @@ fn allocation_section(report: &Value) -> Result<String, ReportError> {
         &svg,
         "Each source's proposed tolerance against today's.",
     ));
-    // Before and after.
-    let distribution = |key: &str| -> Option<Cumulative> {
-        let run = report.get(key)?;
-        let q = run.get("quantiles")?;
-        let p = q.get("p")?.as_array()?;
-        let v = q.get("value")?.as_array()?;
-        let label = match key {
-            "current" => "today".to_string(),
-            "verification" => format!(
-                "proposed, verification run (seed {})",
-                run.get("seed").and_then(Value::as_u64).unwrap_or(0)
-            ),
-            _ => "proposed, optimisation run".to_string(),
-        };
-        Some(Cumulative {
-            label,
-            points: p
-                .iter()
-                .zip(v)
-                .filter_map(|(p, v)| Some((v.as_f64()?, p.as_f64()? / 100.0)))
-                .collect(),
-        })
-    };
-    let lines: Vec<Cumulative> = ["current", "verification"]
-        .iter()
-        .filter_map(|k| distribution(k))
-        .collect();
-    // A target on a value of the output (a percentile, the mean) is a line on the plot;
-    // one on a spread or an index is not.
-    let target_line = match rvtol_engine::allocation::spec::Target::parse(target) {
-        Ok(parsed) => match parsed.figure {
-            TargetFigure::Percentile(p) => Some((parsed.value, Some(p))),
-            TargetFigure::Mean => Some((parsed.value, None)),
-            _ => None,
-        },
-        Err(_) => None,
-    };
-    if !lines.is_empty() {
-        let label = if unit.is_empty() {
-            output.to_string()
-        } else {
-            format!("{output} ({unit})")
-        };
-        let svg = chart::probability_plot(
-            &format!("{output}: before and after"),
-            &label,
-            &lines,
-            &[],
-            Limits::default(),
-            target_line.map(|(value, percent)| chart::Target {
-                value,
-                percent,
-                label: format!("target {target}"),
-            }),
-        )?;
-        out.push_str(&figure(
-            &svg,
-            "The targeted output's cumulative distribution today and with the proposed tolerances \
-             (the independent verification run), on a normal probability scale.",
-        ));
-    }
+    out.push_str(&before_and_after(report, output, unit, target)?);
     out.push_str("</div>\n");
     let mut rows = Vec::new();
     for v in sources {
@@ -848,7 +788,7 @@ fn allocation_section(report: &Value) -> Result<String, ReportError> {
             escape(s(v, "unit").unwrap_or("")),
             number(f(v, "current")),
             number(f(v, "proposed")),
-            rvtol_engine::report::format_change(f(v, "factor").unwrap_or(f64::NAN)),
+            rvtol_engine::format::format_change(f(v, "factor").unwrap_or(f64::NAN)),
             format!("{} .. {}", number(lo), number(hi)),
             number(f(v, "current_cost")),
             number(f(v, "proposed_cost")),
@@ -906,49 +846,126 @@ fn allocation_section(report: &Value) -> Result<String, ReportError> {
         &[1, 2, 3, 4, 5, 6],
     ));
     if let Some(options) = report.get("lever_options").and_then(Value::as_array) {
-        let levers: Vec<String> = report
-            .get("levers")
-            .and_then(Value::as_array)
-            .map(|l| l.iter().filter_map(|v| s(v, "lever").map(escape)).collect())
-            .unwrap_or_default();
-        let rows: Vec<Vec<String>> = options
-            .iter()
-            .map(|o| {
-                let values: Vec<String> = o
-                    .get("values")
-                    .and_then(Value::as_array)
-                    .map(|v| v.iter().map(|x| number(x.as_f64())).collect())
-                    .unwrap_or_default();
-                vec![
-                    values.join(", "),
-                    number(f(o, "lever_cost")),
-                    number(f(o, "tolerance_cost")),
-                    number(f(o, "total_cost")),
-                    escape(s(o, "status").unwrap_or("")),
-                    number(f(o, "verification")),
-                ]
-            })
-            .collect();
-        let lever_header = if levers.is_empty() {
-            "lever".to_string()
-        } else {
-            levers.join(", ")
-        };
-        out.push_str(&table(
-            &[
-                &lever_header,
-                "lever cost",
-                "tolerance cost",
-                "total",
-                "status",
-                "verification",
-            ],
-            &rows,
-            &[1, 2, 3, 5],
-        ));
+        out.push_str(&lever_options_table(report, options));
     }
     out.push_str("</section>\n");
     Ok(out)
+}
+
+/// The targeted output's distribution today and with the proposed tolerances, with the
+/// target where it is a value of the output (empty without the runs' outlines).
+fn before_and_after(
+    report: &Value,
+    output: &str,
+    unit: &str,
+    target: &str,
+) -> Result<String, ReportError> {
+    // Before and after.
+    let distribution = |key: &str| -> Option<Cumulative> {
+        let run = report.get(key)?;
+        let q = run.get("quantiles")?;
+        let p = q.get("p")?.as_array()?;
+        let v = q.get("value")?.as_array()?;
+        let label = match key {
+            "current" => "today".to_string(),
+            "verification" => format!(
+                "proposed, verification run (seed {})",
+                run.get("seed").and_then(Value::as_u64).unwrap_or(0)
+            ),
+            _ => "proposed, optimisation run".to_string(),
+        };
+        Some(Cumulative {
+            label,
+            points: p
+                .iter()
+                .zip(v)
+                .filter_map(|(p, v)| Some((v.as_f64()?, p.as_f64()? / 100.0)))
+                .collect(),
+        })
+    };
+    let lines: Vec<Cumulative> = ["current", "verification"]
+        .iter()
+        .filter_map(|k| distribution(k))
+        .collect();
+    // A target on a value of the output (a percentile, the mean) is a line on the plot;
+    // one on a spread or an index is not.
+    let target_line = match rvtol_analysis::target::Target::parse(target) {
+        Ok(parsed) => match parsed.figure {
+            TargetFigure::Percentile(p) => Some((parsed.value, Some(p))),
+            TargetFigure::Mean => Some((parsed.value, None)),
+            _ => None,
+        },
+        Err(_) => None,
+    };
+    if lines.is_empty() {
+        return Ok(String::new());
+    }
+    let label = if unit.is_empty() {
+        output.to_string()
+    } else {
+        format!("{output} ({unit})")
+    };
+    let svg = chart::probability_plot(
+        &format!("{output}: before and after"),
+        &label,
+        &lines,
+        &[],
+        Limits::default(),
+        target_line.map(|(value, percent)| chart::Target {
+            value,
+            percent,
+            label: format!("target {target}"),
+        }),
+    )?;
+    Ok(figure(
+        &svg,
+        "The targeted output's cumulative distribution today and with the proposed tolerances \
+         (the independent verification run), on a normal probability scale.",
+    ))
+}
+
+/// The table of the levers' combinations with their costs and verdicts.
+fn lever_options_table(report: &Value, options: &[Value]) -> String {
+    let levers: Vec<String> = report
+        .get("levers")
+        .and_then(Value::as_array)
+        .map(|l| l.iter().filter_map(|v| s(v, "lever").map(escape)).collect())
+        .unwrap_or_default();
+    let rows: Vec<Vec<String>> = options
+        .iter()
+        .map(|o| {
+            let values: Vec<String> = o
+                .get("values")
+                .and_then(Value::as_array)
+                .map(|v| v.iter().map(|x| number(x.as_f64())).collect())
+                .unwrap_or_default();
+            vec![
+                values.join(", "),
+                number(f(o, "lever_cost")),
+                number(f(o, "tolerance_cost")),
+                number(f(o, "total_cost")),
+                escape(s(o, "status").unwrap_or("")),
+                number(f(o, "verification")),
+            ]
+        })
+        .collect();
+    let lever_header = if levers.is_empty() {
+        "lever".to_string()
+    } else {
+        levers.join(", ")
+    };
+    table(
+        &[
+            &lever_header,
+            "lever cost",
+            "tolerance cost",
+            "total",
+            "status",
+            "verification",
+        ],
+        &rows,
+        &[1, 2, 3, 5],
+    )
 }
 
 fn curves_section(

@@ -18,8 +18,8 @@ use serde::de::{self, DeserializeOwned, MapAccess, SeqAccess, Visitor};
 use serde::{Deserialize, Deserializer};
 use serde_json::Value;
 
+use super::allocation::AllocationFile;
 use super::ScenarioError;
-use crate::allocation::spec::AllocationFile;
 use rvtol_deviation::Shown;
 
 /// Largest magnitude of a deviation's parameter (a mean, sd, bound or band limit; mm or
@@ -339,7 +339,7 @@ fn shown_path(path: String) -> String {
 
 /// Parses the text into a JSON value: a syntax error (with its line and column) or a
 /// duplicate key (with its path) is the one problem.
-pub(super) fn parse_value(text: &str) -> Result<Value, ScenarioError> {
+pub fn parse_value(text: &str) -> Result<Value, ScenarioError> {
     let mut deserializer = serde_json::Deserializer::from_str(text);
     let value =
         serde_path_to_error::deserialize::<_, Checked>(&mut deserializer).map_err(|err| {
@@ -526,8 +526,12 @@ fn broken_names(object: &serde_json::Map<String, Value>, file: &ScenarioFile) ->
         Some(Value::Array(items)) => items.clone(),
         _ => Vec::new(),
     };
+    // The parsed elements' indices, as sets: a scenario may hold 100,000 variables.
+    let parsed = |indices: Vec<usize>| indices.into_iter().collect::<BTreeSet<usize>>();
+    let parts = parsed(file.parts.iter().map(|(j, _)| *j).collect());
+    let variables = parsed(file.variables.iter().map(|(j, _)| *j).collect());
     for (i, item) in items("parts").iter().enumerate() {
-        if !file.parts.iter().any(|(j, _)| *j == i) {
+        if !parts.contains(&i) {
             if let Some(name) = item.get("name").and_then(Value::as_str) {
                 names.insert(name.to_string());
                 for component in rvtol_deviation::SixDof::NAMES {
@@ -537,7 +541,7 @@ fn broken_names(object: &serde_json::Map<String, Value>, file: &ScenarioFile) ->
         }
     }
     for (i, item) in items("variables").iter().enumerate() {
-        if !file.variables.iter().any(|(j, _)| *j == i) {
+        if !variables.contains(&i) {
             if let Some(name) = item.get("name").and_then(Value::as_str) {
                 names.insert(name.to_string());
             }

@@ -1,70 +1,35 @@
-//! Scenario files: the only serde types of rvtol, their loading and their validation into
-//! a [`Scenario`] the run can use.
+//! Scenario texts: the only serde types of rvtol and their validation into a [`Scenario`]
+//! the run can use (reading the file and the data files it refers to is rvtol-analysis'
+//! `request::scenario`: the engine reads no file).
 //!
 //! [`file`] parses the text section by section, rejecting unknown keys, wrong types and
 //! values out of range with the JSON path of the value (`parts[0].covariance[2]`);
 //! [`compile`] checks every value once (finite, non-negative, symmetric, positive
 //! semi-definite, every model input bound, known models and outputs, each model's geometry)
 //! and builds the [`Scenario`]. Every problem is a [`ScenarioError`] naming its JSON path;
-//! `rvtol validate` reports them all, the other commands the first. [`data`] writes the
-//! numbers of the data files a scenario file refers to into its text first. The keys and
-//! units are documented in scenarios/README.md.
+//! `rvtol validate` reports them all, the other commands the first. The keys and units are
+//! documented in scenarios/README.md.
 
+pub mod allocation;
 mod compile;
-pub mod data;
 mod file;
 pub mod skeleton;
 pub mod units;
 
-use std::path::Path;
-
 use rvtol_deviation::InputSpace;
 use rvtol_models::{ConditionEffect, ErrorModel, OutputKind};
 
-use crate::allocation::spec::{AllocatableSource, Lever};
-use crate::input_file::ReadLimit;
+use crate::chunk::Sampling;
 use crate::stats::SpecLimits;
+use allocation::{AllocatableSource, Lever};
 
-pub use file::{MAX_ARRAY_MEMBERS, MAX_COVARIANCE, MAX_DEVIATION, MAX_PARAMETER};
+pub use crate::error::ScenarioError;
+pub use file::{parse_value, MAX_ARRAY_MEMBERS, MAX_COVARIANCE, MAX_DEVIATION, MAX_PARAMETER};
 
 /// Samples of a run when neither the scenario nor the command line sets them.
 pub const DEFAULT_SAMPLES: u64 = 1_000_000;
 /// Seed of a run when neither the scenario nor the command line sets it.
 pub const DEFAULT_SEED: u64 = 1;
-
-/// A scenario that cannot be read or used, with the JSON path of the problem.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{path}: {message}")]
-pub struct ScenarioError {
-    /// JSON path of the offending value (`(file)` for the file as a whole).
-    pub path: String,
-    /// What is wrong, in one line.
-    pub message: String,
-}
-
-impl ScenarioError {
-    /// A new error at `path`.
-    pub fn new(path: impl Into<String>, message: impl Into<String>) -> Self {
-        ScenarioError {
-            path: path.into(),
-            message: message.into(),
-        }
-    }
-}
-
-impl From<rvtol_deviation::DeviationError> for ScenarioError {
-    fn from(err: rvtol_deviation::DeviationError) -> Self {
-        ScenarioError::new(err.path(), err.message())
-    }
-}
-
-/// The folder a scenario file's relative data paths start from.
-pub fn scenario_folder(path: &Path) -> std::path::PathBuf {
-    match path.parent() {
-        Some(parent) if !parent.as_os_str().is_empty() => parent.to_path_buf(),
-        _ => std::path::PathBuf::from("."),
-    }
-}
 
 // ---------------------------------------------------------------------------------------
 // The validated scenario.
@@ -153,7 +118,7 @@ pub struct Scenario {
     /// Seed when the command line does not say.
     pub seed: u64,
     /// How rows are drawn when the command line does not say (`sampling`, `replicates`).
-    pub sampling: crate::run::Sampling,
+    pub sampling: Sampling,
     /// The joint input space.
     pub input_space: InputSpace,
     /// Its columns' names.
@@ -175,27 +140,6 @@ pub struct Scenario {
 }
 
 impl Scenario {
-    /// Reads and validates a scenario file.
-    pub fn load(path: &Path) -> Result<Scenario, ScenarioError> {
-        Scenario::read(path).map(|(scenario, _)| scenario)
-    }
-
-    /// Reads and validates a scenario file, returning its text too.
-    /// The text is the file's with the numbers of the data files it refers to written in
-    /// ([`data::inline_data_files`]); each file within [`ReadLimit::library`].
-    pub fn read(path: &Path) -> Result<(Scenario, String), ScenarioError> {
-        let limit = ReadLimit::library();
-        let text = crate::input_file::read_text(path, &limit)
-            .map_err(|message| ScenarioError::new("(file)", message))?;
-        let text = data::inline_data_files(&text, &scenario_folder(path), &limit)?.into_owned();
-        let fallback_name = path
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "scenario".to_string());
-        let scenario = Scenario::from_json(&text, &fallback_name)?;
-        Ok((scenario, text))
-    }
-
     /// Parses and validates scenario JSON text; the first problem is the error.
     pub fn from_json(text: &str, fallback_name: &str) -> Result<Scenario, ScenarioError> {
         Scenario::from_json_all_problems(text, fallback_name)
@@ -213,14 +157,11 @@ impl Scenario {
         let (file, mut problems) = file::parse(text).map_err(|err| vec![err])?;
         match compile::compile(file, fallback_name, &mut problems) {
             Some(scenario) if problems.is_empty() => {
-                // The file's sampling against its own samples and input space.
-                let settings = crate::run::RunSettings {
-                    samples: scenario.samples,
-                    seed: scenario.seed,
-                    exact_percentile_limit: 0,
-                    sampling: scenario.sampling,
-                };
-                settings.check(&scenario).map_err(|err| vec![err])?;
+                // The file's sampling against its own samples (at least 1, checked by the
+                // compiler) and input space.
+                (scenario.sampling)
+                    .check(scenario.samples, "samples", &scenario.input_space)
+                    .map_err(|err| vec![err])?;
                 Ok(scenario)
             }
             _ => {
@@ -242,5 +183,19 @@ impl Scenario {
     /// Index of an output by name.
     pub fn output_index(&self, name: &str) -> Option<usize> {
         self.outputs.iter().position(|o| o.name == name)
+    }
+
+    /// The JSON path and name of the model that produces output `output`:
+    /// `models[i] (name)`.
+    pub fn model_of_output(&self, output: usize) -> String {
+        self.models
+            .iter()
+            .enumerate()
+            .find(|(_, bound)| {
+                (bound.first_output..bound.first_output + bound.model.outputs().len())
+                    .contains(&output)
+            })
+            .map(|(i, bound)| format!("models[{i}] ({})", bound.model.name()))
+            .unwrap_or_else(|| "models".to_string())
     }
 }

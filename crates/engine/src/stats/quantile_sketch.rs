@@ -29,6 +29,18 @@
 //!
 //! Counts are integers, so merging is exact and order-independent: merging
 //! sketches in any order gives the same bucket counts.
+//!
+//! # Why not the `sketches-ddsketch` crate
+//!
+//! That crate (a port of DataDog's Go DDSketch) has the same guarantee and merge, but
+//! keys a value by `ln(v) / ln(gamma)`: a libm logarithm per value, whose last bit the
+//! platform's libm decides, so a value near a bucket bound may land in another bucket on
+//! another machine, and the reports must be bit-identical everywhere. It also collapses
+//! its lowest buckets beyond `max_num_bins` (2048 by default), which loses the lower
+//! tail's accuracy that a lower spec limit needs, sends |v| below `min_value` (1e-9 by
+//! default) to zero, and exposes neither its buckets (the histogram drawn from a sketch
+//! needs their bounds, [`bucket_representative`]) nor a byte format (a shard file carries
+//! the sketch). The index read from the bits here needs no logarithm and no collapse.
 
 use std::fmt;
 

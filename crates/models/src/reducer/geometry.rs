@@ -49,6 +49,9 @@ pub(crate) struct Reducer {
     pub face_width: f64,
     /// r_m, the circle on which a cumulative pitch deviation is measured, mm.
     pub pitch_radius: f64,
+    /// s/2, half the axial distance between the two eccentrics' (discs') mid-planes, mm:
+    /// disc 1's plane at z = +s/2 from a crank's deviation reference, disc 2's at −s/2.
+    pub half_spacing: f64,
 }
 
 impl Reducer {
@@ -108,6 +111,7 @@ impl Reducer {
             cranks,
             face_width: params.positive("disc_face_width_mm", None)?,
             pitch_radius,
+            half_spacing: 0.5 * params.positive("crank_eccentric_spacing_mm", None)?,
         })
     }
 
@@ -154,6 +158,9 @@ pub(crate) struct Grid {
     /// shift of the window (disc angle, rad) per mm of the bore centres' free radius
     /// (docs/models.md §14.3).
     pub needle_lever: Vec<f64>,
+    /// Per crank angle kq and disc d (index 2·kq + d): (sin, cos) of the direction across
+    /// the disc's eccentric in the carrier.
+    pub across: Vec<(f64, f64)>,
     /// (sin, cos) of each crank's place β_k on the crank circle.
     pub crank_angles: Vec<(f64, f64)>,
     /// The 2M slots as columns.
@@ -238,11 +245,12 @@ impl Grid {
         let crank_angles: Vec<(f64, f64)> = (0..reducer.cranks)
             .map(|k| (2.0 * PI * k as f64 / reducer.cranks as f64).sin_cos())
             .collect();
-        let mut needle_lever = Vec::new();
+        let (mut needle_lever, mut across_all) = (Vec::new(), Vec::new());
         for kq in 0..per_pin {
             for d in 0..2 {
                 // Disc d's eccentric at χ = −z_p·Θ (+π), its across direction χ + π/2.
                 let across = -2.0 * PI * kq as f64 / per_pin as f64 + d as f64 * PI + 0.5 * PI;
+                across_all.push(across.sin_cos());
                 needle_lever.push(needle_lever_at(
                     across.sin_cos(),
                     &crank_angles,
@@ -260,6 +268,7 @@ impl Grid {
                 .map(|kq| (2.0 * PI * kq as f64 / per_pin as f64).sin_cos())
                 .collect(),
             needle_lever,
+            across: across_all,
             crank_angles,
             columns: Columns::new(&slots, per_pin, zp, LEVER_FLOOR * stage.eccentricity),
         }
@@ -316,12 +325,114 @@ pub(crate) fn needle_lever_at(
         let centres: Vec<(f64, f64)> = cranks.iter().map(|&(sb, cb)| (u * sb, -u * cb)).collect();
         largest_along(y, &centres) / pitch_lever + u / crank_radius
     };
-    let (mut lo, mut hi) = (-1.0_f64, 1.0_f64);
+    golden_max(value, (-1.0, 1.0), 200)
+}
+
+/// The needle rows' slack of one disc (disc angle, rad) when crank k's bore centre is free
+/// within its own radius ρ_k ≥ 0 (mm) of its eccentric's centre: the largest
+/// t·ŷ/(e·z_c) + ρ over the disc's translations t and turns ρ against the carrier that keep
+/// every bore within its circle ([`needle_lever_at`] is this with every ρ_k = 1; with equal
+/// radii ρ the slack is ρ times that lever, docs/models.md §14.3).
+pub(crate) fn needle_slack(
+    across: (f64, f64),
+    cranks: &[(f64, f64)],
+    radii: &[f64],
+    crank_radius: f64,
+    pitch_lever: f64,
+) -> f64 {
+    if cranks.len() == 2 {
+        two_crank_slack(across, (radii[0], radii[1]), crank_radius, pitch_lever)
+    } else {
+        any_crank_slack(across, cranks, radii, crank_radius, pitch_lever)
+    }
+}
+
+/// Two cranks at β = 0 and π (ĵ_1 = −ĵ_2 = ŷ_carrier): with p_k = t + u·ĵ_k the bores'
+/// displacements, p_1 − p_2 = 2u·ĵ_1 makes both share their component X across ĵ, and
+/// t·ŷ/P + u/a_w = y_x·X/P + c_1·p_1,y + c_2·p_2,y with c_{1,2} = y_y/(2P) ± 1/(2a_w)
+/// (P = e·z_c, y the across direction). At a given X each p_k,y takes its circle's end
+/// ±√(ρ_k² − X²) of the sign of c_k, so the slack is the maximum over |X| ≤ min ρ_k of
+/// f(X) = y_x·X/P + |c_1|·√(ρ_1² − X²) + |c_2|·√(ρ_2² − X²), concave: its derivative
+/// falls from +∞ to −∞ and is bisected to its zero (64 steps, 2⁻⁶⁴ of the radius).
+fn two_crank_slack(
+    across: (f64, f64),
+    (r1, r2): (f64, f64),
+    crank_radius: f64,
+    pitch_lever: f64,
+) -> f64 {
+    let (y_x, y_y) = (across.1, across.0);
+    let (r1, r2) = (r1.max(0.0), r2.max(0.0));
+    let c1 = (0.5 * y_y / pitch_lever + 0.5 / crank_radius).abs();
+    let c2 = (0.5 * y_y / pitch_lever - 0.5 / crank_radius).abs();
+    let f = |x: f64| {
+        y_x * x / pitch_lever
+            + c1 * (r1 * r1 - x * x).max(0.0).sqrt()
+            + c2 * (r2 * r2 - x * x).max(0.0).sqrt()
+    };
+    let reach = r1.min(r2);
+    if reach == 0.0 {
+        return f(0.0);
+    }
+    let slope = |x: f64| {
+        y_x / pitch_lever - c1 * x / (r1 * r1 - x * x).sqrt() - c2 * x / (r2 * r2 - x * x).sqrt()
+    };
+    let (mut lo, mut hi) = (-reach, reach);
+    for _ in 0..64 {
+        let mid = 0.5 * (lo + hi);
+        if slope(mid) > 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    f(0.5 * (lo + hi))
+}
+
+/// Any crank count: golden-section search over u = ρ·a_w of the largest t·ŷ over the
+/// circles' intersection (concave in u; −∞ where the circles do not meet, an interval
+/// about u = 0, which is always feasible). 90 steps: 0.618⁹⁰ of the interval, below
+/// 1e-18 of a radius.
+pub(crate) fn any_crank_slack(
+    across: (f64, f64),
+    cranks: &[(f64, f64)],
+    radii: &[f64],
+    crank_radius: f64,
+    pitch_lever: f64,
+) -> f64 {
+    let y = (across.1, across.0);
+    let value = |u: f64| {
+        let circles: Vec<((f64, f64), f64)> = cranks
+            .iter()
+            .zip(radii)
+            .map(|(&(sb, cb), &r)| ((u * sb, -u * cb), r.max(0.0)))
+            .collect();
+        largest_along_circles(y, &circles) / pitch_lever + u / crank_radius
+    };
+    // |u|·|ĵ_j − ĵ_k| ≤ ρ_j + ρ_k for any two cranks, and |ĵ_j − ĵ_k| ≥ √3 for m ≤ 3.
+    let reach = 2.0 * radii.iter().fold(0.0_f64, |a, &r| a.max(r)) / 3.0_f64.sqrt();
+    golden_max(value, (-reach, reach), 90).max(value(0.0))
+}
+
+/// The largest value of a concave `value` over (lo, hi) by golden-section search in
+/// `steps` steps; where `value` is −∞ (infeasible) outside an interval that holds 0, a step
+/// whose two points are both infeasible moves towards 0.
+fn golden_max(value: impl Fn(f64) -> f64, (mut lo, mut hi): (f64, f64), steps: u32) -> f64 {
     let golden = 0.5 * (5.0_f64.sqrt() - 1.0);
     let (mut a, mut b) = (hi - golden * (hi - lo), lo + golden * (hi - lo));
     let (mut fa, mut fb) = (value(a), value(b));
-    for _ in 0..200 {
-        if fa < fb {
+    for _ in 0..steps {
+        if fa == f64::NEG_INFINITY && fb == f64::NEG_INFINITY {
+            // The feasible interval holds 0 and neither point.
+            if b <= 0.0 {
+                lo = b;
+            } else if a >= 0.0 {
+                hi = a;
+            } else {
+                (lo, hi) = (a, b);
+            }
+            (a, b) = (hi - golden * (hi - lo), lo + golden * (hi - lo));
+            (fa, fb) = (value(a), value(b));
+        } else if fa < fb {
             lo = a;
             (a, fa) = (b, fb);
             b = lo + golden * (hi - lo);
@@ -334,6 +445,42 @@ pub(crate) fn needle_lever_at(
         }
     }
     fa.max(fb)
+}
+
+/// The largest y·t over the intersection of circles (centre, radius) (−∞ when empty):
+/// a circle's own extreme point inside every other circle, or a point where two cross.
+fn largest_along_circles(y: (f64, f64), circles: &[((f64, f64), f64)]) -> f64 {
+    let scale = circles.iter().fold(0.0_f64, |a, c| a.max(c.1));
+    let inside = |p: (f64, f64)| {
+        circles.iter().all(|&(c, r)| {
+            let (dx, dy) = (p.0 - c.0, p.1 - c.1);
+            dx * dx + dy * dy <= (r + 1e-12 * scale) * (r + 1e-12 * scale)
+        })
+    };
+    let mut best = f64::NEG_INFINITY;
+    let mut consider = |p: (f64, f64)| {
+        if inside(p) {
+            best = best.max(y.0 * p.0 + y.1 * p.1);
+        }
+    };
+    for (i, &(a, ra)) in circles.iter().enumerate() {
+        consider((a.0 + ra * y.0, a.1 + ra * y.1));
+        for &(b, rb) in &circles[i + 1..] {
+            let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+            let gap = dx.hypot(dy);
+            if gap > ra + rb || gap < (ra - rb).abs() || gap == 0.0 {
+                continue;
+            }
+            // The chord: at `along` from a towards b, half-length `half`.
+            let along = (ra * ra - rb * rb + gap * gap) / (2.0 * gap);
+            let half = (ra * ra - along * along).max(0.0).sqrt();
+            let mid = (a.0 + along * dx / gap, a.1 + along * dy / gap);
+            let normal = (-dy / gap, dx / gap);
+            consider((mid.0 + half * normal.0, mid.1 + half * normal.1));
+            consider((mid.0 - half * normal.0, mid.1 - half * normal.1));
+        }
+    }
+    best
 }
 
 /// The largest y·t over the intersection of unit circles about `centres` (−∞ when empty):

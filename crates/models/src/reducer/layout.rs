@@ -31,15 +31,34 @@ const PER_DISC: [(&str, &str, &str); 5] = [
     ("cumulative_pitch_phase_rad", "rad", "phase of disc d's cumulative pitch deviation in the disc frame"),
 ];
 
-/// Inputs per crank k: its axis in the carrier, then its eccentric under each disc d.
-const PER_CRANK: [(&str, &str); 2] = [
+/// Inputs per crank k: its axis in the carrier (position and tilt, at the deviation
+/// reference midway between the two discs' planes; 001 Eq. 5–8 carries a tilt to each
+/// disc's plane), its needle rows' clearance, then its eccentric under each disc d.
+const PER_CRANK: [(&str, &str, &str); 5] = [
     (
         "crank_axis_radial_error_mm",
+        "mm",
         "crank k's axis (its bores in the carrier), radial, carrier frame",
     ),
     (
         "crank_axis_tangential_error_mm",
+        "mm",
         "crank k's axis, tangential, carrier frame",
+    ),
+    (
+        "crank_axis_tilt_radial_rad",
+        "rad",
+        "crank k's axis tilt about the radial direction, carrier frame (001 Eq. 7: moves the axis tangentially by −τ_r·z at the disc plane z = ±s/2)",
+    ),
+    (
+        "crank_axis_tilt_tangential_rad",
+        "rad",
+        "crank k's axis tilt about the tangential direction, carrier frame (001 Eq. 7: moves the axis radially by +τ_t·z at the disc plane z = ±s/2)",
+    ),
+    (
+        "crank_bearing_clearance_deviation_mm",
+        "mm",
+        "crank k's needle rows' radial internal clearance less the reducer's u (crank_bearing_clearance_mm)",
     ),
 ];
 const PER_ECCENTRIC: [(&str, &str); 2] = [
@@ -80,7 +99,9 @@ pub(crate) struct Layout {
     pub pins: usize,
 }
 
-/// Inputs per crank (its axis, its two eccentrics).
+/// Where a crank's eccentrics start among its inputs.
+pub(crate) const ECCENTRICS: usize = PER_CRANK.len();
+/// Inputs per crank (its axis, its needle rows, its two eccentrics).
 const CRANK_STRIDE: usize = PER_CRANK.len() + 2 * PER_ECCENTRIC.len();
 
 impl Layout {
@@ -108,8 +129,9 @@ impl Layout {
         self.discs + PER_DISC.len() * d
     }
 
-    /// The first input of crank k (0-based): axis radial, tangential, then per disc d the
-    /// eccentric's magnitude and phase errors at + 2 + 2d, + 3 + 2d.
+    /// The first input of crank k (0-based): axis radial, tangential, tilt about the
+    /// radial and the tangential direction, needle clearance deviation, then per disc d the
+    /// eccentric's magnitude and phase errors at + ECCENTRICS + 2d and + ECCENTRICS + 1 + 2d.
     pub fn crank(&self, k: usize) -> usize {
         self.cranks + CRANK_STRIDE * k
     }
@@ -132,8 +154,8 @@ pub(crate) fn inputs(cranks: usize, pins: usize) -> Vec<InputSpec> {
         }
     }
     for k in 1..=cranks {
-        for &(name, description) in &PER_CRANK {
-            specs.push(input(format!("{name}_{k}"), "mm", description));
+        for &(name, unit, description) in &PER_CRANK {
+            specs.push(input(format!("{name}_{k}"), unit, description));
         }
         for d in 1..=2 {
             for &(name, description) in &PER_ECCENTRIC {

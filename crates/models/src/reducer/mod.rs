@@ -44,7 +44,8 @@ use crate::{
 use geometry::{Grid, Reducer};
 use layout::Layout;
 use windows::{
-    disc_window, offset_and_shift, pin_gap, row_terms, turned_pitch, RowTable, RowTerms,
+    disc_window, needle_slack_of, offset_and_shift, pin_gap, row_terms, turned_pitch, RowTable,
+    RowTerms,
 };
 
 const PARAMS: &[ParamSpec] = &[
@@ -62,6 +63,7 @@ const PARAMS: &[ParamSpec] = &[
     ParamSpec { name: "sun_pitch_radius_mm", unit: "mm", description: "r1, sun pitch radius (000 Eq. 5)", default: None },
     ParamSpec { name: "sun_gear_axial_position_mm", unit: "mm", description: "z of the sun mesh from the input shaft's deviation reference point", default: Some(0.0) },
     ParamSpec { name: "crank_count", unit: "1", description: "m, cranks (2 or 3) on the crank circle, evenly spaced", default: Some(2.0) },
+    ParamSpec { name: "crank_eccentric_spacing_mm", unit: "mm", description: "s, axial distance between the two eccentrics' (discs') mid-planes: a crank's tilt acts at ±s/2", default: None },
     ParamSpec { name: "disc_face_width_mm", unit: "mm", description: "L, the disc's face width (the pin contacts' length)", default: None },
     preload::FRICTION,
     preload::PARAMS[0],
@@ -123,6 +125,7 @@ impl RvLostMotion {
             .with_number("center_distance_mm", 27.5)
             .with_number("sun_pitch_radius_mm", 13.5)
             .with_number("disc_face_width_mm", 8.0)
+            .with_number("crank_eccentric_spacing_mm", 9.0)
             .with_number("pin_friction_coefficient", 0.02)
             .with_number("rated_torque_nm", 167.0)
     }
@@ -251,7 +254,7 @@ impl RvLostMotion {
             let turn = grid.turn[kq];
             let (offset, shift) = offset_and_shift(&self.reducer, terms, d, turn);
             let pitch = turned_pitch(terms, d, turn);
-            let slack = grid.needle_lever[2 * kq + d] * terms.needle_radius;
+            let slack = needle_slack_of(&self.reducer, grid, terms, kq, d);
             let mut disc = DiscPins::new(offset, slack);
             let (base, start) = grid.placement(k, d);
             // Pin i meets entry start + i, less z_p past the end of the run.

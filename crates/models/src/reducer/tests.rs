@@ -257,10 +257,16 @@ fn the_needle_lever_matches_its_hand_calculation() {
 #[test]
 fn the_windows_are_those_of_the_transmission_error_geometry() {
     // One geometry: on the deviations both models take (pin positions, pin circle and pin
-    // radius, modification, disc profile and runout, crank axes, eccentrics), each disc's
+    // radius, modification, disc profile and runout, crank axes and their tilts at the two
+    // disc planes, eccentrics), each disc's
     // window at each output angle equals the transmission-error model's physical reading,
     // pin by pin.
-    let m = model(&[CLEAR[0], CLEAR[1], ("positions_per_pin", 2.0)]);
+    let m = model(&[
+        CLEAR[0],
+        CLEAR[1],
+        ("positions_per_pin", 2.0),
+        ("crank_eccentric_spacing_mm", 10.0),
+    ]);
     let te = TransmissionError::from_params(
         &ModelParams::new()
             .with_number("crank_circle_radius_mm", 27.5)
@@ -305,6 +311,8 @@ fn the_windows_are_those_of_the_transmission_error_geometry() {
             format!("crank_axis_tangential_error_mm_{k}"),
             0.004 * next(),
         ));
+        shared.push((format!("crank_axis_tilt_radial_rad_{k}"), 4e-4 * next()));
+        shared.push((format!("crank_axis_tilt_tangential_rad_{k}"), 4e-4 * next()));
     }
     for i in 1..=40 {
         shared.push((format!("pin_radial_error_mm_{i}"), 0.003 * next()));
@@ -572,4 +580,124 @@ fn the_row_table_gives_the_pin_by_pin_windows() {
             );
         }
     }
+}
+
+#[test]
+fn a_crank_tilt_acts_at_the_two_disc_planes_as_opposite_bore_errors() {
+    // 001 Eq. 7 (displacement θ × p of a point p on the axis): a tilt τ_t of crank 1 about
+    // its tangential direction moves its axis radially by +τ_t·s/2 at disc 1's plane
+    // (z = +s/2) and by −τ_t·s/2 at disc 2's; a tilt τ_r about the radial direction moves
+    // it tangentially by −τ_r·z. Each disc's window equals the one a bore error of that
+    // size gives (s = 9 mm, the RV-20E's eccentric spacing).
+    let m = model(&CLEAR);
+    let (tau, half) = (2e-4, 4.5);
+    for (tilt, bore, sign) in [
+        (
+            "crank_axis_tilt_tangential_rad_1",
+            "crank_axis_radial_error_mm_1",
+            1.0,
+        ),
+        (
+            "crank_axis_tilt_radial_rad_1",
+            "crank_axis_tangential_error_mm_1",
+            -1.0,
+        ),
+    ] {
+        let tilted = row(&m, &[(tilt, tau)]);
+        let at_one = row(&m, &[(bore, sign * tau * half)]);
+        let at_two = row(&m, &[(bore, -sign * tau * half)]);
+        for k in [0, 1, 2, 3, 41, 117] {
+            let windows = m.disc_windows(&tilted, k);
+            let (one, two) = (m.disc_windows(&at_one, k)[0], m.disc_windows(&at_two, k)[1]);
+            for (a, b) in [(windows[0], one), (windows[1], two)] {
+                assert!(
+                    (a.0 - b.0).abs() < 1e-15 && (a.1 - b.1).abs() < 1e-15,
+                    "{tilt} k {k}"
+                );
+            }
+        }
+        // And the tilt moves the discs' windows: it is not lost on the way.
+        assert_ne!(m.window_widths(&tilted), m.window_widths(&row(&m, &[])));
+    }
+}
+
+#[test]
+fn the_needle_slack_of_unequal_clearances_matches_its_hand_calculation() {
+    use super::geometry::needle_slack;
+    let (a_w, ezc) = (27.5, PITCH_LEVER);
+    let two = [(0.0, 1.0), (PI.sin(), PI.cos())];
+    let three: Vec<(f64, f64)> = (0..3)
+        .map(|k| (2.0 * PI * k as f64 / 3.0).sin_cos())
+        .collect();
+    // Equal radii ρ: ρ times the unit lever, for two and three cranks.
+    for angle in [0.0, 0.3, 0.5 * PI, 1.0, 2.5, PI, 4.0] {
+        let y: (f64, f64) = angle.sin_cos();
+        for cranks in [&two[..], &three[..]] {
+            let unit = needle_lever_at(y, cranks, a_w, ezc);
+            let radii = vec![0.0013; cranks.len()];
+            let slack = needle_slack(y, cranks, &radii, a_w, ezc);
+            assert!(
+                (slack - 0.0013 * unit).abs() < 1e-12 * unit,
+                "{angle}: {slack}"
+            );
+        }
+    }
+    // Two cranks, the across direction along the cranks' tangent ĵ (y_x = 0): the bores
+    // take their circles' ends along ĵ, p_1 = ρ_1·ĵ and p_2 = −ρ_2·ĵ (since 1/(e·z_c) <
+    // 1/a_w), so h = ρ_1·(1/P + 1/a_w)/2 + ρ_2·(1/a_w − 1/P)/2 (P = e·z_c).
+    let (r1, r2) = (0.0015, 0.0005);
+    let expected = r1 * (1.0 / ezc + 1.0 / a_w) / 2.0 + r2 * (1.0 / a_w - 1.0 / ezc) / 2.0;
+    let slack = needle_slack((1.0, 0.0), &two, &[r1, r2], a_w, ezc);
+    assert!(
+        (slack - expected).abs() < 1e-12 * expected,
+        "{slack} against {expected}"
+    );
+    // The two-crank form against the general search (three cranks' code path on two).
+    for angle in [0.2_f64, 1.1, 2.0, 3.3, 5.0] {
+        let y: (f64, f64) = angle.sin_cos();
+        let closed = needle_slack(y, &two, &[r1, r2], a_w, ezc);
+        let searched = super::geometry::any_crank_slack(y, &two, &[r1, r2], a_w, ezc);
+        assert!(
+            (closed - searched).abs() < 1e-12 * closed,
+            "{angle}: {closed} {searched}"
+        );
+    }
+    // A held bore (ρ = 0) leaves the other's slack, finite.
+    let held = needle_slack(0.6_f64.sin_cos(), &three, &[0.0, 0.001, 0.002], a_w, ezc);
+    assert!(held.is_finite() && held > 0.0, "{held}");
+}
+
+#[test]
+fn a_crank_s_own_needle_clearance_widens_the_window_between_its_neighbours() {
+    // u + δu on both cranks is the even clearance u + δu; δu on one crank only widens the
+    // window at every angle no less than nothing and no more than δu on both.
+    let m = model(&CLEAR);
+    let (u, du) = (0.002, 0.001);
+    let base = row(&m, &[("crank_bearing_clearance_mm", u)]);
+    let even = row(&m, &[("crank_bearing_clearance_mm", u + du)]);
+    let both = row(
+        &m,
+        &[
+            ("crank_bearing_clearance_mm", u),
+            ("crank_bearing_clearance_deviation_mm_1", du),
+            ("crank_bearing_clearance_deviation_mm_2", du),
+        ],
+    );
+    let one = row(
+        &m,
+        &[
+            ("crank_bearing_clearance_mm", u),
+            ("crank_bearing_clearance_deviation_mm_1", du),
+        ],
+    );
+    let widths = |x: &[f64]| m.window_widths(x);
+    let (w0, we, wb, w1) = (widths(&base), widths(&even), widths(&both), widths(&one));
+    for k in 0..m.points() {
+        assert!(
+            (we[k] - wb[k]).abs() < 1e-12 * we[k].abs().max(1e-6),
+            "k {k}"
+        );
+        assert!(w1[k] >= w0[k] - 1e-15 && w1[k] <= wb[k] + 1e-15, "k {k}");
+    }
+    assert!(w1.iter().zip(&w0).any(|(a, b)| a > b));
 }

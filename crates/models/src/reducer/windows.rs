@@ -7,8 +7,8 @@
 //!                    + δΔr_rp·f_e + δΔr_p·f_s + δ_n,d               modification errors
 //!                    + (δr_p + δr_i)·f_r + δt_i·f_t − δr_rp − δρ_i   pin circle, pin i, radii
 //!                    + δJ/2 + T_d,x·f_x − l_i·ε_d(ϑ_i)              groove, disc shift, pitch
-//! disc shift     T_d = mean_k q_kd + σ_d·R(z_p·Θ)·(mean_k B_k + r_d)  (eccentric frame)
-//! four-bar turn  ρ_d = Σ_k t_k·(q_kd + R(…)·B_k)/(m·a_w)
+//! disc shift     T_d = mean_k q_kd + σ_d·R(z_p·Θ)·(mean_k B_kd + r_d)  (eccentric frame)
+//! four-bar turn  ρ_d = Σ_k t_k·(q_kd + R(…)·B_kd)/(m·a_w)
 //! crank offset   C_d = −T_d,y/(e·z_c) − ρ_d
 //! pitch          ε_d(ϑ) = (F_p,d/2)·cos(ϑ − ϕ_p,d)/r_m,  ϑ_i = polar_i − z_p·Θ + d·π
 //! window         [λ·(C_d − K_d − h_d·u/2), λ·(C_d + L_d + h_d·u/2)]
@@ -19,9 +19,11 @@
 //! output window  the intersection over d; its width W(Θ) (negative: the flanks overlap)
 //! ```
 //! with f_e … f_t the pin factors of `cycloid.rs`, q_kd the eccentric error (along,
-//! across), B_k crank k's axis in the carrier, r_d disc d's runout vector (half the radial
-//! runout F_r,d at its phase), u the needle rows' radial internal clearance (the bore
-//! centre moves within u/2) and h_d the needle lever of `geometry.rs`.
+//! across), B_kd = R(β_k)·(b_r + z_d·τ_t, b_t − z_d·τ_r) crank k's axis in the carrier at
+//! disc d's plane z_d = ±s/2 (bore position b, tilt τ; 001 Eq. 7), r_d disc d's runout
+//! vector (half the radial runout F_r,d at its phase), u the needle rows' radial internal
+//! clearance (the bore centre moves within u/2; crank k's within (u + δu_k)/2) and h_d the
+//! needle lever of `geometry.rs` (`needle_slack` when the cranks' clearances differ).
 //!
 //! Every pin of both discs counts at every point (a pin far from the pitch point sets the
 //! window when its own error is large enough). Two paths compute the same windows:
@@ -29,8 +31,8 @@
 //! [`RowTable`], the model's: a row reduced once to its crank angles' runs, so that a
 //! point costs one subtraction and one product per pin (equal to 1e-15, tested).
 
-use super::geometry::{Columns, Grid, Reducer};
-use super::layout::Layout;
+use super::geometry::{needle_slack, Columns, Grid, Reducer, MAX_CRANKS};
+use super::layout::{Layout, ECCENTRICS};
 
 /// What a row contributes, reduced once per row.
 #[derive(Debug, Clone, Default)]
@@ -45,14 +47,18 @@ pub(crate) struct RowTerms {
     pub eccentric: [(f64, f64); 2],
     /// Per disc: mean crank axis plus runout, carrier frame.
     pub carried: [(f64, f64); 2],
-    /// Per disc: Σ_k t_k·R(−z_pΘ)·q_kd = p1·cos z_pΘ + p2·sin z_pΘ, and Σ_k t_k·B_k.
+    /// Per disc: Σ_k t_k·R(−z_pΘ)·q_kd = p1·cos z_pΘ + p2·sin z_pΘ, and Σ_k t_k·B_kd.
     pub p1: [f64; 2],
     pub p2: [f64; 2],
     pub rho_const: [f64; 2],
     /// Per disc: (F_p/2)/r_m·(cos ϕ_p, sin ϕ_p), rad.
     pub pitch: [(f64, f64); 2],
-    /// u/2, the bore centres' free radius, mm.
+    /// u/2, the bore centres' free radius, mm (0 for an interference fit, u < 0).
     pub needle_radius: f64,
+    /// Per crank: (u + δu_k)/2, its bore centre's free radius, mm (≥ 0); `needle_even`
+    /// when every crank has u/2.
+    pub needle_radii: [f64; MAX_CRANKS],
+    pub needle_even: bool,
 }
 
 /// One disc's window at one output angle, disc angles (rad) before the factor λ.
@@ -85,7 +91,8 @@ pub(crate) fn row_terms(reducer: &Reducer, grid: &Grid, layout: &Layout, x: &[f6
         equidistant_error: x[layout.equidistant_error],
         shift_error: x[layout.shift_error],
         pin_circle_error: x[layout.pin_circle_error],
-        needle_radius: 0.5 * x[layout.needle_clearance],
+        needle_radius: 0.5 * x[layout.needle_clearance].max(0.0),
+        needle_even: true,
         ..RowTerms::default()
     };
     let mean = 1.0 / m as f64;
@@ -102,13 +109,26 @@ pub(crate) fn row_terms(reducer: &Reducer, grid: &Grid, layout: &Layout, x: &[f6
     }
     for (k, &(sb, cb)) in grid.crank_angles.iter().enumerate() {
         let crank = layout.crank(k);
-        let (b_r, b_t) = (x[crank], x[crank + 1]);
-        let bore = (b_r * cb - b_t * sb, b_r * sb + b_t * cb);
+        let (b_r, b_t, tau_r, tau_t) = (x[crank], x[crank + 1], x[crank + 2], x[crank + 3]);
+        let deviation = x[crank + 4];
+        terms.needle_radii[k] = 0.5 * (x[layout.needle_clearance] + deviation).max(0.0);
+        terms.needle_even &= deviation == 0.0;
         for d in 0..2 {
+            // The axis at disc d's plane z_d = ±s/2 (001 Eq. 7: θ × p).
+            let z = if d == 0 {
+                reducer.half_spacing
+            } else {
+                -reducer.half_spacing
+            };
+            let (r, t) = (b_r + z * tau_t, b_t - z * tau_r);
+            let bore = (r * cb - t * sb, r * sb + t * cb);
             terms.carried[d].0 += bore.0 * mean;
             terms.carried[d].1 += bore.1 * mean;
-            terms.rho_const[d] += b_t;
-            let (qx, qy) = (x[crank + 2 + 2 * d], x[crank + 3 + 2 * d]);
+            terms.rho_const[d] += t;
+            let (qx, qy) = (
+                x[crank + ECCENTRICS + 2 * d],
+                x[crank + ECCENTRICS + 1 + 2 * d],
+            );
             terms.eccentric[d].0 += qx * mean;
             terms.eccentric[d].1 += qy * mean;
             terms.p1[d] += -sb * qx + cb * qy;
@@ -116,6 +136,29 @@ pub(crate) fn row_terms(reducer: &Reducer, grid: &Grid, layout: &Layout, x: &[f6
         }
     }
     terms
+}
+
+/// The needle rows' slack h_d·u/2 of disc d at crank angle kq (disc angle, rad): the
+/// grid's lever times u/2 when every crank has the same clearance, else the slack of the
+/// cranks' own radii (geometry.rs `needle_slack`).
+pub(crate) fn needle_slack_of(
+    reducer: &Reducer,
+    grid: &Grid,
+    terms: &RowTerms,
+    kq: usize,
+    d: usize,
+) -> f64 {
+    if terms.needle_even {
+        grid.needle_lever[2 * kq + d] * terms.needle_radius
+    } else {
+        needle_slack(
+            grid.across[2 * kq + d],
+            &grid.crank_angles,
+            &terms.needle_radii[..reducer.cranks],
+            reducer.center_distance,
+            reducer.pitch_lever(),
+        )
+    }
 }
 
 /// C_d and T_d,x of disc d at a point whose z_p·Θ has (sin, cos) `turn`.
@@ -217,7 +260,7 @@ pub(crate) fn disc_window(
         offset,
         lag: lag_a.min(lag_b),
         lead: -coast_a.max(coast_b),
-        slack: grid.needle_lever[2 * kq + d] * terms.needle_radius,
+        slack: needle_slack_of(reducer, grid, terms, kq, d),
     }
 }
 
@@ -361,7 +404,7 @@ impl RowTable {
                     let epsilon = pitch.0 * columns.polar_cos[j] + pitch.1 * columns.polar_sin[j];
                     *t = gap - columns.lever[j] * epsilon;
                 }
-                let slack = grid.needle_lever[2 * kq + d] * terms.needle_radius;
+                let slack = needle_slack_of(reducer, grid, terms, kq, d);
                 self.heads.push((base, offset, slack));
             }
         }

@@ -1,0 +1,25 @@
+//! rvtol-analysis: what rvtol computes from runs of a scenario, above the run core
+//! (rvtol-engine), which never uses it.
+//!
+//! - [`sensitivity`]: Sobol' indices by group with their intervals ([`sensitivity_report`]
+//!   the report), [`shapley`] effects for correlated inputs, [`screening`] by derivatives
+//!   at the nominal point;
+//! - [`gate`]: the CI gate, a baseline's figures with their noise bands and the check of a
+//!   re-run against them; [`target`] the requirement grammar it shares with the
+//!   allocation and the page;
+//! - [`allocation`]: the cheapest tolerances that meet a target;
+//! - [`fit`]: a normal model of measured parts, as a scenario fragment;
+//! - [`shard`]: a shard's file and the assembly of a set of them for the merge;
+//! - [`request`]: the requests the command line and the Python module make (scenario
+//!   sources, settings with their defaults and limits, memory), one API for both.
+
+pub mod allocation;
+pub mod fit;
+pub mod gate;
+pub mod request;
+pub mod screening;
+pub mod sensitivity;
+pub mod sensitivity_report;
+pub mod shapley;
+pub mod shard;
+pub mod target;
