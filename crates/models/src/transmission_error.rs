@@ -1306,7 +1306,9 @@ impl ErrorModel for TransmissionError {
                 let Search {
                     curve, two, loaded, ..
                 } = search;
-                self.evaluate_physical(inputs, curve, (two, loaded), outputs)
+                if let Some(terms) = self.evaluate_physical(inputs, curve, two, outputs) {
+                    self.evaluate_loaded(inputs, &terms, loaded, curve, outputs);
+                }
             } else {
                 self.evaluate_with(inputs, search, outputs)
             }

@@ -71,7 +71,6 @@
 
 use std::f64::consts::PI;
 
-use super::loaded::LoadedScratch;
 use super::{smallest, smallest_ratio, PinTable, TransmissionError, MAX_CRANKS};
 use crate::cycloid::{CycloidStage, PinFactors};
 use crate::preload::{slip_arm, zero_torque, DiscPins, LEVER_FLOOR};
@@ -1776,17 +1775,21 @@ pub(super) const TE_OUTPUTS: usize = 8;
 pub(super) const INTERFERENCE: &str = "profile_interference";
 
 impl TransmissionError {
-    /// [`crate::ErrorModel::evaluate`] of the physical reading.
+    /// [`crate::ErrorModel::evaluate`] of the physical reading's rigid pass: the rigid
+    /// curve, the interference indicator and the preload rule's outputs, and the rigid
+    /// readings' transmission error. With the loaded reading it returns the row's terms for
+    /// the loaded solution to finish the row (the parent module dispatches, so that this
+    /// reading does not depend on the loaded one).
     pub(super) fn evaluate_physical(
         &self,
         inputs: &[f64],
         curve: &mut Vec<f64>,
-        (scratch, loaded): (&mut TwoDiscScratch, &mut LoadedScratch),
+        scratch: &mut TwoDiscScratch,
         outputs: &mut [f64],
-    ) {
+    ) -> Option<RowTerms> {
         if inputs.iter().any(|v| !v.is_finite()) {
             outputs.iter_mut().for_each(|o| *o = f64::NAN);
-            return;
+            return None;
         }
         let terms = self.row_terms(inputs);
         curve.resize(self.points, 0.0);
@@ -1797,15 +1800,11 @@ impl TransmissionError {
             let theta = 2.0 * PI * scratch.narrowest.1 as f64 / self.points as f64;
             let judged = self.judge_preload(inputs, &terms, theta);
             outputs[TE_OUTPUTS + 1..].copy_from_slice(&judged);
-            if self.loaded.is_some() {
-                self.evaluate_loaded(inputs, &terms, loaded, curve, outputs);
-            }
-            return;
+            return self.loaded.is_some().then_some(terms);
         }
         if self.loaded.is_some() {
             outputs[TE_OUTPUTS] = 0.0;
-            self.evaluate_loaded(inputs, &terms, loaded, curve, outputs);
-            return;
+            return Some(terms);
         }
         let n = self.points;
         let quads = curve.as_chunks::<4>().0;
@@ -1852,6 +1851,7 @@ impl TransmissionError {
         if !outputs[..TE_OUTPUTS].iter().all(|v| v.is_finite()) {
             outputs.iter_mut().for_each(|o| *o = f64::NAN);
         }
+        None
     }
 
     /// The preload rule's five outputs at the output angle Θ where the discs fit least
