@@ -97,6 +97,15 @@ impl LoadedDisc<'_> {
         )
     }
 
+    /// How many pins are in contact at the turn y (l·y − g > 0).
+    pub fn touching(&self, y: f64) -> usize {
+        self.gaps
+            .iter()
+            .zip(self.levers)
+            .filter(|(g, l)| *l * y - *g > 0.0)
+            .count()
+    }
+
     /// The turn at which the first pin of the flank that `sign` loads touches (sign < 0:
     /// the drive flank, the largest g/l over l < 0; sign > 0: the smallest over l > 0).
     fn first_touch(&self, sign: f64) -> f64 {

@@ -317,3 +317,42 @@ fn a_point_without_a_solution_fails_with_its_cause() {
         .to_string()
         .contains("did not settle"));
 }
+
+#[test]
+fn the_ninth_root_is_the_two_cube_roots_within_a_few_ulps() {
+    use crate::preload::{ninth_root, ROOT_CELLS};
+    // ninth_root against x.cbrt().cbrt() (SecantLaw::stiffness's, within an ulp or two of
+    // the true root) over 1e-12..1e3 mm, every cell of the mantissa and every exponent
+    // class mod 9: at most 4 ulps apart (the table's roots, the series' rounding and the
+    // two cube roots' own error; the series' truncation is below 2·10⁻¹⁹).
+    let mut worst = 0.0_f64;
+    for i in 0..200_000 {
+        // Exponents −40..10 in steps that fall on every mantissa cell (a step of
+        // 2.5·10⁻⁴ in the exponent is 1/40 of a cell at most).
+        let x = (-40.0 + 50.0 * (i as f64 / 200_000.0)).exp2();
+        let (fast, reference) = (ninth_root(x), x.cbrt().cbrt());
+        let ulps = (fast - reference).abs() / (reference * f64::EPSILON);
+        worst = worst.max(ulps);
+    }
+    assert!(worst <= 4.0, "{worst} ulps");
+    // The cells' edges and the exponent classes' edges.
+    for e in -20..20 {
+        for cell in 0..=ROOT_CELLS {
+            let x = (1.0 + cell as f64 / ROOT_CELLS as f64) * f64::from(e).exp2();
+            let x = if cell == ROOT_CELLS {
+                f64::from(e + 1).exp2() * (1.0 - f64::EPSILON)
+            } else {
+                x
+            };
+            let (fast, reference) = (ninth_root(x), x.cbrt().cbrt());
+            assert!(
+                (fast - reference).abs() <= 4.0 * reference * f64::EPSILON,
+                "{x}"
+            );
+        }
+    }
+    // Outside the normal range: the two cube roots themselves.
+    for x in [0.0, 1e-310, f64::INFINITY] {
+        assert_eq!(ninth_root(x).to_bits(), x.cbrt().cbrt().to_bits());
+    }
+}

@@ -27,7 +27,7 @@
 
 use std::f64::consts::PI;
 
-use super::two_discs::{lane_squares, lane_stats, modification, RowTerms, TE_OUTPUTS};
+use super::two_discs::{lane_squares, lane_stats, RowTerms, TE_OUTPUTS};
 use super::TransmissionError;
 use crate::cycloid::CycloidStage;
 use crate::loaded::{LoadedDisc, Solution, TwoDiscs, Unconverged};
@@ -104,62 +104,67 @@ pub(super) struct Loaded {
     pub table: PinPhases,
 }
 
-/// The pins' factors at every fractional pin pitch the curve's points and the two discs
-/// put them at: pin slot s of phase p sits at φ = 2π(s + p/P)/z_p from its disc's
-/// eccentric, P = 2N/g phases (g = gcd(z_c·z_p, N); the factor 2 for disc 2, half a
-/// revolution of the eccentric on, which is half a pitch for an odd pin count). Entry
-/// p·z_p + s; the tooth space of a slot as round(t) and round(t + ½), t = z_c·λ/2π − p/P
-/// (λ the slot's polar angle about the disc centre from the eccentric): the geometry of
-/// `exact_gap_at` without its square roots and arc tangents at every point.
+/// The pins' place at every fractional pin pitch the curve's points and the two discs put
+/// them at: pin slot s of phase p sits at φ = 2π(s + p/P)/z_p from its disc's eccentric.
+/// Point j puts disc d's slots q = 2·z_c·z_p·j + d·z_p·N half-steps of 1/(2N) pitch on, so
+/// the phases met are the multiples of G = gcd(2·z_c·z_p, z_p·N, 2N) and P = 2N/G.
+///
+/// Every factor of a pin (`CycloidStage::pin_factors_at`, with the modification of
+/// `two_discs::modification`) is a combination of a = sin φ/S, b = cos φ/S and c = 1/S
+/// (S = √(1 + K1² − 2K1·cos φ)):
+///
+/// ```text
+/// lever l = e·z_c·a            modification  1 + a  (Δr_rp),  −c + K1·b − √(1 − K1²)·a  (Δr_p)
+/// radial  c − K1·b             eccentric     K1·c − b          tangential  K1·a
+/// ```
+///
+/// so the table holds a, b and c (entry p·z_p + s; a = 0 where the lever is below the
+/// floor), and the tooth space of a slot as round(t) and round(t + ½),
+/// t = z_c·λ/2π − p/P (λ the slot's polar angle about the disc centre from the eccentric):
+/// the geometry of `exact_gap_at` without its square roots and arc tangents at every
+/// point, in 32 bytes a slot, so that the table stays in a core's cache.
 #[derive(Debug, Clone, Default)]
 pub(super) struct PinPhases {
-    /// P.
-    phases: usize,
-    /// Entry p·z_p + s, one slot's factors together (a point reads its slots in a row).
-    slots: Vec<SlotFactors>,
-}
-
-/// One slot's factors (two_discs.rs: `exact_gap_at`) and tooth space.
-#[derive(Debug, Clone, Copy)]
-struct SlotFactors {
-    lever: f64,
-    equidistant: f64,
-    shift: f64,
-    eccentric: f64,
-    radial: f64,
-    tangential: f64,
-    /// round(t), round(t + ½).
-    tooth: [i32; 2],
+    /// G, the half-steps of 1/(2N) pitch from one phase to the next.
+    step: usize,
+    /// K1 and √(1 − K1²).
+    k1: f64,
+    k1_root: f64,
+    /// [a, b, c] of entry p·z_p + s.
+    factors: Vec<[f64; 3]>,
+    /// [round(t), round(t + ½)] of entry p·z_p + s.
+    tooth: Vec<[i32; 2]>,
 }
 
 impl PinPhases {
     /// The table of the stage for N points per revolution.
     fn new(stage: &CycloidStage, points: usize) -> PinPhases {
         let (zp, zc) = (stage.pins, stage.teeth);
-        let phases = 2 * points / gcd(zc * zp, points);
+        let step = gcd(gcd(2 * zc * zp, zp * points), 2 * points);
+        let phases = 2 * points / step;
+        let (r_p, e, k1) = (stage.pin_circle_radius, stage.eccentricity, stage.k1());
         let mut table = PinPhases {
-            phases,
+            step,
+            k1,
+            k1_root: (1.0 - k1 * k1).sqrt(),
             ..PinPhases::default()
         };
-        let (r_p, e) = (stage.pin_circle_radius, stage.eccentricity);
         for p in 0..phases {
             let fraction = p as f64 / phases as f64;
             for slot in 0..zp {
                 let phi = 2.0 * PI * (slot as f64 + fraction) / zp as f64;
                 let (sin, cos) = phi.sin_cos();
-                let factors = stage.pin_factors_at(sin, cos);
-                let (equidistant, shift) = modification(&factors);
+                let c = 1.0 / (1.0 + k1 * k1 - 2.0 * k1 * cos).sqrt();
+                let a = sin * c;
+                let holds = (e * zc as f64 * a).abs() > LEVER_FLOOR * e;
+                table
+                    .factors
+                    .push([if holds { a } else { 0.0 }, cos * c, c]);
                 let polar = (r_p * sin).atan2(r_p * cos - e);
                 let t = zc as f64 * polar / (2.0 * PI) - fraction;
-                table.slots.push(SlotFactors {
-                    lever: factors.lever,
-                    equidistant,
-                    shift,
-                    eccentric: factors.eccentric,
-                    radial: factors.radial,
-                    tangential: factors.tangential,
-                    tooth: [t.round() as i32, (t + 0.5).round() as i32],
-                });
+                table
+                    .tooth
+                    .push([t.round() as i32, (t + 0.5).round() as i32]);
             }
         }
         table
@@ -174,49 +179,85 @@ fn gcd(a: usize, b: usize) -> usize {
     }
 }
 
-/// Per-thread work state of the loaded curve: both discs' gaps and levers at one point,
-/// and the pins near contact the solver is given first.
+/// Which of a disc's pins [`TransmissionError::loaded_pins`] keeps.
+#[derive(Debug, Clone, Copy)]
+enum Keep {
+    /// Every pin whose lever holds a turn.
+    All,
+    /// The pins that come into contact within [`NEAR_TURN`] of the disc's turn (rad).
+    Near(f64),
+}
+
+/// Per-thread work state of the loaded curve: the row's pin and tooth-space errors laid out
+/// so that a point reads them in a row, both discs' kept pins at one point (gaps and
+/// levers), and every pin's where the near ones do not settle a point.
 #[derive(Debug, Default)]
 pub(super) struct LoadedScratch {
+    /// R = the pin circle's radius error + the pin's radial error, as [R, K1·R], pin by
+    /// pin, twice over (slot s + offset).
+    pin_radial: Vec<[f64; 2]>,
+    /// K1 × the pin's tangential error, twice over.
+    pin_tangential: Vec<f64>,
+    /// Each disc's tooth-space errors, three times over (round(t) + shift + z_c).
+    teeth: [Vec<f64>; 2],
+    /// The kept pins of each disc: gaps and levers in their first `kept` entries.
     gaps: [Vec<f64>; 2],
     levers: [Vec<f64>; 2],
-    near_gaps: [Vec<f64>; 2],
-    near_levers: [Vec<f64>; 2],
+    kept: [usize; 2],
 }
 
 /// The pins within this turn of contact at the previous point's solution (rad, disc
 /// frame; 2″, some twenty times a point's step on a busy curve) are the solver's first
-/// set; the solution is then checked against every pin.
+/// set; where the solution's turns stay within it of the previous point's, every pin in
+/// contact is among them (l·y − g > 0 and |y − y₀| ≤ NEAR_TURN give
+/// l·y₀ + |l|·NEAR_TURN − g > 0), else every pin is checked.
 const NEAR_TURN: f64 = 1e-5;
 
 impl LoadedScratch {
-    /// Keeps in the near set the pins of each disc that come into contact within
-    /// [`NEAR_TURN`] of the turns `turns`.
-    fn select_near(&mut self, turns: [f64; 2]) {
-        for (d, turn) in turns.into_iter().enumerate() {
-            let (gaps, levers) = (&mut self.near_gaps[d], &mut self.near_levers[d]);
-            gaps.clear();
-            levers.clear();
-            for (g, l) in self.gaps[d].iter().zip(&self.levers[d]) {
-                if l * turn + l.abs() * NEAR_TURN - g > 0.0 {
-                    gaps.push(*g);
-                    levers.push(*l);
+    /// Lays out the row's pin and tooth-space errors (zeros where the model has none).
+    fn prepare(&mut self, model: &TransmissionError, inputs: &[f64], terms: &RowTerms) {
+        let ph = model.physical();
+        let (zp, zc) = (model.pins, model.cycloid_teeth);
+        let k1 = model.loaded().table.k1;
+        self.pin_radial.clear();
+        self.pin_tangential.clear();
+        for _ in 0..2 {
+            for pin in 0..zp {
+                let (r, t) = if model.per_pin {
+                    (inputs[ph.pin_base + pin], inputs[ph.pin_base + zp + pin])
+                } else {
+                    (0.0, 0.0)
+                };
+                let radial = terms.err_rp + r;
+                self.pin_radial.push([radial, k1 * radial]);
+                self.pin_tangential.push(k1 * t);
+            }
+        }
+        for (d, teeth) in self.teeth.iter_mut().enumerate() {
+            teeth.clear();
+            for _ in 0..3 {
+                for space in 0..zc {
+                    teeth.push(if model.per_tooth {
+                        inputs[ph.tooth_base + d * zc + space]
+                    } else {
+                        0.0
+                    });
                 }
             }
         }
+        for d in 0..2 {
+            self.gaps[d].resize(zp, 0.0);
+            self.levers[d].resize(zp, 0.0);
+        }
     }
 
-    /// Whether every pin in contact at the turns `turns` is in the near set.
-    fn near_holds(&self, turns: [f64; 2]) -> bool {
-        (0..2).all(|d| {
-            let count = |gaps: &[f64], levers: &[f64]| {
-                gaps.iter()
-                    .zip(levers)
-                    .filter(|(g, l)| *l * turns[d] - *g > 0.0)
-                    .count()
-            };
-            count(&self.gaps[d], &self.levers[d]) == count(&self.near_gaps[d], &self.near_levers[d])
-        })
+    /// Disc d's kept pins.
+    fn disc(&self, d: usize, offset: f64) -> LoadedDisc<'_> {
+        LoadedDisc {
+            gaps: &self.gaps[d][..self.kept[d]],
+            levers: &self.levers[d][..self.kept[d]],
+            offset,
+        }
     }
 }
 
@@ -240,113 +281,119 @@ impl TransmissionError {
     ) -> Result<(), Unconverged> {
         let loaded = self.loaded();
         let kappa = self.physical().kappa;
+        scratch.prepare(self, inputs, terms);
         let mut warm = Solution::COLD;
         for (j, value) in curve.iter_mut().enumerate() {
-            let offsets = self.loaded_pins(inputs, terms, j, scratch);
-            // The pins near contact first (a few of the z_p), then every pin where the
-            // solution touches one outside them or there is no previous solution.
-            let mut solved = None;
-            if warm.carrier.is_finite() {
-                scratch.select_near(warm.turns);
-                let near = [0, 1].map(|d| LoadedDisc {
-                    gaps: &scratch.near_gaps[d],
-                    levers: &scratch.near_levers[d],
-                    offset: offsets[d],
-                });
-                if let Ok(solution) = loaded.solver.solve(&near, loaded.target, &warm) {
-                    if scratch.near_holds(solution.turns) {
-                        solved = Some(solution);
-                    }
-                }
-            }
-            warm = match solved {
-                Some(solution) => solution,
-                None => {
-                    let all = [0, 1].map(|d| LoadedDisc {
-                        gaps: &scratch.gaps[d],
-                        levers: &scratch.levers[d],
-                        offset: offsets[d],
-                    });
-                    loaded.solver.solve(&all, loaded.target, &warm)?
-                }
-            };
+            warm = self.loaded_point(j, terms, scratch, &warm)?;
             *value = kappa * warm.carrier - loaded.nominal;
         }
         Ok(())
     }
 
-    /// Both discs' pins at point j of N from the table (gaps and levers into `scratch`, the
-    /// pins whose lever holds a turn), and their crank offsets C_d: the geometry of
-    /// `exact_gap_at`, pin by pin.
+    /// The solution at point j from the previous point's `warm`: on the pins near contact
+    /// first (a few of the z_p), then on every pin where the turns moved beyond
+    /// [`NEAR_TURN`] and a pin outside them is in contact, or there is no previous
+    /// solution.
+    fn loaded_point(
+        &self,
+        j: usize,
+        terms: &RowTerms,
+        scratch: &mut LoadedScratch,
+        warm: &Solution,
+    ) -> Result<Solution, Unconverged> {
+        let solver = &self.loaded().solver;
+        let target = self.loaded().target;
+        if warm.carrier.is_finite() {
+            let keep = warm.turns.map(Keep::Near);
+            let offsets = self.loaded_pins(terms, j, keep, scratch);
+            let near = [0, 1].map(|d| scratch.disc(d, offsets[d]));
+            if let Ok(solution) = solver.solve(&near, target, warm) {
+                let within = (0..2).all(|d| (solution.turns[d] - warm.turns[d]).abs() <= NEAR_TURN);
+                let touching =
+                    |s: &LoadedScratch| [0, 1].map(|d| s.disc(d, 0.0).touching(solution.turns[d]));
+                if within {
+                    return Ok(solution);
+                }
+                let near_touching = touching(scratch);
+                self.loaded_pins(terms, j, [Keep::All; 2], scratch);
+                if touching(scratch) == near_touching {
+                    return Ok(solution);
+                }
+                let all = [0, 1].map(|d| scratch.disc(d, offsets[d]));
+                return solver.solve(&all, target, warm);
+            }
+        }
+        let offsets = self.loaded_pins(terms, j, [Keep::All; 2], scratch);
+        let all = [0, 1].map(|d| scratch.disc(d, offsets[d]));
+        solver.solve(&all, target, warm)
+    }
+
+    /// Both discs' pins at point j of N from the table (gaps and levers of the pins `keep`
+    /// keeps into `scratch`, prepared for the row), and their crank offsets C_d: the
+    /// geometry of `exact_gap_at`, pin by pin.
     fn loaded_pins(
         &self,
-        inputs: &[f64],
         terms: &RowTerms,
         j: usize,
+        keep: [Keep; 2],
         scratch: &mut LoadedScratch,
     ) -> [f64; 2] {
         let table = &self.loaded().table;
-        let ph = self.physical();
         let (n, zp, zc) = (self.points, self.pins, self.cycloid_teeth);
+        let (k1, root) = (table.k1, table.k1_root);
+        let lever_scale = self.eccentricity * zc as f64;
         let theta = 2.0 * PI * j as f64 / n as f64;
         let angles = self.angles_at(theta);
         let (offsets, _) = self.crank_offsets(terms, angles);
-        let floor = LEVER_FLOOR * self.eccentricity;
-        for d in 0..2 {
+        for (d, keep) in keep.into_iter().enumerate() {
             // Disc d's pins in half-pitch units of 1/(2N): q = 2·z_c·z_p·j + d·z_p·N.
             let q = 2 * zc * zp * j + d * zp * n;
             let (whole, rest) = (q / (2 * n), q % (2 * n));
-            let phase = rest * table.phases / (2 * n);
+            let base = rest / table.step * zp;
             let d_r = Self::along(terms, d, angles[0], angles[1]);
-            let constant = terms.profile[d] - terms.err_rrp;
+            // gap = (Δr_rp + profile − Δr_rp-error + tooth) + a·(Δr_rp − √(1 − K1²)·Δr_p
+            // + K1·T) + b·(K1·Δr_p − d_r − K1·R) + c·(−Δr_p + K1·d_r + R) (PinPhases).
+            let constant = terms.d_rp + terms.profile[d] - terms.err_rrp;
+            let along_a = terms.d_rp - root * terms.d_p;
+            let along_b = k1 * terms.d_p - d_r;
+            let along_c = -terms.d_p + k1 * d_r;
+            // Slot s holds pin (s − k) mod z_p: entry s + (z_p − k mod z_p) of the doubled
+            // pin columns; its tooth space round(t + d·z_p/2) − k (mod z_c) is entry
+            // round(·) + ((d·z_p/2 − k) mod z_c) + z_c of the tripled one (for an odd z_p,
+            // disc 2's half pitch rounds with t + ½).
+            let pin_offset = (zp - whole % zp) % zp;
+            let shift = ((d * (zp / 2)) as i64 - (whole % zc) as i64).rem_euclid(zc as i64);
+            let tooth_offset = shift + zc as i64;
+            let rounding = usize::from(d == 1 && zp % 2 == 1);
+            let slots = base..base + zp;
+            let factors = &table.factors[slots.clone()];
+            let tooth_of = &table.tooth[slots];
+            let radial = &scratch.pin_radial[pin_offset..pin_offset + zp];
+            let tangential = &scratch.pin_tangential[pin_offset..pin_offset + zp];
+            let teeth = &scratch.teeth[d];
             let (gaps, levers) = (&mut scratch.gaps[d], &mut scratch.levers[d]);
-            gaps.clear();
-            levers.clear();
-            let base = phase * zp;
-            // Slot s holds pin (s − k) mod z_p; tooth spaces shifted by k (mod z_c), and by
-            // half a revolution of the eccentric on disc 2. Indices step without divisions.
-            let mut pin = (zp - whole % zp) % zp;
-            let tooth_shift = (d * (zp / 2)) as i64 - (whole % zc) as i64;
-            for factors in &table.slots[base..base + zp] {
-                let lever = factors.lever;
-                let this_pin = pin;
-                pin = if pin + 1 == zp { 0 } else { pin + 1 };
-                if lever.abs() <= floor {
-                    continue;
-                }
-                let pin = this_pin;
-                let (pin_r, pin_t) = if self.per_pin {
-                    (inputs[ph.pin_base + pin], inputs[ph.pin_base + zp + pin])
-                } else {
-                    (0.0, 0.0)
-                };
-                let tooth = if self.per_tooth {
-                    // round(t + d·z_p/2) − k: for an odd z_p, disc 2's half pitch rounds
-                    // with t + ½.
-                    let [round, half] = factors.tooth;
-                    let rounded = if d == 1 && zp % 2 == 1 { half } else { round };
-                    let mut space = i64::from(rounded) + tooth_shift;
-                    while space < 0 {
-                        space += zc as i64;
+            let mut kept = 0;
+            for s in 0..zp {
+                let [a, b, c] = factors[s];
+                let [r, k1_r] = radial[s];
+                let tooth = teeth[(i64::from(tooth_of[s][rounding]) + tooth_offset) as usize];
+                let gap = constant
+                    + tooth
+                    + a * (along_a + tangential[s])
+                    + b * (along_b - k1_r)
+                    + c * (along_c + r);
+                let lever = lever_scale * a;
+                let holds = match keep {
+                    Keep::All => lever != 0.0,
+                    Keep::Near(turn) => {
+                        lever != 0.0 && lever * turn + lever.abs() * NEAR_TURN - gap > 0.0
                     }
-                    while space >= zc as i64 {
-                        space -= zc as i64;
-                    }
-                    inputs[ph.tooth_base + d * zc + space as usize]
-                } else {
-                    0.0
                 };
-                gaps.push(
-                    terms.d_rp * factors.equidistant
-                        + terms.d_p * factors.shift
-                        + d_r * factors.eccentric
-                        + (terms.err_rp + pin_r) * factors.radial
-                        + pin_t * factors.tangential
-                        + constant
-                        + tooth,
-                );
-                levers.push(lever);
+                gaps[kept] = gap;
+                levers[kept] = lever;
+                kept += usize::from(holds);
             }
+            scratch.kept[d] = kept;
         }
         offsets
     }
@@ -378,6 +425,7 @@ impl TransmissionError {
                     levers.push(lever);
                 }
             }
+            scratch.kept[d] = gaps.len();
         }
         offsets
     }

@@ -255,9 +255,10 @@ fn the_table_is_the_geometry_pin_by_pin() {
             .collect();
         let terms = model.row_terms(&inputs);
         let (mut table, mut exact) = (LoadedScratch::default(), LoadedScratch::default());
+        table.prepare(&model, &inputs, &terms);
         let n = model.points;
         for j in (0..n).step_by(7) {
-            let a = model.loaded_pins(&inputs, &terms, j, &mut table);
+            let a = model.loaded_pins(&terms, j, [Keep::All; 2], &mut table);
             let theta = 2.0 * PI * j as f64 / n as f64;
             let b = model.exact_loaded_pins(&inputs, &terms, theta, &mut exact);
             assert_eq!(a, b);
@@ -267,10 +268,11 @@ fn the_table_is_the_geometry_pin_by_pin() {
                 // by its rounding (1e-14 rad at Θ near 2π), which moves a lever by up to
                 // 1e-12 mm near φ = 0 or π.
                 let sorted = |s: &LoadedScratch| {
-                    let mut v: Vec<(f64, f64)> = s.levers[d]
+                    let kept = s.kept[d];
+                    let mut v: Vec<(f64, f64)> = s.levers[d][..kept]
                         .iter()
                         .cloned()
-                        .zip(s.gaps[d].iter().cloned())
+                        .zip(s.gaps[d][..kept].iter().cloned())
                         .filter(|(l, _)| l.abs() > 1e-9)
                         .collect();
                     v.sort_by(|x, y| x.0.total_cmp(&y.0));
