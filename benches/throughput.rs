@@ -232,5 +232,55 @@ fn models(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, normals, stages, floor, whole_run, models);
+/// The transmission error under load (the loaded contact solution at every point of the
+/// curve, docs/models.md §12.9) per sample, one thread, at N = 4096 (the default) and
+/// beyond: the RV40E of document 002 with the crank side of scenarios/reducers/rv40e.json
+/// (the model's example), pin and tooth-space errors, on rows drawn from the shipped
+/// transmission scenario. Target ≤ 500 µs per sample at 4096 points.
+fn loaded_transmission_error(c: &mut Criterion) {
+    let scenario =
+        rvtol_analysis::request::scenario::load(&scenario_path("rv40e-transmission.json"))
+            .expect("shipped scenario loads");
+    let rows = 8;
+    let columns = model_rows(&scenario, rows);
+    let inputs: Vec<Vec<f64>> = (0..rows)
+        .map(|r| columns.iter().map(|column| column[r]).collect())
+        .collect();
+    let entry = rvtol_models::find("transmission_error").expect("registered");
+    let mut group = c.benchmark_group("transmission_error_loaded");
+    group.sample_size(10);
+    for points in [4096, 8192, 16384] {
+        let params = (entry.example_params)()
+            .with_number("pin_position_errors", 1.0)
+            .with_number("tooth_profile_errors", 1.0)
+            .with_number("sun_plane_offset_mm", 30.0)
+            .with_number("points_per_revolution", points as f64);
+        let model = (entry.build)(&params).expect("the example builds");
+        assert_eq!(
+            model.inputs().len(),
+            inputs[0].len(),
+            "the scenario's inputs"
+        );
+        let mut outputs = vec![0.0; model.outputs().len()];
+        group.throughput(Throughput::Elements(rows as u64));
+        group.bench_function(BenchmarkId::from_parameter(points), |b| {
+            b.iter(|| {
+                for row in &inputs {
+                    model.evaluate(row, &mut outputs);
+                }
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(
+    benches,
+    normals,
+    stages,
+    floor,
+    whole_run,
+    models,
+    loaded_transmission_error
+);
 criterion_main!(benches);

@@ -12,6 +12,7 @@ mod cycloid;
 mod cycloid_pin_contact;
 mod geometric_hysteresis;
 mod linear_stack;
+mod loaded;
 mod params;
 mod preload;
 mod reducer;

@@ -70,13 +70,16 @@ use std::f64::consts::PI;
 use crate::cycloid::CycloidStage;
 use crate::preload::{self, PreloadRule};
 use crate::spectrum::RealFft;
+use crate::stiffness::build;
 use crate::{
     Curve, CurveStyle, ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputKind,
     OutputSpec, ParamSpec, Series, ARCSEC_PER_RAD,
 };
 
+mod loaded;
 mod two_discs;
 
+use loaded::{Loaded, LoadedScratch};
 use two_discs::{CrankClosure, DiscContact, Physical, TwoDiscScratch};
 
 /// Largest crank count.
@@ -238,7 +241,13 @@ const PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "disc_contact",
         unit: "text",
-        description: "physical reading: \"first_contact\" (default; light load: the disc that touches first carries the output) or \"load_shared\" (both discs loaded: the mean of their contact angles)",
+        description: "physical reading: \"loaded\" (default; the loaded contact solution at load_torque_nm: both discs' pins elastic on their signed gaps, coupled through the crank side, docs/models.md §12.9), \"first_contact\" (rigid, light load: the disc that touches first carries the output) or \"load_shared\" (rigid, both discs loaded: the mean of their contact angles)",
+        default: None,
+    },
+    ParamSpec {
+        name: "load_torque_nm",
+        unit: "N·m",
+        description: "T, the output torque of the loaded reading, input locked, on the drive flank (default 3 % of rated_torque_nm: the light load at which a catalogue reads lost motion and a single-flank test runs)",
         default: None,
     },
     ParamSpec {
@@ -272,6 +281,34 @@ const PARAMS: &[ParamSpec] = &[
     preload::PARAMS[1],
     preload::PARAMS[2],
     preload::PARAMS[3],
+    build::PARAMS[0],
+    build::PARAMS[1],
+    build::PARAMS[2],
+    build::PARAMS[3],
+    build::PARAMS[4],
+    build::PARAMS[5],
+    build::PARAMS[6],
+    build::PARAMS[7],
+    build::PARAMS[8],
+    build::PARAMS[9],
+    build::PARAMS[10],
+    build::PARAMS[11],
+    build::PARAMS[12],
+    build::PARAMS[13],
+    build::PARAMS[14],
+    build::PARAMS[15],
+    build::PARAMS[16],
+    build::PARAMS[17],
+    build::PARAMS[18],
+    build::PARAMS[19],
+    build::PARAMS[20],
+    build::PARAMS[21],
+    build::PARAMS[22],
+    build::PARAMS[23],
+    build::PARAMS[24],
+    build::PARAMS[25],
+    build::PARAMS[26],
+    build::PARAMS[27],
 ];
 
 /// Registry entry.
@@ -303,6 +340,22 @@ fn rv40e_params() -> ModelParams {
         .with_number("pin_circle_radius_mm", 64.0)
         .with_number("eccentricity_mm", 1.25)
         .with_number("output_pin_circle_radius_mm", 27.0)
+        .with_number("crank_journal_diameter_mm", 20.0)
+        .with_number("needle_roller_count", 15.0)
+        .with_number("needle_roller_diameter_mm", 4.0)
+        .with_number("needle_roller_length_mm", 8.0)
+        .with_number("crank_support_span_mm", 38.25)
+        .with_number("crank_eccentric_spacing_mm", 11.0)
+        .with_number("support_roller_count", 13.0)
+        .with_number("support_roller_length_mm", 10.675)
+        .with_number("support_contact_angle_deg", 13.0)
+        .with_number("support_bearing_width_mm", 15.25)
+        .with_number("support_bearing_outer_diameter_mm", 47.0)
+        .with_number("carrier_pillar_width_mm", 14.0)
+        .with_number("carrier_pillar_depth_mm", 14.0)
+        .with_number("carrier_pillar_length_mm", 23.0)
+        .with_number("planet_face_width_mm", 10.0)
+        .with_number("planet_gear_overhang_mm", 13.625)
 }
 
 /// The pin slots of every phase of the curve, as columns (structure of arrays) in blocks of
@@ -438,6 +491,8 @@ pub struct TransmissionError {
     physical: Option<Box<Physical>>,
     /// The one preload rule (docs/models.md §14.5), with the physical reading.
     preload_rule: Option<PreloadRule>,
+    /// The loaded reading's data (`disc_contact` "loaded").
+    loaded: Option<Box<Loaded>>,
 }
 
 /// Per-thread work state of the first-contact search, refilled for every row: the per-pin
@@ -459,6 +514,8 @@ struct Search {
     fft_im: Vec<f64>,
     /// The physical reading's work state.
     two: TwoDiscScratch,
+    /// The loaded reading's.
+    loaded: LoadedScratch,
 }
 
 // Per-thread work state (no allocation per sample).
@@ -525,13 +582,18 @@ impl TransmissionError {
                 ))
             }
         };
-        let contact = match params.text("disc_contact", "first_contact")?.as_str() {
-            "first_contact" => DiscContact::FirstContact,
-            "load_shared" => DiscContact::LoadShared,
+        // The loaded reading keeps the rigid first contact's tables for its interference
+        // flag and preload judgement.
+        let (contact, under_load) = match params.text("disc_contact", "loaded")?.as_str() {
+            "loaded" => (DiscContact::FirstContact, !literal),
+            "first_contact" => (DiscContact::FirstContact, false),
+            "load_shared" => (DiscContact::LoadShared, false),
             other => {
                 return Err(ModelError::new(
                     "disc_contact",
-                    format!("must be \"first_contact\" or \"load_shared\", got \"{other}\""),
+                    format!(
+                        "must be \"loaded\", \"first_contact\" or \"load_shared\", got \"{other}\""
+                    ),
                 ))
             }
         };
@@ -617,11 +679,31 @@ impl TransmissionError {
                 (ratio, lambda),
             )?)
         };
+        let loaded = match (&preload_rule, physical_geometry) {
+            (Some(rule), Some((crank_radius, _, _))) if under_load => {
+                let lambda = cycloid_teeth as f64 / pins as f64 * (1.0 - 1.0 / ratio);
+                Some(Box::new(loaded::build(
+                    params,
+                    &stage,
+                    rule,
+                    (cranks, crank_radius),
+                    (ratio, lambda),
+                    points,
+                )?))
+            }
+            _ => None,
+        };
         params.reject_unknown(&PARAMS.iter().map(|p| p.name).collect::<Vec<_>>())?;
         let (inputs, outputs) = if literal {
             literal_specs(cranks, pins, cycloid_teeth, per_pin, per_tooth)
         } else {
-            two_discs::specs(cranks, pins, cycloid_teeth, per_pin, per_tooth)
+            two_discs::specs(
+                cranks,
+                pins,
+                cycloid_teeth,
+                (per_pin, per_tooth),
+                under_load,
+            )
         };
 
         // Phase table: the fractional pin pitch of the eccentric at point j takes
@@ -721,7 +803,7 @@ impl TransmissionError {
                 ),
             ))
         });
-        Ok(TransmissionError {
+        TransmissionError {
             sun_teeth,
             planet_teeth,
             pins,
@@ -743,7 +825,25 @@ impl TransmissionError {
             outputs,
             physical,
             preload_rule,
-        })
+            loaded,
+        }
+        .with_loaded_nominal()
+    }
+
+    /// Sets the loaded reading's nominal, the perfect reducer's mean angle at its torque.
+    fn with_loaded_nominal(mut self) -> Result<Self, ModelError> {
+        if self.loaded.is_some() {
+            let nominal = self.perfect_loaded_angle().map_err(|cause| {
+                ModelError::new(
+                    "load_torque_nm",
+                    format!("the perfect reducer has no loaded solution: {cause}"),
+                )
+            })?;
+            if let Some(loaded) = self.loaded.as_mut() {
+                loaded.nominal = nominal;
+            }
+        }
+        Ok(self)
     }
 
     /// Overall ratio i = 1 + (z_pl/z_s)·z_p (validation.md 002: 121 for the RV40E).
@@ -1203,8 +1303,12 @@ impl ErrorModel for TransmissionError {
     fn evaluate(&self, inputs: &[f64], outputs: &mut [f64]) {
         SEARCH.with_borrow_mut(|search| {
             if self.physical.is_some() {
-                let Search { curve, two, .. } = search;
-                self.evaluate_physical(inputs, curve, two, outputs)
+                let Search {
+                    curve, two, loaded, ..
+                } = search;
+                if let Some(terms) = self.evaluate_physical(inputs, curve, two, outputs) {
+                    self.evaluate_loaded(inputs, &terms, loaded, curve, outputs);
+                }
             } else {
                 self.evaluate_with(inputs, search, outputs)
             }

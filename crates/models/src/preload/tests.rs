@@ -244,7 +244,13 @@ fn classes(d: Shared) -> Vec<(&'static str, (f64, f64, f64))> {
         .with_number("pin_radius_mm", 2.0)
         .with_number("disc_face_width_mm", 8.0)
         .with_number("pin_friction_coefficient", 0.02)
-        .with_number("rated_torque_nm", 167.0);
+        .with_number("rated_torque_nm", 167.0)
+        // The preload is judged alike in every contact reading; the rigid one needs no
+        // crank side.
+        .with(
+            "disc_contact",
+            crate::ParamValue::Text("first_contact".into()),
+        );
     let te = crate::TransmissionError::from_params(&te_params).unwrap();
     let te_row = row_of(
         &te,

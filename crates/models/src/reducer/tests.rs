@@ -281,7 +281,11 @@ fn the_windows_are_those_of_the_transmission_error_geometry() {
             .with_number("pin_radius_mm", 2.0)
             .with_number("disc_face_width_mm", 8.0)
             .with_number("rated_torque_nm", 167.0)
-            .with_number("pin_position_errors", 1.0),
+            .with_number("pin_position_errors", 1.0)
+            .with(
+                "disc_contact",
+                crate::ParamValue::Text("first_contact".into()),
+            ),
     )
     .expect("valid");
     let mut next = uniform();

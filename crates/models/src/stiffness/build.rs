@@ -22,9 +22,182 @@ use super::{
     assembly_preload, bolt_for_pillar, hub_tilt_stiffness, BoltedJoint, Carrier, CrankShaft,
     CrankSide, EndCompliance, Housing, InvoluteStage, RollerRow, TaperedRow,
 };
-use crate::{ModelError, ModelParams};
+use crate::{ModelError, ModelParams, ParamSpec};
 use rvtol_deviation::{Rounded, Shown};
 use std::f64::consts::PI;
+
+/// The crank side's parameters (the keys [`crank_side`] reads beside the reducer's own), in
+/// the order the models that build it list them.
+pub(crate) const PARAMS: [ParamSpec; 28] = [
+    ParamSpec {
+        name: "youngs_modulus_mpa",
+        unit: "MPa",
+        description: "E of every steel part",
+        default: Some(206_000.0),
+    },
+    ParamSpec {
+        name: "poisson_ratio",
+        unit: "1",
+        description: "ν of every steel part",
+        default: Some(0.3),
+    },
+    ParamSpec {
+        name: "crank_journal_diameter_mm",
+        unit: "mm",
+        description: "d_j, eccentric journal (needle inner raceway), also the crank's bending and torsion diameter",
+        default: None,
+    },
+    ParamSpec {
+        name: "needle_roller_count",
+        unit: "1",
+        description: "Z, needles between one eccentric and the disc bore",
+        default: None,
+    },
+    ParamSpec {
+        name: "needle_roller_diameter_mm",
+        unit: "mm",
+        description: "D, needle diameter: the disc's bore is d_j/2 + D; default d_j/5 (the estimation rule of docs/models.md §13)",
+        default: None,
+    },
+    ParamSpec {
+        name: "needle_roller_length_mm",
+        unit: "mm",
+        description: "l, effective needle length",
+        default: None,
+    },
+    ParamSpec {
+        name: "crank_support_span_mm",
+        unit: "mm",
+        description: "L, between the load centres of a crank's two support bearings",
+        default: None,
+    },
+    ParamSpec {
+        name: "crank_eccentric_spacing_mm",
+        unit: "mm",
+        description: "s, between the two eccentric planes, centred in the span (< L)",
+        default: None,
+    },
+    ParamSpec {
+        name: "support_roller_count",
+        unit: "1",
+        description: "Z_s, rollers of one support bearing",
+        default: None,
+    },
+    ParamSpec {
+        name: "support_roller_length_mm",
+        unit: "mm",
+        description: "l_s, effective roller length of a support bearing",
+        default: None,
+    },
+    ParamSpec {
+        name: "support_contact_angle_deg",
+        unit: "deg",
+        description: "α_s, contact angle of a support bearing (tapered rollers), in [0, 45)",
+        default: None,
+    },
+    ParamSpec {
+        name: "support_bearing_width_mm",
+        unit: "mm",
+        description: "B, width of a support bearing, the thickness of the carrier plate around it; default support_roller_length_mm/0.7 (the estimation rule of docs/models.md §13)",
+        default: None,
+    },
+    ParamSpec {
+        name: "support_bearing_outer_diameter_mm",
+        unit: "mm",
+        description: "D_s, outer diameter of a support bearing, the end plate's seat bore; default d_j + 4π·d_j/(1.2·Z_s − 2π) (the roller-count rule of docs/models.md §13 inverted)",
+        default: None,
+    },
+    ParamSpec {
+        name: "support_preload_n",
+        unit: "N",
+        description: "F_a0, axial preload of each support bearing (the crank's shim), ≥ 0; default the least that keeps every roller loaded under a support's reaction at 3 % of rated torque (docs/models.md §13)",
+        default: None,
+    },
+    ParamSpec {
+        name: "carrier_pillar_count",
+        unit: "1",
+        description: "n_p, pillars joining the carrier's plates; default crank_count",
+        default: None,
+    },
+    ParamSpec {
+        name: "carrier_pillar_radius_mm",
+        unit: "mm",
+        description: "r_p, radius of the pillars' centres; default crank_circle_radius_mm",
+        default: None,
+    },
+    ParamSpec {
+        name: "carrier_pillar_width_mm",
+        unit: "mm",
+        description: "b, pillar section across the radius",
+        default: None,
+    },
+    ParamSpec {
+        name: "carrier_pillar_depth_mm",
+        unit: "mm",
+        description: "h, pillar section along the radius",
+        default: None,
+    },
+    ParamSpec {
+        name: "carrier_pillar_length_mm",
+        unit: "mm",
+        description: "L_p, free pillar length between the plates",
+        default: None,
+    },
+    ParamSpec {
+        name: "end_plate_bolt_diameter_mm",
+        unit: "mm",
+        description: "d, the 12.9 bolt clamping each pillar to the end plate: 4, 5, 6, 8 or 10; default the largest no thicker than half the pillar's smaller side",
+        default: None,
+    },
+    ParamSpec {
+        name: "end_plate_bolt_preload_n",
+        unit: "N",
+        description: "F_M, that bolt's preload; default VDI 2230's assembly preload (12.9, μ_G 0.12, 90 % of the yield point)",
+        default: None,
+    },
+    ParamSpec {
+        name: "joint_deflection_coefficient",
+        unit: "µm/MPa^m",
+        description: "C of the joint surface's δ = C·p^m (Ito, Modular Design for Machine Tools, Table 6-5: ground steel 0.046)",
+        default: Some(0.046),
+    },
+    ParamSpec {
+        name: "joint_deflection_exponent",
+        unit: "1",
+        description: "m of the joint surface's δ = C·p^m, in (0, 1) (Ito, Table 6-5: ground steel 0.48)",
+        default: Some(0.48),
+    },
+    ParamSpec {
+        name: "disc_pillar_hole_radius_mm",
+        unit: "mm",
+        description: "r_h, the holes the pillars pass through in each disc; default the pillar's half-diagonal plus e",
+        default: None,
+    },
+    ParamSpec {
+        name: "planet_face_width_mm",
+        unit: "mm",
+        description: "b, face width of the sun–planet mesh",
+        default: None,
+    },
+    ParamSpec {
+        name: "mesh_stiffness_n_per_mm_um",
+        unit: "N/(mm·µm)",
+        description: "c_γ, mesh stiffness per mm of face width (ISO 6336-1: about 20 for steel spur gears)",
+        default: Some(20.0),
+    },
+    ParamSpec {
+        name: "planet_gear_overhang_mm",
+        unit: "mm",
+        description: "l1, planet gear to the nearer support bearing along the crank",
+        default: None,
+    },
+    ParamSpec {
+        name: "body_compliance",
+        unit: "1",
+        description: "1: the discs (around their bores and pillars' holes), the carrier's plates (seats, paths to the pillars, the pillars' roots, the end plate's joints and bending) and the housing around the pins are elastic (docs/models.md §13); 0: rigid bodies",
+        default: Some(1.0),
+    },
+];
 
 /// What the crank side needs of the reducer around it.
 #[derive(Debug, Clone, Copy)]

@@ -184,6 +184,49 @@ impl CrankSide {
         }
     }
 
+    /// The compliance of one disc against the other through the crank side, rad of the
+    /// disc per N·mm of its own pin moment, linearised at the load state of the disc torque
+    /// T_c (N·mm, > 0) with the closed-form pin resultant F_x = T_c/(e·z_c) (every pin
+    /// normal passes through the pitch point, e·z_c from the disc centre).
+    ///
+    /// Two discs whose pin moments M_1, M_2 differ load the crank side in two patterns
+    /// (docs/models.md §12.9): their torques, τ_d = M_d/(m·a_w) across each crank, and
+    /// their pin resultants, M_d/(e·z_c·m) along each disc's across direction, which are
+    /// opposite in the carrier (eccentrics 180° apart). A disc's own elements (its needle
+    /// rows, the disc around its bores and its web) see only its own load; the crank shaft
+    /// and the supports see both planes, w(x1; x1) for a load at the own plane and
+    /// w(x1; x2) for one at the other. Split into M_1 + M_2 (fixed by the output torque:
+    /// a common turn of both discs, the carrier's wind-up with it) and M_d − M_other, the
+    /// part that differs turns disc d by c·M_d plus a constant, with
+    ///
+    /// ```text
+    /// c = c_rot/(m·a_w²) + c_trans/(m·(e·z_c)²)
+    /// c_rot   = row + bore + web_S + (w11 − w12) + supports and paths, antisymmetric weights
+    /// c_trans = row + bore + web_A + (w11 + w12) + supports and paths, symmetric weights
+    /// ```
+    ///
+    /// (the torques are the same at both planes when the discs are alike, the resultants
+    /// opposite: the shaft's modes swap against [`Self::terms`]'s). Rows at their secant
+    /// stiffness at the rms load of the state, as in [`Self::terms`]; the carrier's
+    /// wind-up and the involute stage carry only the sum and do not appear.
+    pub fn disc_compliance(&self, disc_torque: f64) -> f64 {
+        let (m, a) = (self.cranks, self.crank_circle_radius);
+        let tangential = disc_torque / (m * a);
+        let shared = disc_torque / (self.pitch_radius * m);
+        let own = self.needle.secant_compliance(tangential.hypot(shared)) + self.bore_compliance;
+        let modes = self.shaft.modes();
+        let supports = self.support_state(tangential, shared);
+        let row =
+            |load: f64| self.support.secant_compliance(load) + self.support_housing_compliance;
+        let rows = (row(supports.loads.0), row(supports.loads.1));
+        let path = self.seat_path_compliance;
+        let weigh = |(wa, wb): (f64, f64)| wa * (rows.0 + path) + wb * (rows.1 + path);
+        let rotation =
+            own + self.web_compliance.0 + modes.antisymmetric + weigh(supports.antisymmetric);
+        let translation = own + self.web_compliance.1 + modes.symmetric + weigh(supports.symmetric);
+        rotation / (m * a * a) + translation / (m * self.pitch_radius * self.pitch_radius)
+    }
+
     /// The supports' weights (shares times the lever of each support on the first
     /// eccentric plane) and rms loads for the crank loads τ and |F|/m.
     fn support_state(&self, tangential: f64, shared: f64) -> SupportState {
@@ -323,5 +366,32 @@ mod tests {
         // |F|/m = T_c/(e·z_c·m) = 1139.60 N, A_A = 9/28: √(1454.55² + (1139.60·9/28)²) =
         // 1499.96 N at both supports.
         assert!((side.support_load(80_000.0) / 1499.96 - 1.0).abs() < 1e-5);
+        disc_compliance_swaps_the_shaft_and_support_modes(&side);
+    }
+
+    /// [`CrankSide::disc_compliance`] against [`CrankSide::terms`] of the same state (the
+    /// closed-form resultant F_x = T_c/(e·z_c)): the same elements, with the shaft's and
+    /// the supports' symmetric and antisymmetric parts swapped between the torque (1/a_w²)
+    /// and the resultant (1/(e·z_c)²), and without the carrier and the end plate (the sum
+    /// of the two discs' moments is fixed).
+    fn disc_compliance_swaps_the_shaft_and_support_modes(side: &CrankSide) {
+        let t_c = 80_000.0;
+        let (m, a, p) = (side.cranks, side.crank_circle_radius, side.pitch_radius);
+        let terms = side.terms(t_c, (t_c / p, 0.0), 1.0, 0.0, 1.0);
+        let kept = terms.total() - terms.carrier - terms.end_plate_joint - terms.end_plate_bending;
+        let modes = side.shaft.modes();
+        let supports = side.support_state(t_c / (m * a), t_c / (p * m));
+        let row = |load: f64| {
+            side.support.secant_compliance(load)
+                + side.support_housing_compliance
+                + side.seat_path_compliance
+        };
+        let (row_a, row_b) = (row(supports.loads.0), row(supports.loads.1));
+        let weigh = |(wa, wb): (f64, f64)| wa * row_a + wb * row_b;
+        let swing = (modes.antisymmetric - modes.symmetric)
+            + (weigh(supports.antisymmetric) - weigh(supports.symmetric));
+        let hand = kept / t_c + swing * (1.0 / (m * a * a) - 1.0 / (m * p * p));
+        let model = side.disc_compliance(t_c);
+        assert!((model / hand - 1.0).abs() < 1e-12, "{model} vs {hand}");
     }
 }

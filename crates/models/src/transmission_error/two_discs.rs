@@ -573,6 +573,25 @@ impl TransmissionError {
         pin: usize,
         theta: f64,
         d_r: f64,
+        angle: (f64, f64),
+    ) -> (f64, f64) {
+        let (g, lever) = self.exact_gap_at(inputs, terms, d, pin, theta, d_r, angle);
+        (g / lever.abs(), lever)
+    }
+
+    /// The gap g (mm, along the pin's normal; negative: an overlap) and the lever l (mm) of
+    /// pin `pin` on disc d at Θ, (sin φ, cos φ) of the pin given: the clearance the windows'
+    /// ratios g/|l| are made of.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    pub(super) fn exact_gap_at(
+        &self,
+        inputs: &[f64],
+        terms: &RowTerms,
+        d: usize,
+        pin: usize,
+        theta: f64,
+        d_r: f64,
         (sin, cos): (f64, f64),
     ) -> (f64, f64) {
         let ph = self.physical();
@@ -604,7 +623,7 @@ impl TransmissionError {
             + terms.profile[d]
             - terms.err_rrp
             + tooth;
-        (g / factors.lever.abs(), factors.lever)
+        (g, factors.lever)
     }
 
     /// The whole physical geometry at Θ, pin by pin: the reference of the tabulated curve
@@ -1375,7 +1394,7 @@ impl Physical {
 /// 1 − sin φ/S and −(1 − K1·cos φ − √(1 − K1²)·sin φ)/S, the radial (1 − K1·cos φ)/S):
 /// 2 − equidistant and −2·radial − shift, no root or division of its own.
 #[inline(always)]
-fn modification(factors: &PinFactors) -> (f64, f64) {
+pub(super) fn modification(factors: &PinFactors) -> (f64, f64) {
     (
         2.0 - factors.equidistant,
         -2.0 * factors.radial - factors.shift,
@@ -1603,8 +1622,8 @@ pub(super) fn specs(
     cranks: usize,
     pins: usize,
     teeth: usize,
-    per_pin: bool,
-    per_tooth: bool,
+    (per_pin, per_tooth): (bool, bool),
+    loaded: bool,
 ) -> (Vec<InputSpec>, Vec<OutputSpec>) {
     let input = |name: String, unit: &str, description: &'static str| InputSpec {
         name,
@@ -1657,9 +1676,18 @@ pub(super) fn specs(
             }
         }
     }
-    let condition = Some(OutputCondition {
-        indicator: INTERFERENCE,
-        effect: ConditionEffect::Excluded,
+    // The rigid readings have no transmission error where the discs do not fit; the loaded
+    // reading has one, which an over-preload makes non-conforming (docs/models.md §14.8).
+    let condition = Some(if loaded {
+        OutputCondition {
+            indicator: crate::preload::OVER_PRELOADED,
+            effect: ConditionEffect::NonConforming,
+        }
+    } else {
+        OutputCondition {
+            indicator: INTERFERENCE,
+            effect: ConditionEffect::Excluded,
+        }
     });
     let output = |name: String, description: &'static str| OutputSpec {
         name,
@@ -1692,18 +1720,18 @@ pub(super) fn specs(
 
 /// Per lane of a curve's quadruples (the points j ≡ lane mod 4, in index order): the
 /// smallest and the largest value, the quadruple at which each first occurs, and the sum.
-struct LaneStats {
-    lo: [f64; 4],
-    hi: [f64; 4],
+pub(super) struct LaneStats {
+    pub lo: [f64; 4],
+    pub hi: [f64; 4],
     lo_at: [usize; 4],
     hi_at: [usize; 4],
-    sum: [f64; 4],
+    pub sum: [f64; 4],
 }
 
 /// [`LaneStats`] of a curve in one pass. Not inlined: inlined, LLVM vectorised the minima
 /// and maxima but summed the lanes one by one (a chain of dependent scalar additions).
 #[inline(never)]
-fn lane_stats(quads: &[[f64; 4]]) -> LaneStats {
+pub(super) fn lane_stats(quads: &[[f64; 4]]) -> LaneStats {
     let (mut lo, mut hi, mut sum) = ([f64::INFINITY; 4], [f64::NEG_INFINITY; 4], [0.0; 4]);
     let (mut lo_at, mut hi_at) = ([0; 4], [0; 4]);
     for (q, quad) in quads.iter().enumerate() {
@@ -1729,7 +1757,7 @@ fn lane_stats(quads: &[[f64; 4]]) -> LaneStats {
 /// Per lane, Σ (v − mean)², in index order. Not inlined, for the same reason as
 /// [`lane_stats`].
 #[inline(never)]
-fn lane_squares(quads: &[[f64; 4]], mean: f64) -> [f64; 4] {
+pub(super) fn lane_squares(quads: &[[f64; 4]], mean: f64) -> [f64; 4] {
     let mut squares = [0.0; 4];
     for quad in quads {
         for lane in 0..4 {
@@ -1741,23 +1769,27 @@ fn lane_squares(quads: &[[f64; 4]], mean: f64) -> [f64; 4] {
 
 /// The transmission error's own outputs, before the interference indicator and the preload
 /// rule's five.
-const TE_OUTPUTS: usize = 8;
+pub(super) const TE_OUTPUTS: usize = 8;
 
 /// Name of the interference indicator.
 pub(super) const INTERFERENCE: &str = "profile_interference";
 
 impl TransmissionError {
-    /// [`crate::ErrorModel::evaluate`] of the physical reading.
+    /// [`crate::ErrorModel::evaluate`] of the physical reading's rigid pass: the rigid
+    /// curve, the interference indicator and the preload rule's outputs, and the rigid
+    /// readings' transmission error. With the loaded reading it returns the row's terms for
+    /// the loaded solution to finish the row (the parent module dispatches, so that this
+    /// reading does not depend on the loaded one).
     pub(super) fn evaluate_physical(
         &self,
         inputs: &[f64],
         curve: &mut Vec<f64>,
         scratch: &mut TwoDiscScratch,
         outputs: &mut [f64],
-    ) {
+    ) -> Option<RowTerms> {
         if inputs.iter().any(|v| !v.is_finite()) {
             outputs.iter_mut().for_each(|o| *o = f64::NAN);
-            return;
+            return None;
         }
         let terms = self.row_terms(inputs);
         curve.resize(self.points, 0.0);
@@ -1768,7 +1800,11 @@ impl TransmissionError {
             let theta = 2.0 * PI * scratch.narrowest.1 as f64 / self.points as f64;
             let judged = self.judge_preload(inputs, &terms, theta);
             outputs[TE_OUTPUTS + 1..].copy_from_slice(&judged);
-            return;
+            return self.loaded.is_some().then_some(terms);
+        }
+        if self.loaded.is_some() {
+            outputs[TE_OUTPUTS] = 0.0;
+            return Some(terms);
         }
         let n = self.points;
         let quads = curve.as_chunks::<4>().0;
@@ -1815,6 +1851,7 @@ impl TransmissionError {
         if !outputs[..TE_OUTPUTS].iter().all(|v| v.is_finite()) {
             outputs.iter_mut().for_each(|o| *o = f64::NAN);
         }
+        None
     }
 
     /// The preload rule's five outputs at the output angle Θ where the discs fit least
@@ -1970,6 +2007,19 @@ impl TransmissionError {
                 .map(|j| (degrees(j), value(j) * ARCSEC_PER_RAD))
                 .collect(),
         };
+        // The loaded reading's curve first (its torque in the label), the rigid first
+        // contact and its stages after it.
+        let (loaded_series, total_label) =
+            match (self.load_torque(), self.loaded_curve_arcsec(inputs)) {
+                (Some(torque), Some(loaded)) => (
+                    Some(Series {
+                        label: format!("total under load ({} N·m)", rvtol_deviation::Shown(torque)),
+                        points: (0..n).map(|j| (degrees(j), loaded[j])).collect(),
+                    }),
+                    "rigid first contact",
+                ),
+                _ => (None, "total"),
+            };
         let exact_stages = self.exact_curve_stages(inputs, SPECTRUM_POINTS);
         let exact: Vec<f64> = exact_stages
             .iter()
@@ -2002,8 +2052,10 @@ impl TransmissionError {
                 x_label: "output angle (deg)".into(),
                 y_label: "transmission error (arcsec)".into(),
                 style: CurveStyle::Lines,
-                series: vec![
-                    series("total", &|j| curve[j]),
+                series: loaded_series
+                    .into_iter()
+                    .chain([
+                    series(total_label, &|j| curve[j]),
                     series("involute stage (common to the cranks)", &|j| stages[j][0]),
                     series(
                         "cranks (translation and four-bar, mean of the discs)",
@@ -2013,7 +2065,8 @@ impl TransmissionError {
                         "cycloid–pin contact (first contact over both discs)",
                         &|j| stages[j][2],
                     ),
-                ],
+                ])
+                .collect(),
             },
             Curve {
                 name: "transmission_error_detail".into(),
@@ -2053,8 +2106,14 @@ mod tests {
     use super::*;
     use crate::{ErrorModel, ModelParams, ParamValue, ARCSEC_PER_RAD};
 
+    /// The RV40E in the rigid first contact (the readings these tests check; the loaded
+    /// reading's are in loaded/tests.rs).
     fn params() -> ModelParams {
-        super::super::rv40e_params()
+        text(
+            super::super::rv40e_params(),
+            "disc_contact",
+            "first_contact",
+        )
     }
 
     fn with(params: ModelParams) -> TransmissionError {
