@@ -294,24 +294,44 @@ fn evaluate_chunk(
             }
         }
     }
-    let mut evaluator = ChunkEvaluator::new(scenario);
-    let mut values: ChunkValues = vec![Vec::with_capacity(2 * groups.len() + 2); continuous.len()];
-    let mut evaluate = |matrix: &[f64], values: &mut ChunkValues| {
-        evaluator.evaluate_columns_at(matrix, m, 0);
-        for (slot, &o) in continuous.iter().enumerate() {
-            values[slot].push(evaluator.output_columns[o][..m].to_vec());
-        }
-    };
-    evaluate(&a, &mut values);
-    evaluate(&b, &mut values);
-    let mut mixed = a.clone();
-    for (base, donor) in [(&a, &b), (&b, &a)] {
-        for group in groups {
-            mixed.copy_from_slice(base);
-            for &c in &group.columns {
-                mixed[c * m..(c + 1) * m].copy_from_slice(&donor[c * m..(c + 1) * m]);
-            }
-            evaluate(&mixed, &mut values);
+    // The 2G + 2 matrices (A, B, A with group g's columns from B, B with them from A)
+    // side by side: one chunk of an expensive model is work for every core, and a matrix's
+    // values do not depend on the thread that evaluates it.
+    let n_groups = groups.len();
+    let per_variant: Vec<Vec<Vec<f64>>> = (0..2 * n_groups + 2)
+        .into_par_iter()
+        .map_init(
+            || (ChunkEvaluator::new(scenario), Vec::new()),
+            |(evaluator, mixed), variant| {
+                let matrix: &[f64] = match variant {
+                    0 => &a,
+                    1 => &b,
+                    _ => {
+                        let g = (variant - 2) % n_groups;
+                        let (base, donor) = if variant - 2 < n_groups {
+                            (&a, &b)
+                        } else {
+                            (&b, &a)
+                        };
+                        mixed.clear();
+                        mixed.extend_from_slice(base);
+                        for &c in &groups[g].columns {
+                            mixed[c * m..(c + 1) * m].copy_from_slice(&donor[c * m..(c + 1) * m]);
+                        }
+                        mixed
+                    }
+                };
+                evaluator.evaluate_columns_at(matrix, m, 0);
+                (continuous.iter())
+                    .map(|&o| evaluator.output_columns[o][..m].to_vec())
+                    .collect()
+            },
+        )
+        .collect();
+    let mut values: ChunkValues = vec![Vec::with_capacity(2 * n_groups + 2); continuous.len()];
+    for variant in per_variant {
+        for (slot, column) in variant.into_iter().enumerate() {
+            values[slot].push(column);
         }
     }
     Ok(values)
