@@ -370,7 +370,7 @@ fn disc_windows_move_as_the_exact_profile_windows_do() {
     let (zp, zc, r_p, e) = (40.0, 39.0, 52.0, 0.9);
     let params = ModelParams::new()
         .with_number("crank_circle_radius_mm", 27.5)
-        .with_number("disc_spacing_mm", 12.0)
+        .with_number("crank_eccentric_spacing_mm", 12.0)
         .with_number("sun_teeth", 9.0)
         .with_number("planet_teeth", 27.0)
         .with_number("module_mm", 1.0)

@@ -47,6 +47,13 @@ pub struct ModelParams {
     read: RefCell<BTreeSet<String>>,
 }
 
+/// Parameters renamed since they were introduced: (old key, new key, why).
+const RENAMED: &[(&str, &str, &str)] = &[(
+    "disc_spacing_mm",
+    "crank_eccentric_spacing_mm",
+    "the discs' mid-planes are their eccentrics': one dimension of the reducer, the crank side's too",
+)];
+
 impl ModelParams {
     /// Empty parameters.
     pub fn new() -> Self {
@@ -166,19 +173,24 @@ impl ModelParams {
         to
     }
 
-    /// Fails on the first key that no accessor read (call after building).
+    /// Fails on the first key that no accessor read (call after building); a key renamed
+    /// since ([`RENAMED`]) is told its new name.
     pub fn reject_unknown(&self, known: &[&str]) -> Result<(), ModelError> {
         let read = self.read.borrow();
-        match self
+        let Some(key) = self
             .values
             .keys()
             .find(|k| !read.contains(k.as_str()) && !known.contains(&k.as_str()))
+        else {
+            return Ok(());
+        };
+        let message = match RENAMED
+            .iter()
+            .find(|(old, new, _)| old == key && known.contains(new))
         {
-            Some(key) => Err(ModelError::new(
-                key.clone(),
-                format!("unknown parameter; expected one of: {}", known.join(", ")),
-            )),
-            None => Ok(()),
-        }
+            Some((_, new, why)) => format!("renamed {new} ({why})"),
+            None => format!("unknown parameter; expected one of: {}", known.join(", ")),
+        };
+        Err(ModelError::new(key.clone(), message))
     }
 }

@@ -263,12 +263,6 @@ const PARAMS: &[ParamSpec] = &[
         default: None,
     },
     ParamSpec {
-        name: "disc_spacing_mm",
-        unit: "mm",
-        description: "s, axial distance between the two discs' mid-planes (physical reading; crank tilts act at ±s/2)",
-        default: None,
-    },
-    ParamSpec {
         name: "sun_plane_offset_mm",
         unit: "mm",
         description: "L_s, axial distance from the input shaft's deviation reference to the sun's mid-plane (physical reading; input shaft tilts act there)",
@@ -322,12 +316,11 @@ pub const ENTRY: ModelEntry = ModelEntry {
 };
 
 /// The RV40E of document 002 Table 1, with the crank circle of document 004 (a0 = 36 mm)
-/// and discs 12 mm apart (the 10 mm face width of scenarios/rv40e-elastic.json and a 2 mm
-/// gap, assumed).
+/// and the crank side of scenarios/reducers/rv40e.json (its eccentrics, and so the discs'
+/// mid-planes, 11 mm apart: one 10 mm face width + 1 mm, the rule of docs/models.md §13).
 fn rv40e_params() -> ModelParams {
     ModelParams::new()
         .with_number("crank_circle_radius_mm", 36.0)
-        .with_number("disc_spacing_mm", 12.0)
         .with_number("pin_radius_mm", 3.0)
         .with_number("disc_face_width_mm", 10.0)
         .with_number("pin_friction_coefficient", 0.02)
@@ -629,14 +622,15 @@ impl TransmissionError {
                     ),
                 ));
             }
-            // Geometry that can be: the two discs' mid-planes within a pin-circle radius of
+            // Geometry that can be: the two discs' mid-planes (each on its eccentric: one
+            // dimension of the reducer, the crank side's too) within a pin-circle radius of
             // each other, the sun plane within ten of the input shaft's reference.
-            let spacing = params.number("disc_spacing_mm", None)?;
-            if !(0.0..=pin_circle).contains(&spacing) {
+            let spacing = params.positive("crank_eccentric_spacing_mm", None)?;
+            if spacing > pin_circle {
                 return Err(ModelError::new(
-                    "disc_spacing_mm",
+                    "crank_eccentric_spacing_mm",
                     format!(
-                        "must be a length between 0 and the pin circle radius {} mm, got {}",
+                        "must be a length up to the pin circle radius {} mm, got {}",
                         Shown(pin_circle),
                         Shown(spacing)
                     ),

@@ -650,6 +650,21 @@ fn transmission_error_with_too_few_points() {
 }
 
 #[test]
+fn transmission_error_with_the_old_disc_spacing_key() {
+    // The discs' spacing is the reducer's crank_eccentric_spacing_mm: the old key is told
+    // its new name.
+    let contents = shipped_with("rv40e-transmission.json", |s| {
+        s["models"][0]["params"]["disc_spacing_mm"] = json!(12.0)
+    });
+    assert_bad_scenario(
+        "te-disc-spacing",
+        &contents,
+        Some("models[0].params.disc_spacing_mm"),
+        &["renamed crank_eccentric_spacing_mm"],
+    );
+}
+
+#[test]
 fn contact_with_zero_face_width() {
     let contents = shipped_with("rv80e-contact.json", |s| {
         s["reducer"]["params"]["disc_face_width_mm"] = json!(0.0)

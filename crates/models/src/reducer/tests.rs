@@ -270,7 +270,7 @@ fn the_windows_are_those_of_the_transmission_error_geometry() {
     let te = TransmissionError::from_params(
         &ModelParams::new()
             .with_number("crank_circle_radius_mm", 27.5)
-            .with_number("disc_spacing_mm", 10.0)
+            .with_number("crank_eccentric_spacing_mm", 10.0)
             .with_number("sun_teeth", 12.0)
             .with_number("planet_teeth", 42.0)
             .with_number("module_mm", 1.0)

@@ -74,7 +74,7 @@ pub(crate) const PARAMS: [ParamSpec; 28] = [
     ParamSpec {
         name: "crank_eccentric_spacing_mm",
         unit: "mm",
-        description: "s, between the two eccentric planes, centred in the span (< L)",
+        description: "s, between the two eccentrics' (the discs') mid-planes, centred in the span (< L); a crank's tilt acts on a disc at ±s/2",
         default: None,
     },
     ParamSpec {

@@ -2573,14 +2573,15 @@ mod tests {
         // errors of +τ_t·s/2 and −τ_t·s/2 would at each plane; the mean over the two cranks
         // halves it. A tilt about the radial direction moves the axis tangentially by
         // −τ_r·z. The sun's tilt acts at L_s: Δβ·L_s along x, −Δα·L_s along y.
+        // The example's discs sit on its eccentrics, s = 11 mm apart (s/2 = 5.5 mm).
         let model = with(params().with_number("sun_plane_offset_mm", 40.0));
         let tau = 1e-4;
         let terms = model.row_terms(&row(&model, &[("crank_axis_tilt_tangential_rad_1", tau)]));
-        assert!((terms.v[0].0 - tau * 6.0 / 2.0).abs() < 1e-18);
-        assert!((terms.v[1].0 + tau * 6.0 / 2.0).abs() < 1e-18);
+        assert!((terms.v[0].0 - tau * 5.5 / 2.0).abs() < 1e-18);
+        assert!((terms.v[1].0 + tau * 5.5 / 2.0).abs() < 1e-18);
         let terms = model.row_terms(&row(&model, &[("crank_axis_tilt_radial_rad_1", tau)]));
-        assert!((terms.rho_const[0] + tau * 6.0).abs() < 1e-18);
-        assert!((terms.rho_const[1] - tau * 6.0).abs() < 1e-18);
+        assert!((terms.rho_const[0] + tau * 5.5).abs() < 1e-18);
+        assert!((terms.rho_const[1] - tau * 5.5).abs() < 1e-18);
         let tilted = model.curve(&row(
             &model,
             &[("sun_tilt_y_rad", 1e-4), ("sun_tilt_x_rad", -5e-5)],
