@@ -121,15 +121,18 @@ impl Scenario {
     }
 
     /// Every output on given input rows (a 2-D float array, one column per input in the
-    /// order of `inputs`): a 2-D array with one column per output.
-    #[pyo3(signature = (inputs, threads = None))]
+    /// order of `inputs`): a 2-D array with one column per output. Rows that would need
+    /// more memory than `max_memory` bytes (default: what the machine has) are refused
+    /// before any is evaluated.
+    #[pyo3(signature = (inputs, threads = None, max_memory = None))]
     fn evaluate<'py>(
         &self,
         py: Python<'py>,
         inputs: PyReadonlyArray2<'py, f64>,
         threads: Option<usize>,
+        max_memory: Option<f64>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        evaluate_rows(py, &self.inner, inputs, threads)
+        evaluate_rows(py, &self.inner, inputs, threads, max_memory)
     }
 
     fn __repr__(&self) -> String {
@@ -147,6 +150,7 @@ fn evaluate_rows<'py>(
     scenario: &rvtol_engine::Scenario,
     inputs: PyReadonlyArray2<'py, f64>,
     threads: Option<usize>,
+    max_memory: Option<f64>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let array = inputs.as_array();
     let (rows, columns) = array.dim();
@@ -164,9 +168,10 @@ fn evaluate_rows<'py>(
     }
     rvtol_engine::evaluate::check_table_rows(scenario, rows as u64)
         .map_err(|message| value_error(format!("inputs: {message}")))?;
+    let pool = pool("evaluate", threads, max_memory, |threads| {
+        memory::rows_evaluation(scenario, rows as u64, threads)
+    })?;
     let values: Vec<f64> = array.iter().copied().collect();
-    let threads = machine::threads(threads.map(|n| n as u64), CALLER).map_err(value_error)?;
-    let pool = machine::thread_pool(threads).map_err(value_error)?;
     let table =
         py.detach(|| pool.install(|| rvtol_engine::evaluate::evaluate_rows(scenario, values)));
     let outputs = numpy::ndarray::Array2::from_shape_vec((rows, table.n_outputs), table.outputs)
@@ -177,15 +182,18 @@ fn evaluate_rows<'py>(
 /// Evaluates the model `model` with the parameters `params` (a dict; the others at the
 /// example design's values, as `rvtol init` writes them) on given input rows: a 2-D float
 /// array with one column per model input in the order `rvtol models` lists them. Returns a
-/// 2-D array with one column per model output. Rows run in parallel on `threads` threads.
+/// 2-D array with one column per model output. Rows run in parallel on `threads` threads;
+/// rows that would need more memory than `max_memory` bytes (default: what the machine
+/// has) are refused before any is evaluated.
 #[pyfunction]
-#[pyo3(signature = (model, params, inputs, threads = None))]
+#[pyo3(signature = (model, params, inputs, threads = None, max_memory = None))]
 fn evaluate<'py>(
     py: Python<'py>,
     model: &str,
     params: Option<&Bound<'py, PyDict>>,
     inputs: PyReadonlyArray2<'py, f64>,
     threads: Option<usize>,
+    max_memory: Option<f64>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let given: serde_json::Map<String, serde_json::Value> = match params {
         Some(params) => {
@@ -199,7 +207,7 @@ fn evaluate<'py>(
     let skeleton =
         rvtol_engine::scenario::skeleton::skeleton_with(model, &given).map_err(value_error)?;
     let scenario = rvtol_engine::Scenario::from_json(&skeleton, model).map_err(value_error)?;
-    evaluate_rows(py, &scenario, inputs, threads)
+    evaluate_rows(py, &scenario, inputs, threads, max_memory)
 }
 
 /// Runs the Monte Carlo simulation (as `rvtol run`): returns the JSON report as a dict,

@@ -225,6 +225,15 @@ def test_the_limits_are_the_command_lines():
         rvtol.sensitivity(scenario, shapley=True, permutations=100000, outer=100000)
     with pytest.raises(ValueError, match=r"run: needs about .* \(max_memory\): allow at least"):
         rvtol.run(scenario, samples=1000, max_memory=1e6)
+    # evaluate: 1,000,000 rows of 3 inputs and 1 output take 48 MB (inputs copied, outputs
+    # three times) beside the 64 MB allowance: refused under 100 MB before any row is
+    # evaluated; 10 rows run under 400 MB.
+    rows = np.zeros((1_000_000, len(scenario.inputs)))
+    with pytest.raises(ValueError, match=r"evaluate: needs about .* 1,000,000 rows .* evaluate fewer rows at a time"):
+        scenario.evaluate(rows, max_memory=1e8)
+    assert scenario.evaluate(rows[:10], max_memory=4e8).shape == (10, len(scenario.outputs))
+    with pytest.raises(ValueError, match=r"evaluate: needs about"):
+        rvtol.evaluate("ishigami", {}, np.zeros((1_000_000, 3)), max_memory=1e8)
 
 
 def test_run_with_replicated_sampling_is_the_command_line_report(tmp_path):

@@ -196,6 +196,26 @@ pub fn allocation(scenario: &Scenario, samples: u64, threads: usize) -> MemoryNe
     }
 }
 
+/// Rows given in memory (the Python module's `evaluate`): their inputs copied, the
+/// outputs of each block and of all rows, and the array handed back, and per worker
+/// thread a block's input and output columns.
+pub fn rows_evaluation(scenario: &Scenario, rows: u64, threads: usize) -> MemoryNeed {
+    let inputs = scenario.input_space.n_columns() as f64;
+    let outputs = scenario.outputs.len() as f64;
+    MemoryNeed {
+        bytes: BASE_BYTES
+            + VALUE * rows as f64 * (inputs + 3.0 * outputs)
+            + threads as f64 * VALUE * CHUNK_SIZE as f64 * (inputs + 2.0 * outputs),
+        what: format!(
+            "{} rows of {} inputs copied and their {} outputs",
+            group_thousands(rows),
+            inputs,
+            outputs
+        ),
+        way_out: "evaluate fewer rows at a time",
+    }
+}
+
 /// Bytes `rvtol evaluate` takes per byte of its rows' CSV: the text, its parsed records,
 /// the input values, the evaluated table of inputs and outputs and its CSV (about 4.2 per
 /// byte measured for 1,000,000 rows of 10 inputs and 1 output).
