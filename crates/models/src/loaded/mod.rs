@@ -132,7 +132,15 @@ pub(crate) enum Unconverged {
     NoBracket,
     /// The safeguarded Newton iteration did not settle within its cap.
     Iterations,
+    /// A disc would turn more than [`MAX_TURN`] from its rigid place: gaps that large are
+    /// beyond the contact the solution rests on (each pin's approach l·y, linear in the
+    /// turn), and an absurd input must not cost the bracket search's every doubling.
+    BeyondSmallTurns,
 }
+
+/// The largest turn of a disc from its rigid place the solution takes, rad (34′, some
+/// hundred times a real RV's play).
+pub(crate) const MAX_TURN: f64 = 0.01;
 
 impl std::fmt::Display for Unconverged {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -144,6 +152,10 @@ impl std::fmt::Display for Unconverged {
             Unconverged::Iterations => write!(
                 f,
                 "the safeguarded Newton iteration did not settle in {MAX_ITERATIONS} steps"
+            ),
+            Unconverged::BeyondSmallTurns => write!(
+                f,
+                "a disc would turn more than {MAX_TURN} rad from its rigid place (gaps beyond the linearised contact)"
             ),
         }
     }
@@ -207,7 +219,7 @@ impl TwoDiscs {
         }
         if warm.carrier.is_finite() {
             if let Some(solution) = self.newton_pair(discs, target, warm) {
-                return Ok(solution);
+                return within_small_turns(solution);
             }
         }
         let sign = if target < 0.0 { -1.0 } else { 1.0 };
@@ -223,6 +235,9 @@ impl TwoDiscs {
             };
             if !first.is_finite() {
                 return Err(Unconverged::NoBracket);
+            }
+            if discs.iter().any(|d| (first - d.offset).abs() > MAX_TURN) {
+                return Err(Unconverged::BeyondSmallTurns);
             }
             first
         };
@@ -250,7 +265,7 @@ impl TwoDiscs {
         let carrier = outer_root(&mut balance, start)?;
         // The last evaluation may have been at another bracket end: settle at the root.
         balance(carrier)?;
-        Ok(Solution {
+        within_small_turns(Solution {
             carrier,
             turns,
             moments,
@@ -351,6 +366,15 @@ impl TwoDiscs {
             (value, slope) = (v, s);
         }
         Err(Unconverged::Iterations)
+    }
+}
+
+/// The solution where both discs' turns are within [`MAX_TURN`].
+fn within_small_turns(solution: Solution) -> Result<Solution, Unconverged> {
+    if solution.turns.iter().all(|t| t.abs() <= MAX_TURN) {
+        Ok(solution)
+    } else {
+        Err(Unconverged::BeyondSmallTurns)
     }
 }
 

@@ -316,6 +316,32 @@ fn a_point_without_a_solution_fails_with_its_cause() {
     assert!(Unconverged::Iterations
         .to_string()
         .contains("did not settle"));
+    // Gaps that put the first contact 0.02 rad (twice MAX_TURN) away: refused at once,
+    // cold and from a warm start, rather than bracketed by doubling.
+    let far: Vec<f64> = levers.iter().map(|l| 0.02 * l.abs()).collect();
+    let far_disc = LoadedDisc {
+        gaps: &far,
+        levers: &levers,
+        offset: 0.0,
+    };
+    assert_eq!(
+        solver.solve(&[far_disc, far_disc], 100.0, &Solution::COLD),
+        Err(Unconverged::BeyondSmallTurns)
+    );
+    let near: Vec<f64> = levers.iter().map(|l| 1e-4 * l.abs()).collect();
+    let near_disc = LoadedDisc {
+        gaps: &near,
+        levers: &levers,
+        offset: 0.0,
+    };
+    let warm = solver
+        .solve(&[near_disc, near_disc], 100.0, &Solution::COLD)
+        .unwrap();
+    assert!(warm.turns.iter().all(|t| t.abs() < MAX_TURN));
+    assert_eq!(
+        solver.solve(&[far_disc, far_disc], 100.0, &warm),
+        Err(Unconverged::BeyondSmallTurns)
+    );
 }
 
 #[test]
