@@ -71,7 +71,7 @@
 
 use std::f64::consts::PI;
 
-use super::{smallest, smallest_ratio, PinTable, TransmissionError, MAX_CRANKS};
+use super::{smallest, smallest_ratio, PinTable, Point, TransmissionError, MAX_CRANKS};
 use crate::cycloid::{CycloidStage, PinFactors};
 use crate::preload::{slip_arm, zero_torque, DiscPins, LEVER_FLOOR};
 use crate::spectrum::OrderDft;
@@ -767,24 +767,11 @@ impl TransmissionError {
         // Entry e of a drive block is slot s0 + e: its pin at shift k is (s0 + e − k) mod z_p.
         let s0 = ph.drive_first_slot;
         let width = table.width;
-        let (pins, teeth) = (self.pins, self.cycloid_teeth);
+        let pins = self.pins;
         // The smooth part, point by point in index order, from its expansion in products of
         // the sinusoids of z_p·Θ and (i − 1)·Θ (the loop vectorises).
         let coefficients = self.offset_coefficients(terms);
-        let smooth = |d: usize, [y, x, w, u]: [f64; 4]| {
-            let a = &coefficients[d];
-            a[0] + a[1] * x
-                + a[2] * y
-                + a[3] * u
-                + a[4] * w
-                + a[5] * (x * x)
-                + a[6] * (x * y)
-                + a[7] * (y * y)
-                + a[8] * (x * u)
-                + a[9] * (y * u)
-                + a[10] * (x * w)
-                + a[11] * (y * w)
-        };
+        let smooth = |d: usize, angles: [f64; 4]| smooth_offset(&coefficients[d], angles);
         for (d, offsets) in scratch.offsets.iter_mut().enumerate() {
             offsets.resize(n, 0.0);
             if !ph.uniform_groups {
@@ -795,30 +782,8 @@ impl TransmissionError {
                 }
             }
         }
-        // Pin errors and tooth errors repeated (both flanks' tables run in slot order).
-        let repeat = |target: &mut Vec<f64>, values: &[f64], len: usize| {
-            target.clear();
-            if values.is_empty() {
-                target.resize(len, 0.0);
-            } else {
-                target.extend(values.iter().cycle().take(len));
-            }
-        };
-        let n_pins = if self.per_pin { pins } else { 0 };
-        let pin_inputs = &inputs[ph.pin_base..ph.pin_base + 2 * n_pins];
-        let (pin_radial, pin_tangential) = pin_inputs.split_at(n_pins);
-        repeat(&mut scratch.pin_radial, pin_radial, pins + width);
-        repeat(&mut scratch.pin_tangential, pin_tangential, pins + width);
-        let n_teeth = if self.per_tooth { teeth } else { 0 };
-        for d in 0..2 {
-            let errors = &inputs[ph.tooth_base + d * n_teeth..ph.tooth_base + (d + 1) * n_teeth];
-            repeat(&mut scratch.tooth[d], errors, 2 * teeth);
-        }
-        for heads in [&mut scratch.drive, &mut scratch.coast] {
-            for head in heads.iter_mut() {
-                head.resize(width, 0.0);
-            }
-        }
+        self.lay_out_row_errors(inputs, scratch);
+        self.lay_out_lane_errors(scratch);
         let kappa = ph.kappa;
         let first_contact = ph.contact == DiscContact::FirstContact;
         // The coast flank matters only where the two discs' windows might not overlap:
@@ -840,34 +805,6 @@ impl TransmissionError {
         } = scratch;
         let mut clear = true;
         scratch.narrowest = (f64::INFINITY, 0);
-        // Pin errors in lane order: lane_radial[q][m] = δr of pin (q − m·Δ) mod z_p, Δ the
-        // stride of the pin shift between a lane group's consecutive points. A tangential
-        // pin error's ratio is −δt·K1/(a·z_c) in every drive slot (see `lane_lags`).
-        let lane_rows = pins + width;
-        let tangential_ratio = -ph.stage.k1() / (self.eccentricity * teeth as f64);
-        for (target, source, scale) in [
-            (&mut *lane_radial, &*pin_radial, 1.0),
-            (&mut *lane_tangential, &*pin_tangential, tangential_ratio),
-        ] {
-            target.clear();
-            target.resize(lane_rows, [0.0; LANES]);
-            if self.per_pin {
-                // Column m is the pin list turned by m·Δ: walk it with a wrapping index.
-                let step = pins - ph.lane_stride;
-                let mut first = 0;
-                for m in 0..LANES {
-                    let mut index = first;
-                    for row in target.iter_mut() {
-                        row[m] = source[index] * scale;
-                        index += 1;
-                        if index == pins {
-                            index = 0;
-                        }
-                    }
-                    first = (first + step) % pins;
-                }
-            }
-        }
         for (group_index, group) in self.groups.iter().enumerate() {
             let points = &self.curve_points[group.start as usize..group.end as usize];
             let p = group.phase as usize;
@@ -884,58 +821,15 @@ impl TransmissionError {
                     }
                 }
             }
-            let teeth_of = |d: usize, drive_flank: bool| -> &[u32] {
-                let block = blocks[d] * width..(blocks[d] + 1) * width;
-                match (d, drive_flank) {
-                    (0, true) => &table.tooth[block],
-                    (0, false) => &coast_table.tooth[block],
-                    (_, true) => &ph.tooth_2_drive[p * width..(p + 1) * width],
-                    (_, false) => &ph.tooth_2_coast[p * width..(p + 1) * width],
-                }
+            let heads = GroupHeads {
+                blocks,
+                phase: p,
+                tooth_shift,
+                along,
             };
-            let same_block = blocks[0] == blocks[1];
-            if same_block {
-                // Even pin counts: disc 2 sees disc 1's slots; one pass over the block.
-                let [first, second] = drive;
-                fill_heads_pair(
-                    table,
-                    blocks[0] * width..(blocks[0] + 1) * width,
-                    [teeth_of(0, true), teeth_of(1, true)],
-                    [
-                        &tooth[0][teeth - tooth_shift..],
-                        &tooth[1][teeth - tooth_shift..],
-                    ],
-                    terms,
-                    along,
-                    [first, second],
-                );
-            } else {
-                for d in 0..2 {
-                    fill_heads(
-                        table,
-                        blocks[d] * width..(blocks[d] + 1) * width,
-                        teeth_of(d, true),
-                        &tooth[d][teeth - tooth_shift..],
-                        terms,
-                        terms.profile[d] - terms.err_rrp,
-                        along[d],
-                        &mut drive[d],
-                    );
-                }
-            }
+            self.fill_group_heads(terms, &heads, tooth, drive, true);
             let fill_coast = |coast: &mut [Vec<f64>; 2]| {
-                for d in 0..2 {
-                    fill_heads(
-                        coast_table,
-                        blocks[d] * width..(blocks[d] + 1) * width,
-                        teeth_of(d, false),
-                        &tooth[d][teeth - tooth_shift..],
-                        terms,
-                        terms.profile[d] - terms.err_rrp,
-                        along[d],
-                        &mut coast[d],
-                    );
-                }
+                self.fill_group_heads(terms, &heads, tooth, coast, false)
             };
             let mut coast_filled = false;
             let floor = if row_floor_holds {
@@ -943,82 +837,49 @@ impl TransmissionError {
             } else {
                 fill_coast(coast);
                 coast_filled = true;
-                let mut floor = [0.0; 2];
-                for d in 0..2 {
+                [0, 1].map(|d| {
                     let block = blocks[d] * width..(blocks[d] + 1) * width;
-                    floor[d] = smallest_less_pins(
-                        &coast[d],
+                    let columns = [
                         &coast_table.radial[block.clone()],
                         &coast_table.tangential[block],
-                        bound_r,
-                        bound_t,
-                    );
-                }
-                floor
+                    ];
+                    smallest_less_pins(&coast[d], columns[0], columns[1], bound_r, bound_t)
+                })
             };
             let best = [smallest(&drive[0]), smallest(&drive[1])];
-            let radial = [
-                &table.radial[blocks[0] * width..(blocks[0] + 1) * width],
-                &table.radial[blocks[1] * width..(blocks[1] + 1) * width],
-            ];
-            let tangential = [
-                &table.tangential[blocks[0] * width..(blocks[0] + 1) * width],
-                &table.tangential[blocks[1] * width..(blocks[1] + 1) * width],
-            ];
+            let block = |d: usize| blocks[d] * width..(blocks[d] + 1) * width;
+            let radial = [&table.radial[block(0)], &table.radial[block(1)]];
+            let tangential = [&table.tangential[block(0)], &table.tangential[block(1)]];
             // The slots that can hold a disc's minimum at any of the group's points: those
             // whose sum less the largest pin terms is below the smallest sum plus them (in
             // whole quadruples).
-            let candidates = [0, 1].map(|d| {
-                if self.per_pin && ph.lane_shifts[group_index].is_none() {
-                    candidate_slots(&drive[d], radial[d], tangential[d], bound_r, bound_t)
-                } else {
-                    [0, width]
-                }
+            let narrow = self.per_pin && ph.lane_shifts[group_index].is_none();
+            let candidates = [0, 1].map(|d| match narrow {
+                true => candidate_slots(&drive[d], radial[d], tangential[d], bound_r, bound_t),
+                false => [0, width],
             });
             // A group of LANES points whose pins advance by a fixed stride: its minima for
             // all its points at once, the points as vector lanes.
             let lanes = match ph.lane_shifts[group_index] {
                 Some(first) if self.per_pin => Some([0, 1].map(|d| {
-                    // (s0 − k) mod z_p without a division: k < z_p, s0 < z_p.
-                    let start = pins - first[d] as usize + s0;
-                    let start = if start >= pins { start - pins } else { start };
+                    // (s0 − k) mod z_p: k < z_p, s0 < z_p.
+                    let start = (pins - first[d] as usize + s0) % pins;
+                    let lane_errors = (&lane_radial[start..], &lane_tangential[start..]);
                     lane_lags(
                         &drive[d],
                         radial[d],
                         candidates[d],
-                        &lane_radial[start..],
-                        &lane_tangential[start..],
+                        lane_errors.0,
+                        lane_errors.1,
                     )
                 })),
                 _ => None,
             };
             // The lane group's points in one pass when the floor clears them all.
             if let Some(lags) = &lanes {
-                let mut values = [0.0; LANES];
-                let mut cleared = true;
-                let mut offset = [[0.0; LANES]; 2];
-                for (m, point) in points.iter().enumerate() {
-                    let j = point.index as usize;
-                    offset[0][m] = offsets[0][j];
-                    offset[1][m] = offsets[1][j];
-                }
-                for m in 0..LANES {
-                    let low = [
-                        kappa * (offset[0][m] - lags[0][m]),
-                        kappa * (offset[1][m] - lags[1][m]),
-                    ];
-                    let drive_end = if low[1] > low[0] { low[1] } else { low[0] };
-                    let high_0 = kappa * (offset[0][m] + floor[0]);
-                    let high_1 = kappa * (offset[1][m] + floor[1]);
-                    let high = if high_1 < high_0 { high_1 } else { high_0 };
-                    cleared &= high >= drive_end;
-                    values[m] = if first_contact {
-                        drive_end
-                    } else {
-                        0.5 * (low[0] + low[1])
-                    };
-                }
-                if cleared {
+                if let Some(values) =
+                    lane_values(lags, points, offsets, floor, kappa, first_contact)
+                {
                     for (point, value) in points.iter().zip(values) {
                         curve[point.index as usize] = value;
                     }
@@ -1044,41 +905,21 @@ impl TransmissionError {
                     let low = [kappa * (offset[0] - best[0]), kappa * (offset[1] - best[1])];
                     (low, if low[1] > low[0] { low[1] } else { low[0] })
                 } else if first_contact {
-                    let [first, second] = drive_start;
-                    let ([a0, a1], [b0, b1]) = (candidates[0], candidates[1]);
-                    let least = smallest_ratio_pair(
-                        [&drive[0][a0..a1], &drive[1][b0..b1]],
-                        [&radial[0][a0..a1], &radial[1][b0..b1]],
-                        [&tangential[0][a0..a1], &tangential[1][b0..b1]],
-                        [
-                            &pin_radial[first + a0..first + a1],
-                            &pin_radial[second + b0..second + b1],
-                        ],
-                        [
-                            &pin_tangential[first + a0..first + a1],
-                            &pin_tangential[second + b0..second + b1],
-                        ],
-                        offset,
-                    );
+                    let pins = [&pin_radial[..], &pin_tangential[..]];
+                    let columns = [radial, tangential];
+                    let least = pair_least(drive, columns, candidates, drive_start, pins, offset);
                     ([0.0; 2], -kappa * least)
                 } else {
-                    let [first, second] = drive_start;
-                    let lag = [
+                    let lag = [0, 1].map(|d| {
+                        let start = drive_start[d];
                         smallest_ratio(
-                            &drive[0],
-                            radial[0],
-                            tangential[0],
-                            &pin_radial[first..first + width],
-                            &pin_tangential[first..first + width],
-                        ),
-                        smallest_ratio(
-                            &drive[1],
-                            radial[1],
-                            tangential[1],
-                            &pin_radial[second..second + width],
-                            &pin_tangential[second..second + width],
-                        ),
-                    ];
+                            &drive[d],
+                            radial[d],
+                            tangential[d],
+                            &pin_radial[start..start + width],
+                            &pin_tangential[start..start + width],
+                        )
+                    });
                     let low = [kappa * (offset[0] - lag[0]), kappa * (offset[1] - lag[1])];
                     (low, if low[1] > low[0] { low[1] } else { low[0] })
                 };
@@ -1089,23 +930,8 @@ impl TransmissionError {
                         fill_coast(coast);
                         coast_filled = true;
                     }
-                    let mut high = f64::INFINITY;
-                    for d in 0..2 {
-                        let lead = if self.per_pin {
-                            let block = blocks[d] * width..(blocks[d] + 1) * width;
-                            let start = coast_start[d];
-                            smallest_ratio(
-                                &coast[d],
-                                &coast_table.radial[block.clone()],
-                                &coast_table.tangential[block],
-                                &pin_radial[start..start + width],
-                                &pin_tangential[start..start + width],
-                            )
-                        } else {
-                            smallest(&coast[d])
-                        };
-                        high = high.min(kappa * (offset[d] + lead));
-                    }
+                    let pin_errors = [&pin_radial[..], &pin_tangential[..]];
+                    let high = self.coast_high(coast, blocks, coast_start, pin_errors, offset);
                     if !overlap(high, drive_end) {
                         clear = false;
                         if high - drive_end < scratch.narrowest.0 {
@@ -1121,14 +947,284 @@ impl TransmissionError {
             }
         }
         if let Some(stages) = stages {
-            for (j, stage) in stages.iter_mut().enumerate() {
-                let involute = self.crank_offsets(terms, ph.angles[j]).1;
-                let crank = 0.5 * kappa * (offsets[0][j] + offsets[1][j]) - involute;
-                *stage = [involute, crank, curve[j] - involute - crank];
-            }
+            self.fill_stages(terms, offsets, curve, stages);
         }
         clear
     }
+
+    /// The parts [involute, cranks, contact] of the curve at every point, from the discs'
+    /// crank offsets C_d.
+    fn fill_stages(
+        &self,
+        terms: &RowTerms,
+        offsets: &[Vec<f64>; 2],
+        curve: &[f64],
+        stages: &mut [[f64; 3]],
+    ) {
+        let ph = self.physical();
+        for (j, stage) in stages.iter_mut().enumerate() {
+            let involute = self.crank_offsets(terms, ph.angles[j]).1;
+            let crank = 0.5 * ph.kappa * (offsets[0][j] + offsets[1][j]) - involute;
+            *stage = [involute, crank, curve[j] - involute - crank];
+        }
+    }
+}
+
+impl TransmissionError {
+    /// A row's pin and tooth-space errors laid out for [`Self::physical_curve`]: repeated
+    /// so that both flanks' tables read them in slot order (zeros where the model has no
+    /// such inputs), and the discs' head columns sized to the table's width.
+    fn lay_out_row_errors(&self, inputs: &[f64], scratch: &mut TwoDiscScratch) {
+        let ph = self.physical();
+        let (pins, teeth, width) = (self.pins, self.cycloid_teeth, ph.drive.width);
+        let repeat = |target: &mut Vec<f64>, values: &[f64], len: usize| {
+            target.clear();
+            if values.is_empty() {
+                target.resize(len, 0.0);
+            } else {
+                target.extend(values.iter().cycle().take(len));
+            }
+        };
+        let n_pins = if self.per_pin { pins } else { 0 };
+        let pin_inputs = &inputs[ph.pin_base..ph.pin_base + 2 * n_pins];
+        let (pin_radial, pin_tangential) = pin_inputs.split_at(n_pins);
+        repeat(&mut scratch.pin_radial, pin_radial, pins + width);
+        repeat(&mut scratch.pin_tangential, pin_tangential, pins + width);
+        let n_teeth = if self.per_tooth { teeth } else { 0 };
+        for d in 0..2 {
+            let errors = &inputs[ph.tooth_base + d * n_teeth..ph.tooth_base + (d + 1) * n_teeth];
+            repeat(&mut scratch.tooth[d], errors, 2 * teeth);
+        }
+        for heads in [&mut scratch.drive, &mut scratch.coast] {
+            for head in heads.iter_mut() {
+                head.resize(width, 0.0);
+            }
+        }
+    }
+
+    /// The pin errors in lane order (after [`Self::lay_out_row_errors`]):
+    /// lane_radial[q][m] = δr of pin (q − m·Δ) mod z_p, Δ the stride of the pin shift
+    /// between a lane group's consecutive points. A tangential pin error's ratio is
+    /// −δt·K1/(a·z_c) in every drive slot (see `lane_lags`).
+    fn lay_out_lane_errors(&self, scratch: &mut TwoDiscScratch) {
+        let ph = self.physical();
+        let pins = self.pins;
+        let lane_rows = pins + ph.drive.width;
+        let tangential_ratio = -ph.stage.k1() / (self.eccentricity * self.cycloid_teeth as f64);
+        for (target, source, scale) in [
+            (&mut scratch.lane_radial, &scratch.pin_radial, 1.0),
+            (
+                &mut scratch.lane_tangential,
+                &scratch.pin_tangential,
+                tangential_ratio,
+            ),
+        ] {
+            target.clear();
+            target.resize(lane_rows, [0.0; LANES]);
+            if self.per_pin {
+                // Column m is the pin list turned by m·Δ: walk it with a wrapping index.
+                let step = pins - ph.lane_stride;
+                let mut first = 0;
+                for m in 0..LANES {
+                    let mut index = first;
+                    for row in target.iter_mut() {
+                        row[m] = source[index] * scale;
+                        index += 1;
+                        if index == pins {
+                            index = 0;
+                        }
+                    }
+                    first = (first + step) % pins;
+                }
+            }
+        }
+    }
+}
+
+/// A group's place in the tables, for [`TransmissionError::fill_group_heads`]: each disc's
+/// block, the phase (disc 2's tooth columns), the tooth shift k_j mod z_c and each disc's
+/// displacement along its eccentric.
+struct GroupHeads {
+    blocks: [usize; 2],
+    phase: usize,
+    tooth_shift: usize,
+    along: [f64; 2],
+}
+
+impl TransmissionError {
+    /// Fills both discs' head columns of a group on the drive flank (`drive_flank`) or the
+    /// coast flank: the part of each slot's ratio common to the group's points
+    /// (`fill_heads`; on the drive flank one pass for the pair where disc 2 sees disc 1's
+    /// slots, even pin counts).
+    fn fill_group_heads(
+        &self,
+        terms: &RowTerms,
+        group: &GroupHeads,
+        tooth: &[Vec<f64>; 2],
+        heads: &mut [Vec<f64>; 2],
+        drive_flank: bool,
+    ) {
+        let ph = self.physical();
+        let (table, width) = if drive_flank {
+            (&ph.drive, ph.drive.width)
+        } else {
+            (&ph.coast, ph.drive.width)
+        };
+        let (blocks, p) = (group.blocks, group.phase);
+        let teeth_of = |d: usize| -> &[u32] {
+            let block = blocks[d] * width..(blocks[d] + 1) * width;
+            match (d, drive_flank) {
+                (0, _) => &table.tooth[block],
+                (_, true) => &ph.tooth_2_drive[p * width..(p + 1) * width],
+                (_, false) => &ph.tooth_2_coast[p * width..(p + 1) * width],
+            }
+        };
+        let errors = |d: usize| &tooth[d][self.cycloid_teeth - group.tooth_shift..];
+        if drive_flank && blocks[0] == blocks[1] {
+            // Even pin counts: disc 2 sees disc 1's slots; one pass over the block.
+            let [first, second] = heads;
+            fill_heads_pair(
+                table,
+                blocks[0] * width..(blocks[0] + 1) * width,
+                [teeth_of(0), teeth_of(1)],
+                [errors(0), errors(1)],
+                terms,
+                group.along,
+                [first, second],
+            );
+            return;
+        }
+        for (d, head) in heads.iter_mut().enumerate() {
+            fill_heads(
+                table,
+                blocks[d] * width..(blocks[d] + 1) * width,
+                teeth_of(d),
+                errors(d),
+                terms,
+                terms.profile[d] - terms.err_rrp,
+                group.along[d],
+                head,
+            );
+        }
+    }
+
+    /// The upper end of the output's window at a point from the exact coast minimum of
+    /// both discs (their coast heads filled): min_d κ·(C_d + lead_d), `coast_start` the
+    /// first pin row of each disc's coast entries, `pin_errors` the repeated radial and
+    /// tangential pin errors, `offset` the discs' C_d.
+    fn coast_high(
+        &self,
+        coast: &[Vec<f64>; 2],
+        blocks: [usize; 2],
+        coast_start: [usize; 2],
+        [pin_radial, pin_tangential]: [&[f64]; 2],
+        offset: [f64; 2],
+    ) -> f64 {
+        let ph = self.physical();
+        let width = ph.drive.width;
+        let mut high = f64::INFINITY;
+        for d in 0..2 {
+            let lead = if self.per_pin {
+                let block = blocks[d] * width..(blocks[d] + 1) * width;
+                let start = coast_start[d];
+                smallest_ratio(
+                    &coast[d],
+                    &ph.coast.radial[block.clone()],
+                    &ph.coast.tangential[block],
+                    &pin_radial[start..start + width],
+                    &pin_tangential[start..start + width],
+                )
+            } else {
+                smallest(&coast[d])
+            };
+            high = high.min(ph.kappa * (offset[d] + lead));
+        }
+        high
+    }
+}
+
+/// The first contact over both discs' candidate slots at one point (min over d and e of
+/// ratio − C_d, [`smallest_ratio_pair`]): `columns` the discs' radial and tangential table
+/// columns, `candidates` each disc's slot range, `starts` each disc's first pin row in the
+/// repeated pin errors `pins` (radial, tangential), `offset` the discs' C_d.
+fn pair_least(
+    drive: &[Vec<f64>; 2],
+    [radial, tangential]: [[&[f64]; 2]; 2],
+    candidates: [[usize; 2]; 2],
+    [first, second]: [usize; 2],
+    [pin_radial, pin_tangential]: [&[f64]; 2],
+    offset: [f64; 2],
+) -> f64 {
+    let ([a0, a1], [b0, b1]) = (candidates[0], candidates[1]);
+    smallest_ratio_pair(
+        [&drive[0][a0..a1], &drive[1][b0..b1]],
+        [&radial[0][a0..a1], &radial[1][b0..b1]],
+        [&tangential[0][a0..a1], &tangential[1][b0..b1]],
+        [
+            &pin_radial[first + a0..first + a1],
+            &pin_radial[second + b0..second + b1],
+        ],
+        [
+            &pin_tangential[first + a0..first + a1],
+            &pin_tangential[second + b0..second + b1],
+        ],
+        offset,
+    )
+}
+
+/// A lane group's curve values from its drive lags `lags` (both discs, the points as
+/// lanes) when the row's or the group's coast floor clears every one of its points; None
+/// when it does not clear them all (the points are then taken one by one).
+fn lane_values(
+    lags: &[[f64; LANES]; 2],
+    points: &[Point],
+    offsets: &[Vec<f64>; 2],
+    floor: [f64; 2],
+    kappa: f64,
+    first_contact: bool,
+) -> Option<[f64; LANES]> {
+    let mut values = [0.0; LANES];
+    let mut cleared = true;
+    let mut offset = [[0.0; LANES]; 2];
+    for (m, point) in points.iter().enumerate() {
+        let j = point.index as usize;
+        offset[0][m] = offsets[0][j];
+        offset[1][m] = offsets[1][j];
+    }
+    for m in 0..LANES {
+        let low = [
+            kappa * (offset[0][m] - lags[0][m]),
+            kappa * (offset[1][m] - lags[1][m]),
+        ];
+        let drive_end = if low[1] > low[0] { low[1] } else { low[0] };
+        let high_0 = kappa * (offset[0][m] + floor[0]);
+        let high_1 = kappa * (offset[1][m] + floor[1]);
+        let high = if high_1 < high_0 { high_1 } else { high_0 };
+        cleared &= high >= drive_end;
+        values[m] = if first_contact {
+            drive_end
+        } else {
+            0.5 * (low[0] + low[1])
+        };
+    }
+    cleared.then_some(values)
+}
+
+/// A disc's smooth crank offset at the angles [sin z_pΘ, cos z_pΘ, sin (i−1)Θ, cos (i−1)Θ]
+/// from its expansion `a` in their products ([`TransmissionError::offset_coefficients`]).
+#[inline(always)]
+fn smooth_offset(a: &[f64; 12], [y, x, w, u]: [f64; 4]) -> f64 {
+    a[0] + a[1] * x
+        + a[2] * y
+        + a[3] * u
+        + a[4] * w
+        + a[5] * (x * x)
+        + a[6] * (x * y)
+        + a[7] * (y * y)
+        + a[8] * (x * u)
+        + a[9] * (y * u)
+        + a[10] * (x * w)
+        + a[11] * (y * w)
 }
 
 /// min over both discs d and their slots e of head_de + δr·radial_de + δt·tangential_de −

@@ -77,10 +77,13 @@ use crate::{
 };
 
 mod loaded;
+mod setup;
 mod two_discs;
 
+use setup::Reading;
+
 use loaded::{Loaded, LoadedScratch};
-use two_discs::{CrankClosure, DiscContact, Physical, TwoDiscScratch};
+use two_discs::{Physical, TwoDiscScratch};
 
 /// Largest crank count.
 const MAX_CRANKS: usize = 6;
@@ -539,7 +542,7 @@ impl TransmissionError {
         }
         let stage = CycloidStage::from_params(params, 256)?;
         let (pins, cycloid_teeth) = (stage.pins, stage.teeth);
-        let (pin_circle_radius, eccentricity) = (stage.pin_circle_radius, stage.eccentricity);
+        let eccentricity = stage.eccentricity;
         let cranks = params.count("crank_count", Some(2.0))? as usize;
         if cranks > MAX_CRANKS {
             return Err(ModelError::new(
@@ -564,42 +567,12 @@ impl TransmissionError {
         let feedback = params.flag("carrier_feedback", true)?;
         let per_pin = params.flag("pin_position_errors", false)?;
         let per_tooth = params.flag("tooth_profile_errors", false)?;
-        let reading = params.text("reading", "physical")?;
-        let literal = match reading.as_str() {
-            "physical" => false,
-            "document_002" => true,
-            other => {
-                return Err(ModelError::new(
-                    "reading",
-                    format!("must be \"physical\" or \"document_002\", got \"{other}\""),
-                ))
-            }
-        };
-        // The loaded reading keeps the rigid first contact's tables for its interference
-        // flag and preload judgement.
-        let (contact, under_load) = match params.text("disc_contact", "loaded")?.as_str() {
-            "loaded" => (DiscContact::FirstContact, !literal),
-            "first_contact" => (DiscContact::FirstContact, false),
-            "load_shared" => (DiscContact::LoadShared, false),
-            other => {
-                return Err(ModelError::new(
-                    "disc_contact",
-                    format!(
-                        "must be \"loaded\", \"first_contact\" or \"load_shared\", got \"{other}\""
-                    ),
-                ))
-            }
-        };
-        let closure = match params.text("crank_closure", "four_bar")?.as_str() {
-            "four_bar" => CrankClosure::FourBar,
-            "averaged" => CrankClosure::Averaged,
-            other => {
-                return Err(ModelError::new(
-                    "crank_closure",
-                    format!("must be \"four_bar\" or \"averaged\", got \"{other}\""),
-                ))
-            }
-        };
+        let Reading {
+            literal,
+            contact,
+            under_load,
+            closure,
+        } = Reading::from_params(params)?;
         // r6 belongs to 002's output pin-hole term, which only its literal reading has.
         let output_radius = if literal {
             params.positive("output_pin_circle_radius_mm", None)?
@@ -609,70 +582,9 @@ impl TransmissionError {
         let physical_geometry = if literal {
             None
         } else {
-            let crank_radius = params.positive("crank_circle_radius_mm", None)?;
-            let pin_circle = stage.pin_circle_radius;
-            if crank_radius <= eccentricity || crank_radius >= pin_circle {
-                return Err(ModelError::new(
-                    "crank_circle_radius_mm",
-                    format!(
-                        "must lie between the eccentricity {} mm and the pin circle radius {} mm, got {}",
-                        Shown(eccentricity),
-                        Shown(pin_circle),
-                        Shown(crank_radius)
-                    ),
-                ));
-            }
-            // Geometry that can be: the two discs' mid-planes (each on its eccentric: one
-            // dimension of the reducer, the crank side's too) within a pin-circle radius of
-            // each other, the sun plane within ten of the input shaft's reference.
-            let spacing = params.positive("crank_eccentric_spacing_mm", None)?;
-            if spacing > pin_circle {
-                return Err(ModelError::new(
-                    "crank_eccentric_spacing_mm",
-                    format!(
-                        "must be a length up to the pin circle radius {} mm, got {}",
-                        Shown(pin_circle),
-                        Shown(spacing)
-                    ),
-                ));
-            }
-            let sun_offset = params.number("sun_plane_offset_mm", Some(0.0))?;
-            if sun_offset.abs() > 10.0 * pin_circle {
-                return Err(ModelError::new(
-                    "sun_plane_offset_mm",
-                    format!(
-                        "must lie within ±10 pin circle radii ({} mm), got {}",
-                        Shown(10.0 * pin_circle),
-                        Shown(sun_offset)
-                    ),
-                ));
-            }
-            Some((crank_radius, spacing, sun_offset))
+            Some(setup::physical_geometry(params, &stage)?)
         };
-        // The preload rule judges where the discs do not fit (physical reading only; 002's
-        // literal reading reads the keys a reducer file gives it and leaves them).
-        let preload_rule = if literal {
-            for key in ["pin_radius_mm", "disc_face_width_mm", "rated_torque_nm"] {
-                params.number(key, Some(0.0))?;
-            }
-            for spec in &preload::PARAMS[1..] {
-                params.number(spec.name, Some(0.0))?;
-            }
-            params.number(preload::FRICTION.name, Some(0.0))?;
-            None
-        } else {
-            let pin_radius = params.positive("pin_radius_mm", None)?;
-            stage.check_pin_radius("pin_radius_mm", pin_radius)?;
-            let face_width = params.positive("disc_face_width_mm", None)?;
-            let lambda = cycloid_teeth as f64 / pins as f64 * (1.0 - 1.0 / ratio);
-            Some(PreloadRule::from_params(
-                params,
-                &stage,
-                pin_radius,
-                face_width,
-                (ratio, lambda),
-            )?)
-        };
+        let preload_rule = setup::preload_rule(params, &stage, literal, ratio)?;
         let loaded = match (&preload_rule, physical_geometry) {
             (Some(rule), Some((crank_radius, _, _))) if under_load => {
                 let lambda = cycloid_teeth as f64 / pins as f64 * (1.0 - 1.0 / ratio);
@@ -703,71 +615,17 @@ impl TransmissionError {
         // Phase table: the fractional pin pitch of the eccentric at point j takes
         // N/gcd(z_c·z_p, N) values. A slot s has a positive lever while 0 < s + f < z_p/2.
         let g = gcd(cycloid_mesh, points);
-        let phases = points / g;
         let width = pins.div_ceil(2).next_multiple_of(4);
-        let mut table = PinTable {
-            width,
-            ..PinTable::default()
-        };
-        let zc = cycloid_teeth as i64;
         // Filled for 002's reading only: the physical reading builds its own, one per flank.
-        let table_phases = if literal { phases } else { 0 };
-        for p in 0..table_phases {
-            let fraction = p as f64 * g as f64 / points as f64;
-            for s in 0..width {
-                let phi = 2.0 * PI * (s as f64 + fraction) / pins as f64;
-                let (sin, cos) = phi.sin_cos();
-                // Padding: no positive lever, or past the last pin (3 pins, 4 slots).
-                if s >= pins || sin <= 1e-12 {
-                    table.push_padding();
-                    continue;
-                }
-                let factors = stage.pin_factors(phi);
-                let inverse_lever = 1.0 / factors.lever;
-                let polar = (pin_circle_radius * sin).atan2(pin_circle_radius * cos - eccentricity);
-                let tooth = ((cycloid_teeth as f64 * polar / (2.0 * PI) - fraction).round() as i64)
-                    .rem_euclid(zc);
-                table.blocked.push(0.0);
-                table.inverse_lever.push(inverse_lever);
-                table.equidistant.push(factors.equidistant * inverse_lever);
-                table.shift.push(factors.shift * inverse_lever);
-                table.eccentric.push(factors.eccentric * inverse_lever);
-                table.radial.push(factors.radial * inverse_lever);
-                table.tangential.push(factors.tangential * inverse_lever);
-                table.tooth.push(tooth as u32);
+        let table = if literal {
+            setup::literal_table(&stage, points, g, width)
+        } else {
+            PinTable {
+                width,
+                ..PinTable::default()
             }
-        }
-        let angle = |step: usize| (2.0 * PI * (step % points) as f64 / points as f64).sin_cos();
-        let mut keyed: Vec<((usize, usize, usize), Point)> = (0..points)
-            .map(|j| {
-                let theta = 2.0 * PI * j as f64 / points as f64;
-                let turns = cycloid_mesh * j;
-                let point = Point {
-                    output: angle(j),
-                    crank: angle(pins * j),
-                    sun: ((ratio - 1.0) * theta).sin_cos(),
-                    pin_shift: ((turns / points) % pins) as u32,
-                    tooth_shift: ((turns / points) % cycloid_teeth) as u32,
-                    index: j as u32,
-                };
-                let phase = (turns % points) / g;
-                let key = (phase, (pins * j) % points, point.tooth_shift as usize);
-                (key, point)
-            })
-            .collect();
-        keyed.sort_by_key(|(key, point)| (*key, point.index));
-        let mut groups: Vec<Group> = Vec::new();
-        for (k, (key, _)) in keyed.iter().enumerate() {
-            match groups.last_mut() {
-                Some(group) if keyed[group.start as usize].0 == *key => group.end += 1,
-                _ => groups.push(Group {
-                    phase: key.0 as u32,
-                    start: k as u32,
-                    end: k as u32 + 1,
-                }),
-            }
-        }
-        let curve_points: Vec<Point> = keyed.into_iter().map(|(_, point)| point).collect();
+        };
+        let (curve_points, groups) = setup::curve_points(&stage, points, g, ratio);
         let alpha = alpha.to_radians();
         let divisor = if feedback {
             pins as f64 + sun_teeth / planet_teeth
