@@ -229,7 +229,7 @@ def test_the_limits_are_the_command_lines():
     # three times) beside the 64 MB allowance: refused under 100 MB before any row is
     # evaluated; 10 rows run under 400 MB.
     rows = np.zeros((1_000_000, len(scenario.inputs)))
-    with pytest.raises(ValueError, match=r"evaluate: needs about .* 1,000,000 rows .* evaluate fewer rows at a time"):
+    with pytest.raises(ValueError, match=r"evaluate: needs about [0-9.]+ MB of memory \(the inputs and outputs of 1,000,000 rows, 3 \+ 1 values each.*: evaluate fewer rows at a time"):
         scenario.evaluate(rows, max_memory=1e8)
     assert scenario.evaluate(rows[:10], max_memory=4e8).shape == (10, len(scenario.outputs))
     with pytest.raises(ValueError, match=r"evaluate: needs about"):

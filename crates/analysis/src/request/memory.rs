@@ -207,7 +207,7 @@ pub fn rows_evaluation(scenario: &Scenario, rows: u64, threads: usize) -> Memory
             + VALUE * rows as f64 * (inputs + 3.0 * outputs)
             + threads as f64 * VALUE * CHUNK_SIZE as f64 * (inputs + 2.0 * outputs),
         what: format!(
-            "{} rows of {} inputs copied and their {} outputs",
+            "the inputs and outputs of {} rows, {} + {} values each",
             group_thousands(rows),
             inputs,
             outputs
