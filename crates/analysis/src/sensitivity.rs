@@ -257,11 +257,14 @@ pub type ChunkValues = Vec<Vec<Vec<f64>>>;
 /// rows left out because a value was not finite.
 pub type ChunkBlocks = Vec<(Vec<BlockSums>, u64)>;
 
+/// The model values of chunk `chunk`; its 2G + 2 matrices side by side when `side_by_side`
+/// (fewer chunks in flight than threads), else one after the other on the calling thread.
 fn evaluate_chunk(
     scenario: &Scenario,
     plan: &SobolPlan,
     settings: SensitivitySettings,
     chunk: u64,
+    side_by_side: bool,
 ) -> Result<ChunkValues, ScenarioError> {
     let (groups, continuous) = (&plan.groups, &plan.continuous);
     let (replicate, first_row, _, m) = settings.sampling.chunk_rows(settings.base_samples, chunk);
@@ -294,12 +297,16 @@ fn evaluate_chunk(
             }
         }
     }
-    // The 2G + 2 matrices (A, B, A with group g's columns from B, B with them from A)
-    // side by side: one chunk of an expensive model is work for every core, and a matrix's
-    // values do not depend on the thread that evaluates it.
+    // The 2G + 2 matrices (A, B, A with group g's columns from B, B with them from A), side
+    // by side where the chunks alone leave threads idle (a run of fewer base samples than a
+    // chunk is one chunk; a matrix's values do not depend on the thread that evaluates it).
+    // Otherwise in one job, so that a thread holds one chunk's matrices at a time, as the
+    // memory estimate counts them (`request::memory::sensitivity`).
     let n_groups = groups.len();
-    let per_variant: Vec<Vec<Vec<f64>>> = (0..2 * n_groups + 2)
+    let variants = 2 * n_groups + 2;
+    let per_variant: Vec<Vec<Vec<f64>>> = (0..variants)
         .into_par_iter()
+        .with_min_len(if side_by_side { 1 } else { variants })
         .map_init(
             || (ChunkEvaluator::new(scenario), Vec::new()),
             |(evaluator, mixed), variant| {
@@ -328,7 +335,7 @@ fn evaluate_chunk(
             },
         )
         .collect();
-    let mut values: ChunkValues = vec![Vec::with_capacity(2 * n_groups + 2); continuous.len()];
+    let mut values: ChunkValues = vec![Vec::with_capacity(variants); continuous.len()];
     for variant in per_variant {
         for (slot, column) in variant.into_iter().enumerate() {
             values[slot].push(column);
@@ -586,8 +593,9 @@ pub fn sobol_chunks(
     }
     let chunk_samples =
         |chunk: u64| settings.sampling.chunk_rows(settings.base_samples, chunk).3 as u64;
+    let side_by_side = chunks.end - chunks.start < rayon::current_num_threads() as u64;
     let evaluate = |chunk: u64| {
-        let values = evaluate_chunk(scenario, &plan, settings, chunk);
+        let values = evaluate_chunk(scenario, &plan, settings, chunk, side_by_side);
         progress(chunk_samples(chunk));
         values
     };
@@ -604,7 +612,7 @@ pub fn sobol_chunks(
         }
         // Centres from chunk 0, which every run draws identically.
         IntervalMethod::Blocks { rows } => (
-            evaluate_chunk(scenario, &plan, settings, 0)?
+            evaluate_chunk(scenario, &plan, settings, 0, true)?
                 .iter()
                 .map(|f| finite_mean(f[0].iter().chain(&f[1])))
                 .collect::<Vec<f64>>(),
