@@ -125,6 +125,31 @@ pub struct ParamSpec {
     pub default: Option<f64>,
 }
 
+/// The parameter lists `parts` one after the other, N in all (checked when it is
+/// evaluated, at compile time for a `const`): a model's `params` made of its own keys and
+/// the shared lists of `preload` and `stiffness::build`, in the order `rvtol models`
+/// shows them.
+pub(crate) const fn concat_params<const N: usize>(parts: &[&[ParamSpec]]) -> [ParamSpec; N] {
+    const EMPTY: ParamSpec = ParamSpec {
+        name: "",
+        unit: "",
+        description: "",
+        default: None,
+    };
+    let mut out = [EMPTY; N];
+    let (mut k, mut part) = (0, 0);
+    while part < parts.len() {
+        let mut i = 0;
+        while i < parts[part].len() {
+            out[k] = parts[part][i];
+            (k, i) = (k + 1, i + 1);
+        }
+        part += 1;
+    }
+    assert!(k == N, "the parts hold another number of parameters than N");
+    out
+}
+
 /// A physical error model: a pure function from inputs to outputs.
 pub trait ErrorModel: Send + Sync {
     /// Registry name (`geometric_hysteresis`).

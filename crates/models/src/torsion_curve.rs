@@ -92,8 +92,9 @@ use crate::geometric_hysteresis::{self, GeometricHysteresis};
 use crate::preload::{self, Preload, PreloadRule};
 use crate::stiffness::{build, ChainTerms, CrankSide, Housing};
 use crate::{
-    ConditionEffect, Curve, CurveStyle, ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams,
-    OutputCondition, OutputKind, OutputSpec, ParamSpec, Series, ARCMIN_PER_RAD,
+    concat_params, ConditionEffect, Curve, CurveStyle, ErrorModel, InputSpec, ModelEntry,
+    ModelError, ModelParams, OutputCondition, OutputKind, OutputSpec, ParamSpec, Series,
+    ARCMIN_PER_RAD,
 };
 use rvtol_deviation::Shown;
 
@@ -153,171 +154,167 @@ const OUTPUTS: [(&str, &str, &str, OutputKind); 5] = [
     ),
 ];
 
-const PARAMS: &[ParamSpec] = &[
-    ParamSpec {
-        name: "sun_teeth",
-        unit: "1",
-        description: "Z1, sun gear teeth (000 Table 8: 12)",
-        default: None,
-    },
-    ParamSpec {
-        name: "planet_teeth",
-        unit: "1",
-        description: "Z2, planet gear teeth (000 Table 8: 42)",
-        default: None,
-    },
-    ParamSpec {
-        name: "cycloid_teeth",
-        unit: "1",
-        description: "Zc, cycloid teeth = pin_count − 1 (000 Table 8: 39)",
-        default: None,
-    },
-    ParamSpec {
-        name: "pin_count",
-        unit: "1",
-        description: "Zp, pins, 3..=128 (000 Table 8: 40)",
-        default: None,
-    },
-    ParamSpec {
-        name: "pin_circle_radius_mm",
-        unit: "mm",
-        description: "rp, pin centre circle radius (000 Table 8: 52)",
-        default: None,
-    },
-    ParamSpec {
-        name: "eccentricity_mm",
-        unit: "mm",
-        description: "e, cycloid eccentricity (000 Table 8: 0.9)",
-        default: None,
-    },
-    ParamSpec {
-        name: "curtate_ratio",
-        unit: "1",
-        description: "K1 of 000's Eq. 16, 17 only; default e·Zp/rp (000 Table 8 prints 0.72); the profile uses e·Zp/rp",
-        default: None,
-    },
-    ParamSpec {
-        name: "pressure_angle_deg",
-        unit: "deg",
-        description: "α of the involute stage (000 Table 8: 20)",
-        default: Some(20.0),
-    },
-    ParamSpec {
-        name: "center_distance_mm",
-        unit: "mm",
-        description: "a0, the lever of 000 Eq. 18, 20 (000 Table 8: 27.5)",
-        default: None,
-    },
-    ParamSpec {
-        name: "sun_pitch_radius_mm",
-        unit: "mm",
-        description: "r1, sun pitch radius of 000 Eq. 5 (000 Table 8: 13.5)",
-        default: None,
-    },
-    ParamSpec {
-        name: "sun_gear_axial_position_mm",
-        unit: "mm",
-        description: "z of the sun mesh from the input shaft's deviation reference point (000)",
-        default: Some(0.0),
-    },
-    ParamSpec {
-        name: "pin_radius_mm",
-        unit: "mm",
-        description: "r_rp, pin radius (000 Table 8: 2)",
-        default: None,
-    },
-    ParamSpec {
-        name: "disc_face_width_mm",
-        unit: "mm",
-        description: "contact length of one cycloid disc",
-        default: None,
-    },
-    ParamSpec {
-        name: "disc_load_share",
-        unit: "1",
-        description: "share of the output torque carried by one disc (two discs: 0.5)",
-        default: Some(0.5),
-    },
-    ParamSpec {
-        name: "disc_torque_balance",
-        unit: "1",
-        description: "1: disc torque share·λ·T and output angle λ·(disc frame), λ = (z_c/z_p)(1 − 1/i); 0: share·T and one to one (as 000, 003, 004 print it)",
-        default: Some(1.0),
-    },
-    build::PARAMS[0],
-    build::PARAMS[1],
-    ParamSpec {
-        name: "crank_count",
-        unit: "1",
-        description: "m, cranks, 2 or 3",
-        default: Some(2.0),
-    },
-    ParamSpec {
-        name: "crank_circle_radius_mm",
-        unit: "mm",
-        description: "a_w, crank axes from the reducer axis; default center_distance_mm",
-        default: None,
-    },
-    build::PARAMS[2],
-    build::PARAMS[3],
-    build::PARAMS[4],
-    build::PARAMS[5],
-    build::PARAMS[6],
-    build::PARAMS[7],
-    build::PARAMS[8],
-    build::PARAMS[9],
-    build::PARAMS[10],
-    build::PARAMS[11],
-    build::PARAMS[12],
-    build::PARAMS[13],
-    build::PARAMS[14],
-    build::PARAMS[15],
-    build::PARAMS[16],
-    build::PARAMS[17],
-    build::PARAMS[18],
-    build::PARAMS[19],
-    build::PARAMS[20],
-    build::PARAMS[21],
-    build::PARAMS[22],
-    build::PARAMS[23],
-    build::PARAMS[24],
-    build::PARAMS[25],
-    build::PARAMS[26],
-    build::PARAMS[27],
-    ParamSpec {
-        name: "pin_friction_coefficient",
-        unit: "1",
-        description: "μ_p, Coulomb friction at the pin contacts, in [0, 0.5)",
-        default: None,
-    },
-    ParamSpec {
-        name: "crank_bearing_friction_coefficient",
-        unit: "1",
-        description: "μ_b, friction coefficient of a needle row on its journal radius, in [0, 0.5)",
-        default: None,
-    },
-    ParamSpec {
-        name: "clearance_reading",
-        unit: "1",
-        description: "1: the cycloid stage's free play from the load sharing's own profile; 0: 000's printed Eq. 16",
-        default: Some(1.0),
-    },
-    ParamSpec {
-        name: "rated_torque_nm",
-        unit: "N·m",
-        description: "T_r, rated output torque (RV-20E catalogue: 167)",
-        default: None,
-    },
-    preload::PARAMS[1],
-    preload::PARAMS[2],
-    preload::PARAMS[3],
+/// The model's own keys, in three runs between the crank side's (`PARAMS`).
+const OWN_PARAMS: [&[ParamSpec]; 3] = [
+    &[
+        ParamSpec {
+            name: "sun_teeth",
+            unit: "1",
+            description: "Z1, sun gear teeth (000 Table 8: 12)",
+            default: None,
+        },
+        ParamSpec {
+            name: "planet_teeth",
+            unit: "1",
+            description: "Z2, planet gear teeth (000 Table 8: 42)",
+            default: None,
+        },
+        ParamSpec {
+            name: "cycloid_teeth",
+            unit: "1",
+            description: "Zc, cycloid teeth = pin_count − 1 (000 Table 8: 39)",
+            default: None,
+        },
+        ParamSpec {
+            name: "pin_count",
+            unit: "1",
+            description: "Zp, pins, 3..=128 (000 Table 8: 40)",
+            default: None,
+        },
+        ParamSpec {
+            name: "pin_circle_radius_mm",
+            unit: "mm",
+            description: "rp, pin centre circle radius (000 Table 8: 52)",
+            default: None,
+        },
+        ParamSpec {
+            name: "eccentricity_mm",
+            unit: "mm",
+            description: "e, cycloid eccentricity (000 Table 8: 0.9)",
+            default: None,
+        },
+        ParamSpec {
+            name: "curtate_ratio",
+            unit: "1",
+            description: "K1 of 000's Eq. 16, 17 only; default e·Zp/rp (000 Table 8 prints 0.72); the profile uses e·Zp/rp",
+            default: None,
+        },
+        ParamSpec {
+            name: "pressure_angle_deg",
+            unit: "deg",
+            description: "α of the involute stage (000 Table 8: 20)",
+            default: Some(20.0),
+        },
+        ParamSpec {
+            name: "center_distance_mm",
+            unit: "mm",
+            description: "a0, the lever of 000 Eq. 18, 20 (000 Table 8: 27.5)",
+            default: None,
+        },
+        ParamSpec {
+            name: "sun_pitch_radius_mm",
+            unit: "mm",
+            description: "r1, sun pitch radius of 000 Eq. 5 (000 Table 8: 13.5)",
+            default: None,
+        },
+        ParamSpec {
+            name: "sun_gear_axial_position_mm",
+            unit: "mm",
+            description: "z of the sun mesh from the input shaft's deviation reference point (000)",
+            default: Some(0.0),
+        },
+        ParamSpec {
+            name: "pin_radius_mm",
+            unit: "mm",
+            description: "r_rp, pin radius (000 Table 8: 2)",
+            default: None,
+        },
+        ParamSpec {
+            name: "disc_face_width_mm",
+            unit: "mm",
+            description: "contact length of one cycloid disc",
+            default: None,
+        },
+        ParamSpec {
+            name: "disc_load_share",
+            unit: "1",
+            description: "share of the output torque carried by one disc (two discs: 0.5)",
+            default: Some(0.5),
+        },
+        ParamSpec {
+            name: "disc_torque_balance",
+            unit: "1",
+            description: "1: disc torque share·λ·T and output angle λ·(disc frame), λ = (z_c/z_p)(1 − 1/i); 0: share·T and one to one (as 000, 003, 004 print it)",
+            default: Some(1.0),
+        },
+    ],
+    &[
+        ParamSpec {
+            name: "crank_count",
+            unit: "1",
+            description: "m, cranks, 2 or 3",
+            default: Some(2.0),
+        },
+        ParamSpec {
+            name: "crank_circle_radius_mm",
+            unit: "mm",
+            description: "a_w, crank axes from the reducer axis; default center_distance_mm",
+            default: None,
+        },
+    ],
+    &[
+        ParamSpec {
+            name: "pin_friction_coefficient",
+            unit: "1",
+            description: "μ_p, Coulomb friction at the pin contacts, in [0, 0.5)",
+            default: None,
+        },
+        ParamSpec {
+            name: "crank_bearing_friction_coefficient",
+            unit: "1",
+            description: "μ_b, friction coefficient of a needle row on its journal radius, in [0, 0.5)",
+            default: None,
+        },
+        ParamSpec {
+            name: "clearance_reading",
+            unit: "1",
+            description: "1: the cycloid stage's free play from the load sharing's own profile; 0: 000's printed Eq. 16",
+            default: Some(1.0),
+        },
+        ParamSpec {
+            name: "rated_torque_nm",
+            unit: "N·m",
+            description: "T_r, rated output torque (RV-20E catalogue: 167)",
+            default: None,
+        },
+    ],
 ];
+
+/// The crank side's keys (`stiffness::build`), split where the model's own crank keys go.
+const CRANK_SIDE: (&[ParamSpec], &[ParamSpec]) = build::PARAMS.as_slice().split_at(2);
+
+/// The preload rule's limits (its first key, the pin radius, is this model's own).
+const PRELOAD_LIMITS: &[ParamSpec] = preload::PARAMS.as_slice().split_at(1).1;
+
+const PARAMS: [ParamSpec;
+    OWN_PARAMS[0].len()
+        + OWN_PARAMS[1].len()
+        + OWN_PARAMS[2].len()
+        + build::PARAMS.len()
+        + PRELOAD_LIMITS.len()] = concat_params(&[
+    OWN_PARAMS[0],
+    CRANK_SIDE.0,
+    OWN_PARAMS[1],
+    CRANK_SIDE.1,
+    OWN_PARAMS[2],
+    PRELOAD_LIMITS,
+]);
 
 /// Registry entry.
 pub const ENTRY: ModelEntry = ModelEntry {
     name: "torsion_curve",
     summary: "hysteresis (torsion) curve, input locked: 000 free play, 003 load sharing on the same profile, needle rows, discs, crank shafts, preloaded supports, carrier with its bolted end plate, housing and involute stage in series, Coulomb friction; lost motion at ±3 % rated, hysteresis loss, torsional rigidity 50-100 % rated",
-    params: PARAMS,
+    params: &PARAMS,
     build: |params| Ok(Box::new(TorsionCurve::from_params(params)?)),
     example_params: TorsionCurve::rv20e_params,
     example_inputs: &[
@@ -1290,7 +1287,7 @@ mod tests {
         let keys: Vec<&str> = geometric_hysteresis::ENTRY
             .params
             .iter()
-            .chain(PARAMS)
+            .chain(&PARAMS)
             .map(|p| p.name)
             .filter(|name| {
                 !["needle_roller_diameter_mm", "support_bearing_width_mm"].contains(name)

@@ -5,11 +5,15 @@
 //!
 //! Two readings (parameter `reading`, docs/models.md §12):
 //! - `"physical"` (default, module `two_discs`): two discs with eccentrics 180° apart on
-//!   m cranks, four-bar closure of each disc on its crank pins, first contact over both
-//!   discs (or their load-shared mean), crank and input-shaft tilts at their planes (001
-//!   Eq. 5–8), disc-side errors reaching the output times κ = z_c/D because the cranks
-//!   ride on the output, no output pin-hole term (a runout of the output translates it, it
-//!   does not turn it), interference flagged as an indicator that excludes the sample.
+//!   m cranks, four-bar closure of each disc on its crank pins, crank and input-shaft
+//!   tilts at their planes (001 Eq. 5–8), disc-side errors reaching the output times
+//!   κ = z_c/D because the cranks ride on the output, no output pin-hole term (a runout of
+//!   the output translates it, it does not turn it). The discs' contact (`disc_contact`):
+//!   under load (default, module `loaded`: every pin of both discs elastic on its own gap,
+//!   the crank side between them, so a preloaded assembly has a transmission error and
+//!   the preload rule judges it), or rigid, first contact over both discs or their
+//!   load-shared mean, where interference is an indicator that excludes the sample.
+//!   `setup` builds what the parameters ask for once.
 //! - `"document_002"`: 002 read literally, the model below: one disc, the cranks
 //!   averaged, 002's δ41 at r6, disc-side errors 1:1. It reproduces the one-disc model
 //!   figure for figure (tests/transmission_error.rs).
@@ -72,12 +76,14 @@ use crate::preload::{self, PreloadRule};
 use crate::spectrum::RealFft;
 use crate::stiffness::build;
 use crate::{
-    Curve, CurveStyle, ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputKind,
-    OutputSpec, ParamSpec, Series, ARCSEC_PER_RAD,
+    concat_params, Curve, CurveStyle, ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams,
+    OutputKind, OutputSpec, ParamSpec, Series, ARCSEC_PER_RAD,
 };
 
 mod loaded;
 mod setup;
+#[cfg(test)]
+mod test_support;
 mod two_discs;
 
 use setup::Reading;
@@ -149,7 +155,8 @@ const FIXED_INPUTS: [(&str, &str); 9] = [
     ),
 ];
 
-const PARAMS: &[ParamSpec] = &[
+/// The model's own keys (`PARAMS` adds the preload rule's and the crank side's).
+const OWN_PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "sun_teeth",
         unit: "",
@@ -271,48 +278,20 @@ const PARAMS: &[ParamSpec] = &[
         description: "L_s, axial distance from the input shaft's deviation reference to the sun's mid-plane (physical reading; input shaft tilts act there)",
         default: Some(0.0),
     },
-    preload::PIN_RADIUS,
-    preload::FACE_WIDTH,
-    preload::FRICTION,
-    preload::PARAMS[0],
-    preload::PARAMS[1],
-    preload::PARAMS[2],
-    preload::PARAMS[3],
-    build::PARAMS[0],
-    build::PARAMS[1],
-    build::PARAMS[2],
-    build::PARAMS[3],
-    build::PARAMS[4],
-    build::PARAMS[5],
-    build::PARAMS[6],
-    build::PARAMS[7],
-    build::PARAMS[8],
-    build::PARAMS[9],
-    build::PARAMS[10],
-    build::PARAMS[11],
-    build::PARAMS[12],
-    build::PARAMS[13],
-    build::PARAMS[14],
-    build::PARAMS[15],
-    build::PARAMS[16],
-    build::PARAMS[17],
-    build::PARAMS[18],
-    build::PARAMS[19],
-    build::PARAMS[20],
-    build::PARAMS[21],
-    build::PARAMS[22],
-    build::PARAMS[23],
-    build::PARAMS[24],
-    build::PARAMS[25],
-    build::PARAMS[26],
-    build::PARAMS[27],
 ];
+
+/// The preload rule's contact keys, which it shares with the load sharing.
+const SHARED_PARAMS: &[ParamSpec] = &[preload::PIN_RADIUS, preload::FACE_WIDTH, preload::FRICTION];
+
+const PARAMS: [ParamSpec;
+    OWN_PARAMS.len() + SHARED_PARAMS.len() + preload::PARAMS.len() + build::PARAMS.len()] =
+    concat_params(&[OWN_PARAMS, SHARED_PARAMS, &preload::PARAMS, &build::PARAMS]);
 
 /// Registry entry.
 pub const ENTRY: ModelEntry = ModelEntry {
     name: "transmission_error",
-    summary: "kinematic transmission error over one output revolution by the action-line increment principle (document 002), two discs on four-bar cranks (or 002's literal one-disc reading): peak-to-peak, rms, order amplitudes, interference",
-    params: PARAMS,
+    summary: "transmission error over one output revolution by the action-line increment principle (document 002), two discs on four-bar cranks, under load by default (every pin of both discs elastic on its own gap, the crank side between them; or rigid first contact, load shared, or 002's literal one-disc reading): peak-to-peak, rms, order amplitudes, interference, preload",
+    params: &PARAMS,
     build: |params| Ok(Box::new(TransmissionError::from_params(params)?)),
     example_params: rv40e_params,
     example_inputs: &[],
@@ -584,10 +563,11 @@ impl TransmissionError {
         } else {
             Some(setup::physical_geometry(params, &stage)?)
         };
-        let preload_rule = setup::preload_rule(params, &stage, literal, ratio)?;
+        // λ, the torque balance of the discs against the output (docs/models.md §10).
+        let lambda = cycloid_teeth as f64 / pins as f64 * (1.0 - 1.0 / ratio);
+        let preload_rule = setup::preload_rule(params, &stage, literal, (ratio, lambda))?;
         let loaded = match (&preload_rule, physical_geometry) {
             (Some(rule), Some((crank_radius, _, _))) if under_load => {
-                let lambda = cycloid_teeth as f64 / pins as f64 * (1.0 - 1.0 / ratio);
                 Some(Box::new(loaded::build(
                     params,
                     &stage,
@@ -1222,6 +1202,7 @@ impl ErrorModel for TransmissionError {
 
 #[cfg(test)]
 mod tests {
+    use super::test_support::{outputs, row, with, MODIFIED};
     use super::*;
     use crate::ParamValue;
 
@@ -1233,25 +1214,6 @@ mod tests {
 
     fn rv40e() -> TransmissionError {
         TransmissionError::from_params(&rv40e_params()).unwrap()
-    }
-
-    fn with(params: ModelParams) -> TransmissionError {
-        TransmissionError::from_params(&params).unwrap()
-    }
-
-    /// A zero row with the named inputs set.
-    fn row(model: &TransmissionError, set: &[(&str, f64)]) -> Vec<f64> {
-        let mut row = vec![0.0; model.inputs().len()];
-        for (name, value) in set {
-            row[model.input_index(name).unwrap_or_else(|| panic!("{name}"))] = *value;
-        }
-        row
-    }
-
-    fn outputs(model: &TransmissionError, row: &[f64]) -> Vec<f64> {
-        let mut out = vec![0.0; model.outputs().len()];
-        model.evaluate(row, &mut out);
-        out
     }
 
     /// 5 µm, the error size of 002 Table 2.
@@ -1369,13 +1331,6 @@ mod tests {
             .fold(0.0, f64::max)
     }
 
-    fn modified() -> [(&'static str, f64); 2] {
-        [
-            ("equidistant_modification_mm", 0.01),
-            ("shift_modification_mm", -0.008),
-        ]
-    }
-
     #[test]
     fn pin_errors_appear_at_order_39_disc_errors_at_40() {
         // validation.md 002: pin-borne errors at z_c = 39 per revolution (the eccentric
@@ -1384,18 +1339,18 @@ mod tests {
             .with_number("pin_position_errors", 1.0)
             .with_number("tooth_profile_errors", 1.0);
         let model = with(params);
-        let mut set = modified().to_vec();
+        let mut set = MODIFIED.to_vec();
         set.push(("pin_radial_error_mm_1", -0.004));
         let spectrum = model.spectrum(&model.curve(&row(&model, &set)));
         assert!(spectrum[39] > 0.05, "{}", spectrum[39]);
         assert!(largest_off_harmonic(&spectrum, 39) < 1e-2 * spectrum[39]);
-        let mut set = modified().to_vec();
+        let mut set = MODIFIED.to_vec();
         set.push(("tooth_profile_error_mm_7", -0.004));
         let spectrum = model.spectrum(&model.curve(&row(&model, &set)));
         assert!(spectrum[40] > 0.05, "{}", spectrum[40]);
         assert!(largest_off_harmonic(&spectrum, 40) < 1e-2 * spectrum[40]);
         // A crank-bore error of one crank turns against the eccentric: order 40.
-        let mut set = modified().to_vec();
+        let mut set = MODIFIED.to_vec();
         set.push(("crank_axis_radial_error_mm_1", DELTA));
         let spectrum = model.spectrum(&model.curve(&row(&model, &set)));
         let peak = (1..spectrum.len())
@@ -1410,9 +1365,9 @@ mod tests {
         // cycloid profile > crank eccentricity (one of two cranks) > involute stage, by the
         // largest change of the curve over a revolution, with 003-style modification.
         let model = rv40e();
-        let base = model.curve(&row(&model, &modified()));
+        let base = model.curve(&row(&model, &MODIFIED));
         let effect = |name: &str| {
-            let mut set = modified().to_vec();
+            let mut set = MODIFIED.to_vec();
             set.push((name, DELTA));
             let curve = model.curve(&row(&model, &set));
             curve

@@ -121,12 +121,13 @@ pub(super) fn physical_geometry(
 }
 
 /// The preload rule that judges where the discs do not fit (physical reading only; 002's
-/// literal reading reads the keys a reducer file gives it and leaves them).
+/// literal reading reads the keys a reducer file gives it and leaves them); `ratio_lambda`
+/// is (i, λ).
 pub(super) fn preload_rule(
     params: &ModelParams,
     stage: &CycloidStage,
     literal: bool,
-    ratio: f64,
+    ratio_lambda: (f64, f64),
 ) -> Result<Option<PreloadRule>, ModelError> {
     if literal {
         for key in ["pin_radius_mm", "disc_face_width_mm", "rated_torque_nm"] {
@@ -141,13 +142,12 @@ pub(super) fn preload_rule(
     let pin_radius = params.positive("pin_radius_mm", None)?;
     stage.check_pin_radius("pin_radius_mm", pin_radius)?;
     let face_width = params.positive("disc_face_width_mm", None)?;
-    let lambda = stage.teeth as f64 / stage.pins as f64 * (1.0 - 1.0 / ratio);
     Ok(Some(PreloadRule::from_params(
         params,
         stage,
         pin_radius,
         face_width,
-        (ratio, lambda),
+        ratio_lambda,
     )?))
 }
 

@@ -2199,6 +2199,7 @@ impl TransmissionError {
 
 #[cfg(test)]
 mod tests {
+    use super::super::test_support::{outputs, row, text, with, xorshift, MODIFIED};
     use super::*;
     use crate::{ErrorModel, ModelParams, ParamValue, ARCSEC_PER_RAD};
 
@@ -2212,50 +2213,11 @@ mod tests {
         )
     }
 
-    fn with(params: ModelParams) -> TransmissionError {
-        TransmissionError::from_params(&params).unwrap()
-    }
-
-    fn text(params: ModelParams, key: &str, value: &str) -> ModelParams {
-        params.with(key, ParamValue::Text(value.into()))
-    }
-
-    fn row(model: &TransmissionError, set: &[(&str, f64)]) -> Vec<f64> {
-        let mut row = vec![0.0; model.inputs().len()];
-        for (name, value) in set {
-            row[model.input_index(name).unwrap_or_else(|| panic!("{name}"))] = *value;
-        }
-        row
-    }
-
-    fn outputs(model: &TransmissionError, row: &[f64]) -> Vec<f64> {
-        let mut out = vec![0.0; model.outputs().len()];
-        model.evaluate(row, &mut out);
-        out
-    }
-
-    /// 003's modification: a play 2δ* = 2(Δr_rp − Δr_p·√(1 − K1²))/(a·z_c) = 126.9″ per
-    /// disc (see `coast_modification`).
-    const MODIFIED: [(&str, f64); 2] = [
-        ("equidistant_modification_mm", 0.01),
-        ("shift_modification_mm", -0.008),
-    ];
-
     /// 5 µm, the error size of 002 Table 2.
     const DELTA: f64 = 0.005;
 
     /// κ = z_c/D with D = z_p + z_s/z_pl = 121/3 (carrier feedback).
     const KAPPA: f64 = 39.0 / (121.0 / 3.0);
-
-    fn xorshift(seed: u64) -> impl FnMut() -> f64 {
-        let mut state = seed;
-        move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        }
-    }
 
     /// A row with every input set: modification with play, and every error a few µm (tilts
     /// a few µm over the disc spacing).

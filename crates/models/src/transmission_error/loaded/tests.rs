@@ -3,50 +3,13 @@
 
 use super::super::rv40e_params;
 use super::*;
-use crate::{ErrorModel, ModelParams, ParamValue, ARCSEC_PER_RAD};
-
-fn with(params: ModelParams) -> TransmissionError {
-    TransmissionError::from_params(&params).unwrap()
-}
-
-fn text(params: ModelParams, key: &str, value: &str) -> ModelParams {
-    params.with(key, ParamValue::Text(value.into()))
-}
-
-fn row(model: &TransmissionError, set: &[(&str, f64)]) -> Vec<f64> {
-    let mut inputs = vec![0.0; model.inputs().len()];
-    for (name, value) in set {
-        inputs[model.input_index(name).unwrap_or_else(|| panic!("{name}"))] = *value;
-    }
-    inputs
-}
-
-fn outputs(model: &TransmissionError, row: &[f64]) -> Vec<f64> {
-    let mut out = vec![0.0; model.outputs().len()];
-    model.evaluate(row, &mut out);
-    out
-}
-
-/// 003's modification: 126.9″ of play per disc (two_discs.rs tests).
-const MODIFIED: [(&str, f64); 2] = [
-    ("equidistant_modification_mm", 0.01),
-    ("shift_modification_mm", -0.008),
-];
+use crate::transmission_error::test_support::{outputs, row, text, with, xorshift, MODIFIED};
+use crate::{ErrorModel, ModelParams, ARCSEC_PER_RAD};
 
 /// The solver settles the carrier to 1e-13 rad (crate::loaded): a curve carries at most
 /// that much of the iteration's path, κ·1e-13 rad, and an order amplitude (2/N·|Σ|) at most
 /// twice it.
 const SOLVER_NOISE_ARCSEC: f64 = 2.0 * 1e-13 * ARCSEC_PER_RAD;
-
-fn xorshift(seed: u64) -> impl FnMut() -> f64 {
-    let mut state = seed;
-    move || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    }
-}
 
 #[test]
 fn the_default_torque_is_3_percent_of_rated() {
