@@ -8,6 +8,7 @@
 mod common;
 
 mod capability_intervals;
+mod conformity;
 mod engine;
 mod lost_motion;
 mod msrv;

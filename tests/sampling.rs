@@ -223,10 +223,12 @@ fn replicated_runs_have_the_same_bits_for_any_thread_and_shard_count() {
 
 #[test]
 fn replicated_runs_agree_with_monte_carlo() {
-    // The RV-20E lost motion's mean and P99.865 under LHS and RQMC against a Monte Carlo
+    // The RV-20E lost motion's mean and P50 under LHS and RQMC against a Monte Carlo
     // run of the same scenario: the differences lie within SIGMA_BOUND of their standard
     // errors (a replicate interval's half-width is t(0.975, 15)·se = 2.131·se; a Monte
-    // Carlo 95 % interval's is 1.96·se): the three methods draw the same law.
+    // Carlo 95 % interval's is 1.96·se): the three methods draw the same law. P50 is read
+    // among all the samples, the over-preloaded ones beyond the upper limit
+    // (docs/models.md, "Conformity"); P99.865 is beyond it in every method.
     let scenario = load("rv20e-hysteresis.json");
     let mc = RunReport::new(
         &scenario,
@@ -238,8 +240,9 @@ fn replicated_runs_agree_with_monte_carlo() {
         .unwrap(),
     );
     let mc = &mc.outputs[0];
-    let mc_p = mc.percentiles.get("99.865").unwrap();
-    let [mc_lo, mc_hi] = mc.percentile_ci95.get("99.865").unwrap();
+    assert_eq!(mc.percentiles.get("99.865"), Some(f64::INFINITY));
+    let mc_p = mc.percentiles.get("50").unwrap();
+    let [mc_lo, mc_hi] = mc.percentile_ci95.get("50").unwrap();
     let mc_p_se = 0.5 * (mc_hi.unwrap() - mc_lo.unwrap()) / 1.96;
     for method in REPLICATED {
         let report = RunReport::new(
@@ -255,12 +258,12 @@ fn replicated_runs_agree_with_monte_carlo() {
             o.mean,
             mc.mean
         );
-        let [lo, hi] = r.percentiles.get("99.865").unwrap();
+        let [lo, hi] = r.percentiles.get("50").unwrap();
         let se = (0.5 * (hi.unwrap() - lo.unwrap()) / 2.131).hypot(mc_p_se);
-        let p = o.percentiles.get("99.865").unwrap();
+        let p = o.percentiles.get("50").unwrap();
         assert!(
             (p - mc_p).abs() <= SIGMA_BOUND * se,
-            "{method:?}: P99.865 {p} against Monte Carlo {mc_p} (se {se})"
+            "{method:?}: P50 {p} against Monte Carlo {mc_p} (se {se})"
         );
     }
 }

@@ -854,15 +854,21 @@ fn runs_table() -> String {
         let cells: Vec<String> = reports.iter().map(cell).collect();
         table += &format!("| {label} | {} |\n", cells.join(" | "));
     };
-    line("lost motion mean, sd, P99.865 (arcmin)", &|r| {
-        let o = output(r, "lost_motion_arcmin");
-        format!(
-            "{:.3}, {:.3}, {:.2}",
-            number(&o["mean"]),
-            number(&o["sd"]),
-            number(&o["percentiles"]["99.865"])
-        )
-    });
+    // The values' P99.865 (flagged ones included): among all the assemblies it is beyond
+    // the limit, the over-preloaded ones lying beyond it (docs/models.md, "Conformity").
+    line(
+        "lost motion mean, sd, P99.865 of the values (arcmin)",
+        &|r| {
+            let o = output(r, "lost_motion_arcmin");
+            assert!(o["percentiles"]["99.865"].is_null());
+            format!(
+                "{:.3}, {:.3}, {:.2}",
+                number(&o["mean"]),
+                number(&o["sd"]),
+                number(&o["value_percentiles"]["99.865"])
+            )
+        },
+    );
     line("out of spec (above 1 arcmin, or over-preloaded)", &|r| {
         format!(
             "{:.1} %",

@@ -63,11 +63,15 @@ pub struct Figure {
     pub output: String,
     /// Figure name: `mean`, `sd`, `p0.135` … `p99.865`, `ppm_out`, `fraction`.
     pub figure: String,
-    /// Value of the baseline run.
+    /// Value of the baseline run: a number, or for a percentile beyond the limits
+    /// ([`rvtol_engine::stats::conformity`]) "+inf" or "-inf".
+    #[serde(with = "signed_infinity")]
     pub value: f64,
     /// Lowest value a re-run may give.
+    #[serde(with = "signed_infinity")]
     pub lower: f64,
     /// Highest value a re-run may give.
+    #[serde(with = "signed_infinity")]
     pub upper: f64,
     /// Absolute tolerance that replaces the band, when set.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -80,6 +84,39 @@ pub struct Figure {
     /// `rvtol check --one-sided`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub worse: Option<Worse>,
+}
+
+/// A baseline number that may be infinite (a percentile beyond the limits, or a band
+/// that reaches into them): JSON has no infinity, so ±∞ is written "+inf" or "-inf".
+mod signed_infinity {
+    use serde::{de, Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(value: &f64, serializer: S) -> Result<S::Ok, S::Error> {
+        match *value {
+            f64::INFINITY => serializer.serialize_str("+inf"),
+            f64::NEG_INFINITY => serializer.serialize_str("-inf"),
+            v => serializer.serialize_f64(v),
+        }
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(deserializer: D) -> Result<f64, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Number {
+            Finite(f64),
+            Text(String),
+        }
+        match Number::deserialize(deserializer)? {
+            Number::Finite(v) => Ok(v),
+            Number::Text(text) => match text.as_str() {
+                "+inf" => Ok(f64::INFINITY),
+                "-inf" => Ok(f64::NEG_INFINITY),
+                other => Err(de::Error::custom(format!(
+                    "expected a number, \"+inf\" or \"-inf\", got \"{other}\""
+                ))),
+            },
+        }
+    }
 }
 
 /// The direction in which a figure gets worse.
@@ -99,6 +136,8 @@ impl Figure {
     /// The interval a re-run must fall in.
     pub fn allowed(&self) -> (f64, f64) {
         match (self.absolute_tolerance, self.relative_tolerance) {
+            // Beyond the limits: a re-run must be beyond them too (or better, one-sided).
+            _ if self.value.is_infinite() => (self.value, self.value),
             (Some(a), _) => (self.value - a, self.value + a),
             (None, Some(r)) => (
                 self.value - r * self.value.abs(),
@@ -233,15 +272,25 @@ impl Baseline {
             ));
         }
         for (i, figure) in baseline.figures.iter().enumerate() {
+            // Infinite: a percentile beyond the limits ("+inf"/"-inf", value and band
+            // alike), or a finite one whose band reaches beyond them.
+            let percentile = figure.figure.starts_with('p');
+            let beyond = figure.value.is_infinite();
             for (key, value) in [
                 ("value", figure.value),
                 ("lower", figure.lower),
                 ("upper", figure.upper),
             ] {
-                if !value.is_finite() {
+                let allowed = value.is_finite()
+                    || (percentile && !value.is_nan() && (!beyond || value == figure.value));
+                if !allowed {
                     return Err(BaselineError::new(
                         format!("figures[{i}].{key}"),
-                        "must be a finite number",
+                        if percentile {
+                            "must be a number, or \"+inf\"/\"-inf\" beyond the limits (as the value)"
+                        } else {
+                            "must be a finite number"
+                        },
                     ));
                 }
             }
@@ -445,10 +494,10 @@ pub fn figures_of(
         push("sd", value.sd, half);
         let out = acc.out_of_spec(info.flagged_conform);
         let (min, max) = (acc.moments.min, acc.moments.max);
-        let order = OrderStatistics::new(acc.kept, n, min, max)
+        let order = OrderStatistics::new(acc.kept, samples, info.spec, (min, max))
             .expect("the gate keeps the distribution of every continuous output");
         for (name, percent) in GATED_PERCENTS {
-            let (_, low, high) = order.percentile_with_interval(percent, z);
+            let (reading, low, high) = order.percentile_with_interval(percent, z);
             let k = PERCENTS.iter().position(|p| p.1 == percent);
             let half = k
                 .and_then(|k| {
@@ -457,6 +506,9 @@ pub fn figures_of(
                         .filter(|h| h.is_finite())
                 })
                 .unwrap_or_else(|| std::f64::consts::SQRT_2 * 0.5 * (high - low).max(0.0));
+            // A percentile beyond the limits is the same beyond in a re-run that agrees;
+            // one whose interval reaches beyond them has an unbounded band.
+            let half = if reading.is_infinite() { 0.0 } else { half };
             let key = name.trim_start_matches('p');
             push(name, value.percentiles.get(key).unwrap_or(f64::NAN), half);
         }
@@ -909,7 +961,7 @@ pub fn check_result(
                 .find(|f| f.output == old.output && f.figure == old.figure)
                 .map(|f| f.value);
             let (low, high) = match (old.absolute_tolerance, old.relative_tolerance) {
-                (None, None) if widen > 1.0 => (
+                (None, None) if widen > 1.0 && old.value.is_finite() => (
                     old.value - widen * (old.value - old.lower),
                     old.value + widen * (old.upper - old.value),
                 ),
@@ -952,7 +1004,11 @@ pub fn check_result(
             // The band is ± √2·z·SE (two runs); one run's interval is ± z·SE.
             let (value, interval) = match measured {
                 Some(f) => {
-                    let reach = 0.5 * (f.upper - f.lower) / std::f64::consts::SQRT_2;
+                    let reach = if f.value.is_infinite() {
+                        0.0 // beyond the limits, and so in a re-run
+                    } else {
+                        0.5 * (f.upper - f.lower) / std::f64::consts::SQRT_2
+                    };
                     (Some(f.value), [f.value - reach, f.value + reach])
                 }
                 None => (None, [f64::NAN, f64::NAN]),
@@ -1001,15 +1057,23 @@ impl CheckReport {
             .map(|c| {
                 let value = c
                     .value
-                    .map_or("missing".to_string(), rvtol_engine::format::format_sig);
+                    .map_or("missing".to_string(), rvtol_engine::format::format_figure);
+                let allowed = match c.allowed {
+                    [low, high] if low.is_infinite() && low == high => {
+                        "allowed: beyond the limits only".to_string()
+                    }
+                    [low, high] => format!(
+                        "allowed {} .. {}",
+                        rvtol_engine::format::format_sig(low),
+                        rvtol_engine::format::format_sig(high)
+                    ),
+                };
                 format!(
-                    "moved: {} {}: {} -> {} (allowed {} .. {}); {hint}",
+                    "moved: {} {}: {} -> {} ({allowed}); {hint}",
                     c.output,
                     c.figure,
-                    rvtol_engine::format::format_sig(c.baseline),
+                    rvtol_engine::format::format_figure(c.baseline),
                     value,
-                    rvtol_engine::format::format_sig(c.allowed[0]),
-                    rvtol_engine::format::format_sig(c.allowed[1]),
                 )
             })
             .collect()
@@ -1017,7 +1081,7 @@ impl CheckReport {
 
     /// One line per requirement.
     pub fn requirement_lines(&self) -> Vec<String> {
-        use rvtol_engine::format::format_sig;
+        use rvtol_engine::format::format_figure;
         self.requirements
             .iter()
             .map(|r| match r.value {
@@ -1031,9 +1095,9 @@ impl CheckReport {
                     r.requirement,
                     r.output,
                     r.figure,
-                    format_sig(value),
-                    format_sig(r.interval[0]),
-                    format_sig(r.interval[1]),
+                    format_figure(value),
+                    format_figure(r.interval[0]),
+                    format_figure(r.interval[1]),
                     match r.status {
                         "met" => ": met",
                         "within noise" => {

@@ -44,7 +44,7 @@ use rvtol_engine::stats::{Moments, QuantileSketch, SketchParts};
 /// First bytes of a shard file.
 pub const MAGIC: &[u8] = b"rvtol-partial\n";
 /// Layout version written and read.
-pub const FORMAT: u32 = 3;
+pub const FORMAT: u32 = 4;
 
 /// What a shard file says about the run or analysis it belongs to.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
@@ -325,33 +325,38 @@ fn write_outputs(out: &mut Writer, outputs: &[OutputAccumulator]) {
         ] {
             out.u64(count);
         }
-        match &output.kept {
-            KeptValues::Values(values) => {
-                out.u8(0);
-                out.f64s(values);
-            }
-            KeptValues::Sketch {
-                sketch,
-                center,
-                scale,
-            } => {
-                out.u8(1);
-                out.f64(*center);
-                out.f64(*scale);
-                let parts = sketch.to_parts();
-                out.f64(parts.relative_accuracy);
-                out.u64(parts.zero_count);
-                for buckets in [&parts.positive, &parts.negative] {
-                    out.u64(buckets.len() as u64);
-                    for &(index, count) in buckets {
-                        out.0.extend_from_slice(&index.to_le_bytes());
-                        out.u64(count);
-                    }
+        write_kept(out, &output.kept);
+        write_kept(out, &output.flagged_kept);
+    }
+}
+
+fn write_kept(out: &mut Writer, kept: &KeptValues) {
+    match kept {
+        KeptValues::Values(values) => {
+            out.u8(0);
+            out.f64s(values);
+        }
+        KeptValues::Sketch {
+            sketch,
+            center,
+            scale,
+        } => {
+            out.u8(1);
+            out.f64(*center);
+            out.f64(*scale);
+            let parts = sketch.to_parts();
+            out.f64(parts.relative_accuracy);
+            out.u64(parts.zero_count);
+            for buckets in [&parts.positive, &parts.negative] {
+                out.u64(buckets.len() as u64);
+                for &(index, count) in buckets {
+                    out.0.extend_from_slice(&index.to_le_bytes());
+                    out.u64(count);
                 }
             }
-            KeptValues::Indicator => out.u8(2),
-            KeptValues::Dropped => out.u8(3),
         }
+        KeptValues::Indicator => out.u8(2),
+        KeptValues::Dropped => out.u8(3),
     }
 }
 
@@ -680,10 +685,25 @@ fn check_counts(
         }
         _ => {}
     }
+    let apart = acc.flagged_kept.count() as u128;
+    if apart > wide(acc.flagged) {
+        return Err(format!(
+            "{apart} flagged values kept of {} flagged",
+            acc.flagged
+        ));
+    }
+    if let KeptValues::Values(flagged) = &acc.flagged_kept {
+        if flagged.iter().any(|v| v.is_nan()) {
+            return Err("a flagged value is NaN".to_string());
+        }
+    }
     match &acc.kept {
         KeptValues::Values(values) => {
-            if values.len() as u128 != finite {
-                return Err(format!("{} values kept of {finite} finite", values.len()));
+            if values.len() as u128 + apart != finite {
+                return Err(format!(
+                    "{} values kept of {finite} finite ({apart} flagged apart)",
+                    values.len()
+                ));
             }
             if let Some(position) = values.iter().position(|v| v.is_nan()) {
                 return Err(format!("value {position} is NaN"));
@@ -701,7 +721,7 @@ fn check_counts(
                     rvtol_deviation::Shown(*scale)
                 ));
             }
-            if wide(sketch.count()) > finite {
+            if wide(sketch.count()) + apart > finite {
                 return Err(format!(
                     "a sketch of {} values of {finite} finite",
                     sketch.count()
@@ -773,36 +793,8 @@ fn read_outputs(input: &mut Reader) -> Result<Vec<OutputAccumulator>, String> {
         for count in &mut counts {
             *count = input.u64()?;
         }
-        let kept = match input.u8()? {
-            0 => KeptValues::Values(input.f64s()?),
-            1 => {
-                let (center, scale) = (input.f64()?, input.f64()?);
-                let relative_accuracy = input.f64()?;
-                let zero_count = input.u64()?;
-                let mut buckets = || -> Result<Vec<(i64, u64)>, String> {
-                    let n = input.count(16)?;
-                    (0..n)
-                        .map(|_| Ok((input.u64()? as i64, input.u64()?)))
-                        .collect()
-                };
-                let (positive, negative) = (buckets()?, buckets()?);
-                let sketch = QuantileSketch::from_parts(&SketchParts {
-                    relative_accuracy,
-                    zero_count,
-                    positive,
-                    negative,
-                })
-                .map_err(|err| damaged(&format!("sketch: {err}")))?;
-                KeptValues::Sketch {
-                    sketch,
-                    center,
-                    scale,
-                }
-            }
-            2 => KeptValues::Indicator,
-            3 => KeptValues::Dropped,
-            tag => return Err(damaged(&format!("distribution {tag}"))),
-        };
+        let kept = read_kept(input)?;
+        let flagged_kept = read_kept(input)?;
         let [non_finite, first, excluded, flagged, flagged_within_spec, below_lower, above_upper, nonzero] =
             counts;
         outputs.push(OutputAccumulator {
@@ -816,9 +808,43 @@ fn read_outputs(input: &mut Reader) -> Result<Vec<OutputAccumulator>, String> {
             above_upper,
             nonzero,
             kept,
+            flagged_kept,
         });
     }
     Ok(outputs)
+}
+
+fn read_kept(input: &mut Reader) -> Result<KeptValues, String> {
+    Ok(match input.u8()? {
+        0 => KeptValues::Values(input.f64s()?),
+        1 => {
+            let (center, scale) = (input.f64()?, input.f64()?);
+            let relative_accuracy = input.f64()?;
+            let zero_count = input.u64()?;
+            let mut buckets = || -> Result<Vec<(i64, u64)>, String> {
+                let n = input.count(16)?;
+                (0..n)
+                    .map(|_| Ok((input.u64()? as i64, input.u64()?)))
+                    .collect()
+            };
+            let (positive, negative) = (buckets()?, buckets()?);
+            let sketch = QuantileSketch::from_parts(&SketchParts {
+                relative_accuracy,
+                zero_count,
+                positive,
+                negative,
+            })
+            .map_err(|err| damaged(&format!("sketch: {err}")))?;
+            KeptValues::Sketch {
+                sketch,
+                center,
+                scale,
+            }
+        }
+        2 => KeptValues::Indicator,
+        3 => KeptValues::Dropped,
+        tag => return Err(damaged(&format!("distribution {tag}"))),
+    })
 }
 
 fn read_sobol(input: &mut Reader, chunks: Range<u64>) -> Result<SobolPartial, String> {

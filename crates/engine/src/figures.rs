@@ -15,12 +15,14 @@ use serde::{Serialize, Serializer};
 use crate::format::{format_sig, group_thousands};
 use crate::run::{replicated_sd, KeptValues, OutputAccumulator, ReplicateFigures, RunResult};
 use crate::scenario::{OutputInfo, Scenario};
+use crate::stats::conformity::{interpolate_beyond, Placement};
+use crate::stats::exact::type7_position;
 use crate::stats::quantile_sketch::bucket_representative;
 use crate::stats::{
     binomial_rank_interval, capability_from_moments, capability_percentile_method,
-    cpk_on_upper_side, cpk_standard_error, order_statistic_interval, out_of_spec_interval,
-    percentile_type7_of_sorted, percentiles_type7_with_intervals, replicate_standard_error,
-    student_t_quantile, Histogram, Moments, QuantileSketch, SpecLimits, StandardisedSketch,
+    cpk_on_upper_side, cpk_standard_error, out_of_spec_interval, percentiles_type7,
+    percentiles_with_intervals_beyond, replicate_standard_error, student_t_quantile, Histogram,
+    Moments, QuantileSketch, SpecLimits, StandardisedSketch,
 };
 
 pub use crate::stats::PERCENTS;
@@ -199,15 +201,24 @@ pub struct OutputFigures {
     pub min: f64,
     /// Largest value.
     pub max: f64,
-    /// Percentiles keyed by percent.
+    /// Percentiles keyed by percent, as a conformity judgement reads them
+    /// ([`crate::stats::conformity`]): a sample that does not conform although its value
+    /// does not show it (flagged, excluded, not finite) lies beyond the limits in the tail
+    /// the percentile reads; null where the percentile reads such a sample (beyond the
+    /// limits). Without such samples, the type-7 percentiles of the values.
     pub percentiles: OrderedNumbers,
+    /// Where samples lie beyond the limits: the plain percentiles of the finite values,
+    /// flagged ones included (the values' distribution, not a conformity figure).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub value_percentiles: Option<OrderedNumbers>,
     /// Bound on each percentile's error from the percentile method, in the output's unit:
     /// 0 for exact order statistics; for the sketch, α·|percentile − centre|.
     pub percentile_error_bounds: OrderedNumbers,
     /// Distribution-free 95 % confidence interval of each percentile: the order
-    /// statistics [X_(l), X_(u)] of the exact binomial ranks (Hahn & Meeker 1991 §5.2;
-    /// `binomial_rank_interval`), from the sketch moved out by its error bound; an end is
-    /// null where too few values lie beyond the percentile to bound it.
+    /// statistics [X_(l), X_(u)] of the exact binomial ranks among all the samples (Hahn &
+    /// Meeker 1991 §5.2; `binomial_rank_interval`), from the sketch moved out by its error
+    /// bound; an end is null where too few samples lie beyond the percentile to bound it,
+    /// or where it reads a sample beyond the limits (as `percentiles`).
     pub percentile_ci95: OrderedIntervals,
     /// Histogram over [min, max].
     pub histogram: HistogramFigures,
@@ -284,7 +295,7 @@ impl OutputContext<'_> {
     /// The figures of the output whose accumulator is `acc`.
     fn figures(&self, acc: &mut OutputAccumulator) -> OutputFigures {
         let (info, samples) = (self.info, self.samples);
-        let found = percentile_figures(acc);
+        let found = percentile_figures(acc, samples, Placement::of(info.spec));
         let m = &acc.moments;
         let (min, max) = if m.n > 0 {
             (m.min, m.max)
@@ -328,6 +339,9 @@ impl OutputContext<'_> {
                 )
             }),
             percentiles,
+            value_percentiles: found.of_values.map(|values| {
+                OrderedNumbers(keyed(values.into_iter().map(|v| v.unwrap_or(f64::NAN))))
+            }),
             percentile_error_bounds: OrderedNumbers(keyed(found.bounds)),
             percentile_ci95: OrderedIntervals(keyed(found.intervals)),
             histogram: HistogramFigures {
@@ -423,56 +437,77 @@ impl OutputContext<'_> {
 }
 
 /// One output's percentiles (per [`PERCENTS`]), their error bounds and 95 % intervals,
-/// and its histogram.
+/// its histogram, and where samples lie beyond the limits, the plain percentiles of its
+/// values.
 struct PercentileFigures {
     values: Vec<Option<f64>>,
     bounds: Vec<f64>,
     intervals: Vec<[Option<f64>; 2]>,
     histogram: Histogram,
+    of_values: Option<Vec<Option<f64>>>,
 }
 
-/// The percentiles, their bounds and intervals and the histogram of an output: exact
-/// order statistics of its kept values (one selection pass, reordering them), read from
-/// its sketch, or those of an indicator's zeros and ones.
-fn percentile_figures(acc: &mut OutputAccumulator) -> PercentileFigures {
+/// The percentiles as a conformity judgement reads them ([`crate::stats::conformity`]:
+/// the samples of `samples` whose value is not among the conforming ones lie beyond the
+/// limits), their bounds and intervals, and the histogram of every finite value (flagged
+/// ones included): exact order statistics of the kept values (one selection pass,
+/// reordering them), read from the sketch, or those of an indicator's zeros and ones.
+fn percentile_figures(
+    acc: &mut OutputAccumulator,
+    samples: u64,
+    placement: Placement,
+) -> PercentileFigures {
     let m = &acc.moments;
     let (min, max) = if m.n > 0 {
         (m.min, m.max)
     } else {
         (f64::NAN, f64::NAN)
     };
-    let exact_bounds = || vec![0.0; PERCENTS.len()];
-    let n_values = m.n as usize;
-    let rank_intervals = || {
-        PERCENTS
-            .iter()
-            .map(|p| binomial_rank_interval(n_values, p.1 / 100.0, CONFIDENCE))
-    };
-    match &mut acc.kept {
-        KeptValues::Values(values) => {
-            let percents: Vec<f64> = PERCENTS.iter().map(|p| p.1).collect();
-            let histogram = Histogram::from_values(values, min, max, HISTOGRAM_BINS);
-            let found = percentiles_type7_with_intervals(values, &percents, CONFIDENCE);
+    let beyond = acc.beyond(samples);
+    let percents: Vec<f64> = PERCENTS.iter().map(|p| p.1).collect();
+    match (&mut acc.kept, &mut acc.flagged_kept) {
+        (KeptValues::Values(values), flagged) => {
+            let flagged: &[f64] = match flagged {
+                KeptValues::Values(flagged) => flagged,
+                _ => &[],
+            };
+            let mut histogram = Histogram::from_values(values, min, max, HISTOGRAM_BINS);
+            histogram.add_values(flagged);
+            // The plain percentiles of the values, before the selection reorders them.
+            let of_values = (beyond > 0).then(|| {
+                let mut all = [&values[..], flagged].concat();
+                percentiles_type7(&mut all, &percents)
+            });
+            let found = percentiles_with_intervals_beyond(
+                values,
+                &percents,
+                CONFIDENCE,
+                beyond as usize,
+                placement,
+            );
             PercentileFigures {
                 intervals: found
                     .iter()
                     .map(|f| f.map_or([None, None], |f| [f.lower, f.upper]))
                     .collect(),
                 values: found.iter().map(|f| f.map(|f| f.value)).collect(),
-                bounds: exact_bounds(),
+                bounds: vec![0.0; PERCENTS.len()],
                 histogram,
+                of_values,
             }
         }
-        KeptValues::Sketch {
-            sketch,
-            center,
-            scale,
-        } => {
-            let alpha = sketch.relative_accuracy();
-            let standardised: Vec<Option<f64>> = PERCENTS
-                .iter()
-                .map(|p| sketch.quantile(p.1 / 100.0))
-                .collect();
+        (
+            KeptValues::Sketch {
+                sketch,
+                center,
+                scale,
+            },
+            flagged,
+        ) => {
+            let flagged = match flagged {
+                KeptValues::Sketch { sketch, .. } => Some(&*sketch),
+                _ => None,
+            };
             let read = StandardisedSketch {
                 sketch,
                 center: *center,
@@ -480,49 +515,117 @@ fn percentile_figures(acc: &mut OutputAccumulator) -> PercentileFigures {
                 min,
                 max,
             };
-            PercentileFigures {
-                // Back to output units; the true order statistic lies in [min, max].
-                values: standardised
-                    .iter()
-                    .map(|z| z.map(|z| (*center + *scale * z).clamp(min, max)))
-                    .collect(),
-                bounds: standardised
-                    .iter()
-                    .map(|z| z.map_or(f64::NAN, |z| alpha * (*scale * z).abs()))
-                    .collect(),
-                intervals: rank_intervals()
-                    .map(|(l, u)| {
-                        [
-                            l.map(|r| read.order_statistic(r as u64, -1.0)),
-                            u.map(|r| read.order_statistic(r as u64, 1.0)),
-                        ]
-                    })
-                    .collect(),
-                histogram: histogram_of_standardised_sketch(sketch, *center, *scale, min, max),
-            }
+            sketch_percentile_figures(read, flagged, beyond, placement)
         }
-        KeptValues::Dropped => {
+        (KeptValues::Dropped, _) => {
             unreachable!("a run for a report keeps every output's distribution")
         }
-        KeptValues::Indicator => {
-            let zeros = m.n - acc.nonzero;
-            let value = |rank: usize| if (rank as u64) < zeros { 0.0 } else { 1.0 };
-            PercentileFigures {
-                values: PERCENTS
-                    .iter()
-                    .map(|p| binary_percentile(zeros, m.n, p.1))
-                    .collect(),
-                bounds: exact_bounds(),
-                intervals: rank_intervals()
-                    .map(|(l, u)| [l.map(value), u.map(value)])
-                    .collect(),
-                histogram: Histogram {
-                    lower_edge: 0.0,
-                    bin_width: 0.5,
-                    counts: vec![zeros, acc.nonzero],
-                },
+        (KeptValues::Indicator, _) => indicator_percentile_figures(acc.nonzero, m.n),
+    }
+}
+
+/// [`percentile_figures`] from the sketch of the conforming values (`read`), the sketch of
+/// the flagged ones and the count of samples beyond the limits.
+fn sketch_percentile_figures(
+    read: StandardisedSketch,
+    flagged: Option<&QuantileSketch>,
+    beyond: u64,
+    placement: Placement,
+) -> PercentileFigures {
+    let (sketch, center, scale) = (read.sketch, read.center, read.scale);
+    let alpha = sketch.relative_accuracy();
+    let n = sketch.count() as usize;
+    let count = n + beyond as usize;
+    // Rank ⌊q·(N − 1)⌋ among all N samples (the sketch's quantile when none is beyond).
+    let standardised: Vec<Result<f64, f64>> = PERCENTS
+        .iter()
+        .map(|&(_, percent)| {
+            let last = count.saturating_sub(1);
+            let q = (percent / 100.0).clamp(0.0, 1.0);
+            let rank = ((q * last as f64).floor() as usize).min(last);
+            match placement.value_rank(rank, n, beyond as usize, percent) {
+                Some(k) if n > 0 => sketch.order_statistic(k as u64).ok_or(f64::NAN),
+                _ if count == 0 => Err(f64::NAN),
+                _ => Err(placement.beyond_value(percent)),
             }
+        })
+        .collect();
+    let mut histogram = histogram_of_standardised_sketch(sketch, center, scale, read.min, read.max);
+    if let Some(flagged) = flagged {
+        let more = histogram_of_standardised_sketch(flagged, center, scale, read.min, read.max);
+        histogram.add_counts(&more);
+    }
+    let of_values = (beyond > 0).then(|| {
+        let mut all = sketch.clone();
+        if let Some(flagged) = flagged {
+            all.merge(flagged)
+                .expect("the two sketches of one output share their accuracy");
         }
+        PERCENTS
+            .iter()
+            .map(|p| {
+                all.quantile(p.1 / 100.0)
+                    .map(|z| (center + scale * z).clamp(read.min, read.max))
+            })
+            .collect()
+    });
+    PercentileFigures {
+        // Back to output units; the true order statistic lies in [min, max].
+        values: standardised
+            .iter()
+            .map(|z| match *z {
+                Ok(z) => Some((center + scale * z).clamp(read.min, read.max)),
+                Err(beyond) => Some(beyond).filter(|v| !v.is_nan()),
+            })
+            .collect(),
+        bounds: standardised
+            .iter()
+            .map(|z| match *z {
+                Ok(z) => alpha * (scale * z).abs(),
+                Err(beyond) if beyond.is_infinite() => 0.0,
+                Err(_) => f64::NAN,
+            })
+            .collect(),
+        intervals: PERCENTS
+            .iter()
+            .map(|&(_, percent)| {
+                let (l, u) = binomial_rank_interval(count, percent / 100.0, CONFIDENCE);
+                let at = |rank: usize, outward: f64| {
+                    placement
+                        .value_rank(rank, n, beyond as usize, percent)
+                        .map_or(placement.beyond_value(percent), |k| {
+                            read.order_statistic(k as u64, outward)
+                        })
+                };
+                [l.map(|r| at(r, -1.0)), u.map(|r| at(r, 1.0))]
+            })
+            .collect(),
+        histogram,
+        of_values,
+    }
+}
+
+/// [`percentile_figures`] of an indicator: `events` ones among `n` values.
+fn indicator_percentile_figures(events: u64, n: u64) -> PercentileFigures {
+    let zeros = n - events;
+    let value = |rank: usize| if (rank as u64) < zeros { 0.0 } else { 1.0 };
+    PercentileFigures {
+        values: PERCENTS
+            .iter()
+            .map(|p| binary_percentile(zeros, n, p.1))
+            .collect(),
+        bounds: vec![0.0; PERCENTS.len()],
+        intervals: PERCENTS
+            .iter()
+            .map(|p| binomial_rank_interval(n as usize, p.1 / 100.0, CONFIDENCE))
+            .map(|(l, u)| [l.map(value), u.map(value)])
+            .collect(),
+        histogram: Histogram {
+            lower_edge: 0.0,
+            bin_width: 0.5,
+            counts: vec![zeros, events],
+        },
+        of_values: None,
     }
 }
 
@@ -585,7 +688,16 @@ fn capability_figures(
     });
     report.cp_percentile = pct.cp;
     report.cpk_percentile = pct.cpk;
-    if report.cpk_percentile.is_none() {
+    let beyond = ["0.135", "50", "99.865"]
+        .iter()
+        .any(|key| percentiles.get(key).is_some_and(f64::is_infinite));
+    if beyond {
+        report.cp_percentile = None;
+        report.cpk_percentile = None;
+        report.capability_note = Some(
+            "percentile-method indices not given: a percentile lies beyond the limits (flagged samples in its tail)".to_string(),
+        );
+    } else if report.cpk_percentile.is_none() {
         report.capability_note = Some(
             "percentile-method indices not given: the percentiles do not spread on the side of a limit".to_string(),
         );
@@ -667,13 +779,22 @@ fn binary_percentile(zeros: u64, n: u64, percent: f64) -> Option<f64> {
     Some(a + (h - low as f64) * (b - a))
 }
 
-/// An output's kept values ready to be read at any rank: sorted exact values, or the
-/// quantile sketch of a run beyond the exact-percentile limit with its frame. The gate's
-/// bands and the allocation's percentile targets read their intervals here.
+/// An output's conforming values ready to be read at any rank, with the samples beyond
+/// the limits as a conformity judgement places them ([`crate::stats::conformity`]):
+/// sorted exact values, or the quantile sketch of a run beyond the exact-percentile limit
+/// with its frame. The gate's bands and requirements and the allocation's percentile
+/// targets read their percentiles and intervals here.
 pub enum OrderStatistics {
-    /// The finite values, sorted by `f64::total_cmp`.
-    Exact(Vec<f64>),
-    /// The sketch of the standardised values.
+    /// The conforming values, sorted by `f64::total_cmp`, and the samples beyond.
+    Exact {
+        /// The values.
+        sorted: Vec<f64>,
+        /// Samples beyond the limits.
+        beyond: u64,
+        /// Where they sit.
+        placement: Placement,
+    },
+    /// The sketch of the standardised conforming values.
     Sketch {
         /// The sketch.
         sketch: QuantileSketch,
@@ -681,8 +802,10 @@ pub enum OrderStatistics {
         center: f64,
         /// Scale divided out before insertion.
         scale: f64,
-        /// Values in it.
-        n: u64,
+        /// Samples beyond the limits.
+        beyond: u64,
+        /// Where they sit.
+        placement: Placement,
         /// Smallest value.
         min: f64,
         /// Largest value.
@@ -691,13 +814,25 @@ pub enum OrderStatistics {
 }
 
 impl OrderStatistics {
-    /// The order statistics of an output's kept values (`n` of them within [`min`,
-    /// `max`]); `None` for an indicator or a dropped output, which keep none.
-    pub fn new(kept: KeptValues, n: u64, min: f64, max: f64) -> Option<OrderStatistics> {
+    /// The order statistics of an output's conforming values (`kept`, within [`min`,
+    /// `max`]) among `samples` samples, the others beyond the limits `limits`; `None` for
+    /// an indicator or a dropped output, which keep none.
+    pub fn new(
+        kept: KeptValues,
+        samples: u64,
+        limits: Option<SpecLimits>,
+        (min, max): (f64, f64),
+    ) -> Option<OrderStatistics> {
+        let beyond = samples.saturating_sub(kept.count());
+        let placement = Placement::of(limits);
         match kept {
             KeptValues::Values(mut values) => {
                 values.sort_unstable_by(f64::total_cmp);
-                Some(OrderStatistics::Exact(values))
+                Some(OrderStatistics::Exact {
+                    sorted: values,
+                    beyond,
+                    placement,
+                })
             }
             KeptValues::Sketch {
                 sketch,
@@ -707,7 +842,8 @@ impl OrderStatistics {
                 sketch,
                 center,
                 scale,
-                n,
+                beyond,
+                placement,
                 min,
                 max,
             }),
@@ -716,20 +852,28 @@ impl OrderStatistics {
     }
 
     /// The type-7 percentile at `percent` and its distribution-free interval [X_(l), X_(u)]
-    /// at z, of normal-approximation ranks n·p ∓ z·√(n·p·(1 − p)) (`value`, `low`, `high`);
-    /// from a sketch, each end moved out by its error bound α·|x − centre|. NaN for no
-    /// values.
+    /// at z, of normal-approximation ranks N·p ∓ z·√(N·p·(1 − p)) among all N samples
+    /// (`value`, `low`, `high`); ±∞ where they read a sample beyond the limits; from a
+    /// sketch, each end moved out by its error bound α·|x − centre|. NaN for no samples.
     pub fn percentile_with_interval(&self, percent: f64, z: f64) -> (f64, f64, f64) {
         match self {
-            OrderStatistics::Exact(sorted) => percentile_of_sorted_with_interval(
-                sorted, percent, z,
+            OrderStatistics::Exact {
+                sorted,
+                beyond,
+                placement,
+            } => percentile_of_sorted_with_interval(
+                sorted,
+                (*beyond as usize, *placement),
+                percent,
+                z,
             )
             .unwrap_or((f64::NAN, f64::NAN, f64::NAN)),
             OrderStatistics::Sketch {
                 sketch,
                 center,
                 scale,
-                n,
+                beyond,
+                placement,
                 min,
                 max,
             } => {
@@ -740,10 +884,20 @@ impl OrderStatistics {
                     min: *min,
                     max: *max,
                 };
-                let last = (*n - 1) as f64;
-                let at_rank =
-                    |rank: f64, outward: f64| sketch.order_statistic(rank as u64, outward);
-                let (nf, p) = (*n as f64, (percent / 100.0).clamp(0.0, 1.0));
+                let n = sketch.sketch.count() as usize;
+                let count = n as u64 + beyond;
+                if count == 0 {
+                    return (f64::NAN, f64::NAN, f64::NAN);
+                }
+                let last = (count - 1) as f64;
+                let at_rank = |rank: f64, outward: f64| {
+                    placement
+                        .value_rank(rank as usize, n, *beyond as usize, percent)
+                        .map_or(placement.beyond_value(percent), |k| {
+                            sketch.order_statistic(k as u64, outward)
+                        })
+                };
+                let (nf, p) = (count as f64, (percent / 100.0).clamp(0.0, 1.0));
                 let value = at_rank((p * last).floor(), 0.0);
                 let reach = z * (nf * p * (1.0 - p)).sqrt();
                 let low = at_rank((nf * p - reach).floor().clamp(0.0, last), -1.0);
@@ -754,14 +908,35 @@ impl OrderStatistics {
     }
 }
 
-/// [`OrderStatistics::percentile_with_interval`] of sorted values; `None` when there are
-/// none.
+/// [`OrderStatistics::percentile_with_interval`] of sorted conforming values with `beyond`
+/// samples beyond the limits where `placement` puts them; `None` when there are no
+/// samples. With `beyond` 0, the type-7 percentile of `sorted` and
+/// [`crate::stats::order_statistic_interval`]'s interval, bit for bit.
 pub fn percentile_of_sorted_with_interval(
     sorted: &[f64],
+    (beyond, placement): (usize, Placement),
     percent: f64,
     z: f64,
 ) -> Option<(f64, f64, f64)> {
-    let value = percentile_type7_of_sorted(sorted, percent)?;
-    let (low, high) = order_statistic_interval(sorted, percent, z)?;
-    Some((value, low, high))
+    let n = sorted.len();
+    let count = n + beyond;
+    let at = |rank: usize| {
+        placement
+            .value_rank(rank, n, beyond, percent)
+            .map_or(placement.beyond_value(percent), |k| sorted[k])
+    };
+    let (lower_rank, weight) = type7_position(count, percent)?;
+    let upper = if lower_rank + 1 < count {
+        at(lower_rank + 1)
+    } else {
+        at(lower_rank)
+    };
+    let value = interpolate_beyond(at(lower_rank), upper, weight);
+    let last = count - 1;
+    let (nf, p) = (count as f64, (percent / 100.0).clamp(0.0, 1.0));
+    let centre = nf * p;
+    let reach = z * (nf * p * (1.0 - p)).sqrt();
+    let low = ((centre - reach).floor().max(0.0) as usize).min(last);
+    let high = ((centre + reach).ceil() as usize).min(last);
+    Some((value, at(low), at(high)))
 }

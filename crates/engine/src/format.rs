@@ -28,6 +28,16 @@ pub fn format_sig(x: f64) -> String {
     format!("{x:.decimals$}")
 }
 
+/// A figure judged against spec limits as text: [`format_sig`], with a percentile that
+/// reads samples beyond the limits (±∞, [`crate::stats::conformity`]) as `beyond`.
+pub fn format_figure(x: f64) -> String {
+    if x.is_infinite() {
+        "beyond".into()
+    } else {
+        format_sig(x)
+    }
+}
+
 /// The change a ratio `factor` (new / old) makes, as a signed percentage (`+100.0 %`,
 /// `-12.5 %`; `+1.0000e8 %` beyond a million percent); a factor too large for its
 /// percentage to be a number reads as the factor (`×1.0000e308`), and one that is no

@@ -15,7 +15,7 @@ use serde::Serialize;
 
 use crate::chunk::CHUNK_SIZE;
 use crate::figures::{output_figures, OutputFigures};
-use crate::format::{format_ppm, format_sig, group_thousands};
+use crate::format::{format_figure, format_ppm, format_sig, group_thousands};
 use crate::run::{PercentileMethod, RunResult};
 use crate::scenario::Scenario;
 use crate::stats::Histogram;
@@ -239,9 +239,9 @@ impl RunReport {
                 o.unit,
                 format_sig(o.mean),
                 format_sig(o.sd),
-                format_sig(o.percentiles.get("0.135").unwrap_or(f64::NAN)),
-                format_sig(o.percentiles.get("50").unwrap_or(f64::NAN)),
-                format_sig(o.percentiles.get("99.865").unwrap_or(f64::NAN)),
+                format_figure(o.percentiles.get("0.135").unwrap_or(f64::NAN)),
+                format_figure(o.percentiles.get("50").unwrap_or(f64::NAN)),
+                format_figure(o.percentiles.get("99.865").unwrap_or(f64::NAN)),
                 format_sig(o.min),
                 format_sig(o.max),
             ));
@@ -272,6 +272,13 @@ impl RunReport {
             };
             for o in &continuous {
                 let Some(r) = &o.replicate_ci95 else { continue };
+                let percentile_pair = |key: &str| {
+                    if o.percentiles.get(key).is_some_and(f64::is_infinite) {
+                        "beyond".to_string()
+                    } else {
+                        pair(r.percentiles.get(key).unwrap_or([None, None]))
+                    }
+                };
                 let [ml, mu] = r.mean;
                 let [sl, su] = r.sd;
                 lines.push(format!(
@@ -285,8 +292,8 @@ impl RunReport {
                         Some(sl).filter(|x| x.is_finite()),
                         Some(su).filter(|x| x.is_finite())
                     ]),
-                    pair(r.percentiles.get("50").unwrap_or([None, None])),
-                    pair(r.percentiles.get("99.865").unwrap_or([None, None])),
+                    percentile_pair("50"),
+                    percentile_pair("99.865"),
                 ));
             }
         } else if !continuous.is_empty() {
@@ -303,9 +310,14 @@ impl RunReport {
                 "{:<name_width$}  {:>23} {:>23} {:>23}",
                 "output", "P0.135", "P50", "P99.865"
             ));
-            let end = |x: Option<f64>, open: &str| x.map_or(open.to_string(), format_sig);
             for o in continuous {
+                // An end that reads a sample beyond the limits is "beyond"; an open one
+                // reaches past the sample's extreme.
+                let end = |x: Option<f64>, open: &str| x.map_or(open.to_string(), format_figure);
                 let interval = |key: &str| {
+                    if o.percentiles.get(key).is_some_and(f64::is_infinite) {
+                        return "beyond".to_string();
+                    }
                     let [l, u] = o.percentile_ci95.get(key).unwrap_or([None, None]);
                     format!("{} .. {}", end(l, "below min"), end(u, "above max"))
                 };
@@ -403,6 +415,16 @@ impl RunReport {
                     group_thousands(c.samples),
                     format_sig(100.0 * c.fraction),
                     c.indicator,
+                ));
+            }
+            if let Some(values) = &o.value_percentiles {
+                let at = |key: &str| format_sig(values.get(key).unwrap_or(f64::NAN));
+                lines.push(format!(
+                    "{}: its percentiles place the samples that do not conform although their values do not show it (flagged, excluded, not finite) beyond the spec limits (\"beyond\" where a percentile reaches them); of the values alone, flagged ones included: P0.135 {}, P50 {}, P99.865 {}",
+                    o.name,
+                    at("0.135"),
+                    at("50"),
+                    at("99.865"),
                 ));
             }
         }

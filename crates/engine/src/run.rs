@@ -40,7 +40,8 @@ use rvtol_models::{ConditionEffect, Curve, OutputKind};
 use crate::chunk::{waves, Sampling, BLOCK_ROWS, CHUNK_SIZE};
 use crate::error::MergeError;
 use crate::evaluate::{check_table_rows, ChunkEvaluator, SampleTable};
-use crate::scenario::{Scenario, ScenarioError};
+use crate::scenario::{OutputInfo, Scenario, ScenarioError};
+use crate::stats::conformity::Placement;
 use crate::stats::{values_at_ranks, Moments, QuantileSketch, SpecLimits, PERCENTS};
 
 /// Relative accuracy of the quantile sketch used beyond the exact-percentile limit.
@@ -207,12 +208,19 @@ pub struct OutputAccumulator {
     pub above_upper: u64,
     /// Samples whose value was non-zero (the events of an indicator output).
     pub nonzero: u64,
-    /// Values or sketch, for percentiles and the histogram.
+    /// Values or sketch, for percentiles and the histogram: of every finite value, except
+    /// those of samples flagged non-conforming (unless `flagged_conform`), which are in
+    /// `flagged_kept`.
     pub kept: KeptValues,
+    /// The values of the samples flagged non-conforming, kept apart so that a conformity
+    /// figure places them beyond the limits ([`crate::figures::Conformity`]) while the
+    /// histogram and the value percentiles still show them; [`KeptValues::Dropped`] for an
+    /// output whose flags do not take samples out of conformity.
+    pub flagged_kept: KeptValues,
 }
 
 impl OutputAccumulator {
-    fn new(kept: KeptValues) -> OutputAccumulator {
+    fn new(kept: KeptValues, flagged_kept: KeptValues) -> OutputAccumulator {
         OutputAccumulator {
             moments: Moments::new(),
             non_finite: 0,
@@ -224,7 +232,15 @@ impl OutputAccumulator {
             above_upper: 0,
             nonzero: 0,
             kept,
+            flagged_kept,
         }
+    }
+
+    /// The samples of a run of `samples` that a conformity figure places beyond the
+    /// limits: every sample whose value is not among `kept` (not finite, excluded, or
+    /// flagged non-conforming).
+    pub fn beyond(&self, samples: u64) -> u64 {
+        samples.saturating_sub(self.kept.count())
     }
 
     /// Samples that do not conform to the spec limits: outside them, not finite, excluded,
@@ -437,7 +453,18 @@ impl<'a> Plan<'a> {
     /// Empty accumulators of every output.
     fn new_accumulators(&self) -> Vec<OutputAccumulator> {
         (0..self.scenario.outputs.len())
-            .map(|o| OutputAccumulator::new(self.new_kept_values(o)))
+            .map(|o| {
+                let flagged_apart = matches!(
+                    self.conditions[o],
+                    Some((_, ConditionEffect::NonConforming))
+                ) && !self.flagged_conform[o];
+                let flagged_kept = if flagged_apart {
+                    self.new_kept_values(o)
+                } else {
+                    KeptValues::Dropped
+                };
+                OutputAccumulator::new(self.new_kept_values(o), flagged_kept)
+            })
             .collect()
     }
 
@@ -698,31 +725,27 @@ impl<'a> Plan<'a> {
             if let Some((flags, ConditionEffect::NonConforming)) = flags {
                 acc.flagged += flags.iter().filter(|&&flag| is_set(flag)).count() as u64;
             }
-            match &mut acc.kept {
-                KeptValues::Values(all) => {
-                    match flags {
-                        // The values a conformity target reads: a flagged sample lies beyond
-                        // every limit.
-                        Some((flags, ConditionEffect::NonConforming))
-                            if self.only_output == Some(o) && !self.flagged_conform[o] =>
-                        {
-                            all.extend(
-                                values.iter().zip(flags).filter(|(v, _)| v.is_finite()).map(
-                                    |(&v, &flag)| if is_set(flag) { f64::INFINITY } else { v },
-                                ),
-                            )
+            match flags {
+                // A flagged sample's value apart: conformity figures place it beyond the
+                // limits.
+                Some((flags, ConditionEffect::NonConforming))
+                    if !matches!(acc.flagged_kept, KeptValues::Dropped) =>
+                {
+                    let (mut flagged, mut conforming) = (Vec::new(), Vec::new());
+                    for (&v, &flag) in values.iter().zip(flags) {
+                        if v.is_finite() {
+                            if is_set(flag) {
+                                &mut flagged
+                            } else {
+                                &mut conforming
+                            }
+                            .push(v);
                         }
-                        _ => all.extend_from_slice(kept),
                     }
+                    acc.kept.extend(&conforming);
+                    acc.flagged_kept.extend(&flagged);
                 }
-                KeptValues::Sketch {
-                    sketch,
-                    center,
-                    scale,
-                } => {
-                    sketch.insert_standardised(kept, *center, 1.0 / *scale);
-                }
-                KeptValues::Indicator | KeptValues::Dropped => {}
+                _ => acc.kept.extend(kept),
             }
         }
         worker.chunk_moments.push((chunk, moments));
@@ -795,11 +818,7 @@ pub fn run(
 
 /// [`run`] for a caller that needs the distribution of one output only (the allocation):
 /// the other outputs keep their moments and counts but no values or sketch
-/// ([`KeptValues::Dropped`]), so memory grows with one output's values. The values kept
-/// are those a conformity target reads: a sample flagged non-conforming by the output's
-/// indicator (and not allowed to conform by its spec) is kept as +∞, beyond every limit,
-/// so a percentile target counts it as the worst assembly it is; the moments keep the real
-/// values.
+/// ([`KeptValues::Dropped`]), so memory grows with one output's values.
 pub fn run_for_output(
     scenario: &Scenario,
     settings: RunSettings,
@@ -1058,7 +1077,7 @@ impl<'a> RunMerger<'a> {
                             } else {
                                 m.clone()
                             };
-                            replicate_figures(acc, &m, points, info.flagged_conform)
+                            replicate_figures(acc, &m, points, info)
                         })
                         .collect()
                 })
@@ -1103,24 +1122,53 @@ fn replicate_figures(
     acc: &mut OutputAccumulator,
     moments: &Moments,
     points: u64,
-    flagged_conform: bool,
+    info: &OutputInfo,
 ) -> ReplicateFigures {
+    let placement = Placement::of(info.spec);
     let percents: Vec<f64> = PERCENTS.iter().map(|p| p.1 / 100.0).collect();
     let (percentiles, percentile_bias_bounds) = match &mut acc.kept {
         KeptValues::Values(values) => {
-            let n = values.len() as f64;
-            // Hazen's and Weibull's ranks of each percentile, read in one pass.
+            let n = values.len();
+            // Among the replicate's points, the samples beyond the limits in the tail each
+            // percentile reads (crate::stats::conformity).
+            let beyond = (points as usize).saturating_sub(n);
+            let total = (n + beyond) as f64;
+            // Hazen's and Weibull's positions of each percentile among all the points,
+            // as positions among the values (NaN where a sample beyond is read), in one pass.
+            let among_values = |position: f64, percent: f64| {
+                if beyond == 0 {
+                    position
+                } else if placement.above(percent) {
+                    if position.ceil() <= (n as f64 - 1.0) {
+                        position
+                    } else {
+                        f64::NAN
+                    }
+                } else if position.floor() >= beyond as f64 {
+                    position - beyond as f64
+                } else {
+                    f64::NAN
+                }
+            };
             let positions: Vec<f64> = percents
                 .iter()
-                .flat_map(|&p| [n * p - 0.5, (n + 1.0) * p - 1.0])
+                .flat_map(|&p| {
+                    [total * p - 0.5, (total + 1.0) * p - 1.0]
+                        .map(|position| among_values(position, 100.0 * p))
+                })
                 .collect();
             let read = values_at_ranks(values, &positions);
             read.chunks(2)
-                .map(|pair| match (pair[0], pair[1]) {
+                .zip(positions.chunks(2))
+                .zip(&percents)
+                .map(|((pair, at), &p)| match (pair[0], pair[1]) {
                     (Some(hazen), Some(weibull)) => (
                         Some(0.5 * (hazen + weibull)),
                         Some(0.5 * (hazen - weibull).abs()),
                     ),
+                    _ if at.iter().any(|h| h.is_nan()) => {
+                        (Some(placement.beyond_value(100.0 * p)), Some(0.0))
+                    }
                     _ => (None, None),
                 })
                 .unzip()
@@ -1129,15 +1177,28 @@ fn replicate_figures(
             sketch,
             center,
             scale,
-        } => percents
-            .iter()
-            .map(|&p| {
-                let value = sketch
-                    .quantile(p)
-                    .map(|z| (*center + *scale * z).clamp(moments.min, moments.max));
-                (value, value.map(|_| 0.0))
-            })
-            .unzip(),
+        } => {
+            let n = sketch.count();
+            let beyond = points.saturating_sub(n);
+            let last = (n + beyond).saturating_sub(1);
+            percents
+                .iter()
+                .map(|&p| {
+                    // Rank ⌊q·(N − 1)⌋ among the points (the sketch's quantile when no
+                    // sample is beyond the limits).
+                    let rank = ((p.clamp(0.0, 1.0) * last as f64).floor() as u64).min(last);
+                    let at =
+                        placement.value_rank(rank as usize, n as usize, beyond as usize, 100.0 * p);
+                    let value = match at {
+                        Some(k) => sketch
+                            .order_statistic(k as u64)
+                            .map(|z| (*center + *scale * z).clamp(moments.min, moments.max)),
+                        None => Some(placement.beyond_value(100.0 * p)),
+                    };
+                    (value, value.map(|_| 0.0))
+                })
+                .unzip()
+        }
         KeptValues::Indicator | KeptValues::Dropped => {
             (vec![None; percents.len()], vec![None; percents.len()])
         }
@@ -1152,7 +1213,7 @@ fn replicate_figures(
         sd: population_variance.sqrt(),
         percentiles,
         percentile_bias_bounds,
-        out_of_spec_fraction: acc.out_of_spec(flagged_conform) as f64 / points as f64,
+        out_of_spec_fraction: acc.out_of_spec(info.flagged_conform) as f64 / points as f64,
     }
 }
 
@@ -1181,7 +1242,39 @@ fn absorb_counts(
     }
     for (output, part) in outputs.iter_mut().zip(other) {
         output.add_counts(&part);
-        match (&mut output.kept, part.kept) {
+        output.kept.absorb(part.kept)?;
+        output.flagged_kept.absorb(part.flagged_kept)?;
+    }
+    Ok(())
+}
+
+impl KeptValues {
+    /// Adds `values` (finite) to the values or the sketch.
+    fn extend(&mut self, values: &[f64]) {
+        match self {
+            KeptValues::Values(all) => all.extend_from_slice(values),
+            KeptValues::Sketch {
+                sketch,
+                center,
+                scale,
+            } => sketch.insert_standardised(values, *center, 1.0 / *scale),
+            KeptValues::Indicator | KeptValues::Dropped => {}
+        }
+    }
+
+    /// The values kept (those in the sketch); 0 for nothing kept.
+    pub fn count(&self) -> u64 {
+        match self {
+            KeptValues::Values(values) => values.len() as u64,
+            KeptValues::Sketch { sketch, .. } => sketch.count(),
+            KeptValues::Indicator | KeptValues::Dropped => 0,
+        }
+    }
+
+    /// Adds another partial's values or sketch of the same kind.
+    fn absorb(&mut self, part: KeptValues) -> Result<(), MergeError> {
+        let mismatch = || MergeError::new("the partials' output statistics differ");
+        match (self, part) {
             (KeptValues::Values(all), KeptValues::Values(part)) => all.extend_from_slice(&part),
             (KeptValues::Indicator, KeptValues::Indicator)
             | (KeptValues::Dropped, KeptValues::Dropped) => {}
@@ -1204,8 +1297,8 @@ fn absorb_counts(
             }
             _ => return Err(mismatch()),
         }
+        Ok(())
     }
-    Ok(())
 }
 
 /// Whether an indicator value flags its sample: finite and non-zero.

@@ -18,9 +18,10 @@ use rvtol_models::{Curve, CurveStyle};
 use serde_json::Value;
 
 use chart::{BarRow, Cumulative, Limits, Marker};
-use html::{escape, figure, interval, number, table};
+use html::{escape, figure, number, table};
 use rvtol_analysis::target::TargetFigure;
 use rvtol_engine::format::group_thousands as thousands;
+use rvtol_engine::stats::{conformity::Placement, SpecLimits};
 
 /// What the page is a record of.
 #[derive(Debug, Clone, Default)]
@@ -286,6 +287,48 @@ fn record_section(report: &Report) -> String {
     out
 }
 
+/// Where an output's samples beyond the limits sit among its values (by its spec limits).
+fn placement_of(output: &Value) -> Placement {
+    let spec = output.get("spec");
+    Placement::of(Some(SpecLimits {
+        lower: spec.and_then(|s| f(s, "lower")),
+        upper: spec.and_then(|s| f(s, "upper")),
+    }))
+}
+
+/// The table of an output's percentiles with their intervals: "beyond the limits" for a
+/// percentile that reads a sample beyond them, an interval's open end "beyond" on the side
+/// where such samples sit.
+fn percentile_table(output: &Value, markers: &[Marker]) -> String {
+    let placement = placement_of(output);
+    let has_beyond = output.get("value_percentiles").is_some();
+    let rows: Vec<Vec<String>> = markers
+        .iter()
+        .map(|m| {
+            let above = placement.above(m.percent);
+            let end = |x: Option<f64>, open: &str, side: bool| match x {
+                Some(x) => number(Some(x)),
+                None if has_beyond && side => "beyond".into(),
+                None => open.into(),
+            };
+            let (value, interval) = if m.value.is_infinite() {
+                ("beyond the limits".into(), String::new())
+            } else {
+                (
+                    number(Some(m.value)),
+                    format!(
+                        "{} .. {}",
+                        end(m.interval.0, "below min", !above),
+                        end(m.interval.1, "above max", above)
+                    ),
+                )
+            };
+            vec![format!("P{}", m.percent), value, interval]
+        })
+        .collect();
+    table(&["percentile", "value", "95 % CI"], &rows, &[1, 2])
+}
+
 /// The report's percentiles, in its order, keyed by the percent as text, with their
 /// intervals: a replicated run's from its replicates, else the order-statistic ones.
 fn markers(output: &Value) -> Vec<Marker> {
@@ -298,12 +341,18 @@ fn markers(output: &Value) -> Vec<Marker> {
     ) else {
         return Vec::new();
     };
+    // With samples beyond the limits (the report then gives the values' own percentiles
+    // too), a null percentile reads them: ±∞ where the output's limits place them.
+    let beyond = output.get("value_percentiles").is_some();
+    let placement = placement_of(output);
     values
         .iter()
         .filter_map(|(key, value)| {
+            let percent: f64 = key.parse().ok()?;
+            let beyond_value = placement.beyond_value(percent);
             Some(Marker {
-                percent: key.parse().ok()?,
-                value: value.as_f64()?,
+                percent,
+                value: value.as_f64().or(beyond.then_some(beyond_value))?,
                 interval: pair(intervals.and_then(|i| i.get(key))),
             })
         })
@@ -494,21 +543,7 @@ fn output_block(output: &Value, name: &str, unit: &str) -> Result<String, Report
         rows.push(vec![label.into(), number(f(output, key))]);
     }
     let mut tables = table(&["figure", "value"], &rows, &[1]);
-    let percentile_rows: Vec<Vec<String>> = all_markers
-        .iter()
-        .map(|m| {
-            vec![
-                format!("P{}", m.percent),
-                number(Some(m.value)),
-                interval(m.interval.0, m.interval.1),
-            ]
-        })
-        .collect();
-    tables.push_str(&table(
-        &["percentile", "value", "95 % CI"],
-        &percentile_rows,
-        &[1, 2],
-    ));
+    tables.push_str(&percentile_table(output, &all_markers));
     if limits.lower.is_some() || limits.upper.is_some() {
         let spec_text = match (limits.lower, limits.upper) {
             (Some(l), Some(u)) => format!("{} ≤ x ≤ {}", number(Some(l)), number(Some(u))),

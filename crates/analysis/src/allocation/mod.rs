@@ -34,9 +34,10 @@ use rvtol_engine::figures::{percentile_of_sorted_with_interval, symmetric95, CON
 use rvtol_engine::run::{run_for_output, KeptValues, RunSettings};
 use rvtol_engine::scenario::allocation::{self as spec, AllocatableSource, CostKind};
 use rvtol_engine::scenario::{Scenario, ScenarioError};
+use rvtol_engine::stats::conformity::Placement;
 use rvtol_engine::stats::{
     capability_from_moments, cpk_on_upper_side, cpk_standard_error, out_of_spec_interval,
-    percentile_type7_of_sorted, proportion_standard_error, Moments, SpecLimits,
+    proportion_standard_error, Moments, SpecLimits,
 };
 
 use crate::target::{Target, TargetFigure};
@@ -103,7 +104,8 @@ pub struct Evaluation {
     /// Standard deviation of the output.
     pub sd: f64,
     /// The output's distribution in outline: (p in %, type-7 percentile) at
-    /// [`QUANTILE_LEVELS`] (a flagged sample beyond every limit is ±∞).
+    /// [`QUANTILE_LEVELS`] as a conformity judgement reads them (±∞ where a level reads a
+    /// sample beyond the limits: flagged, excluded or not finite).
     pub quantiles: Vec<(f64, f64)>,
 }
 
@@ -114,10 +116,15 @@ pub const QUANTILE_LEVELS: [f64; 29] = [
     55.0, 60.0, 65.0, 70.0, 75.0, 80.0, 84.134, 90.0, 95.0, 97.725, 99.0, 99.5, 99.75, 99.865,
 ];
 
-fn outline(sorted: &[f64]) -> Vec<(f64, f64)> {
+/// The outline of the conforming values `sorted` with `beyond` samples beyond the limits,
+/// as a conformity judgement reads it (±∞ where a level reads one of those).
+fn outline(sorted: &[f64], beyond: (usize, Placement)) -> Vec<(f64, f64)> {
     QUANTILE_LEVELS
         .iter()
-        .filter_map(|&p| Some((p, percentile_type7_of_sorted(sorted, p)?)))
+        .filter_map(|&p| {
+            let (value, _, _) = percentile_of_sorted_with_interval(sorted, beyond, p, 0.0)?;
+            Some((p, value))
+        })
         .collect()
 }
 
@@ -728,9 +735,8 @@ impl Problem<'_> {
         (self.progress)(self.evaluations.get());
         let accumulator = result.outputs.swap_remove(self.output);
         let out = accumulator.out_of_spec(self.flagged_conform);
-        // Flagged samples are +∞ among the kept values (run_for_output): the interpolated
-        // fraction above the upper limit counts them already.
-        let hidden_out = accumulator.non_finite + accumulator.excluded;
+        // The kept values are the conforming ones; the others lie beyond the limits.
+        let hidden_out = accumulator.beyond(self.samples);
         let KeptValues::Values(mut values) = accumulator.kept else {
             unreachable!("allocation runs keep every value");
         };
@@ -1045,7 +1051,7 @@ struct OutOfSpec {
     /// Samples drawn.
     samples: u64,
     /// Samples that do not conform although their values do not show it (not finite,
-    /// excluded, flagged within the limits).
+    /// excluded, flagged non-conforming): beyond the limits, not among the sorted values.
     hidden: u64,
     /// The counted samples out of spec, for the verification; the optimisation uses the
     /// interpolated count instead.
@@ -1062,7 +1068,14 @@ fn evaluate_figure(
     let (mean, sd) = (moments.mean, moments.sd());
     let (excess_kurtosis, skewness) = (moments.excess_kurtosis(), moments.skewness());
     let n = sorted.len();
-    if n < 2 {
+    // Where the samples beyond the limits sit among the values (rvtol_engine::stats::conformity).
+    let beyond = (out_of_spec.hidden as usize, Placement::of(limits));
+    // A percentile reads the samples beyond the limits too (all of them, at worst).
+    let among = match figure {
+        TargetFigure::Percentile(_) => n as u64 + out_of_spec.hidden,
+        _ => n as u64,
+    };
+    if among < 2 {
         return None;
     }
     let nf = n as f64;
@@ -1077,24 +1090,28 @@ fn evaluate_figure(
     };
     let (value, se, interval) = match figure {
         TargetFigure::Percentile(p) => {
-            let (value, low, high) = percentile_of_sorted_with_interval(sorted, p, Z95)?;
-            (value, (high - low) / (2.0 * Z95), (low, high))
+            let (value, low, high) = percentile_of_sorted_with_interval(sorted, beyond, p, Z95)?;
+            // Beyond the limits: no spread to speak of (the constraint is +∞ anyway).
+            let se = if value.is_infinite() {
+                0.0
+            } else {
+                (high - low) / (2.0 * Z95)
+            };
+            (value, se, (low, high))
         }
         TargetFigure::Mean => symmetric(mean, moments.mean_standard_error()),
         TargetFigure::Sd => symmetric(sd, moments.sd_standard_error()),
         // The indices are undefined when samples are out of spec in a way the values do not
         // show (as in the run report): no Cp or Cpk target can be met then.
-        TargetFigure::Cp | TargetFigure::Cpk
-            if out_of_spec.hidden > 0 || sorted.last().is_some_and(|v| v.is_infinite()) =>
-        {
+        TargetFigure::Cp | TargetFigure::Cpk if out_of_spec.hidden > 0 => {
             return Some(Evaluation {
                 figure: f64::NAN,
                 standard_error: f64::NAN,
                 interval: (f64::NAN, f64::NAN),
-                n: n as u64,
+                n: moments.n,
                 mean,
                 sd,
-                quantiles: outline(sorted),
+                quantiles: outline(sorted, beyond),
             });
         }
         TargetFigure::Cp => {
@@ -1143,10 +1160,10 @@ fn evaluate_figure(
         figure: value,
         standard_error: se,
         interval,
-        n: n as u64,
+        n: moments.n,
         mean,
         sd,
-        quantiles: outline(sorted),
+        quantiles: outline(sorted, beyond),
     })
 }
 
@@ -1174,6 +1191,7 @@ fn interpolated_cdf(sorted: &[f64], x: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rvtol_engine::stats::percentile_type7_of_sorted;
 
     #[test]
     fn met_needs_the_whole_interval_on_the_right_side() {

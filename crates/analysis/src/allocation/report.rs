@@ -179,14 +179,15 @@ pub struct LeverOptionReport {
     pub verification: f64,
 }
 
-/// A target figure as text: a number, or why there is none. A percentile is +∞ when the
-/// samples flagged non-conforming (kept beyond every limit) reach into its tail; a
-/// capability index has no value when such samples exist.
+/// A target figure as text: a number, or why there is none. A percentile is ±∞ when it
+/// reads samples that do not conform although their values do not show it (flagged,
+/// excluded, not finite), which lie beyond the limits in its tail; a capability index has
+/// no value when such samples exist.
 fn figure_text(value: f64) -> String {
     if value.is_finite() {
         format_sig(value)
-    } else if value == f64::INFINITY {
-        "beyond the limits (flagged samples in the tail)".to_string()
+    } else if value.is_infinite() {
+        "beyond the limits (non-conforming samples in the tail)".to_string()
     } else {
         "n/a (flagged or non-finite samples)".to_string()
     }

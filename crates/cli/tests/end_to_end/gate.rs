@@ -199,17 +199,15 @@ fn options(one_sided: bool, requirements: &[&str]) -> CheckOptions {
 fn one_sided_checks_and_requirements_keep_the_false_alarm_bound() {
     // As above, 50 independent baseline/check pairs of the unchanged RV-20E, now one-sided
     // and with requirements at the true values (the worst case for a requirement that is
-    // met): P99.865 of the lost motion 1.777 and its mean 0.3938 (10⁶ samples, the
-    // README's run; their own Monte Carlo errors, about 0.005 and 0.0003, are far below the
-    // 10⁵-sample intervals of about 0.06 and 0.003). A requirement fails only when its whole
+    // met): P50 of the lost motion among all the samples 0.6345 (its P99.865 is beyond the
+    // limit: 36 % of the assemblies are over-preloaded) and its mean 0.3938 (10⁶ samples,
+    // the README's run; their own Monte Carlo errors, about 0.0014 and 0.0003, are well
+    // below the 10⁵-sample intervals of about ±0.009 and ±0.003). A requirement fails only when its whole
     // interval misses it, at the family's z: at most 3 failures in 50, P(≥ 4) = 0.0016 for
     // a family level of 1 %.
     let text = rv20e_text();
     let s = scenario(&text);
-    let checked = options(
-        true,
-        &["hysteresis_arcmin p99.865 <= 1.777", "mean <= 0.3938"],
-    );
+    let checked = options(true, &["hysteresis_arcmin p50 <= 0.6345", "mean <= 0.3938"]);
     let failures = (0..50u64)
         .filter(|&k| {
             let recorded = baseline(&s, &text, settings(2 * k + 1), 0.0, &|_| {}).unwrap();
@@ -227,8 +225,11 @@ fn one_sided_checks_and_requirements_keep_the_false_alarm_bound() {
 
 #[test]
 fn requirements_detect_a_violation_and_pass_a_margin() {
-    // RV-20E lost motion: P99.865 1.78 arcmin (README), 40.8 % out of spec (36.4 %
-    // over-preloaded, the rest above 1 arcmin).
+    // RV-20E lost motion, 40.8 % out of spec (36.4 % over-preloaded, the rest above
+    // 1 arcmin): the values' P99.865 is 1.77 arcmin, but the over-preloaded assemblies lie
+    // beyond the limit (docs/models.md, "Conformity"), so P99.865 is beyond it and
+    // "≤ 2.0" is violated; P50 among all the samples is 0.635 arcmin (95 % interval
+    // 0.626 .. 0.643 at 100,000 samples, seed 1), well above 0.6 and below 0.7.
     let text = rv20e_text();
     let s = scenario(&text);
     let recorded = baseline(&s, &text, settings(1), 0.0, &|_| {}).unwrap();
@@ -241,13 +242,23 @@ fn requirements_detect_a_violation_and_pass_a_margin() {
             0.0,
             &options(
                 false,
-                &["p99.865 <= 1.5", "p99.865 <= 2.0", "ppm_out <= 300000"],
+                &[
+                    "p50 <= 0.6",
+                    "p50 <= 0.7",
+                    "p99.865 <= 2.0",
+                    "ppm_out <= 300000",
+                ],
             ),
             &|_| {},
         )
         .unwrap();
         let status: Vec<&str> = report.requirements.iter().map(|r| r.status).collect();
-        assert_eq!(status, ["violated", "met", "violated"], "seed {seed}");
+        assert_eq!(
+            status,
+            ["violated", "met", "violated", "violated"],
+            "seed {seed}"
+        );
+        assert_eq!(report.requirements[2].value, Some(f64::INFINITY));
         assert!(!report.passed);
         assert!(report.comparisons.iter().all(|c| c.passed));
         // cpk is undefined when over-preloaded samples are counted out of spec within the

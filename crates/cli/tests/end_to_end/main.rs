@@ -20,6 +20,7 @@
 //! - `report`: `rvtol report` and the HTML pages.
 //! - `gate`: `baseline` and `check`, their bands and requirements.
 //! - `allocate`: `rvtol allocate`, its proposal and verification.
+//! - `conformity`: one meaning of a non-conforming sample in run, check and allocate.
 //! - `fit`: `rvtol fit` against the library's fit.
 //! - `shard`: `--shard` and `merge`, bit for bit the unsharded command.
 //! - `kubernetes`: the Kubernetes recipe's commands (deploy/kubernetes/).
@@ -29,6 +30,7 @@ mod common;
 mod allocate;
 mod bad_input;
 mod cli;
+mod conformity;
 mod fit;
 mod gate;
 mod hardening;

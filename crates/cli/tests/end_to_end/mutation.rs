@@ -309,8 +309,21 @@ fn non_finite_figure(report: &Value) -> Option<String> {
         .filter(|k| output.get(**k).is_some())
         .map(|k| (*k, &output[*k]))
         .collect();
-        if let Some(percentiles) = output["percentiles"].as_object() {
-            figures.extend(percentiles.iter().map(|(k, v)| (k.as_str(), v)));
+        // A percentile is null where it reads a sample beyond the limits (flagged, excluded,
+        // not finite: docs/models.md, "Conformity"); the report then gives the values' own
+        // percentiles, which must be numbers.
+        match (
+            output["percentiles"].as_object(),
+            output.get("value_percentiles"),
+        ) {
+            (Some(_), Some(values)) => {
+                let values = values.as_object()?;
+                figures.extend(values.iter().map(|(k, v)| (k.as_str(), v)));
+            }
+            (Some(percentiles), None) => {
+                figures.extend(percentiles.iter().map(|(k, v)| (k.as_str(), v)));
+            }
+            _ => {}
         }
         for (key, value) in figures {
             if !value.as_f64().is_some_and(f64::is_finite) {

@@ -11,10 +11,11 @@
 //! `_of_sorted` ones and [`order_statistic_interval`], which take a sorted slice.
 
 use super::binomial::binomial_rank_interval;
+use super::conformity::{interpolate_beyond, Placement};
 
 /// 0-based position h = (n − 1)·p of percent `percent` (clamped into
 /// [0, 100]) among `count` values; `None` for NaN.
-fn type7_position(count: usize, percent: f64) -> Option<(usize, f64)> {
+pub(crate) fn type7_position(count: usize, percent: f64) -> Option<(usize, f64)> {
     if count == 0 || percent.is_nan() {
         return None;
     }
@@ -174,7 +175,24 @@ pub fn percentiles_type7_with_intervals(
     percents: &[f64],
     confidence: f64,
 ) -> Vec<Option<PercentileWithInterval>> {
-    let count = values.len();
+    percentiles_with_intervals_beyond(values, percents, confidence, 0, Placement::Tail)
+}
+
+/// [`percentiles_type7_with_intervals`] as a conformity judgement reads them
+/// ([`super::conformity`]): `values` are the conforming ones, `beyond` samples lie beyond
+/// the limits where `placement` puts them, and the ranks are among all
+/// `values.len() + beyond` samples. A percentile or an interval end that reads a beyond
+/// sample is ±∞. With `beyond` 0, bit for bit
+/// [`percentiles_type7_with_intervals`].
+pub fn percentiles_with_intervals_beyond(
+    values: &mut [f64],
+    percents: &[f64],
+    confidence: f64,
+    beyond: usize,
+    placement: Placement,
+) -> Vec<Option<PercentileWithInterval>> {
+    let n = values.len();
+    let count = n + beyond;
     let positions: Vec<Option<(usize, f64)>> = percents
         .iter()
         .map(|&percent| type7_position(count, percent))
@@ -184,29 +202,36 @@ pub fn percentiles_type7_with_intervals(
         .map(|&percent| binomial_rank_interval(count, percent / 100.0, confidence))
         .collect();
     let mut ranks: Vec<usize> = Vec::new();
-    for (position, &(l, u)) in positions.iter().zip(&intervals) {
+    for ((position, &(l, u)), &percent) in positions.iter().zip(&intervals).zip(percents) {
+        let mut need = |rank: usize| ranks.extend(placement.value_rank(rank, n, beyond, percent));
         if let Some((lower_rank, weight)) = *position {
-            ranks.push(lower_rank);
+            need(lower_rank);
             if weight > 0.0 {
-                ranks.push(lower_rank + 1);
+                need(lower_rank + 1);
             }
-            ranks.extend(l);
-            ranks.extend(u);
+            l.into_iter().chain(u).for_each(need);
         }
     }
     let order_statistics = select_ranks(values, ranks);
-    let lookup = |rank: usize| order_statistic(&order_statistics, rank);
     positions
         .iter()
         .zip(&intervals)
-        .map(|(position, &(l, u))| {
+        .zip(percents)
+        .map(|((position, &(l, u)), &percent)| {
+            let lookup = |rank: usize| {
+                placement
+                    .value_rank(rank, n, beyond, percent)
+                    .map_or(placement.beyond_value(percent), |k| {
+                        order_statistic(&order_statistics, k)
+                    })
+            };
             position.map(|(lower_rank, weight)| {
                 let lower = lookup(lower_rank);
                 PercentileWithInterval {
                     value: if weight == 0.0 {
                         lower
                     } else {
-                        interpolate(lower, lookup(lower_rank + 1), weight)
+                        interpolate_beyond(lower, lookup(lower_rank + 1), weight)
                     },
                     lower: l.map(lookup),
                     upper: u.map(lookup),
@@ -245,6 +270,7 @@ pub fn order_statistic_interval(sorted: &[f64], percent: f64, z: f64) -> Option<
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::stats::SpecLimits;
 
     #[test]
     fn percentiles_with_intervals_match_the_plain_ones_and_the_sorted_ranks() {
@@ -262,6 +288,59 @@ mod tests {
             let (l, u) = binomial_rank_interval(values.len(), p / 100.0, 0.95);
             assert_eq!(b.lower, l.map(|r| sorted[r]), "{p}");
             assert_eq!(b.upper, u.map(|r| sorted[r]), "{p}");
+        }
+    }
+
+    #[test]
+    fn conformity_percentiles_are_type7_of_the_samples_with_the_beyond_ones_placed() {
+        // Reference: the samples beyond the limits materialised as ±1e300 where the
+        // placement puts them, type 7 of the whole list; a result that reads one of them
+        // is beyond (±∞), any other is the reference bit for bit, and so are the interval
+        // ends (binomial ranks among all the samples).
+        let values: Vec<f64> = (0..397)
+            .map(|i| ((i * 151) % 397) as f64 * 0.01 - 1.0)
+            .collect();
+        let percents = [0.135, 2.275, 15.866, 50.0, 84.134, 97.725, 99.865];
+        let limits = |lower: Option<f64>, upper: Option<f64>| SpecLimits { lower, upper };
+        for placement in [
+            Placement::Tail,
+            Placement::of(Some(limits(None, Some(1.0)))),
+            Placement::of(Some(limits(Some(0.0), None))),
+        ] {
+            for beyond in [0usize, 1, 3, 10, 60, 397] {
+                let found = percentiles_with_intervals_beyond(
+                    &mut values.clone(),
+                    &percents,
+                    0.95,
+                    beyond,
+                    placement,
+                );
+                for (&p, found) in percents.iter().zip(&found) {
+                    let sentinel = placement.beyond_value(p).signum() * 1e300;
+                    let mut all = values.clone();
+                    all.extend(std::iter::repeat_n(sentinel, beyond));
+                    all.sort_unstable_by(f64::total_cmp);
+                    let reference = percentile_type7_of_sorted(&all, p).unwrap();
+                    let found = found.unwrap();
+                    if reference.abs() > 1e290 {
+                        assert_eq!(found.value, placement.beyond_value(p), "{p} {beyond}");
+                    } else {
+                        assert_eq!(found.value.to_bits(), reference.to_bits(), "{p} {beyond}");
+                    }
+                    let (l, u) = binomial_rank_interval(all.len(), p / 100.0, 0.95);
+                    let end = |rank: Option<usize>| {
+                        rank.map(|r| {
+                            if all[r].abs() > 1e290 {
+                                placement.beyond_value(p)
+                            } else {
+                                all[r]
+                            }
+                        })
+                    };
+                    assert_eq!(found.lower, end(l), "{p} {beyond}");
+                    assert_eq!(found.upper, end(u), "{p} {beyond}");
+                }
+            }
         }
     }
 

@@ -73,12 +73,24 @@ impl Histogram {
     /// `bins == 0` is treated as 1; reversed bounds are swapped.
     pub fn from_values(values: &[f64], min: f64, max: f64, bins: usize) -> Histogram {
         let mut histogram = Histogram::empty(min, max, bins);
+        histogram.add_values(values);
+        histogram
+    }
+
+    /// Adds `values` with the rules of [`Histogram::from_values`].
+    pub fn add_values(&mut self, values: &[f64]) {
         for &value in values {
-            if let Some(bin) = histogram.bin_of(value) {
-                histogram.counts[bin] += 1;
+            if let Some(bin) = self.bin_of(value) {
+                self.counts[bin] += 1;
             }
         }
-        histogram
+    }
+
+    /// Adds the counts of a histogram over the same bins.
+    pub fn add_counts(&mut self, other: &Histogram) {
+        for (count, more) in self.counts.iter_mut().zip(&other.counts) {
+            *count += more;
+        }
     }
 
     /// Histogram of a sketch: each bucket's count goes to the bin containing

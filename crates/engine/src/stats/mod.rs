@@ -13,6 +13,7 @@
 
 pub mod binomial;
 pub mod capability;
+pub mod conformity;
 pub mod exact;
 pub mod histogram;
 pub mod moments;
@@ -25,7 +26,8 @@ pub use capability::{
 };
 pub use exact::{
     order_statistic_interval, percentile_type7, percentile_type7_of_sorted, percentiles_type7,
-    percentiles_type7_with_intervals, values_at_ranks, PercentileWithInterval,
+    percentiles_type7_with_intervals, percentiles_with_intervals_beyond, values_at_ranks,
+    PercentileWithInterval,
 };
 /// Percentiles every report gives: the ±1, 2, 3 σ points of a normal law and the median.
 pub const PERCENTS: [(&str, f64); 7] = [
