@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Reference ranks of the distribution-free percentile intervals, computed in 40-digit
-arithmetic, independently of rvtol's binomial module (crates/engine/src/stats/binomial.rs).
+arithmetic, independently of rvtol's binomial module (crates/stats/src/binomial.rs).
 
 For B ~ Binomial(n, p), p = percent / 100 as an IEEE double (the value rvtol uses) and
 q = 1 - p exactly, the interval [X_(l), X_(u)] at 95 % has

@@ -2,7 +2,8 @@
 //!
 //! Data flows one way, and the modules are layered the same way (no module imports one
 //! that imports it back): on the ground floor [`error`], [`format`] (numbers as every report
-//! prints them), [`chunk`] (the chunk-and-stream contract) and [`stats`]; then [`scenario`],
+//! prints them), [`chunk`] (the chunk-and-stream contract) and [`stats`] (the crate
+//! rvtol-stats, re-exported: the statistics every figure is made of); then [`scenario`],
 //! which validates the JSON into a [`Scenario`] (input space + bound models + outputs),
 //! section by section; [`evaluate`], the models on a block of rows; [`run`], which draws
 //! chunks in parallel under the reproducibility contract and folds model outputs into
@@ -20,7 +21,9 @@ pub mod format;
 pub mod report;
 pub mod run;
 pub mod scenario;
-pub mod stats;
+
+/// The statistics every figure is made of (the crate rvtol-stats).
+pub use rvtol_stats as stats;
 
 pub use chunk::{shard_range, Sampling};
 pub use error::{FoldError, MergeError};

@@ -13,7 +13,7 @@
 //! the limits: +∞ or −∞ here, `null` in JSON, "beyond" in text. With no such sample the
 //! figures are the plain type-7 percentiles of the values, bit for bit.
 
-use super::capability::SpecLimits;
+use crate::capability::SpecLimits;
 
 /// Where the samples beyond the limits sit among the conforming values: above them for an
 /// output with an upper spec limit only, below them for a lower limit only, and for two

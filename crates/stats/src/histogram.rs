@@ -9,7 +9,7 @@
 //! value 2·lo·hi / (lo + hi) (Masson, Rim & Lee 2019, DDSketch), so bin
 //! counts are exact up to the sketch's relative accuracy in the values.
 
-use super::quantile_sketch::{bucket_representative, QuantileSketch};
+use crate::quantile_sketch::{bucket_representative, QuantileSketch};
 
 /// Largest number of lines produced by [`Histogram::render_text`].
 const MAX_RENDERED_LINES: usize = 12;

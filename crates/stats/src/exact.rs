@@ -10,12 +10,12 @@
 //! no function here assumes anything about its order on entry, except the
 //! `_of_sorted` ones and [`order_statistic_interval`], which take a sorted slice.
 
-use super::binomial::binomial_rank_interval;
-use super::conformity::{interpolate_beyond, Placement};
+use crate::binomial::binomial_rank_interval;
+use crate::conformity::{interpolate_beyond, Placement};
 
 /// 0-based position h = (n − 1)·p of percent `percent` (clamped into
 /// [0, 100]) among `count` values; `None` for NaN.
-pub(crate) fn type7_position(count: usize, percent: f64) -> Option<(usize, f64)> {
+pub fn type7_position(count: usize, percent: f64) -> Option<(usize, f64)> {
     if count == 0 || percent.is_nan() {
         return None;
     }
@@ -179,7 +179,7 @@ pub fn percentiles_type7_with_intervals(
 }
 
 /// [`percentiles_type7_with_intervals`] as a conformity judgement reads them
-/// ([`super::conformity`]): `values` are the conforming ones, `beyond` samples lie beyond
+/// ([`crate::conformity`]): `values` are the conforming ones, `beyond` samples lie beyond
 /// the limits where `placement` puts them, and the ranks are among all
 /// `values.len() + beyond` samples. A percentile or an interval end that reads a beyond
 /// sample is ±∞. With `beyond` 0, bit for bit
@@ -270,7 +270,7 @@ pub fn order_statistic_interval(sorted: &[f64], percent: f64, z: f64) -> Option<
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::stats::SpecLimits;
+    use crate::SpecLimits;
 
     #[test]
     fn percentiles_with_intervals_match_the_plain_ones_and_the_sorted_ranks() {
