@@ -27,6 +27,7 @@
 
 use std::f64::consts::PI;
 
+use super::common::gcd;
 use super::two_discs::{lane_squares, lane_stats, RowTerms, TE_OUTPUTS};
 use super::TransmissionError;
 use crate::cycloid::CycloidStage;
@@ -168,14 +169,6 @@ impl PinPhases {
             }
         }
         table
-    }
-}
-
-fn gcd(a: usize, b: usize) -> usize {
-    if b == 0 {
-        a
-    } else {
-        gcd(b, a % b)
     }
 }
 

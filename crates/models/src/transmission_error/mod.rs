@@ -80,19 +80,19 @@ use crate::{
     OutputKind, OutputSpec, ParamSpec, Series, ARCSEC_PER_RAD,
 };
 
+mod common;
 mod loaded;
 mod setup;
 #[cfg(test)]
 mod test_support;
 mod two_discs;
 
+use common::{gcd, smallest, smallest_ratio, Group, PinTable, Point, MAX_CRANKS};
 use setup::Reading;
 
 use loaded::{Loaded, LoadedScratch};
 use two_discs::{Physical, TwoDiscScratch};
 
-/// Largest crank count.
-const MAX_CRANKS: usize = 6;
 /// Inputs per crank, in order.
 const CRANK_INPUTS: [(&str, &str); 7] = [
     (
@@ -333,89 +333,6 @@ fn rv40e_params() -> ModelParams {
         .with_number("planet_gear_overhang_mm", 13.625)
 }
 
-/// The pin slots of every phase of the curve, as columns (structure of arrays) in blocks of
-/// `width` entries per phase: entry e of phase p is pin slot s = e, at φ = 2π(s + p·g/N)/z_p
-/// from the eccentric; pin i is in slot (i − 1 + k_j) mod z_p at point j. Slots whose lever
-/// is not positive, and slots past the last pin (3 pins in 4 slots), are padding
-/// (`blocked` = +∞, every factor 0). Each clearance factor is
-/// stored divided by the lever l, so that a row's clearance ratio g/l is a sum of products.
-/// (The physical reading builds its own tables of this form, one per flank, in
-/// `two_discs`: there the drive flank is the pins with l < 0, their factors over |l|.)
-#[derive(Debug, Clone, Default)]
-struct PinTable {
-    /// Entries per phase: the ⌈z_p/2⌉ slots that can have a positive lever, rounded up to
-    /// a multiple of 4 (the chunk of the vectorised scans).
-    width: usize,
-    /// 0 for a pin with a positive lever, +∞ for padding.
-    blocked: Vec<f64>,
-    /// 1/l, 1/mm.
-    inverse_lever: Vec<f64>,
-    /// (1 − sin φ/S)/l: factor of Δr_rp.
-    equidistant: Vec<f64>,
-    /// −(1 − K1·cos φ − √(1 − K1²)·sin φ)/(S·l): factor of Δr_p.
-    shift: Vec<f64>,
-    /// (K1 − cos φ)/(S·l): factor of a disc displacement along the eccentric.
-    eccentric: Vec<f64>,
-    /// (1 − K1·cos φ)/(S·l): factor of a radial pin displacement.
-    radial: Vec<f64>,
-    /// K1·sin φ/(S·l): factor of a tangential pin displacement.
-    tangential: Vec<f64>,
-    /// Tooth space in contact when the eccentric has turned no whole pin pitch (k_j = 0):
-    /// round(z_c·λ/2π − phase fraction) mod z_c, λ the pin's polar angle about the disc
-    /// centre from the eccentric; at point j it is this minus k_j (mod z_c).
-    tooth: Vec<u32>,
-}
-
-impl PinTable {
-    /// An entry that no pin fills or that has no lever on this flank: blocked (+∞), every
-    /// factor 0.
-    fn push_padding(&mut self) {
-        self.blocked.push(f64::INFINITY);
-        for column in [
-            &mut self.inverse_lever,
-            &mut self.equidistant,
-            &mut self.shift,
-            &mut self.eccentric,
-            &mut self.radial,
-            &mut self.tangential,
-        ] {
-            column.push(0.0);
-        }
-        self.tooth.push(0);
-    }
-}
-
-/// Per curve point: the angles and indices of point j.
-#[derive(Debug, Clone, Copy)]
-struct Point {
-    /// (sin, cos) of Θ.
-    output: (f64, f64),
-    /// (sin, cos) of z_p·Θ (crank against carrier), from z_p·j reduced modulo N, so that
-    /// the points of a group have the same bits.
-    crank: (f64, f64),
-    /// (sin, cos) of (i − 1)·Θ (sun against carrier).
-    sun: (f64, f64),
-    /// Whole pin pitches the eccentric has turned, k_j, modulo z_p.
-    pin_shift: u32,
-    /// k_j modulo z_c.
-    tooth_shift: u32,
-    /// Its index j on the curve.
-    index: u32,
-}
-
-/// Points of the curve that see the same pin slots (the same fractional pin pitch), the
-/// same disc displacement along the eccentric (the same z_p·Θ modulo 2π) and the same tooth
-/// spaces in those slots (the same k_j modulo z_c): they differ only in which pin sits in
-/// each slot. For the RV40E (N = 4096, z_c·z_p = 1560) the 4096 points form 512 groups of 8.
-#[derive(Debug, Clone, Copy)]
-struct Group {
-    /// Block of the pin table.
-    phase: u32,
-    /// Range of its points in `curve_points`.
-    start: u32,
-    end: u32,
-}
-
 /// The stage contributions at one point, rad.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct StageErrors {
@@ -496,14 +413,6 @@ struct Search {
 // Per-thread work state (no allocation per sample).
 thread_local! {
     static SEARCH: RefCell<Search> = RefCell::new(Search::default());
-}
-
-fn gcd(a: usize, b: usize) -> usize {
-    if b == 0 {
-        a
-    } else {
-        gcd(b, a % b)
-    }
 }
 
 impl TransmissionError {
@@ -1056,67 +965,6 @@ fn literal_specs(
         ),
     ];
     (inputs, outputs)
-}
-
-/// The first `chunks` quadruples of a column.
-#[inline(always)]
-fn quads(column: &[f64], chunks: usize) -> &[[f64; 4]] {
-    &column.as_chunks::<4>().0[..chunks]
-}
-
-/// min over k of head + pin_radial·radial + pin_tangential·tangential, over columns of
-/// equal length, a multiple of 4. Four independent minima in fixed-size chunks let the loop
-/// vectorise; `<` selects compile to plain min instructions.
-#[inline(always)]
-fn smallest_ratio(
-    head: &[f64],
-    radial: &[f64],
-    tangential: &[f64],
-    pin_radial: &[f64],
-    pin_tangential: &[f64],
-) -> f64 {
-    let count = head.len() / 4;
-    let (head, radial, tangential) = (
-        quads(head, count),
-        quads(radial, count),
-        quads(tangential, count),
-    );
-    let (pin_radial, pin_tangential) = (quads(pin_radial, count), quads(pin_tangential, count));
-    let mut lanes = [f64::INFINITY; 4];
-    for c in 0..count {
-        for lane in 0..4 {
-            let v = head[c][lane]
-                + pin_radial[c][lane] * radial[c][lane]
-                + pin_tangential[c][lane] * tangential[c][lane];
-            lanes[lane] = if v < lanes[lane] { v } else { lanes[lane] };
-        }
-    }
-    smallest_lane(lanes)
-}
-
-/// The smallest value of a column whose length is a multiple of 4, in four lanes (the
-/// pin-free form of [`smallest_ratio`]).
-#[inline(always)]
-fn smallest(column: &[f64]) -> f64 {
-    let mut lanes = [f64::INFINITY; 4];
-    for quad in column.as_chunks::<4>().0 {
-        for lane in 0..4 {
-            lanes[lane] = if quad[lane] < lanes[lane] {
-                quad[lane]
-            } else {
-                lanes[lane]
-            };
-        }
-    }
-    smallest_lane(lanes)
-}
-
-/// The smallest of four lanes, by `<` selects (plain min instructions; a NaN lane is
-/// passed over, as in the lanes themselves).
-#[inline(always)]
-fn smallest_lane(lanes: [f64; 4]) -> f64 {
-    let select = |a: f64, b: f64| if b < a { b } else { a };
-    select(select(lanes[0], lanes[1]), select(lanes[2], lanes[3]))
 }
 
 impl ErrorModel for TransmissionError {

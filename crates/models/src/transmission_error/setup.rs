@@ -6,8 +6,8 @@
 use rvtol_deviation::Shown;
 use std::f64::consts::PI;
 
+use super::common::{Group, PinTable, Point};
 use super::two_discs::{CrankClosure, DiscContact};
-use super::{Group, PinTable, Point};
 use crate::cycloid::CycloidStage;
 use crate::preload::{self, PreloadRule};
 use crate::{ModelError, ModelParams};

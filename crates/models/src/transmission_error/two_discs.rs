@@ -71,7 +71,10 @@
 
 use std::f64::consts::PI;
 
-use super::{smallest, smallest_ratio, PinTable, Point, TransmissionError, MAX_CRANKS};
+use super::common::{
+    quads, smallest, smallest_lane, smallest_ratio, Group, PinTable, Point, MAX_CRANKS,
+};
+use super::TransmissionError;
 use crate::cycloid::{CycloidStage, PinFactors};
 use crate::preload::{slip_arm, zero_torque, DiscPins, LEVER_FLOOR};
 use crate::spectrum::OrderDft;
@@ -1242,14 +1245,11 @@ fn smallest_ratio_pair(
     for d in 0..2 {
         let count = head[d].len() / 4;
         let (h, a, b) = (
-            super::quads(head[d], count),
-            super::quads(radial[d], count),
-            super::quads(tangential[d], count),
+            quads(head[d], count),
+            quads(radial[d], count),
+            quads(tangential[d], count),
         );
-        let (pa, pb) = (
-            super::quads(pin_radial[d], count),
-            super::quads(pin_tangential[d], count),
-        );
+        let (pa, pb) = (quads(pin_radial[d], count), quads(pin_tangential[d], count));
         for c in 0..count {
             for lane in 0..4 {
                 let v =
@@ -1258,7 +1258,7 @@ fn smallest_ratio_pair(
             }
         }
     }
-    super::smallest_lane(lanes)
+    smallest_lane(lanes)
 }
 
 /// Whether a window's upper end `high` reaches its lower end `low` (false for NaN).
@@ -1341,7 +1341,7 @@ fn smallest_less_pins(head: &[f64], radial: &[f64], tangential: &[f64], r: f64, 
             lanes[lane] = if v < lanes[lane] { v } else { lanes[lane] };
         }
     }
-    super::smallest_lane(lanes)
+    smallest_lane(lanes)
 }
 
 /// head_e = Δr_rp·eq_e + Δr_p·sh_e + δr_p·rad_e + constant/l_e + d_r·ecc_e + δ_n,j(e)/l_e +
@@ -1573,8 +1573,8 @@ fn tooth_space(stage: &CycloidStage, phi: f64, fraction: f64) -> u32 {
 pub(super) fn build(
     stage: &CycloidStage,
     width: usize,
-    curve_points: &[super::Point],
-    groups: &[super::Group],
+    curve_points: &[Point],
+    groups: &[Group],
     layout: Layout,
     settings: Settings,
 ) -> Physical {
