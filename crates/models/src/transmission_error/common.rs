@@ -1,10 +1,77 @@
-//! What the transmission error's readings share: the curve's points and their groups (the
-//! points that see the same pin slots), the pin-slot table form both readings tabulate their
+//! What the transmission error's readings share: [`Common`], the model's geometry from its
+//! parameters (teeth, eccentricity, cranks, the involute stage, the divisor to the output),
+//! the curve's points and their groups (the points that see the same pin slots), the FFT
+//! and the inputs and outputs; the pin-slot table form both readings tabulate their
 //! clearances in (document 002's one table, the physical reading's one per flank), and the
-//! vectorised minimum scans over its columns.
+//! vectorised minimum scans over its columns. It names no other module of the model.
+
+use crate::spectrum::RealFft;
+use crate::{InputSpec, OutputSpec};
 
 /// Largest crank count.
 pub(super) const MAX_CRANKS: usize = 6;
+
+/// What every reading of the model shares: the design geometry read from the parameters,
+/// the curve's points in their groups, the FFT of N points, and the inputs and outputs of
+/// the reading asked for.
+#[derive(Debug, Clone)]
+pub(super) struct Common {
+    /// z_s.
+    pub(super) sun_teeth: f64,
+    /// z_pl.
+    pub(super) planet_teeth: f64,
+    /// z_p.
+    pub(super) pins: usize,
+    /// z_c.
+    pub(super) cycloid_teeth: usize,
+    /// a, mm.
+    pub(super) eccentricity: f64,
+    /// m.
+    pub(super) cranks: usize,
+    /// N, points of the curve per output revolution.
+    pub(super) points: usize,
+    /// r2·cos α, mm.
+    pub(super) base_radius: f64,
+    /// sin α, cos α.
+    pub(super) pressure: (f64, f64),
+    /// Divisor from the crank rotation to the output.
+    pub(super) divisor: f64,
+    /// Whether the inputs hold per-pin position errors.
+    pub(super) per_pin: bool,
+    /// Whether the inputs hold per-tooth-space profile errors.
+    pub(super) per_tooth: bool,
+    /// The curve points, grouped (see [`Group`]).
+    pub(super) curve_points: Vec<Point>,
+    pub(super) groups: Vec<Group>,
+    pub(super) fft: RealFft,
+    pub(super) inputs: Vec<InputSpec>,
+    pub(super) outputs: Vec<OutputSpec>,
+}
+
+impl Common {
+    /// Overall ratio i = 1 + (z_pl/z_s)·z_p (validation.md 002: 121 for the RV40E).
+    pub(super) fn ratio(&self) -> f64 {
+        1.0 + self.planet_teeth / self.sun_teeth * self.pins as f64
+    }
+
+    /// Semi-amplitudes of orders 0..N/2 of a curve (order 0: the mean), arcsec.
+    pub(super) fn spectrum(&self, curve: &[f64]) -> Vec<f64> {
+        let mut work = vec![(0.0, 0.0); self.points / 2];
+        self.fft.transform(curve, &mut work);
+        let mut amplitudes: Vec<f64> = (0..=self.points / 2)
+            .map(|k| self.fft.amplitude(&work, k))
+            .collect();
+        amplitudes[0] = self.fft.bin(&work, 0).0 / self.points as f64;
+        amplitudes
+    }
+
+    /// [sin, cos] of z_p·Θ and of (i − 1)·Θ: the crank's and the sun's angles at Θ.
+    pub(super) fn angles_at(&self, theta: f64) -> [f64; 4] {
+        let (s, c) = (self.pins as f64 * theta).sin_cos();
+        let (ss, cs) = ((self.ratio() - 1.0) * theta).sin_cos();
+        [s, c, ss, cs]
+    }
+}
 
 /// The pin slots of every phase of the curve, as columns (structure of arrays) in blocks of
 /// `width` entries per phase: entry e of phase p is pin slot s = e, at φ = 2π(s + p·g/N)/z_p
