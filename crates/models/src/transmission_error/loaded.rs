@@ -24,11 +24,17 @@
 //! it non-conforming). The curve is sampled (no refinement of its extremes: it has no
 //! kinks at the first contact, only where a pin comes into contact); its orders are the
 //! direct DFT of the rigid reading, the same five.
+//!
+//! The reading's data is [`Loaded`] (the torque, the solver, the nominal and the pins'
+//! table [`PinPhases`]), its per-thread work state [`LoadedScratch`]; its methods take what
+//! every reading shares ([`Common`]) and the physical reading it builds on ([`Physical`]:
+//! the row's terms, the crank offsets, κ, the output orders, where the pin and tooth inputs
+//! lie), whose tables judge interference and preload in the same row.
 
 use std::f64::consts::PI;
 
-use super::two_discs::{lane_squares, lane_stats, RowTerms, TE_OUTPUTS};
-use super::TransmissionError;
+use super::common::{gcd, Common};
+use super::two_discs::{lane_squares, lane_stats, Physical, RowTerms, TE_OUTPUTS};
 use crate::cycloid::CycloidStage;
 use crate::loaded::{LoadedDisc, Solution, TwoDiscs, Unconverged};
 use crate::preload::{PreloadRule, LEVER_FLOOR};
@@ -89,19 +95,21 @@ pub(super) fn build(
     })
 }
 
-/// The loaded reading's data.
+/// The loaded reading's data: the torque, the solver, the nominal the curve is measured from
+/// and the pins' table. Its code reads the physical reading's geometry ([`Physical`]: the
+/// row's terms, the crank offsets, κ, the output orders) and never its tables.
 #[derive(Debug, Clone)]
 pub(super) struct Loaded {
     /// T, the output torque, N·m.
-    pub torque: f64,
+    torque: f64,
     /// M* = −λ·T, the pins' total moment, N·mm.
-    pub target: f64,
+    target: f64,
     /// The contact law and the crank side's compliance.
-    pub solver: TwoDiscs,
+    solver: TwoDiscs,
     /// ⟨κ·x⟩ of the perfect reducer at T, rad at the output.
-    pub nominal: f64,
+    nominal: f64,
     /// The pins' factors at every place the curve's points put them.
-    pub table: PinPhases,
+    table: PinPhases,
 }
 
 /// The pins' place at every fractional pin pitch the curve's points and the two discs put
@@ -171,15 +179,7 @@ impl PinPhases {
     }
 }
 
-fn gcd(a: usize, b: usize) -> usize {
-    if b == 0 {
-        a
-    } else {
-        gcd(b, a % b)
-    }
-}
-
-/// Which of a disc's pins [`TransmissionError::loaded_pins`] keeps.
+/// Which of a disc's pins [`Loaded::pins`] keeps.
 #[derive(Debug, Clone, Copy)]
 enum Keep {
     /// Every pin whose lever holds a turn.
@@ -215,16 +215,23 @@ const NEAR_TURN: f64 = 1e-5;
 
 impl LoadedScratch {
     /// Lays out the row's pin and tooth-space errors (zeros where the model has none).
-    fn prepare(&mut self, model: &TransmissionError, inputs: &[f64], terms: &RowTerms) {
-        let ph = model.physical();
-        let (zp, zc) = (model.pins, model.cycloid_teeth);
-        let k1 = model.loaded().table.k1;
+    /// `k1` is K1 of the loaded reading's table.
+    fn prepare(
+        &mut self,
+        common: &Common,
+        physical: &Physical,
+        k1: f64,
+        inputs: &[f64],
+        terms: &RowTerms,
+    ) {
+        let (zp, zc) = (common.pins, common.cycloid_teeth);
+        let (pin_base, tooth_base) = (physical.pin_base(), physical.tooth_base());
         self.pin_radial.clear();
         self.pin_tangential.clear();
         for _ in 0..2 {
             for pin in 0..zp {
-                let (r, t) = if model.per_pin {
-                    (inputs[ph.pin_base + pin], inputs[ph.pin_base + zp + pin])
+                let (r, t) = if common.per_pin {
+                    (inputs[pin_base + pin], inputs[pin_base + zp + pin])
                 } else {
                     (0.0, 0.0)
                 };
@@ -237,8 +244,8 @@ impl LoadedScratch {
             teeth.clear();
             for _ in 0..3 {
                 for space in 0..zc {
-                    teeth.push(if model.per_tooth {
-                        inputs[ph.tooth_base + d * zc + space]
+                    teeth.push(if common.per_tooth {
+                        inputs[tooth_base + d * zc + space]
                     } else {
                         0.0
                     });
@@ -261,31 +268,47 @@ impl LoadedScratch {
     }
 }
 
-impl TransmissionError {
-    /// The loaded reading's data (the physical reading with `disc_contact` "loaded").
-    fn loaded(&self) -> &Loaded {
-        self.loaded
-            .as_deref()
-            .expect("called on the loaded reading")
+impl Loaded {
+    /// T, the output torque, N·m.
+    pub(super) fn torque(&self) -> f64 {
+        self.torque
+    }
+
+    /// Sets the nominal to ⟨κ·x⟩ of the perfect reducer (every input 0: no deviation, no
+    /// modification), rad: the nominal the loaded curve is measured from (set once, when
+    /// the model is built; the curve it is taken from is measured from 0).
+    pub(super) fn set_nominal(
+        &mut self,
+        common: &Common,
+        physical: &Physical,
+    ) -> Result<(), Unconverged> {
+        let zero = vec![0.0; common.inputs.len()];
+        let terms = physical.row_terms(common, &zero);
+        let mut curve = vec![0.0; common.points];
+        let mut scratch = LoadedScratch::default();
+        self.curve(common, physical, &zero, &terms, &mut scratch, &mut curve)?;
+        self.nominal = curve.iter().sum::<f64>() / common.points as f64;
+        Ok(())
     }
 
     /// Fills `curve` (N values, rad at the output) with the loaded transmission error of a
     /// row, warm starting each point from the previous one; the first point that has no
     /// solution ends it with its cause.
-    pub(super) fn loaded_curve(
+    pub(super) fn curve(
         &self,
+        common: &Common,
+        physical: &Physical,
         inputs: &[f64],
         terms: &RowTerms,
         scratch: &mut LoadedScratch,
         curve: &mut [f64],
     ) -> Result<(), Unconverged> {
-        let loaded = self.loaded();
-        let kappa = self.physical().kappa;
-        scratch.prepare(self, inputs, terms);
+        let kappa = physical.kappa();
+        scratch.prepare(common, physical, self.table.k1, inputs, terms);
         let mut warm = Solution::COLD;
         for (j, value) in curve.iter_mut().enumerate() {
-            warm = self.loaded_point(j, terms, scratch, &warm)?;
-            *value = kappa * warm.carrier - loaded.nominal;
+            warm = self.point(common, physical, j, terms, scratch, &warm)?;
+            *value = kappa * warm.carrier - self.nominal;
         }
         Ok(())
     }
@@ -294,18 +317,20 @@ impl TransmissionError {
     /// first (a few of the z_p), then on every pin where the turns moved beyond
     /// [`NEAR_TURN`] and a pin outside them is in contact, or there is no previous
     /// solution.
-    fn loaded_point(
+    fn point(
         &self,
+        common: &Common,
+        physical: &Physical,
         j: usize,
         terms: &RowTerms,
         scratch: &mut LoadedScratch,
         warm: &Solution,
     ) -> Result<Solution, Unconverged> {
-        let solver = &self.loaded().solver;
-        let target = self.loaded().target;
+        let solver = &self.solver;
+        let target = self.target;
         if warm.carrier.is_finite() {
             let keep = warm.turns.map(Keep::Near);
-            let offsets = self.loaded_pins(terms, j, keep, scratch);
+            let offsets = self.pins(common, physical, terms, j, keep, scratch);
             let near = [0, 1].map(|d| scratch.disc(d, offsets[d]));
             if let Ok(solution) = solver.solve(&near, target, warm) {
                 let within = (0..2).all(|d| (solution.turns[d] - warm.turns[d]).abs() <= NEAR_TURN);
@@ -315,7 +340,7 @@ impl TransmissionError {
                     return Ok(solution);
                 }
                 let near_touching = touching(scratch);
-                self.loaded_pins(terms, j, [Keep::All; 2], scratch);
+                self.pins(common, physical, terms, j, [Keep::All; 2], scratch);
                 if touching(scratch) == near_touching {
                     return Ok(solution);
                 }
@@ -323,7 +348,7 @@ impl TransmissionError {
                 return solver.solve(&all, target, warm);
             }
         }
-        let offsets = self.loaded_pins(terms, j, [Keep::All; 2], scratch);
+        let offsets = self.pins(common, physical, terms, j, [Keep::All; 2], scratch);
         let all = [0, 1].map(|d| scratch.disc(d, offsets[d]));
         solver.solve(&all, target, warm)
     }
@@ -331,26 +356,28 @@ impl TransmissionError {
     /// Both discs' pins at point j of N from the table (gaps and levers of the pins `keep`
     /// keeps into `scratch`, prepared for the row), and their crank offsets C_d: the
     /// geometry of `exact_gap_at`, pin by pin.
-    fn loaded_pins(
+    fn pins(
         &self,
+        common: &Common,
+        physical: &Physical,
         terms: &RowTerms,
         j: usize,
         keep: [Keep; 2],
         scratch: &mut LoadedScratch,
     ) -> [f64; 2] {
-        let table = &self.loaded().table;
-        let (n, zp, zc) = (self.points, self.pins, self.cycloid_teeth);
+        let table = &self.table;
+        let (n, zp, zc) = (common.points, common.pins, common.cycloid_teeth);
         let (k1, root) = (table.k1, table.k1_root);
-        let lever_scale = self.eccentricity * zc as f64;
+        let lever_scale = common.eccentricity * zc as f64;
         let theta = 2.0 * PI * j as f64 / n as f64;
-        let angles = self.angles_at(theta);
-        let (offsets, _) = self.crank_offsets(terms, angles);
+        let angles = common.angles_at(theta);
+        let (offsets, _) = physical.crank_offsets(common, terms, angles);
         for (d, keep) in keep.into_iter().enumerate() {
             // Disc d's pins in half-pitch units of 1/(2N): q = 2·z_c·z_p·j + d·z_p·N.
             let q = 2 * zc * zp * j + d * zp * n;
             let (whole, rest) = (q / (2 * n), q % (2 * n));
             let base = rest / table.step * zp;
-            let d_r = Self::along(terms, d, angles[0], angles[1]);
+            let d_r = Physical::along(terms, d, angles[0], angles[1]);
             // gap = (Δr_rp + profile − Δr_rp-error + tooth) + a·(Δr_rp − √(1 − K1²)·Δr_p
             // + K1·T) + b·(K1·Δr_p − d_r − K1·R) + c·(−Δr_p + K1·d_r + R) (PinPhases).
             let constant = terms.d_rp + terms.profile[d] - terms.err_rrp;
@@ -398,54 +425,28 @@ impl TransmissionError {
         offsets
     }
 
-    /// [`Self::loaded_pins`] from the geometry pin by pin (`exact_gap_at`): the reference
-    /// of the table.
-    #[cfg(test)]
-    fn exact_loaded_pins(
-        &self,
-        inputs: &[f64],
-        terms: &RowTerms,
-        theta: f64,
-        scratch: &mut LoadedScratch,
-    ) -> [f64; 2] {
-        let angles = self.angles_at(theta);
-        let (offsets, _) = self.crank_offsets(terms, angles);
-        for d in 0..2 {
-            let d_r = Self::along(terms, d, angles[0], angles[1]);
-            let start = self.cycloid_teeth as f64 * theta + d as f64 * PI;
-            let (gaps, levers) = (&mut scratch.gaps[d], &mut scratch.levers[d]);
-            gaps.clear();
-            levers.clear();
-            for pin in 0..self.pins {
-                let phi = (start + 2.0 * PI * pin as f64 / self.pins as f64).rem_euclid(2.0 * PI);
-                let (gap, lever) =
-                    self.exact_gap_at(inputs, terms, d, pin, theta, d_r, phi.sin_cos());
-                if lever.abs() > LEVER_FLOOR * self.eccentricity {
-                    gaps.push(gap);
-                    levers.push(lever);
-                }
-            }
-            scratch.kept[d] = gaps.len();
-        }
-        offsets
-    }
-
     /// The loaded reading's outputs [p-p, rms, mean, orders 1, z_c, z_p, 2z_c, 2z_p]
     /// (arcsec) of a row; NaN where a point has no solution.
-    pub(super) fn evaluate_loaded(
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn evaluate(
         &self,
+        common: &Common,
+        physical: &Physical,
         inputs: &[f64],
         terms: &RowTerms,
         scratch: &mut LoadedScratch,
         curve: &mut Vec<f64>,
         outputs: &mut [f64],
     ) {
-        curve.resize(self.points, 0.0);
-        if self.loaded_curve(inputs, terms, scratch, curve).is_err() {
+        curve.resize(common.points, 0.0);
+        if self
+            .curve(common, physical, inputs, terms, scratch, curve)
+            .is_err()
+        {
             outputs[..TE_OUTPUTS].fill(f64::NAN);
             return;
         }
-        let n = self.points as f64;
+        let n = common.points as f64;
         let quads = curve.as_chunks::<4>().0;
         let lanes = lane_stats(quads);
         let lo = lanes.lo.into_iter().fold(f64::INFINITY, f64::min);
@@ -453,7 +454,7 @@ impl TransmissionError {
         let mean = ((lanes.sum[0] + lanes.sum[1]) + (lanes.sum[2] + lanes.sum[3])) / n;
         let squares = lane_squares(quads, mean);
         let var = ((squares[0] + squares[1]) + (squares[2] + squares[3])) / n;
-        let orders = self.physical().orders.amplitudes(curve);
+        let orders = physical.order_amplitudes(curve);
         let to_arcsec = crate::ARCSEC_PER_RAD;
         outputs[0] = (hi - lo) * to_arcsec;
         outputs[1] = var.sqrt() * to_arcsec;
@@ -463,19 +464,18 @@ impl TransmissionError {
         }
     }
 
-    /// T, the loaded reading's output torque, N·m (None outside the loaded reading).
-    pub fn load_torque(&self) -> Option<f64> {
-        self.loaded.as_ref().map(|l| l.torque)
-    }
-
-    /// The loaded transmission error of a row at the N points, arcsec (None outside the
-    /// loaded reading, or where a point has no solution).
-    pub fn loaded_curve_arcsec(&self, inputs: &[f64]) -> Option<Vec<f64>> {
-        self.loaded.as_ref()?;
-        let terms = self.row_terms(inputs);
-        let mut curve = vec![0.0; self.points];
+    /// The loaded transmission error of a row at the N points, arcsec (None where a point
+    /// has no solution).
+    pub(super) fn curve_arcsec(
+        &self,
+        common: &Common,
+        physical: &Physical,
+        inputs: &[f64],
+    ) -> Option<Vec<f64>> {
+        let terms = physical.row_terms(common, inputs);
+        let mut curve = vec![0.0; common.points];
         let mut scratch = LoadedScratch::default();
-        self.loaded_curve(inputs, &terms, &mut scratch, &mut curve)
+        self.curve(common, physical, inputs, &terms, &mut scratch, &mut curve)
             .ok()?;
         Some(
             curve
@@ -484,17 +484,39 @@ impl TransmissionError {
                 .collect(),
         )
     }
+}
 
-    /// ⟨κ·x⟩ of the perfect reducer (every input 0: no deviation, no modification), rad:
-    /// the nominal the loaded curve is measured from (set once, when the model is built).
-    pub(super) fn perfect_loaded_angle(&self) -> Result<f64, Unconverged> {
-        let zero = vec![0.0; self.inputs.len()];
-        let terms = self.row_terms(&zero);
-        let mut curve = vec![0.0; self.points];
-        let mut scratch = LoadedScratch::default();
-        self.loaded_curve(&zero, &terms, &mut scratch, &mut curve)?;
-        Ok(curve.iter().sum::<f64>() / self.points as f64)
+/// [`Loaded::pins`] from the geometry pin by pin (`exact_gap_at`): the reference of the
+/// table.
+#[cfg(test)]
+fn exact_pins(
+    common: &Common,
+    physical: &Physical,
+    inputs: &[f64],
+    terms: &RowTerms,
+    theta: f64,
+    scratch: &mut LoadedScratch,
+) -> [f64; 2] {
+    let angles = common.angles_at(theta);
+    let (offsets, _) = physical.crank_offsets(common, terms, angles);
+    for d in 0..2 {
+        let d_r = Physical::along(terms, d, angles[0], angles[1]);
+        let start = common.cycloid_teeth as f64 * theta + d as f64 * PI;
+        let (gaps, levers) = (&mut scratch.gaps[d], &mut scratch.levers[d]);
+        gaps.clear();
+        levers.clear();
+        for pin in 0..common.pins {
+            let phi = (start + 2.0 * PI * pin as f64 / common.pins as f64).rem_euclid(2.0 * PI);
+            let (gap, lever) =
+                physical.exact_gap_at(common, inputs, terms, d, pin, theta, d_r, phi.sin_cos());
+            if lever.abs() > LEVER_FLOOR * common.eccentricity {
+                gaps.push(gap);
+                levers.push(lever);
+            }
+        }
+        scratch.kept[d] = gaps.len();
     }
+    offsets
 }
 
 #[cfg(test)]

@@ -1,13 +1,14 @@
 //! What `TransmissionError::from_params` builds once, section by section: the reading the
 //! parameters ask for ([`Reading`]), the physical reading's geometry beyond the stage
-//! (crank circle, the discs' spacing, the sun's plane), the one preload rule, document
-//! 002's pin table, and the curve's points grouped by the pin slots they see.
+//! (crank circle, the discs' spacing, the sun's plane), the one preload rule, and the
+//! curve's points grouped by the pin slots they see. Each reading builds its own tables
+//! (`literal::Literal::new`, `two_discs::build`, `loaded::build`).
 
 use rvtol_deviation::Shown;
 use std::f64::consts::PI;
 
+use super::common::{Group, Point};
 use super::two_discs::{CrankClosure, DiscContact};
-use super::{Group, PinTable, Point};
 use crate::cycloid::CycloidStage;
 use crate::preload::{self, PreloadRule};
 use crate::{ModelError, ModelParams};
@@ -149,49 +150,6 @@ pub(super) fn preload_rule(
         face_width,
         ratio_lambda,
     )?))
-}
-
-/// Document 002's pin table ([`PinTable`]) for N = `points` points, g = gcd(z_c·z_p, N):
-/// N/g phases of `width` slots each.
-pub(super) fn literal_table(
-    stage: &CycloidStage,
-    points: usize,
-    g: usize,
-    width: usize,
-) -> PinTable {
-    let (pins, cycloid_teeth) = (stage.pins, stage.teeth);
-    let (pin_circle_radius, eccentricity) = (stage.pin_circle_radius, stage.eccentricity);
-    let mut table = PinTable {
-        width,
-        ..PinTable::default()
-    };
-    let zc = cycloid_teeth as i64;
-    for p in 0..points / g {
-        let fraction = p as f64 * g as f64 / points as f64;
-        for s in 0..width {
-            let phi = 2.0 * PI * (s as f64 + fraction) / pins as f64;
-            let (sin, cos) = phi.sin_cos();
-            // Padding: no positive lever, or past the last pin (3 pins, 4 slots).
-            if s >= pins || sin <= 1e-12 {
-                table.push_padding();
-                continue;
-            }
-            let factors = stage.pin_factors(phi);
-            let inverse_lever = 1.0 / factors.lever;
-            let polar = (pin_circle_radius * sin).atan2(pin_circle_radius * cos - eccentricity);
-            let tooth = ((cycloid_teeth as f64 * polar / (2.0 * PI) - fraction).round() as i64)
-                .rem_euclid(zc);
-            table.blocked.push(0.0);
-            table.inverse_lever.push(inverse_lever);
-            table.equidistant.push(factors.equidistant * inverse_lever);
-            table.shift.push(factors.shift * inverse_lever);
-            table.eccentric.push(factors.eccentric * inverse_lever);
-            table.radial.push(factors.radial * inverse_lever);
-            table.tangential.push(factors.tangential * inverse_lever);
-            table.tooth.push(tooth as u32);
-        }
-    }
-    table
 }
 
 /// The curve's N = `points` points, sorted into [`Group`]s of the points that see the same

@@ -1,5 +1,5 @@
 //! What the transmission-error model's three test modules share: the literal reading's
-//! (`mod.rs`), the physical reading's (`two_discs.rs`) and the reading under load's
+//! (`literal.rs`), the physical reading's (`two_discs.rs`) and the reading under load's
 //! (`loaded/tests.rs`).
 
 use super::TransmissionError;
@@ -32,7 +32,7 @@ pub(super) fn outputs(model: &TransmissionError, row: &[f64]) -> Vec<f64> {
 }
 
 /// 003's modification: a play 2δ* = 2(Δr_rp − Δr_p·√(1 − K1²))/(a·z_c) = 126.9″ per disc
-/// (see `coast_modification` in two_discs.rs).
+/// (see `modification` in two_discs.rs).
 pub(super) const MODIFIED: [(&str, f64); 2] = [
     ("equidistant_modification_mm", 0.01),
     ("shift_modification_mm", -0.008),

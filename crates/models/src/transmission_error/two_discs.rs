@@ -68,12 +68,20 @@
 //! two contacts near the minimum, which is a kink): the sampled extremes are off by up to
 //! L·h/2 (L the largest slope, h = 2π/N), the refined ones only move towards the true ones
 //! (tests/transmission_error.rs).
+//!
+//! The reading's data is [`Physical`] (built once by [`build`]: its options, the preload
+//! rule, both flanks' slot tables, disc 2's phases and tooth columns, the per-point
+//! angles), its per-thread work state [`TwoDiscScratch`]; its methods read what every
+//! reading shares from [`Common`]. The loaded reading (module `loaded`) builds on its row
+//! terms and crank offsets; this module names nothing of it.
 
 use std::f64::consts::PI;
 
-use super::{smallest, smallest_ratio, PinTable, Point, TransmissionError, MAX_CRANKS};
+use super::common::{
+    quads, smallest, smallest_lane, smallest_ratio, Common, PinTable, Point, MAX_CRANKS,
+};
 use crate::cycloid::{CycloidStage, PinFactors};
-use crate::preload::{slip_arm, zero_torque, DiscPins, LEVER_FLOOR};
+use crate::preload::{slip_arm, zero_torque, DiscPins, PreloadRule, LEVER_FLOOR};
 use crate::spectrum::OrderDft;
 use crate::{ConditionEffect, InputSpec, OutputCondition, OutputKind, OutputSpec};
 
@@ -210,63 +218,67 @@ pub(super) const PER_ECCENTRIC: [(&str, &str); 2] = [
 /// Inputs per crank: the crank's own and its two eccentrics'.
 pub(super) const CRANK_STRIDE: usize = PER_CRANK.len() + 2 * PER_ECCENTRIC.len();
 
-/// The model data of the physical reading.
+/// The physical reading's data: its options, the cycloid stage, both flanks' slot tables
+/// (built once, disc 2 reading disc 1's at its own phase), the per-point angles, the
+/// direct DFT of its five output orders, and where its inputs lie in a row.
 #[derive(Debug, Clone)]
 pub(super) struct Physical {
-    pub contact: DiscContact,
-    pub closure: CrankClosure,
+    contact: DiscContact,
+    closure: CrankClosure,
     /// a_w, mm.
-    pub crank_radius: f64,
+    crank_radius: f64,
     /// s/2, mm: the disc planes at z = +s/2 (disc 1) and −s/2 (disc 2).
-    pub half_spacing: f64,
+    half_spacing: f64,
     /// L_s, mm: from the input shaft's reference to the sun plane.
-    pub sun_offset: f64,
+    sun_offset: f64,
     /// κ = z_c/D.
-    pub kappa: f64,
-    pub stage: CycloidStage,
+    kappa: f64,
+    /// The one preload rule (docs/models.md §14.5): it judges where the discs do not fit.
+    preload_rule: PreloadRule,
+    stage: CycloidStage,
     /// Slots with a negative lever (the drive flank: the window's lower end, the TE),
     /// factors over |l|; entry e of a block is slot `drive_first_slot` + e.
-    pub drive: PinTable,
+    drive: PinTable,
     /// ⌊z_p/2⌋: the first slot that can have a negative lever.
-    pub drive_first_slot: usize,
+    drive_first_slot: usize,
     /// Slots with a positive lever (the coast flank: the window's upper end), entry e is
     /// slot e.
-    pub coast: PinTable,
+    coast: PinTable,
     /// Per disc-1 phase p: disc 2's block.
-    pub phase_2: Vec<u32>,
+    phase_2: Vec<u32>,
     /// Tooth space of each entry of disc 2's drive and coast blocks, per disc-1 phase p
     /// (p·width + e), relative to the same tooth shift k_j as disc 1.
-    pub tooth_2_drive: Vec<u32>,
-    pub tooth_2_coast: Vec<u32>,
+    tooth_2_drive: Vec<u32>,
+    tooth_2_coast: Vec<u32>,
     /// Per curve point (in `curve_points` order): disc 2's whole pin pitches, mod z_p.
-    pub pin_shift_2: Vec<u32>,
+    pin_shift_2: Vec<u32>,
     /// Per group: the pin shifts of its first point on each disc, when it has LANES points
     /// whose shifts advance by `lane_stride` (mod z_p) from one to the next.
-    pub lane_shifts: Vec<Option<[u32; 2]>>,
+    lane_shifts: Vec<Option<[u32; 2]>>,
     /// Δ = z_c·z_p·(N/g)/N mod z_p, the pin-shift stride within a group.
-    pub lane_stride: usize,
-    /// A(φ), B(φ), C(φ) of [`TransmissionError::coast_floor`] at φ = π·(k + ½)/G,
+    lane_stride: usize,
+    /// A(φ), B(φ), C(φ) of [`Physical::coast_floor`] at φ = π·(k + ½)/G,
     /// k < G = FLOOR_GRID, and their largest slopes |dA/dφ|, |dB/dφ|, |dC/dφ| (taken on a
     /// grid 64 times finer, by differences, and doubled).
-    pub floor_grid: Vec<[f64; 3]>,
-    pub floor_slopes: [f64; 3],
+    floor_grid: Vec<[f64; 3]>,
+    floor_slopes: [f64; 3],
     /// Whether every group's points share z_p·Θ and (i − 1)·Θ (an integral sun order
     /// that the group spacing N/g turns by whole revolutions): C_d is then one value per
     /// group.
-    pub uniform_groups: bool,
+    uniform_groups: bool,
     /// Per point index j: (sin, cos) of z_p·Θ and of (i − 1)·Θ.
-    pub angles: Vec<[f64; 4]>,
+    angles: Vec<[f64; 4]>,
     /// The same as four columns.
-    pub columns: [Vec<f64>; 4],
+    columns: [Vec<f64>; 4],
     /// (sin β_k, cos β_k).
-    pub crank_angles: Vec<(f64, f64)>,
+    crank_angles: Vec<(f64, f64)>,
     /// The direct DFT of the output orders 1, z_c, z_p, 2·z_c, 2·z_p.
-    pub orders: OrderDft<5>,
+    orders: OrderDft<5>,
     /// Input offsets: per disc, cranks, pins, teeth.
-    pub disc_base: usize,
-    pub crank_base: usize,
-    pub pin_base: usize,
-    pub tooth_base: usize,
+    disc_base: usize,
+    crank_base: usize,
+    pin_base: usize,
+    tooth_base: usize,
 }
 
 /// What a row contributes, reduced once per row.
@@ -317,22 +329,15 @@ pub(super) struct Exact {
     pub windows: [(f64, f64); 2],
 }
 
-impl TransmissionError {
-    pub(super) fn physical(&self) -> &Physical {
-        self.physical
-            .as_deref()
-            .expect("called on the physical reading")
-    }
-
+impl Physical {
     /// Reduces a row of the physical reading to its per-row terms.
-    pub(super) fn row_terms(&self, inputs: &[f64]) -> RowTerms {
-        let ph = self.physical();
-        let m = self.cranks;
-        let (sin_a, cos_a) = self.pressure;
-        let inverse_base = 1.0 / self.base_radius;
+    pub(super) fn row_terms(&self, common: &Common, inputs: &[f64]) -> RowTerms {
+        let m = common.cranks;
+        let (sin_a, cos_a) = common.pressure;
+        let inverse_base = 1.0 / common.base_radius;
         let (sun_x, sun_y) = (
-            inputs[0] + ph.sun_offset * inputs[3],
-            inputs[1] - ph.sun_offset * inputs[2],
+            inputs[0] + self.sun_offset * inputs[3],
+            inputs[1] - self.sun_offset * inputs[2],
         );
         let mut terms = RowTerms {
             d_rp: inputs[4],
@@ -342,14 +347,14 @@ impl TransmissionError {
             ..RowTerms::default()
         };
         for d in 0..2 {
-            let disc = &inputs[ph.disc_base + 3 * d..ph.disc_base + 3 * (d + 1)];
+            let disc = &inputs[self.disc_base + 3 * d..self.disc_base + 3 * (d + 1)];
             terms.profile[d] = disc[0];
             terms.v[d] = (disc[1], disc[2]);
         }
         let mean = 1.0 / m as f64;
         for k in 0..m {
-            let row = &inputs[ph.crank_base + CRANK_STRIDE * k..][..CRANK_STRIDE];
-            let (sb, cb) = ph.crank_angles[k];
+            let row = &inputs[self.crank_base + CRANK_STRIDE * k..][..CRANK_STRIDE];
+            let (sb, cb) = self.crank_angles[k];
             // Involute stage: action line n_k = sin α·u_k + cos α·t_k; lag g_k/(r2·cos α).
             let n = (sin_a * cb - cos_a * sb, sin_a * sb + cos_a * cb);
             let (px, py) = (row[0], row[1]);
@@ -363,9 +368,9 @@ impl TransmissionError {
             let (b_r, b_t, tau_r, tau_t) = (row[3], row[4], row[5], row[6]);
             for d in 0..2 {
                 let z = if d == 0 {
-                    ph.half_spacing
+                    self.half_spacing
                 } else {
-                    -ph.half_spacing
+                    -self.half_spacing
                 };
                 let (r, t) = (b_r + z * tau_t, b_t - z * tau_r);
                 // Carrier frame: R(β_k)·(r, t).
@@ -382,9 +387,9 @@ impl TransmissionError {
             }
         }
         // (v started from the disc runouts, weight 1, before the crank means were added.)
-        if self.per_pin {
-            let pins = &inputs[ph.pin_base..ph.pin_base + 2 * self.pins];
-            let (radial, tangential) = pins.split_at(self.pins);
+        if common.per_pin {
+            let pins = &inputs[self.pin_base..self.pin_base + 2 * common.pins];
+            let (radial, tangential) = pins.split_at(common.pins);
             terms.pin_bound = (
                 radial.iter().fold(0.0, |a, v| f64::max(a, v.abs())),
                 tangential.iter().fold(0.0, |a, v| f64::max(a, v.abs())),
@@ -396,26 +401,30 @@ impl TransmissionError {
     /// C_d for both discs and the involute stage's common part at one angle, from
     /// (sin, cos) of z_p·Θ and of (i − 1)·Θ.
     #[inline(always)]
-    pub(super) fn crank_offsets(&self, terms: &RowTerms, angles: [f64; 4]) -> ([f64; 2], f64) {
-        let ph = self.physical();
+    pub(super) fn crank_offsets(
+        &self,
+        common: &Common,
+        terms: &RowTerms,
+        angles: [f64; 4],
+    ) -> ([f64; 2], f64) {
         let [s, c, ss, cs] = angles;
-        let m = self.cranks as f64;
+        let m = common.cranks as f64;
         let (mut lam_sum, mut four) = (0.0, 0.0);
-        for (l, &(sb, cb)) in terms.lam[..self.cranks].iter().zip(&ph.crank_angles) {
+        for (l, &(sb, cb)) in terms.lam[..common.cranks].iter().zip(&self.crank_angles) {
             let lam = l[0] + l[1] * c + l[2] * s + l[3] * cs + l[4] * ss;
             lam_sum += lam;
             four += lam * (cb * c - sb * s);
         }
-        let a = self.eccentricity;
+        let a = common.eccentricity;
         let lam_mean = lam_sum / m;
-        let inverse_azc = 1.0 / (a * self.cycloid_teeth as f64);
-        let inverse_aw = 1.0 / (m * ph.crank_radius);
+        let inverse_azc = 1.0 / (a * common.cycloid_teeth as f64);
+        let inverse_aw = 1.0 / (m * self.crank_radius);
         let mut offsets = [0.0; 2];
         for (d, offset) in offsets.iter_mut().enumerate() {
             let sigma = if d == 0 { 1.0 } else { -1.0 };
             let across =
                 terms.q_mean[d].1 + a * lam_mean + sigma * (terms.v[d].0 * s + terms.v[d].1 * c);
-            let rho = match ph.closure {
+            let rho = match self.closure {
                 CrankClosure::FourBar => {
                     (sigma * (terms.p1[d] * c + terms.p2[d] * s + a * four) + terms.rho_const[d])
                         * inverse_aw
@@ -424,22 +433,24 @@ impl TransmissionError {
             };
             *offset = -across * inverse_azc - rho;
         }
-        (offsets, -ph.kappa * lam_mean / self.cycloid_teeth as f64)
+        (
+            offsets,
+            -self.kappa * lam_mean / common.cycloid_teeth as f64,
+        )
     }
 
     /// The coefficients of C_d over the products [1, x, y, u, w, x², xy, y², xu, yu, xw, yw]
     /// of x = cos z_pΘ, y = sin z_pΘ, u = cos (i−1)Θ, w = sin (i−1)Θ: the expansion of
     /// [`Self::crank_offsets`] (λ_k is linear in x, y, u, w; the four-bar term multiplies
     /// it by cos(β_k + z_pΘ) = cos β_k·x − sin β_k·y).
-    pub(super) fn offset_coefficients(&self, terms: &RowTerms) -> [[f64; 12]; 2] {
-        let ph = self.physical();
-        let m = self.cranks as f64;
-        let a = self.eccentricity;
-        let inverse_azc = 1.0 / (a * self.cycloid_teeth as f64);
-        let inverse_aw = 1.0 / (m * ph.crank_radius);
+    pub(super) fn offset_coefficients(&self, common: &Common, terms: &RowTerms) -> [[f64; 12]; 2] {
+        let m = common.cranks as f64;
+        let a = common.eccentricity;
+        let inverse_azc = 1.0 / (a * common.cycloid_teeth as f64);
+        let inverse_aw = 1.0 / (m * self.crank_radius);
         // Means of the λ coefficients, and Σ_k l_i·cos β_k, Σ_k l_i·sin β_k.
         let (mut mean, mut lc, mut ls) = ([0.0; 5], [0.0; 5], [0.0; 5]);
-        for (l, &(sb, cb)) in terms.lam[..self.cranks].iter().zip(&ph.crank_angles) {
+        for (l, &(sb, cb)) in terms.lam[..common.cranks].iter().zip(&self.crank_angles) {
             for i in 0..5 {
                 mean[i] += l[i] / m;
                 lc[i] += l[i] * cb;
@@ -460,7 +471,7 @@ impl TransmissionError {
             for i in 0..5 {
                 c[i] = -across[i] * inverse_azc;
             }
-            if ph.closure == CrankClosure::FourBar {
+            if self.closure == CrankClosure::FourBar {
                 let rho = [
                     terms.rho_const[d],
                     sigma * (terms.p1[d] + a * lc[0]),
@@ -494,18 +505,22 @@ impl TransmissionError {
     /// a grid of A, B, C less their largest slopes times half the grid spacing. A
     /// non-negative minimum N gives a ratio of at least δ* + N/(a·z_c) (|l| ≤ a·z_c); else
     /// −∞, and the coast flank is scanned where the windows need it.
-    pub(super) fn coast_floor(&self, inputs: &[f64], terms: &RowTerms) -> [f64; 2] {
-        let ph = self.physical();
-        let k1 = ph.stage.k1();
-        let azc = self.eccentricity * self.cycloid_teeth as f64;
+    pub(super) fn coast_floor(
+        &self,
+        common: &Common,
+        inputs: &[f64],
+        terms: &RowTerms,
+    ) -> [f64; 2] {
+        let k1 = self.stage.k1();
+        let azc = common.eccentricity * common.cycloid_teeth as f64;
         let half_play = (terms.d_rp - terms.d_p * (1.0 - k1 * k1).sqrt()) / azc;
         let (bound_r, bound_t) = terms.pin_bound;
         let alpha = -terms.d_p - terms.err_rp.abs() - bound_r;
         let mut floors = [f64::NEG_INFINITY; 2];
         for (d, floor) in floors.iter_mut().enumerate() {
-            let teeth = if self.per_tooth {
-                let start = ph.tooth_base + d * self.cycloid_teeth;
-                inputs[start..start + self.cycloid_teeth]
+            let teeth = if common.per_tooth {
+                let start = self.tooth_base + d * common.cycloid_teeth;
+                inputs[start..start + common.cycloid_teeth]
                     .iter()
                     .fold(0.0, |a, v| f64::max(a, v.abs()))
             } else {
@@ -514,13 +529,13 @@ impl TransmissionError {
             let along = terms.q_mean[d].0.abs() + terms.v[d].0.hypot(terms.v[d].1);
             let constant = terms.d_rp - terms.profile[d].abs() - terms.err_rrp.abs() - teeth;
             let mut least = f64::INFINITY;
-            for &[a, b, c] in &ph.floor_grid {
+            for &[a, b, c] in &self.floor_grid {
                 let v = alpha * a - along * b - bound_t * c;
                 least = if v < least { v } else { least };
             }
-            let [slope_a, slope_b, slope_c] = ph.floor_slopes;
+            let [slope_a, slope_b, slope_c] = self.floor_slopes;
             let margin = (alpha.abs() * slope_a + along * slope_b + bound_t * slope_c)
-                * (0.5 * PI / ph.floor_grid.len() as f64);
+                * (0.5 * PI / self.floor_grid.len() as f64);
             let numerator = constant + least - margin;
             if numerator >= 0.0 {
                 *floor = half_play + numerator / azc;
@@ -536,19 +551,13 @@ impl TransmissionError {
         terms.q_mean[d].0 + sigma * (terms.v[d].0 * c - terms.v[d].1 * s)
     }
 
-    /// [sin, cos] of z_p·Θ and of (i − 1)·Θ: the crank's and the sun's angles at Θ.
-    pub(super) fn angles_at(&self, theta: f64) -> [f64; 4] {
-        let (s, c) = (self.pins as f64 * theta).sin_cos();
-        let (ss, cs) = ((self.ratio() - 1.0) * theta).sin_cos();
-        [s, c, ss, cs]
-    }
-
     /// The clearance ratio g/|l| of pin `pin` (0-based) on disc d at Θ, with its lever's
     /// sign, from the geometry (no tables): the reference the tables must reproduce. `d_r`
     /// is the disc's displacement along its eccentric at Θ ([`Self::along`]).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn exact_ratio(
         &self,
+        common: &Common,
         inputs: &[f64],
         terms: &RowTerms,
         d: usize,
@@ -556,10 +565,10 @@ impl TransmissionError {
         theta: f64,
         d_r: f64,
     ) -> (f64, f64) {
-        let zp = self.pins as f64;
-        let phi = 2.0 * PI * pin as f64 / zp + self.cycloid_teeth as f64 * theta + d as f64 * PI;
+        let zp = common.pins as f64;
+        let phi = 2.0 * PI * pin as f64 / zp + common.cycloid_teeth as f64 * theta + d as f64 * PI;
         let (sin, cos) = phi.rem_euclid(2.0 * PI).sin_cos();
-        self.exact_ratio_at(inputs, terms, d, pin, theta, d_r, (sin, cos))
+        self.exact_ratio_at(common, inputs, terms, d, pin, theta, d_r, (sin, cos))
     }
 
     /// [`Self::exact_ratio`] with (sin φ, cos φ) of the pin given.
@@ -567,6 +576,7 @@ impl TransmissionError {
     #[inline(always)]
     fn exact_ratio_at(
         &self,
+        common: &Common,
         inputs: &[f64],
         terms: &RowTerms,
         d: usize,
@@ -575,7 +585,7 @@ impl TransmissionError {
         d_r: f64,
         angle: (f64, f64),
     ) -> (f64, f64) {
-        let (g, lever) = self.exact_gap_at(inputs, terms, d, pin, theta, d_r, angle);
+        let (g, lever) = self.exact_gap_at(common, inputs, terms, d, pin, theta, d_r, angle);
         (g / lever.abs(), lever)
     }
 
@@ -586,6 +596,7 @@ impl TransmissionError {
     #[inline(always)]
     pub(super) fn exact_gap_at(
         &self,
+        common: &Common,
         inputs: &[f64],
         terms: &RowTerms,
         d: usize,
@@ -594,24 +605,23 @@ impl TransmissionError {
         d_r: f64,
         (sin, cos): (f64, f64),
     ) -> (f64, f64) {
-        let ph = self.physical();
-        let factors = ph.stage.pin_factors_at(sin, cos);
+        let factors = self.stage.pin_factors_at(sin, cos);
         let (equidistant, shift) = modification(&factors);
-        let (pin_r, pin_t) = if self.per_pin {
+        let (pin_r, pin_t) = if common.per_pin {
             (
-                inputs[ph.pin_base + pin],
-                inputs[ph.pin_base + self.pins + pin],
+                inputs[self.pin_base + pin],
+                inputs[self.pin_base + common.pins + pin],
             )
         } else {
             (0.0, 0.0)
         };
-        let tooth = if self.per_tooth {
-            let zc = self.cycloid_teeth as f64;
-            let r_p = ph.stage.pin_circle_radius;
-            let polar = (r_p * sin).atan2(r_p * cos - self.eccentricity);
-            let space = ((zc * (polar - self.pins as f64 * theta) / (2.0 * PI)).round() as i64)
+        let tooth = if common.per_tooth {
+            let zc = common.cycloid_teeth as f64;
+            let r_p = self.stage.pin_circle_radius;
+            let polar = (r_p * sin).atan2(r_p * cos - common.eccentricity);
+            let space = ((zc * (polar - common.pins as f64 * theta) / (2.0 * PI)).round() as i64)
                 .rem_euclid(zc as i64);
-            inputs[ph.tooth_base + d * self.cycloid_teeth + space as usize]
+            inputs[self.tooth_base + d * common.cycloid_teeth + space as usize]
         } else {
             0.0
         };
@@ -628,37 +638,43 @@ impl TransmissionError {
 
     /// The whole physical geometry at Θ, pin by pin: the reference of the tabulated curve
     /// and the refinement of its extremes.
-    pub(super) fn exact(&self, inputs: &[f64], terms: &RowTerms, theta: f64) -> Exact {
-        self.exact_flanks(inputs, terms, theta, true)
+    pub(super) fn exact(
+        &self,
+        common: &Common,
+        inputs: &[f64],
+        terms: &RowTerms,
+        theta: f64,
+    ) -> Exact {
+        self.exact_flanks(common, inputs, terms, theta, true)
     }
 
     /// [`Self::exact`], the coast flank (l > 0) only when `coast` (else its windows' upper
     /// ends are +∞ and `clear` is true).
     pub(super) fn exact_flanks(
         &self,
+        common: &Common,
         inputs: &[f64],
         terms: &RowTerms,
         theta: f64,
         coast: bool,
     ) -> Exact {
-        let ph = self.physical();
-        let angles = self.angles_at(theta);
-        let (offsets, involute) = self.crank_offsets(terms, angles);
+        let angles = common.angles_at(theta);
+        let (offsets, involute) = self.crank_offsets(common, terms, angles);
         let mut windows = [(0.0, 0.0); 2];
         let mut winners = [0; 2];
         // Pin φ by rotation: pin 1 at z_c·Θ (+π on disc 2), then one pitch at a time.
-        let (pitch_sin, pitch_cos) = (2.0 * PI / self.pins as f64).sin_cos();
+        let (pitch_sin, pitch_cos) = (2.0 * PI / common.pins as f64).sin_cos();
         for d in 0..2 {
             let d_r = Self::along(terms, d, angles[0], angles[1]);
-            let start = (self.cycloid_teeth as f64 * theta + d as f64 * PI).rem_euclid(2.0 * PI);
+            let start = (common.cycloid_teeth as f64 * theta + d as f64 * PI).rem_euclid(2.0 * PI);
             // K_d over the drive flank (l < 0, with the pin that holds it), L_d over the
             // coast flank (l > 0).
             let (mut lag, mut lead, mut winner) = (f64::INFINITY, f64::INFINITY, 0);
             let mut previous = (0.0, 1.0);
-            for pin in 0..self.pins {
+            for pin in 0..common.pins {
                 // Exact sin_cos every 8 pins keeps the rotation's rounding at the 1e-15 level.
                 let (sin, cos) = if pin % 8 == 0 {
-                    (start + 2.0 * PI * pin as f64 / self.pins as f64).sin_cos()
+                    (start + 2.0 * PI * pin as f64 / common.pins as f64).sin_cos()
                 } else {
                     let (sin, cos) = previous;
                     (
@@ -671,22 +687,22 @@ impl TransmissionError {
                     continue;
                 }
                 let (ratio, lever) =
-                    self.exact_ratio_at(inputs, terms, d, pin, theta, d_r, (sin, cos));
-                if lever < -1e-12 * self.eccentricity {
+                    self.exact_ratio_at(common, inputs, terms, d, pin, theta, d_r, (sin, cos));
+                if lever < -1e-12 * common.eccentricity {
                     if ratio < lag {
                         (lag, winner) = (ratio, pin);
                     }
-                } else if lever > 1e-12 * self.eccentricity {
+                } else if lever > 1e-12 * common.eccentricity {
                     lead = lead.min(ratio);
                 }
             }
             windows[d] = (
-                ph.kappa * (offsets[d] - lag),
-                ph.kappa * (offsets[d] + lead),
+                self.kappa * (offsets[d] - lag),
+                self.kappa * (offsets[d] + lead),
             );
             winners[d] = winner;
         }
-        let (te, branch) = match ph.contact {
+        let (te, branch) = match self.contact {
             DiscContact::FirstContact => {
                 let disc = if windows[1].0 > windows[0].0 { 1 } else { 0 };
                 (
@@ -709,38 +725,27 @@ impl TransmissionError {
             clear: coast >= drive,
             branch,
             involute,
-            crank: [ph.kappa * offsets[0], ph.kappa * offsets[1]],
+            crank: [self.kappa * offsets[0], self.kappa * offsets[1]],
             windows,
         }
-    }
-
-    /// Both discs' windows [lower, upper] at the output angle Θ (rad), from the whole
-    /// geometry pin by pin: [κ·(C_d − K_d), κ·(C_d + L_d)], the lower end set by the pins
-    /// with l < 0 (forward drive), the upper by those with l > 0, the angle measured from
-    /// the disc turned into contact on the l < 0 flank (`rv_lost_motion` measures it from
-    /// 003's reference, 2κ·δ* lower). None for 002's literal one-disc reading.
-    pub fn disc_windows(&self, inputs: &[f64], theta: f64) -> Option<[(f64, f64); 2]> {
-        self.physical.as_ref()?;
-        let terms = self.row_terms(inputs);
-        Some(self.exact(inputs, &terms, theta).windows)
     }
 
     /// The value of one contact branch at Θ (a lower bound of TE there), or None where
     /// one of its pins has no driving lever (l < 0).
     pub(super) fn branch_value(
         &self,
+        common: &Common,
         inputs: &[f64],
         terms: &RowTerms,
         branch: Branch,
         theta: f64,
     ) -> Option<f64> {
-        let ph = self.physical();
-        let angles = self.angles_at(theta);
-        let (offsets, _) = self.crank_offsets(terms, angles);
+        let angles = common.angles_at(theta);
+        let (offsets, _) = self.crank_offsets(common, terms, angles);
         let one = |d: usize, pin: usize| {
             let d_r = Self::along(terms, d, angles[0], angles[1]);
-            let (ratio, lever) = self.exact_ratio(inputs, terms, d, pin, theta, d_r);
-            (lever < 0.0).then(|| ph.kappa * (offsets[d] - ratio))
+            let (ratio, lever) = self.exact_ratio(common, inputs, terms, d, pin, theta, d_r);
+            (lever < 0.0).then(|| self.kappa * (offsets[d] - ratio))
         };
         match branch {
             Branch::One { disc, pin } => one(disc, pin),
@@ -754,42 +759,42 @@ impl TransmissionError {
     /// With `stages`, also the parts [involute, cranks, contact] per point.
     pub(super) fn physical_curve(
         &self,
+        common: &Common,
         inputs: &[f64],
         terms: &RowTerms,
         scratch: &mut TwoDiscScratch,
         curve: &mut [f64],
         stages: Option<&mut [[f64; 3]]>,
     ) -> bool {
-        let ph = self.physical();
-        let n = self.points;
-        let table = &ph.drive;
-        let coast_table = &ph.coast;
+        let n = common.points;
+        let table = &self.drive;
+        let coast_table = &self.coast;
         // Entry e of a drive block is slot s0 + e: its pin at shift k is (s0 + e − k) mod z_p.
-        let s0 = ph.drive_first_slot;
+        let s0 = self.drive_first_slot;
         let width = table.width;
-        let pins = self.pins;
+        let pins = common.pins;
         // The smooth part, point by point in index order, from its expansion in products of
         // the sinusoids of z_p·Θ and (i − 1)·Θ (the loop vectorises).
-        let coefficients = self.offset_coefficients(terms);
+        let coefficients = self.offset_coefficients(common, terms);
         let smooth = |d: usize, angles: [f64; 4]| smooth_offset(&coefficients[d], angles);
         for (d, offsets) in scratch.offsets.iter_mut().enumerate() {
             offsets.resize(n, 0.0);
-            if !ph.uniform_groups {
-                let [sin, cos, sun_sin, sun_cos] = &ph.columns;
+            if !self.uniform_groups {
+                let [sin, cos, sun_sin, sun_cos] = &self.columns;
                 let angles = sin.iter().zip(cos).zip(sun_sin.iter().zip(sun_cos));
                 for (offset, ((&y, &x), (&w, &u))) in offsets.iter_mut().zip(angles) {
                     *offset = smooth(d, [y, x, w, u]);
                 }
             }
         }
-        self.lay_out_row_errors(inputs, scratch);
-        self.lay_out_lane_errors(scratch);
-        let kappa = ph.kappa;
-        let first_contact = ph.contact == DiscContact::FirstContact;
+        self.lay_out_row_errors(common, inputs, scratch);
+        self.lay_out_lane_errors(common, scratch);
+        let kappa = self.kappa;
+        let first_contact = self.contact == DiscContact::FirstContact;
         // The coast flank matters only where the two discs' windows might not overlap:
         // first a floor for the whole row, then, where it is too low, one per group
         // (the group's coast sums less the largest pin terms), then the exact minimum.
-        let row_floor = self.coast_floor(inputs, terms);
+        let row_floor = self.coast_floor(common, inputs, terms);
         let row_floor_holds = row_floor.iter().all(|f| f.is_finite());
         let (bound_r, bound_t) = terms.pin_bound;
         let TwoDiscScratch {
@@ -805,15 +810,15 @@ impl TransmissionError {
         } = scratch;
         let mut clear = true;
         scratch.narrowest = (f64::INFINITY, 0);
-        for (group_index, group) in self.groups.iter().enumerate() {
-            let points = &self.curve_points[group.start as usize..group.end as usize];
+        for (group_index, group) in common.groups.iter().enumerate() {
+            let points = &common.curve_points[group.start as usize..group.end as usize];
             let p = group.phase as usize;
-            let blocks = [p, ph.phase_2[p] as usize];
+            let blocks = [p, self.phase_2[p] as usize];
             let (s, c) = points[0].crank;
             let tooth_shift = points[0].tooth_shift as usize;
             let along = [Self::along(terms, 0, s, c), Self::along(terms, 1, s, c)];
-            if ph.uniform_groups {
-                let angles = ph.angles[points[0].index as usize];
+            if self.uniform_groups {
+                let angles = self.angles[points[0].index as usize];
                 for (d, offsets) in offsets.iter_mut().enumerate() {
                     let value = smooth(d, angles);
                     for point in points {
@@ -827,9 +832,9 @@ impl TransmissionError {
                 tooth_shift,
                 along,
             };
-            self.fill_group_heads(terms, &heads, tooth, drive, true);
+            self.fill_group_heads(common, terms, &heads, tooth, drive, true);
             let fill_coast = |coast: &mut [Vec<f64>; 2]| {
-                self.fill_group_heads(terms, &heads, tooth, coast, false)
+                self.fill_group_heads(common, terms, &heads, tooth, coast, false)
             };
             let mut coast_filled = false;
             let floor = if row_floor_holds {
@@ -853,15 +858,15 @@ impl TransmissionError {
             // The slots that can hold a disc's minimum at any of the group's points: those
             // whose sum less the largest pin terms is below the smallest sum plus them (in
             // whole quadruples).
-            let narrow = self.per_pin && ph.lane_shifts[group_index].is_none();
+            let narrow = common.per_pin && self.lane_shifts[group_index].is_none();
             let candidates = [0, 1].map(|d| match narrow {
                 true => candidate_slots(&drive[d], radial[d], tangential[d], bound_r, bound_t),
                 false => [0, width],
             });
             // A group of LANES points whose pins advance by a fixed stride: its minima for
             // all its points at once, the points as vector lanes.
-            let lanes = match ph.lane_shifts[group_index] {
-                Some(first) if self.per_pin => Some([0, 1].map(|d| {
+            let lanes = match self.lane_shifts[group_index] {
+                Some(first) if common.per_pin => Some([0, 1].map(|d| {
                     // (s0 − k) mod z_p: k < z_p, s0 < z_p.
                     let start = (pins - first[d] as usize + s0) % pins;
                     let lane_errors = (&lane_radial[start..], &lane_tangential[start..]);
@@ -891,7 +896,7 @@ impl TransmissionError {
                 let offset = [offsets[0][j], offsets[1][j]];
                 let shifts = [
                     point.pin_shift as usize,
-                    ph.pin_shift_2[group.start as usize + point_index] as usize,
+                    self.pin_shift_2[group.start as usize + point_index] as usize,
                 ];
                 // low_d = κ·(C_d − K_d); first contact needs only their maximum, one scan
                 // over both discs' slots of ratio − C_d. The first pin row of disc d's
@@ -901,7 +906,7 @@ impl TransmissionError {
                 let (low, drive_end) = if let Some(lags) = &lanes {
                     let low = [0, 1].map(|d| kappa * (offset[d] - lags[d][point_index]));
                     (low, if low[1] > low[0] { low[1] } else { low[0] })
-                } else if !self.per_pin {
+                } else if !common.per_pin {
                     let low = [kappa * (offset[0] - best[0]), kappa * (offset[1] - best[1])];
                     (low, if low[1] > low[0] { low[1] } else { low[0] })
                 } else if first_contact {
@@ -931,7 +936,8 @@ impl TransmissionError {
                         coast_filled = true;
                     }
                     let pin_errors = [&pin_radial[..], &pin_tangential[..]];
-                    let high = self.coast_high(coast, blocks, coast_start, pin_errors, offset);
+                    let high =
+                        self.coast_high(common, coast, blocks, coast_start, pin_errors, offset);
                     if !overlap(high, drive_end) {
                         clear = false;
                         if high - drive_end < scratch.narrowest.0 {
@@ -947,7 +953,7 @@ impl TransmissionError {
             }
         }
         if let Some(stages) = stages {
-            self.fill_stages(terms, offsets, curve, stages);
+            self.fill_stages(common, terms, offsets, curve, stages);
         }
         clear
     }
@@ -956,27 +962,26 @@ impl TransmissionError {
     /// crank offsets C_d.
     fn fill_stages(
         &self,
+        common: &Common,
         terms: &RowTerms,
         offsets: &[Vec<f64>; 2],
         curve: &[f64],
         stages: &mut [[f64; 3]],
     ) {
-        let ph = self.physical();
         for (j, stage) in stages.iter_mut().enumerate() {
-            let involute = self.crank_offsets(terms, ph.angles[j]).1;
-            let crank = 0.5 * ph.kappa * (offsets[0][j] + offsets[1][j]) - involute;
+            let involute = self.crank_offsets(common, terms, self.angles[j]).1;
+            let crank = 0.5 * self.kappa * (offsets[0][j] + offsets[1][j]) - involute;
             *stage = [involute, crank, curve[j] - involute - crank];
         }
     }
 }
 
-impl TransmissionError {
+impl Physical {
     /// A row's pin and tooth-space errors laid out for [`Self::physical_curve`]: repeated
     /// so that both flanks' tables read them in slot order (zeros where the model has no
     /// such inputs), and the discs' head columns sized to the table's width.
-    fn lay_out_row_errors(&self, inputs: &[f64], scratch: &mut TwoDiscScratch) {
-        let ph = self.physical();
-        let (pins, teeth, width) = (self.pins, self.cycloid_teeth, ph.drive.width);
+    fn lay_out_row_errors(&self, common: &Common, inputs: &[f64], scratch: &mut TwoDiscScratch) {
+        let (pins, teeth, width) = (common.pins, common.cycloid_teeth, self.drive.width);
         let repeat = |target: &mut Vec<f64>, values: &[f64], len: usize| {
             target.clear();
             if values.is_empty() {
@@ -985,14 +990,15 @@ impl TransmissionError {
                 target.extend(values.iter().cycle().take(len));
             }
         };
-        let n_pins = if self.per_pin { pins } else { 0 };
-        let pin_inputs = &inputs[ph.pin_base..ph.pin_base + 2 * n_pins];
+        let n_pins = if common.per_pin { pins } else { 0 };
+        let pin_inputs = &inputs[self.pin_base..self.pin_base + 2 * n_pins];
         let (pin_radial, pin_tangential) = pin_inputs.split_at(n_pins);
         repeat(&mut scratch.pin_radial, pin_radial, pins + width);
         repeat(&mut scratch.pin_tangential, pin_tangential, pins + width);
-        let n_teeth = if self.per_tooth { teeth } else { 0 };
+        let n_teeth = if common.per_tooth { teeth } else { 0 };
         for d in 0..2 {
-            let errors = &inputs[ph.tooth_base + d * n_teeth..ph.tooth_base + (d + 1) * n_teeth];
+            let errors =
+                &inputs[self.tooth_base + d * n_teeth..self.tooth_base + (d + 1) * n_teeth];
             repeat(&mut scratch.tooth[d], errors, 2 * teeth);
         }
         for heads in [&mut scratch.drive, &mut scratch.coast] {
@@ -1006,11 +1012,11 @@ impl TransmissionError {
     /// lane_radial[q][m] = δr of pin (q − m·Δ) mod z_p, Δ the stride of the pin shift
     /// between a lane group's consecutive points. A tangential pin error's ratio is
     /// −δt·K1/(a·z_c) in every drive slot (see `lane_lags`).
-    fn lay_out_lane_errors(&self, scratch: &mut TwoDiscScratch) {
-        let ph = self.physical();
-        let pins = self.pins;
-        let lane_rows = pins + ph.drive.width;
-        let tangential_ratio = -ph.stage.k1() / (self.eccentricity * self.cycloid_teeth as f64);
+    fn lay_out_lane_errors(&self, common: &Common, scratch: &mut TwoDiscScratch) {
+        let pins = common.pins;
+        let lane_rows = pins + self.drive.width;
+        let tangential_ratio =
+            -self.stage.k1() / (common.eccentricity * common.cycloid_teeth as f64);
         for (target, source, scale) in [
             (&mut scratch.lane_radial, &scratch.pin_radial, 1.0),
             (
@@ -1021,9 +1027,9 @@ impl TransmissionError {
         ] {
             target.clear();
             target.resize(lane_rows, [0.0; LANES]);
-            if self.per_pin {
+            if common.per_pin {
                 // Column m is the pin list turned by m·Δ: walk it with a wrapping index.
-                let step = pins - ph.lane_stride;
+                let step = pins - self.lane_stride;
                 let mut first = 0;
                 for m in 0..LANES {
                     let mut index = first;
@@ -1041,7 +1047,7 @@ impl TransmissionError {
     }
 }
 
-/// A group's place in the tables, for [`TransmissionError::fill_group_heads`]: each disc's
+/// A group's place in the tables, for [`Physical::fill_group_heads`]: each disc's
 /// block, the phase (disc 2's tooth columns), the tooth shift k_j mod z_c and each disc's
 /// displacement along its eccentric.
 struct GroupHeads {
@@ -1051,35 +1057,35 @@ struct GroupHeads {
     along: [f64; 2],
 }
 
-impl TransmissionError {
+impl Physical {
     /// Fills both discs' head columns of a group on the drive flank (`drive_flank`) or the
     /// coast flank: the part of each slot's ratio common to the group's points
     /// (`fill_heads`; on the drive flank one pass for the pair where disc 2 sees disc 1's
     /// slots, even pin counts).
     fn fill_group_heads(
         &self,
+        common: &Common,
         terms: &RowTerms,
         group: &GroupHeads,
         tooth: &[Vec<f64>; 2],
         heads: &mut [Vec<f64>; 2],
         drive_flank: bool,
     ) {
-        let ph = self.physical();
         let (table, width) = if drive_flank {
-            (&ph.drive, ph.drive.width)
+            (&self.drive, self.drive.width)
         } else {
-            (&ph.coast, ph.drive.width)
+            (&self.coast, self.drive.width)
         };
         let (blocks, p) = (group.blocks, group.phase);
         let teeth_of = |d: usize| -> &[u32] {
             let block = blocks[d] * width..(blocks[d] + 1) * width;
             match (d, drive_flank) {
                 (0, _) => &table.tooth[block],
-                (_, true) => &ph.tooth_2_drive[p * width..(p + 1) * width],
-                (_, false) => &ph.tooth_2_coast[p * width..(p + 1) * width],
+                (_, true) => &self.tooth_2_drive[p * width..(p + 1) * width],
+                (_, false) => &self.tooth_2_coast[p * width..(p + 1) * width],
             }
         };
-        let errors = |d: usize| &tooth[d][self.cycloid_teeth - group.tooth_shift..];
+        let errors = |d: usize| &tooth[d][common.cycloid_teeth - group.tooth_shift..];
         if drive_flank && blocks[0] == blocks[1] {
             // Even pin counts: disc 2 sees disc 1's slots; one pass over the block.
             let [first, second] = heads;
@@ -1114,30 +1120,30 @@ impl TransmissionError {
     /// tangential pin errors, `offset` the discs' C_d.
     fn coast_high(
         &self,
+        common: &Common,
         coast: &[Vec<f64>; 2],
         blocks: [usize; 2],
         coast_start: [usize; 2],
         [pin_radial, pin_tangential]: [&[f64]; 2],
         offset: [f64; 2],
     ) -> f64 {
-        let ph = self.physical();
-        let width = ph.drive.width;
+        let width = self.drive.width;
         let mut high = f64::INFINITY;
         for d in 0..2 {
-            let lead = if self.per_pin {
+            let lead = if common.per_pin {
                 let block = blocks[d] * width..(blocks[d] + 1) * width;
                 let start = coast_start[d];
                 smallest_ratio(
                     &coast[d],
-                    &ph.coast.radial[block.clone()],
-                    &ph.coast.tangential[block],
+                    &self.coast.radial[block.clone()],
+                    &self.coast.tangential[block],
                     &pin_radial[start..start + width],
                     &pin_tangential[start..start + width],
                 )
             } else {
                 smallest(&coast[d])
             };
-            high = high.min(ph.kappa * (offset[d] + lead));
+            high = high.min(self.kappa * (offset[d] + lead));
         }
         high
     }
@@ -1211,7 +1217,7 @@ fn lane_values(
 }
 
 /// A disc's smooth crank offset at the angles [sin z_pΘ, cos z_pΘ, sin (i−1)Θ, cos (i−1)Θ]
-/// from its expansion `a` in their products ([`TransmissionError::offset_coefficients`]).
+/// from its expansion `a` in their products ([`Physical::offset_coefficients`]).
 #[inline(always)]
 fn smooth_offset(a: &[f64; 12], [y, x, w, u]: [f64; 4]) -> f64 {
     a[0] + a[1] * x
@@ -1242,14 +1248,11 @@ fn smallest_ratio_pair(
     for d in 0..2 {
         let count = head[d].len() / 4;
         let (h, a, b) = (
-            super::quads(head[d], count),
-            super::quads(radial[d], count),
-            super::quads(tangential[d], count),
+            quads(head[d], count),
+            quads(radial[d], count),
+            quads(tangential[d], count),
         );
-        let (pa, pb) = (
-            super::quads(pin_radial[d], count),
-            super::quads(pin_tangential[d], count),
-        );
+        let (pa, pb) = (quads(pin_radial[d], count), quads(pin_tangential[d], count));
         for c in 0..count {
             for lane in 0..4 {
                 let v =
@@ -1258,7 +1261,7 @@ fn smallest_ratio_pair(
             }
         }
     }
-    super::smallest_lane(lanes)
+    smallest_lane(lanes)
 }
 
 /// Whether a window's upper end `high` reaches its lower end `low` (false for NaN).
@@ -1341,7 +1344,7 @@ fn smallest_less_pins(head: &[f64], radial: &[f64], tangential: &[f64], r: f64, 
             lanes[lane] = if v < lanes[lane] { v } else { lanes[lane] };
         }
     }
-    super::smallest_lane(lanes)
+    smallest_lane(lanes)
 }
 
 /// head_e = Δr_rp·eq_e + Δr_p·sh_e + δr_p·rad_e + constant/l_e + d_r·ecc_e + δ_n,j(e)/l_e +
@@ -1436,18 +1439,6 @@ pub(super) struct TwoDiscScratch {
     pub narrowest: (f64, usize),
 }
 
-/// The sizes the tables of the physical reading are built for.
-pub(super) struct Layout {
-    /// N.
-    pub points: usize,
-    /// g = gcd(z_c·z_p, N): the fractional pin pitch steps by g/N.
-    pub common_divisor: usize,
-    pub cranks: usize,
-    pub per_pin: bool,
-    /// i.
-    pub ratio: f64,
-}
-
 /// The options of the physical reading, before its tables are built.
 pub(super) struct Settings {
     contact: DiscContact,
@@ -1475,6 +1466,27 @@ impl Physical {
             sun_offset,
             kappa,
         }
+    }
+
+    /// κ = z_c/D: what a disc-side angle is at the output.
+    pub(super) fn kappa(&self) -> f64 {
+        self.kappa
+    }
+
+    /// Where a row's per-pin inputs start (radial errors, then tangential).
+    pub(super) fn pin_base(&self) -> usize {
+        self.pin_base
+    }
+
+    /// Where a row's per-tooth-space inputs start (disc 1's, then disc 2's).
+    pub(super) fn tooth_base(&self) -> usize {
+        self.tooth_base
+    }
+
+    /// The semi-amplitudes of the output orders 1, z_c, z_p, 2·z_c and 2·z_p of a curve of
+    /// N points (the direct DFT).
+    pub(super) fn order_amplitudes(&self, curve: &[f64]) -> [f64; 5] {
+        self.orders.amplitudes(curve)
     }
 }
 
@@ -1567,20 +1579,23 @@ fn tooth_space(stage: &CycloidStage, phi: f64, fraction: f64) -> u32 {
         .rem_euclid(stage.teeth as i64) as u32
 }
 
-/// Builds the drive and coast tables, disc 2's phases and tooth columns, and the per-point
-/// angles. `width`: the entries per phase of every table (the ⌈z_p/2⌉ slots that can have
-/// a lever of one sign, rounded up to a multiple of 4).
+/// Builds the physical reading on the shared geometry `common`: the drive and coast tables,
+/// disc 2's phases and tooth columns, and the per-point angles, with the options `settings`
+/// and the preload rule `preload_rule`. `width`: the entries per phase of every table (the
+/// ⌈z_p/2⌉ slots that can have a lever of one sign, rounded up to a multiple of 4);
+/// `common_divisor`: g = gcd(z_c·z_p, N), the fractional pin pitch steps by g/N.
 pub(super) fn build(
     stage: &CycloidStage,
     width: usize,
-    curve_points: &[super::Point],
-    groups: &[super::Group],
-    layout: Layout,
+    common_divisor: usize,
+    common: &Common,
     settings: Settings,
+    preload_rule: PreloadRule,
 ) -> Physical {
     let (pins, teeth) = (stage.pins, stage.teeth);
-    let n = layout.points;
-    let g = layout.common_divisor;
+    let (curve_points, groups) = (&common.curve_points, &common.groups);
+    let n = common.points;
+    let g = common_divisor;
     let phases = n / g;
     let fraction_of = |p: usize| p as f64 * g as f64 / n as f64;
     // Disc 2 sees the pins half a revolution of the eccentric on: z_p·N/2 in units of 1/N
@@ -1645,7 +1660,7 @@ pub(super) fn build(
             let theta = 2.0 * PI * j as f64 / n as f64;
             let (s, c) = (2.0 * PI * ((pins * j) % n) as f64 / n as f64).sin_cos();
             // An integral sun order (120 for the RV40E) reduced exactly, as z_p·j is.
-            let sun = layout.ratio - 1.0;
+            let sun = common.ratio() - 1.0;
             let (ss, cs) = if sun.fract() == 0.0 {
                 (2.0 * PI * ((sun as usize * j) % n) as f64 / n as f64).sin_cos()
             } else {
@@ -1654,13 +1669,13 @@ pub(super) fn build(
             [s, c, ss, cs]
         })
         .collect();
-    let crank_angles = (0..layout.cranks)
-        .map(|k| (2.0 * PI * k as f64 / layout.cranks as f64).sin_cos())
+    let crank_angles = (0..common.cranks)
+        .map(|k| (2.0 * PI * k as f64 / common.cranks as f64).sin_cos())
         .collect();
     let disc_base = FIXED.len();
     let crank_base = disc_base + 2 * PER_DISC.len();
-    let pin_base = crank_base + CRANK_STRIDE * layout.cranks;
-    let tooth_base = pin_base + if layout.per_pin { 2 * pins } else { 0 };
+    let pin_base = crank_base + CRANK_STRIDE * common.cranks;
+    let tooth_base = pin_base + if common.per_pin { 2 * pins } else { 0 };
     Physical {
         contact: settings.contact,
         closure: settings.closure,
@@ -1668,6 +1683,7 @@ pub(super) fn build(
         half_spacing: settings.half_spacing,
         sun_offset: settings.sun_offset,
         kappa: settings.kappa,
+        preload_rule,
         stage: *stage,
         drive,
         drive_first_slot,
@@ -1870,39 +1886,41 @@ pub(super) const TE_OUTPUTS: usize = 8;
 /// Name of the interference indicator.
 pub(super) const INTERFERENCE: &str = "profile_interference";
 
-impl TransmissionError {
+impl Physical {
     /// [`crate::ErrorModel::evaluate`] of the physical reading's rigid pass: the rigid
     /// curve, the interference indicator and the preload rule's outputs, and the rigid
-    /// readings' transmission error. With the loaded reading it returns the row's terms for
-    /// the loaded solution to finish the row (the parent module dispatches, so that this
-    /// reading does not depend on the loaded one).
+    /// readings' transmission error. `under_load` (the loaded reading): it returns the
+    /// row's terms for the loaded solution to finish the row instead (the parent module
+    /// dispatches, so that this reading does not depend on the loaded one).
     pub(super) fn evaluate_physical(
         &self,
+        common: &Common,
         inputs: &[f64],
         curve: &mut Vec<f64>,
         scratch: &mut TwoDiscScratch,
         outputs: &mut [f64],
+        under_load: bool,
     ) -> Option<RowTerms> {
         if inputs.iter().any(|v| !v.is_finite()) {
             outputs.iter_mut().for_each(|o| *o = f64::NAN);
             return None;
         }
-        let terms = self.row_terms(inputs);
-        curve.resize(self.points, 0.0);
+        let terms = self.row_terms(common, inputs);
+        curve.resize(common.points, 0.0);
         outputs[TE_OUTPUTS + 1..].fill(0.0);
-        if !self.physical_curve(inputs, &terms, scratch, curve, None) {
+        if !self.physical_curve(common, inputs, &terms, scratch, curve, None) {
             outputs[..TE_OUTPUTS].iter_mut().for_each(|o| *o = f64::NAN);
             outputs[TE_OUTPUTS] = 1.0;
-            let theta = 2.0 * PI * scratch.narrowest.1 as f64 / self.points as f64;
-            let judged = self.judge_preload(inputs, &terms, theta);
+            let theta = 2.0 * PI * scratch.narrowest.1 as f64 / common.points as f64;
+            let judged = self.judge_preload(common, inputs, &terms, theta);
             outputs[TE_OUTPUTS + 1..].copy_from_slice(&judged);
-            return self.loaded.is_some().then_some(terms);
+            return under_load.then_some(terms);
         }
-        if self.loaded.is_some() {
+        if under_load {
             outputs[TE_OUTPUTS] = 0.0;
             return Some(terms);
         }
-        let n = self.points;
+        let n = common.points;
         let quads = curve.as_chunks::<4>().0;
         let lanes = lane_stats(quads);
         let (lo, hi) = (
@@ -1930,12 +1948,12 @@ impl TransmissionError {
             first(hi, lanes.hi, lanes.hi_at),
         ) {
             (Some(j_lo), Some(j_hi)) => {
-                self.refine_extremes(inputs, &terms, curve, (lo, j_lo), (hi, j_hi))
+                self.refine_extremes(common, inputs, &terms, curve, (lo, j_lo), (hi, j_hi))
             }
             _ => (lo, hi),
         };
         // Five orders: summed directly, not by an FFT of all N/2.
-        let orders = self.physical().orders.amplitudes(curve);
+        let orders = self.orders.amplitudes(curve);
         let to_arcsec = crate::ARCSEC_PER_RAD;
         outputs[0] = (hi - lo) * to_arcsec;
         outputs[1] = var.sqrt() * to_arcsec;
@@ -1953,28 +1971,31 @@ impl TransmissionError {
     /// The preload rule's five outputs at the output angle Θ where the discs fit least
     /// (docs/models.md §14.5): both discs' pins from the exact geometry, each disc at its
     /// crank offset C_d, balanced at zero torque.
-    fn judge_preload(&self, inputs: &[f64], terms: &RowTerms, theta: f64) -> [f64; 5] {
-        let Some(rule) = &self.preload_rule else {
-            return [f64::NAN; 5];
-        };
-        let ph = self.physical();
-        let angles = self.angles_at(theta);
-        let (offsets, _) = self.crank_offsets(terms, angles);
+    fn judge_preload(
+        &self,
+        common: &Common,
+        inputs: &[f64],
+        terms: &RowTerms,
+        theta: f64,
+    ) -> [f64; 5] {
+        let rule = &self.preload_rule;
+        let angles = common.angles_at(theta);
+        let (offsets, _) = self.crank_offsets(common, terms, angles);
         let discs = [0, 1].map(|d| {
             let d_r = Self::along(terms, d, angles[0], angles[1]);
             let mut disc = DiscPins::new(offsets[d], 0.0);
-            for pin in 0..self.pins {
-                let phi = 2.0 * PI * pin as f64 / self.pins as f64
-                    + self.cycloid_teeth as f64 * theta
+            for pin in 0..common.pins {
+                let phi = 2.0 * PI * pin as f64 / common.pins as f64
+                    + common.cycloid_teeth as f64 * theta
                     + d as f64 * PI;
                 let (sin, cos) = phi.rem_euclid(2.0 * PI).sin_cos();
                 let (ratio, lever) =
-                    self.exact_ratio_at(inputs, terms, d, pin, theta, d_r, (sin, cos));
-                if lever.abs() > LEVER_FLOOR * self.eccentricity {
+                    self.exact_ratio_at(common, inputs, terms, d, pin, theta, d_r, (sin, cos));
+                if lever.abs() > LEVER_FLOOR * common.eccentricity {
                     disc.push(
                         ratio * lever.abs(),
                         lever,
-                        slip_arm(&ph.stage, rule.pin_radius(), cos),
+                        slip_arm(&self.stage, rule.pin_radius(), cos),
                     );
                 }
             }
@@ -2001,25 +2022,26 @@ impl TransmissionError {
     /// the first points at which the sampled extremes `lo`, `hi` occur.
     pub(super) fn refine_extremes(
         &self,
+        common: &Common,
         inputs: &[f64],
         terms: &RowTerms,
         curve: &[f64],
         (lo, j_lo): (f64, usize),
         (hi, j_hi): (f64, usize),
     ) -> (f64, f64) {
-        let n = self.points;
+        let n = common.points;
         let h = 2.0 * PI / n as f64;
         let at = |j: usize| 2.0 * PI * j as f64 / n as f64;
         let mut best_hi = hi;
-        let top = self.exact_flanks(inputs, terms, at(j_hi), false);
+        let top = self.exact_flanks(common, inputs, terms, at(j_hi), false);
         // Two parabola steps: through the point and its neighbours, then through the first
         // vertex and points h/8 either side of it (a branch whose curvature changes fast
         // is far from a parabola over ±h).
         let (mut centre_at, mut spacing) = (at(j_hi), h);
-        let mut centre = self.branch_value(inputs, terms, top.branch, centre_at);
+        let mut centre = self.branch_value(common, inputs, terms, top.branch, centre_at);
         for _ in 0..2 {
             let values = [-spacing, spacing]
-                .map(|dt| self.branch_value(inputs, terms, top.branch, centre_at + dt));
+                .map(|dt| self.branch_value(common, inputs, terms, top.branch, centre_at + dt));
             let ([Some(before), Some(after)], Some(middle)) = (values, centre) else {
                 break;
             };
@@ -2029,7 +2051,7 @@ impl TransmissionError {
             }
             let t = (0.5 * (before - after) / curvature).clamp(-1.0, 1.0);
             centre_at += t * spacing;
-            centre = self.branch_value(inputs, terms, top.branch, centre_at);
+            centre = self.branch_value(common, inputs, terms, top.branch, centre_at);
             match centre {
                 Some(v) => best_hi = best_hi.max(v),
                 None => break,
@@ -2040,20 +2062,21 @@ impl TransmissionError {
         let mut best_lo = lo;
         let (previous, next) = (curve[(j_lo + n - 1) % n], curve[(j_lo + 1) % n]);
         let side = if previous < next { -1.0 } else { 1.0 };
-        let bottom = self.exact_flanks(inputs, terms, at(j_lo), false);
+        let bottom = self.exact_flanks(common, inputs, terms, at(j_lo), false);
         let theta = at(j_lo) + side * h;
-        let near = self.exact_flanks(inputs, terms, theta, false);
+        let near = self.exact_flanks(common, inputs, terms, theta, false);
         if near.branch != bottom.branch {
             // Chords of the two branches from Θ_lo (t = 0) to its neighbour (t = 1).
             if let (Some(a_lo), Some(b_near)) = (
-                self.branch_value(inputs, terms, near.branch, at(j_lo)),
-                self.branch_value(inputs, terms, bottom.branch, theta),
+                self.branch_value(common, inputs, terms, near.branch, at(j_lo)),
+                self.branch_value(common, inputs, terms, bottom.branch, theta),
             ) {
                 let (a_near, b_lo) = (near.te, bottom.te);
                 let denominator = (a_near - a_lo) - (b_near - b_lo);
                 let t = (b_lo - a_lo) / denominator;
                 if t > 0.0 && t < 1.0 {
-                    let crossing = self.exact_flanks(inputs, terms, at(j_lo) + side * t * h, false);
+                    let crossing =
+                        self.exact_flanks(common, inputs, terms, at(j_lo) + side * t * h, false);
                     best_lo = best_lo.min(crossing.te);
                 }
             }
@@ -2063,11 +2086,16 @@ impl TransmissionError {
 
     /// The curve of one row from the exact geometry at `n` points (rad; NaN where the
     /// discs interfere), with the stage parts [involute, crank, contact].
-    pub(super) fn exact_curve_stages(&self, inputs: &[f64], n: usize) -> Vec<(f64, [f64; 3])> {
-        let terms = self.row_terms(inputs);
+    pub(super) fn exact_curve_stages(
+        &self,
+        common: &Common,
+        inputs: &[f64],
+        n: usize,
+    ) -> Vec<(f64, [f64; 3])> {
+        let terms = self.row_terms(common, inputs);
         (0..n)
             .map(|j| {
-                let exact = self.exact(inputs, &terms, 2.0 * PI * j as f64 / n as f64);
+                let exact = self.exact(common, inputs, &terms, 2.0 * PI * j as f64 / n as f64);
                 let te = if exact.clear { exact.te } else { f64::NAN };
                 let crank = 0.5 * (exact.crank[0] + exact.crank[1]) - exact.involute;
                 (te, [exact.involute, crank, te - exact.involute - crank])
@@ -2085,17 +2113,30 @@ pub(super) const SPECTRUM_POINTS: usize = 1 << 16;
 /// RV40E's cycloid–pin mesh, order z_c·z_p = 1560; 819 points).
 const DETAIL_FRACTION: usize = 80;
 
-impl TransmissionError {
+impl Physical {
     /// The curves of the physical reading: the tabulated curve with its stage parts, and
-    /// the order spectrum (orders 1..N/2) of the exact curve at [`SPECTRUM_POINTS`].
-    pub(super) fn physical_curves(&self, inputs: &[f64]) -> Vec<crate::Curve> {
+    /// the order spectrum (orders 1..N/2) of the exact curve at [`SPECTRUM_POINTS`]; with
+    /// `under_load`, the loaded reading's torque (N·m) and curve (arcsec) first.
+    pub(super) fn curves(
+        &self,
+        common: &Common,
+        inputs: &[f64],
+        under_load: Option<(f64, Vec<f64>)>,
+    ) -> Vec<crate::Curve> {
         use crate::{Curve, CurveStyle, Series, ARCSEC_PER_RAD};
-        let n = self.points;
-        let terms = self.row_terms(inputs);
+        let n = common.points;
+        let terms = self.row_terms(common, inputs);
         let mut curve = vec![0.0; n];
         let mut stages = vec![[0.0; 3]; n];
         let mut scratch = TwoDiscScratch::default();
-        self.physical_curve(inputs, &terms, &mut scratch, &mut curve, Some(&mut stages));
+        self.physical_curve(
+            common,
+            inputs,
+            &terms,
+            &mut scratch,
+            &mut curve,
+            Some(&mut stages),
+        );
         let degrees = |j: usize| 360.0 * j as f64 / n as f64;
         let series = |label: &str, value: &dyn Fn(usize) -> f64| Series {
             label: label.into(),
@@ -2105,18 +2146,17 @@ impl TransmissionError {
         };
         // The loaded reading's curve first (its torque in the label), the rigid first
         // contact and its stages after it.
-        let (loaded_series, total_label) =
-            match (self.load_torque(), self.loaded_curve_arcsec(inputs)) {
-                (Some(torque), Some(loaded)) => (
-                    Some(Series {
-                        label: format!("total under load ({} N·m)", rvtol_deviation::Shown(torque)),
-                        points: (0..n).map(|j| (degrees(j), loaded[j])).collect(),
-                    }),
-                    "rigid first contact",
-                ),
-                _ => (None, "total"),
-            };
-        let exact_stages = self.exact_curve_stages(inputs, SPECTRUM_POINTS);
+        let (loaded_series, total_label) = match under_load {
+            Some((torque, loaded)) => (
+                Some(Series {
+                    label: format!("total under load ({} N·m)", rvtol_deviation::Shown(torque)),
+                    points: (0..n).map(|j| (degrees(j), loaded[j])).collect(),
+                }),
+                "rigid first contact",
+            ),
+            None => (None, "total"),
+        };
+        let exact_stages = self.exact_curve_stages(common, inputs, SPECTRUM_POINTS);
         let exact: Vec<f64> = exact_stages
             .iter()
             .map(|(te, _)| te * ARCSEC_PER_RAD)
@@ -2200,6 +2240,7 @@ impl TransmissionError {
 #[cfg(test)]
 mod tests {
     use super::super::test_support::{outputs, row, text, with, xorshift, MODIFIED};
+    use super::super::TransmissionError;
     use super::*;
     use crate::{ErrorModel, ModelParams, ParamValue, ARCSEC_PER_RAD};
 
@@ -2310,11 +2351,11 @@ mod tests {
                     row[index] = *r;
                 }
                 let flagged = outputs(&model, &row)[8] == 1.0;
-                let terms = model.row_terms(&row);
+                let (common, ph) = model.physical_parts();
+                let terms = ph.row_terms(common, &row);
                 let n = model.points();
                 let exact = (0..n).any(|j| {
-                    !model
-                        .exact(&row, &terms, 2.0 * PI * j as f64 / n as f64)
+                    !ph.exact(common, &row, &terms, 2.0 * PI * j as f64 / n as f64)
                         .clear
                 });
                 assert_eq!(flagged, exact, "{zp} pins, runout {r}");
@@ -2384,19 +2425,21 @@ mod tests {
                 ("crank_eccentricity_error_mm_2_1", -DELTA),
             ],
         );
-        let terms = model.row_terms(&row);
+        let (common, ph) = model.physical_parts();
+        let terms = ph.row_terms(common, &row);
         assert!((DELTA / 36.0 * ARCSEC_PER_RAD - 28.648).abs() < 5e-4);
         for j in 0..model.points() {
-            let angles = model.physical().angles[j];
-            let (offsets, _) = model.crank_offsets(&terms, angles);
+            let angles = ph.angles[j];
+            let (offsets, _) = ph.crank_offsets(common, &terms, angles);
             let rho = -DELTA * angles[0] / 36.0;
             assert!((offsets[0] + rho).abs() < 1e-15, "{j}: {offsets:?} {rho}");
             assert_eq!(offsets[1], 0.0);
         }
         let averaged = with(text(params(), "crank_closure", "averaged"));
-        let terms = averaged.row_terms(&row);
-        for &angles in &averaged.physical().angles {
-            assert_eq!(averaged.crank_offsets(&terms, angles).0, [0.0, 0.0]);
+        let (common, ph) = averaged.physical_parts();
+        let terms = ph.row_terms(common, &row);
+        for &angles in &ph.angles {
+            assert_eq!(ph.crank_offsets(common, &terms, angles).0, [0.0, 0.0]);
         }
     }
 
@@ -2426,7 +2469,7 @@ mod tests {
             let paired = row(&model, &set);
             let curve = model.curve(&paired);
             for (j, (v, r)) in curve.iter().zip(&reference).enumerate() {
-                let rectified = amplitude * model.physical().angles[j][0].abs();
+                let rectified = amplitude * model.physical_parts().1.angles[j][0].abs();
                 let expected = if contact == "load_shared" {
                     0.0
                 } else {
@@ -2602,25 +2645,25 @@ mod tests {
         // after the output pin holes.
         let model = with(params());
         assert!(model.input_index("output_runout_x_mm").is_none());
-        let terms = model.row_terms(&row(
-            &model,
-            &[
-                ("crank_axis_radial_error_mm_1", DELTA),
-                ("crank_axis_radial_error_mm_2", -DELTA),
-            ],
-        ));
-        for &angles in &model.physical().angles {
-            let (offsets, _) = model.crank_offsets(&terms, angles);
+        let (common, ph) = model.physical_parts();
+        let terms = ph.row_terms(
+            common,
+            &row(
+                &model,
+                &[
+                    ("crank_axis_radial_error_mm_1", DELTA),
+                    ("crank_axis_radial_error_mm_2", -DELTA),
+                ],
+            ),
+        );
+        for &angles in &ph.angles {
+            let (offsets, _) = ph.crank_offsets(common, &terms, angles);
             let across = -DELTA * angles[0] / (1.25 * 39.0);
             assert!((offsets[0] - across).abs() < 1e-18, "{offsets:?} {across}");
             assert!((offsets[1] + across).abs() < 1e-18, "{offsets:?} {across}");
             let along = DELTA * angles[1];
-            assert!(
-                (TransmissionError::along(&terms, 0, angles[0], angles[1]) - along).abs() < 1e-18
-            );
-            assert!(
-                (TransmissionError::along(&terms, 1, angles[0], angles[1]) + along).abs() < 1e-18
-            );
+            assert!((Physical::along(&terms, 0, angles[0], angles[1]) - along).abs() < 1e-18);
+            assert!((Physical::along(&terms, 1, angles[0], angles[1]) + along).abs() < 1e-18);
         }
     }
 
@@ -2634,10 +2677,17 @@ mod tests {
         // The example's discs sit on its eccentrics, s = 11 mm apart (s/2 = 5.5 mm).
         let model = with(params().with_number("sun_plane_offset_mm", 40.0));
         let tau = 1e-4;
-        let terms = model.row_terms(&row(&model, &[("crank_axis_tilt_tangential_rad_1", tau)]));
+        let (common, ph) = model.physical_parts();
+        let terms = ph.row_terms(
+            common,
+            &row(&model, &[("crank_axis_tilt_tangential_rad_1", tau)]),
+        );
         assert!((terms.v[0].0 - tau * 5.5 / 2.0).abs() < 1e-18);
         assert!((terms.v[1].0 + tau * 5.5 / 2.0).abs() < 1e-18);
-        let terms = model.row_terms(&row(&model, &[("crank_axis_tilt_radial_rad_1", tau)]));
+        let terms = ph.row_terms(
+            common,
+            &row(&model, &[("crank_axis_tilt_radial_rad_1", tau)]),
+        );
         assert!((terms.rho_const[0] + tau * 5.5).abs() < 1e-18);
         assert!((terms.rho_const[1] - tau * 5.5).abs() < 1e-18);
         let tilted = model.curve(&row(

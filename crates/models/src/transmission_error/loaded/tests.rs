@@ -1,7 +1,7 @@
 //! Tests of the transmission error under load (docs/models.md §12.9) on the RV40E of
 //! document 002 with the crank side of scenarios/reducers/rv40e.json.
 
-use super::super::rv40e_params;
+use super::super::{rv40e_params, TransmissionError};
 use super::*;
 use crate::transmission_error::test_support::{outputs, row, text, with, xorshift, MODIFIED};
 use crate::{ErrorModel, ModelParams, ARCSEC_PER_RAD};
@@ -32,7 +32,7 @@ fn a_perfect_reducer_under_load_has_almost_no_transmission_error() {
     // whole wind-up the nominal removes (pins and crank side). The mean is 0 by definition.
     let model = with(rv40e_params());
     let out = outputs(&model, &row(&model, &[]));
-    let wind_up = model.loaded().nominal.abs() * ARCSEC_PER_RAD;
+    let wind_up = model.loaded_parts().2.nominal.abs() * ARCSEC_PER_RAD;
     let (k1, zp) = (1.25 * 40.0 / 64.0, 40);
     let lever = |phi: f64| phi.sin() / (1.0 + k1 * k1 - 2.0 * k1 * phi.cos()).sqrt();
     let largest = |fraction: f64| {
@@ -216,14 +216,15 @@ fn the_table_is_the_geometry_pin_by_pin() {
             .iter()
             .map(|i| (if i.unit == "rad" { 0.004 / 12.0 } else { 0.004 }) * next())
             .collect();
-        let terms = model.row_terms(&inputs);
+        let (common, physical, loaded) = model.loaded_parts();
+        let terms = physical.row_terms(common, &inputs);
         let (mut table, mut exact) = (LoadedScratch::default(), LoadedScratch::default());
-        table.prepare(&model, &inputs, &terms);
-        let n = model.points;
+        table.prepare(common, physical, loaded.table.k1, &inputs, &terms);
+        let n = model.points();
         for j in (0..n).step_by(7) {
-            let a = model.loaded_pins(&terms, j, [Keep::All; 2], &mut table);
+            let a = loaded.pins(common, physical, &terms, j, [Keep::All; 2], &mut table);
             let theta = 2.0 * PI * j as f64 / n as f64;
-            let b = model.exact_loaded_pins(&inputs, &terms, theta, &mut exact);
+            let b = exact_pins(common, physical, &inputs, &terms, theta, &mut exact);
             assert_eq!(a, b);
             for d in 0..2 {
                 // The same pins (the table starts at slot 0, the geometry at pin 0), compared
