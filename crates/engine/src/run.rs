@@ -213,7 +213,7 @@ pub struct OutputAccumulator {
     /// `flagged_kept`.
     pub kept: KeptValues,
     /// The values of the samples flagged non-conforming, kept apart so that a conformity
-    /// figure places them beyond the limits ([`crate::figures::Conformity`]) while the
+    /// figure places them beyond the limits ([`crate::stats::conformity`]) while the
     /// histogram and the value percentiles still show them; [`KeptValues::Dropped`] for an
     /// output whose flags do not take samples out of conformity.
     pub flagged_kept: KeptValues,
