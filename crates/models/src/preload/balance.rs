@@ -66,6 +66,44 @@ impl DiscPins {
         &self.levers[..self.len]
     }
 
+    /// Empties the disc for another output angle (keeping its storage).
+    pub fn reset(&mut self, offset: f64, slack: f64) {
+        self.len = 0;
+        self.offset = offset;
+        self.slack = slack;
+    }
+
+    /// Keeps, in their order, the pins that can be loaded (l·y − g > 0) at some output
+    /// angle u in [u_lo, u_hi]: the disc then turns within y in [u_lo − C − s,
+    /// u_hi − C + s], and l·y − g is monotone in y in floating point too, so a pin left
+    /// out is one whose term [`DiscPins::moment`] and the balance's sums would skip at
+    /// every y they reach: every sum over the rest is the same to the bit.
+    fn retain_loadable(&mut self, u_lo: f64, u_hi: f64) {
+        let (y_lo, y_hi) = (
+            (u_lo - self.offset) - self.slack,
+            (u_hi - self.offset) + self.slack,
+        );
+        let mut kept = 0;
+        for i in 0..self.len {
+            let (g, l) = (self.gaps[i], self.levers[i]);
+            let reach = if l > 0.0 {
+                l * y_hi - g
+            } else if l < 0.0 {
+                l * y_lo - g
+            } else {
+                -g
+            };
+            // NaN bounds keep every pin (the balance then has no root either way).
+            if reach > 0.0 || reach.is_nan() {
+                self.gaps[kept] = g;
+                self.levers[kept] = l;
+                self.arms[kept] = self.arms[i];
+                kept += 1;
+            }
+        }
+        self.len = kept;
+    }
+
     /// T_d(y), mm² (per unit stiffness: N·mm per N/mm).
     fn moment(&self, y: f64) -> f64 {
         let mut sum = 0.0;
@@ -92,6 +130,22 @@ impl DiscPins {
         }
     }
 
+    /// T_d at the settled turn of [`DiscPins::settle`] without the turn itself (0 where
+    /// the disc finds its balance within its slack: no root to find), reading T_d(x + s)
+    /// only where T_d(x − s) < 0: the balance's sum over the discs, the same values.
+    fn settled_moment(&self, x: f64) -> f64 {
+        let t_lo = self.moment(x - self.slack);
+        if t_lo >= 0.0 {
+            return t_lo;
+        }
+        let t_hi = self.moment(x + self.slack);
+        if t_hi <= 0.0 {
+            t_hi
+        } else {
+            0.0
+        }
+    }
+
     /// The smallest g/l over the drive flank (its lag L_d), rad.
     fn lag(&self) -> f64 {
         self.gaps()
@@ -113,8 +167,9 @@ impl DiscPins {
     }
 }
 
-/// The zero-torque balance of the two discs.
-pub(crate) fn zero_torque(contact: &PinContact, discs: &[DiscPins; 2]) -> Preload {
+/// The zero-torque balance of the two discs. It drops from `discs` the pins that no
+/// output angle of the balance's bracket loads (they do not act on it).
+pub(crate) fn zero_torque(contact: &PinContact, discs: &mut [DiscPins; 2]) -> Preload {
     // Σ_d τ_d(u) rises with u; beyond these ends every disc pushes one way.
     let lo = discs
         .iter()
@@ -124,10 +179,22 @@ pub(crate) fn zero_torque(contact: &PinContact, discs: &[DiscPins; 2]) -> Preloa
         .iter()
         .map(|p| p.offset + p.slack + p.lag())
         .fold(f64::NEG_INFINITY, f64::max);
-    let total = |u: f64| discs.iter().map(|p| p.settle(u - p.offset).1).sum::<f64>();
     let margin = 1e-9 * (hi - lo).abs().max(1e-12);
+    let (u_lo, u_hi) = (lo - margin, hi + margin);
+    // The balance reads only pins that can take load somewhere in the bracket.
+    // (The bracket may be reversed: a disc's flanks can overlap by more than its slack.)
+    for disc in discs.iter_mut() {
+        disc.retain_loadable(u_lo.min(u_hi), u_lo.max(u_hi));
+    }
+    let discs = &*discs;
+    let total = |u: f64| {
+        discs
+            .iter()
+            .map(|p| p.settled_moment(u - p.offset))
+            .sum::<f64>()
+    };
     let u = if lo.is_finite() && hi.is_finite() {
-        root(total, lo - margin, hi + margin)
+        root(total, u_lo, u_hi)
     } else {
         f64::NAN
     };

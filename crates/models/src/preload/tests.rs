@@ -47,7 +47,7 @@ fn alike_discs_balance_as_the_pair_does() {
         let (gaps, disc) = design_disc(&rule, shift);
         let c = &rule.columns;
         let one = balance::alike(rule.contact(), &gaps, &c.pins).unwrap();
-        let pair = zero_torque(rule.contact(), &[disc.clone(), disc]);
+        let pair = zero_torque(rule.contact(), &mut [disc.clone(), disc]);
         assert!(one.pin_force > 0.0, "{shift}: preloaded");
         for (a, b) in [
             (one.overlap_um, pair.overlap_um),

@@ -165,6 +165,12 @@ pub(crate) struct Grid {
     pub crank_angles: Vec<(f64, f64)>,
     /// The 2M slots as columns.
     pub columns: Columns,
+    /// Per grid point k: where each disc's window sits among a row table's window ends,
+    /// (2·kq + d)·z_p + start (`placement`), so that a point reads its ends without a
+    /// division.
+    pub ends_at: Vec<[u32; 2]>,
+    /// The instruction sets the row tables' folds may use (folds.rs).
+    pub arch: pulp::Arch,
 }
 
 /// The 2M slots as columns grouped by residue: the slots of one grid point and disc are
@@ -259,7 +265,7 @@ impl Grid {
                 ));
             }
         }
-        Grid {
+        let mut grid = Grid {
             per_pin,
             points,
             pins: zp,
@@ -271,7 +277,19 @@ impl Grid {
             across: across_all,
             crank_angles,
             columns: Columns::new(&slots, per_pin, zp, LEVER_FLOOR * stage.eccentricity),
-        }
+            ends_at: Vec::new(),
+            arch: pulp::Arch::new(),
+        };
+        grid.ends_at = (0..points)
+            .map(|k| {
+                [0, 1].map(|d| {
+                    let (_, start) = grid.placement(k, d);
+                    // At most 2·64·200 entries: the index fits u32.
+                    ((2 * (k % per_pin) + d) * zp + start) as u32
+                })
+            })
+            .collect();
+        grid
     }
 
     /// Where disc d's pins sit at grid point k: the first column entry of their residue

@@ -30,6 +30,7 @@
 //! limits a window in a narrow peak), 4 % low at P99.865 on the RV-20E scenario against
 //! q = 16 (docs/models.md §14.4; test: the worst grows and the mean settles with q).
 
+mod folds;
 mod geometry;
 mod layout;
 mod windows;
@@ -93,6 +94,9 @@ pub const ENTRY: ModelEntry = ModelEntry {
 thread_local! {
     /// Each thread's row table (the model allocates nothing per sample once it has grown).
     static TABLE: std::cell::RefCell<RowTable> = std::cell::RefCell::new(RowTable::default());
+    /// Each thread's pins of the two discs for the zero-torque balance.
+    static PINS: std::cell::RefCell<[DiscPins; 2]> =
+        std::cell::RefCell::new([DiscPins::new(0.0, 0.0), DiscPins::new(0.0, 0.0)]);
 }
 
 /// The model with its reducer and grid.
@@ -203,24 +207,24 @@ impl RvLostMotion {
         let mut table = RowTable::default();
         table.fill(&self.reducer, &self.grid, &self.layout, &terms, x);
         (0..self.grid.points)
-            .map(|k| self.width(&table, x, k))
+            .map(|k| self.width(&table, k))
             .collect()
     }
 
     /// W_k from the row's table.
     #[inline(always)]
-    fn width(&self, table: &RowTable, x: &[f64], k: usize) -> f64 {
-        let ends = |d| table.ends(&self.reducer, &self.grid, &self.layout, x, k, d);
+    fn width(&self, table: &RowTable, k: usize) -> f64 {
+        let ends = |d| table.ends(&self.grid, k, d);
         let ((lo0, up0), (lo1, up1)) = (ends(0), ends(1));
         up0.min(up1) - lo0.max(lo1)
     }
 
     /// The revolution: the widest common window, the mean of max(0, W) and the least W
     /// over the M points, the narrowest W and where it is.
-    fn scan_revolution(&self, table: &RowTable, x: &[f64]) -> (f64, f64, f64, (f64, usize)) {
+    fn scan_revolution(&self, table: &RowTable) -> (f64, f64, f64, (f64, usize)) {
         let (mut widest, mut sum, mut narrowest) = (f64::NEG_INFINITY, 0.0, (f64::INFINITY, 0));
         for k in 0..self.grid.points {
-            let w = self.width(table, x, k);
+            let w = self.width(table, k);
             widest = widest.max(w);
             sum += w.max(0.0);
             if w < narrowest.0 {
@@ -247,15 +251,15 @@ impl RvLostMotion {
     }
 
     /// Both discs' pins at grid point k, every pin, for the preload's balance.
-    fn pins_at(&self, terms: &RowTerms, x: &[f64], k: usize) -> [DiscPins; 2] {
+    fn pins_at(&self, terms: &RowTerms, x: &[f64], k: usize, discs: &mut [DiscPins; 2]) {
         let (grid, pins) = (&self.grid, self.reducer.stage.pins);
         let kq = k % grid.per_pin;
-        [0, 1].map(|d| {
+        for (d, disc) in discs.iter_mut().enumerate() {
             let turn = grid.turn[kq];
             let (offset, shift) = offset_and_shift(&self.reducer, terms, d, turn);
             let pitch = turned_pitch(terms, d, turn);
             let slack = needle_slack_of(&self.reducer, grid, terms, kq, d);
-            let mut disc = DiscPins::new(offset, slack);
+            disc.reset(offset, slack);
             let (base, start) = grid.placement(k, d);
             // Pin i meets entry start + i, less z_p past the end of the run.
             let entries = (start..pins).chain(0..start);
@@ -267,7 +271,15 @@ impl RvLostMotion {
                 let lever = grid.columns.lever[j];
                 disc.push(gap - lever * epsilon, lever, grid.columns.slip_arm[j]);
             }
-            disc
+        }
+    }
+
+    /// The preload of a row whose narrowest window (at grid point `at`) is negative.
+    fn preload(&self, terms: &RowTerms, x: &[f64], at: usize) -> Preload {
+        PINS.with(|discs| {
+            let mut discs = discs.borrow_mut();
+            self.pins_at(terms, x, at, &mut discs);
+            preload::zero_torque(self.rule.contact(), &mut discs)
         })
     }
 }
@@ -294,12 +306,12 @@ impl ErrorModel for RvLostMotion {
         let (widest, sum, least, (narrowest, at)) = TABLE.with(|table| {
             let mut table = table.borrow_mut();
             table.fill(&self.reducer, &self.grid, &self.layout, &terms, x);
-            self.scan_revolution(&table, x)
+            self.scan_revolution(&table)
         });
         let involute = self.involute(x) + 0.0;
         let free_involute = involute.max(0.0);
         let preload = if narrowest < 0.0 {
-            preload::zero_torque(self.rule.contact(), &self.pins_at(&terms, x, at))
+            self.preload(&terms, x, at)
         } else {
             Preload::NONE
         };

@@ -28,9 +28,12 @@
 //! Every pin of both discs counts at every point (a pin far from the pitch point sets the
 //! window when its own error is large enough). Two paths compute the same windows:
 //! [`disc_window`], every gap in full (the reference, and the public `disc_windows`), and
-//! [`RowTable`], the model's: a row reduced once to its crank angles' runs, so that a
-//! point costs one subtraction and one product per pin (equal to 1e-15, tested).
+//! [`RowTable`], the model's: a row reduced once to its crank angles' runs, each run folded
+//! over all its z_p rotations at once (folds.rs), so that a point's window costs one
+//! subtraction, one product and one comparison per pin in packed lanes (equal to 1e-15,
+//! tested).
 
+use super::folds::{fold_flank, Flank, Turned};
 use super::geometry::{needle_slack, Columns, Grid, Reducer, MAX_CRANKS};
 use super::layout::{Layout, ECCENTRICS};
 
@@ -359,7 +362,11 @@ fn scan(
 /// window but the pins depends on the output angle only through z_p·Θ_k, which takes q
 /// values, and the point's slots are one residue's z_p columns; so the row is reduced to
 /// 2q runs of z_p values (t_m = g_m − l_m·ε_m, the pin terms left out) with their offsets
-/// and slacks, and a point's window is one pass over a run rotated by whole pins.
+/// and slacks. The z_p points of one run differ only in the rotation `start` by which the
+/// pins meet its entries (pin i meets entry (start + i) mod z_p, and start takes every
+/// value once as k runs over the points of one crank angle, z_c and z_p being coprime), so
+/// [`RowTable::ends`] takes the run entry by entry and every rotation at once: one long
+/// contiguous loop per entry that the compiler turns into packed instructions.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct RowTable {
     /// Per (kq, d) at 2·kq + d: z_p values t_m.
@@ -368,10 +375,20 @@ pub(crate) struct RowTable {
     pub heads: Vec<(usize, f64, f64)>,
     /// Whether any pin has a radial or tangential error (else only its radius acts).
     pub placed_pins: bool,
+    /// The pins' radii, radial and tangential errors reversed and doubled (z_p − 1 − u
+    /// mod z_p at u < 2·z_p): entry m's pins over the rotations 0..z_p are
+    /// `[z_p − 1 − m .. 2·z_p − 1 − m]`.
+    turned: [Vec<f64>; 3],
+    /// Per (kq, d) and rotation at (2·kq + d)·z_p + start: the window's ends (lower,
+    /// upper) at the output, rad.
+    pub window_ends: Vec<(f64, f64)>,
+    /// Per rotation: the drive flank's least and the coast flank's largest ratio.
+    lag: Vec<f64>,
+    coast: Vec<f64>,
 }
 
 impl RowTable {
-    /// Fills the table of a row.
+    /// Fills the table of a row: its runs, then every window end.
     pub fn fill(
         &mut self,
         reducer: &Reducer,
@@ -408,137 +425,73 @@ impl RowTable {
                 self.heads.push((base, offset, slack));
             }
         }
+        self.turn_pins(layout, x, pins);
+        self.window_ends.clear();
+        for run in 0..2 * q {
+            self.ends_of_run(reducer, grid, run);
+        }
+    }
+
+    /// The pins' columns reversed and doubled (`turned`).
+    fn turn_pins(&mut self, layout: &Layout, x: &[f64], pins: usize) {
+        let columns = if self.placed_pins { 3 } else { 1 };
+        for (c, turned) in self.turned.iter_mut().take(columns).enumerate() {
+            // c = 0 the radii (the third block of pin inputs), 1 radial, 2 tangential.
+            let block = [2, 0, 1][c];
+            let pin = &x[layout.pins + block * pins..layout.pins + (block + 1) * pins];
+            turned.clear();
+            turned.extend((0..2 * pins).map(|u| pin[(2 * pins - 1 - u) % pins]));
+        }
+    }
+
+    /// The window ends of one run (crank angle and disc) at its z_p rotations.
+    fn ends_of_run(&mut self, reducer: &Reducer, grid: &Grid, run_index: usize) {
+        let pins = reducer.stage.pins;
+        let (base, offset, slack) = self.heads[run_index];
+        let run = &self.runs[run_index * pins..(run_index + 1) * pins];
+        let residue = base / pins;
+        let columns = &grid.columns;
+        let inverse = &columns.inverse_lever[base..base + pins];
+        self.lag.clear();
+        self.lag.resize(pins, f64::INFINITY);
+        self.coast.clear();
+        self.coast.resize(pins, f64::NEG_INFINITY);
+        let flanks = [
+            (columns.drive[residue].clone(), &mut self.lag, false),
+            (columns.coast[residue].clone(), &mut self.coast, true),
+        ];
+        let turned = Turned {
+            radius: &self.turned[0],
+            placed: self
+                .placed_pins
+                .then(|| (&self.turned[1][..], &self.turned[2][..])),
+        };
+        for (entries, extreme, largest) in flanks {
+            let flank = Flank {
+                entries,
+                run,
+                inverse,
+                radial: &columns.radial[base..base + pins],
+                tangential: &columns.tangential[base..base + pins],
+                largest,
+            };
+            fold_flank(grid.arch, extreme, &flank, &turned);
+        }
+        let lambda = reducer.lambda;
+        self.window_ends
+            .extend(self.lag.iter().zip(&self.coast).map(|(lag, coast)| {
+                (
+                    lambda * (offset + coast - slack),
+                    lambda * (offset + lag + slack),
+                )
+            }));
     }
 
     /// The window ends of disc d at grid point k, output angles (rad).
     #[inline(always)]
-    pub fn ends(
-        &self,
-        reducer: &Reducer,
-        grid: &Grid,
-        layout: &Layout,
-        x: &[f64],
-        k: usize,
-        d: usize,
-    ) -> (f64, f64) {
-        let (q, pins) = (grid.per_pin, reducer.stage.pins);
-        let kq = k % q;
-        let (base, offset, slack) = self.heads[2 * kq + d];
-        let (_, start) = grid.placement(k, d);
-        let run = &self.runs[(2 * kq + d) * pins..(2 * kq + d + 1) * pins];
-        let inverse = &grid.columns.inverse_lever[base..base + pins];
-        let radius = &x[layout.pins + 2 * pins..layout.pins + 3 * pins];
-        // Pins [0, z_p − start) meet entries start.., pins [z_p − start, z_p) entries 0...
-        let split = pins - start;
-        let (lag, coast) = if self.placed_pins {
-            let (fr, ft) = (
-                &grid.columns.radial[base..base + pins],
-                &grid.columns.tangential[base..base + pins],
-            );
-            let radial = &x[layout.pins..layout.pins + pins];
-            let tangential = &x[layout.pins + pins..layout.pins + 2 * pins];
-            // Entries `from` of the run meet pins first_pin, first_pin + 1, ….
-            let placed = |from: std::ops::Range<usize>, first_pin: usize| {
-                let (mut low, mut high) = (f64::INFINITY, f64::NEG_INFINITY);
-                for (m, j) in from.enumerate() {
-                    let i = first_pin + m;
-                    let r = (run[j] + radial[i] * fr[j] + tangential[i] * ft[j] - radius[i])
-                        * inverse[j];
-                    if inverse[j] > 0.0 && r < low {
-                        low = r;
-                    }
-                    if inverse[j] < 0.0 && r > high {
-                        high = r;
-                    }
-                }
-                (low, high)
-            };
-            let a = placed(start..pins, 0);
-            let b = placed(0..start, split);
-            (a.0.min(b.0), a.1.max(b.1))
-        } else {
-            let residue = base / pins;
-            let (drive, coast) = (&grid.columns.drive[residue], &grid.columns.coast[residue]);
-            // Entry m meets pin m − start (m ≥ start) or m − start + z_p (m < start).
-            let segments = |range: &std::ops::Range<usize>| {
-                let below = range.start..range.end.min(start);
-                let above = range.start.max(start)..range.end;
-                [
-                    (below.clone(), below.start + split),
-                    (above.clone(), above.start.wrapping_sub(start)),
-                ]
-            };
-            let (mut lag, mut coast_max) = (f64::INFINITY, f64::NEG_INFINITY);
-            for (entries, first_pin) in segments(drive) {
-                if !entries.is_empty() {
-                    let pins_of = &radius[first_pin..first_pin + entries.len()];
-                    lag = lag.min(lane_min::<false>(
-                        &run[entries.clone()],
-                        &inverse[entries],
-                        pins_of,
-                    ));
-                }
-            }
-            for (entries, first_pin) in segments(coast) {
-                if !entries.is_empty() {
-                    let pins_of = &radius[first_pin..first_pin + entries.len()];
-                    coast_max = coast_max.max(-lane_min::<true>(
-                        &run[entries.clone()],
-                        &inverse[entries],
-                        pins_of,
-                    ));
-                }
-            }
-            (lag, coast_max)
-        };
-        let lambda = reducer.lambda;
-        (
-            lambda * (offset + coast - slack),
-            lambda * (offset + lag + slack),
-        )
+    pub fn ends(&self, grid: &Grid, k: usize, d: usize) -> (f64, f64) {
+        self.window_ends[grid.ends_at[k][d] as usize]
     }
-}
-
-/// min over entries of (t_m − ρ_m)·v_m (the pins' radii ρ the only pin terms), or of its
-/// negative with `NEGATED` (the coast flank's −max), in four lanes so that the loop
-/// compiles to packed instructions (the order of the comparisons does not change a
-/// minimum).
-#[inline(always)]
-fn lane_min<const NEGATED: bool>(run: &[f64], inverse: &[f64], radius: &[f64]) -> f64 {
-    let n = run.len();
-    let (inverse, radius) = (&inverse[..n], &radius[..n]);
-    let term = |i: usize| {
-        let r = (run[i] - radius[i]) * inverse[i];
-        if NEGATED {
-            -r
-        } else {
-            r
-        }
-    };
-    let mut low = [f64::INFINITY; 4];
-    let whole = n / 4 * 4;
-    for start in (0..whole).step_by(4) {
-        for (lane, low) in low.iter_mut().enumerate() {
-            let r = term(start + lane);
-            *low = if r < *low { r } else { *low };
-        }
-    }
-    for i in whole..n {
-        let r = term(i);
-        low[0] = if r < low[0] { r } else { low[0] };
-    }
-    fold_lanes(low, [f64::NEG_INFINITY; 4]).0
-}
-
-/// The smallest of four lanes of minima and the largest of four of maxima.
-fn fold_lanes(low: [f64; 4], high: [f64; 4]) -> (f64, f64) {
-    let lag = low
-        .iter()
-        .fold(f64::INFINITY, |a, &v| if v < a { v } else { a });
-    let coast = high
-        .iter()
-        .fold(f64::NEG_INFINITY, |a, &v| if v > a { v } else { a });
-    (lag, coast)
 }
 
 /// ε's (cos, sin) coefficients on the polar angle: (F_p/2)/r_m·(cos, sin) of ϕ_p + z_p·Θ − d·π.

@@ -1981,7 +1981,7 @@ impl Physical {
         let rule = &self.preload_rule;
         let angles = common.angles_at(theta);
         let (offsets, _) = self.crank_offsets(common, terms, angles);
-        let discs = [0, 1].map(|d| {
+        let mut discs = [0, 1].map(|d| {
             let d_r = Self::along(terms, d, angles[0], angles[1]);
             let mut disc = DiscPins::new(offsets[d], 0.0);
             for pin in 0..common.pins {
@@ -2001,7 +2001,7 @@ impl Physical {
             }
             disc
         });
-        let load = zero_torque(rule.contact(), &discs);
+        let load = zero_torque(rule.contact(), &mut discs);
         let class = rule.classify(&load, (true, false), (inputs[4], inputs[5]));
         [
             load.overlap_um,

@@ -1,0 +1,289 @@
+//! The folds of a row table's runs over every rotation (windows.rs `RowTable`): for each
+//! run entry m (t_m, 1/l_m) of a flank, the extreme over the rotations s of
+//! ```text
+//! r(m, s) = (t_m + δr_i·f_r,m + δt_i·f_t,m − ρ_i)·(1/l_m),   i = (m − s) mod z_p
+//! lag[s]   = min over the drive entries,   coast[s] = max over the coast entries
+//! ```
+//! the loop that carries most of `rv_lost_motion`'s cost. It runs over the rotations, a
+//! contiguous slice of the pins' columns reversed and doubled, and is compiled three times:
+//! for the baseline x86-64 (two lanes), and for AVX2 and AVX-512 (four and eight), chosen
+//! once by the processor's own report ([`Kernel::detect`]); a binary built for the
+//! baseline runs everywhere and uses the wider instructions where they exist. Every width
+//! gives the same bits: a difference, a product and a comparison are exact IEEE operations
+//! whatever the lane count, no product is fused, and a minimum or maximum does not depend
+//! on the order of its comparisons (tested: `folds_agree_to_the_bit_in_every_width`).
+
+use std::ops::Range;
+
+/// One flank of one run: its entries, the run's t and 1/l, the pins' factors f_r, f_t
+/// (indexed by entry), and whether its extreme is the largest (coast) or the least.
+pub(crate) struct Flank<'a> {
+    pub entries: Range<usize>,
+    pub run: &'a [f64],
+    pub inverse: &'a [f64],
+    pub radial: &'a [f64],
+    pub tangential: &'a [f64],
+    pub largest: bool,
+}
+
+/// The pins' columns reversed and doubled (entry m's pins over the rotations 0..z_p are
+/// `[z_p − 1 − m .. 2·z_p − 1 − m]`): the radii ρ, and the radial and tangential errors
+/// when any pin is out of place.
+pub(crate) struct Turned<'a> {
+    pub radius: &'a [f64],
+    pub placed: Option<(&'a [f64], &'a [f64])>,
+}
+
+/// Folds every entry of `flank` into `extreme` (one value per rotation), with the widest
+/// instructions `arch` (the processor's report, `pulp::Arch::new()`) allows.
+pub(crate) fn fold_flank(arch: pulp::Arch, extreme: &mut [f64], flank: &Flank, turned: &Turned) {
+    arch.dispatch(Fold {
+        extreme,
+        flank,
+        turned,
+    })
+}
+
+/// [`fold_all`] as the operation `pulp` compiles once per instruction set and calls
+/// within a function that enables it (so that the plain loops below vectorise for it).
+struct Fold<'a, 'b> {
+    extreme: &'a mut [f64],
+    flank: &'a Flank<'b>,
+    turned: &'a Turned<'b>,
+}
+
+impl pulp::WithSimd for Fold<'_, '_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) {
+        fold_all(self.extreme, self.flank, self.turned)
+    }
+}
+
+/// Every entry of the flank (inlined into each kernel, which compiles it for its width):
+/// rotations in blocks of [`LANES`] held in registers while every entry passes, then the
+/// rotations left over one by one.
+#[inline(always)]
+fn fold_all(extreme: &mut [f64], flank: &Flank, turned: &Turned) {
+    let pins = extreme.len();
+    let whole = pins / LANES * LANES;
+    for block in (0..whole).step_by(LANES) {
+        let lanes: &mut [f64; LANES] = (&mut extreme[block..block + LANES])
+            .try_into()
+            .expect("a block of LANES");
+        match (turned.placed, flank.largest) {
+            (None, true) => block_of::<true, false>(lanes, block, flank, turned),
+            (None, false) => block_of::<false, false>(lanes, block, flank, turned),
+            (Some(_), true) => block_of::<true, true>(lanes, block, flank, turned),
+            (Some(_), false) => block_of::<false, true>(lanes, block, flank, turned),
+        }
+    }
+    for (s, e) in extreme.iter_mut().enumerate().skip(whole) {
+        for m in flank.entries.clone() {
+            let at = pins - 1 - m + s;
+            *e = extreme_of_flank(flank.largest, *e, ratio(flank, turned, m, at));
+        }
+    }
+}
+
+/// The lanes of one block of rotations starting at `block`, every entry folded in.
+#[inline(always)]
+fn block_of<const LARGEST: bool, const PLACED: bool>(
+    lanes: &mut [f64; LANES],
+    block: usize,
+    flank: &Flank,
+    turned: &Turned,
+) {
+    let pins = flank.run.len();
+    let mut acc = *lanes;
+    for m in flank.entries.clone() {
+        let at = pins - 1 - m + block;
+        let (t, v) = (flank.run[m], flank.inverse[m]);
+        let rho: &[f64; LANES] = turned.radius[at..at + LANES].try_into().expect("lanes");
+        if PLACED {
+            let (radial, tangential) = turned.placed.expect("placed pins");
+            let radial: &[f64; LANES] = radial[at..at + LANES].try_into().expect("lanes");
+            let tangential: &[f64; LANES] = tangential[at..at + LANES].try_into().expect("lanes");
+            let (fr, ft) = (flank.radial[m], flank.tangential[m]);
+            for lane in 0..LANES {
+                let r = (t + radial[lane] * fr + tangential[lane] * ft - rho[lane]) * v;
+                acc[lane] = extreme_of::<LARGEST>(acc[lane], r);
+            }
+        } else {
+            for lane in 0..LANES {
+                acc[lane] = extreme_of::<LARGEST>(acc[lane], (t - rho[lane]) * v);
+            }
+        }
+    }
+    *lanes = acc;
+}
+
+/// r(m, s) of entry m with the pins' columns read at `at` (= z_p − 1 − m + s).
+#[inline(always)]
+fn ratio(flank: &Flank, turned: &Turned, m: usize, at: usize) -> f64 {
+    let (t, v) = (flank.run[m], flank.inverse[m]);
+    match turned.placed {
+        Some((radial, tangential)) => {
+            (t + radial[at] * flank.radial[m] + tangential[at] * flank.tangential[m]
+                - turned.radius[at])
+                * v
+        }
+        None => (t - turned.radius[at]) * v,
+    }
+}
+
+/// [`extreme_of`] with the flank's choice at run time.
+#[inline(always)]
+fn extreme_of_flank(largest: bool, e: f64, r: f64) -> f64 {
+    if largest {
+        extreme_of::<true>(e, r)
+    } else {
+        extreme_of::<false>(e, r)
+    }
+}
+
+/// The extreme of `e` and `r`: the larger with `LARGEST`, else the smaller (`e` on a tie).
+#[inline(always)]
+fn extreme_of<const LARGEST: bool>(e: f64, r: f64) -> f64 {
+    if LARGEST {
+        if r > e {
+            r
+        } else {
+            e
+        }
+    } else if r < e {
+        r
+    } else {
+        e
+    }
+}
+
+/// Rotations per block: one AVX-512 register, two AVX2 or four SSE2 ones.
+const LANES: usize = 8;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pulp::Simd;
+
+    /// A small deterministic stream in [−1, 1) (a linear congruential generator).
+    fn stream(seed: u64) -> impl FnMut() -> f64 {
+        let mut state = seed;
+        move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+        }
+    }
+
+    #[test]
+    fn folds_agree_to_the_bit_in_every_width() {
+        // Every kernel this processor runs against the baseline, on runs of 40 and 37
+        // entries (a remainder for every lane count), both flanks, with and without pins
+        // out of place; ties included (a repeated radius).
+        let mut next = stream(7);
+        for pins in [40, 37, 8] {
+            let column = |next: &mut dyn FnMut() -> f64, scale: f64| -> Vec<f64> {
+                (0..pins).map(|_| scale * next()).collect()
+            };
+            let run = column(&mut next, 3e-3);
+            let inverse: Vec<f64> = (0..pins)
+                .map(|m| {
+                    if m < pins / 2 {
+                        50.0 + m as f64
+                    } else {
+                        -60.0 - m as f64
+                    }
+                })
+                .collect();
+            let (fr, ft) = (column(&mut next, 1.0), column(&mut next, 1.0));
+            let doubled = |v: Vec<f64>| -> Vec<f64> {
+                (0..2 * pins)
+                    .map(|u| v[(2 * pins - 1 - u) % pins])
+                    .collect()
+            };
+            let mut radius = column(&mut next, 4e-3);
+            radius[3] = radius[5];
+            let (radius, radial, tangential) = (
+                doubled(radius),
+                doubled(column(&mut next, 5e-3)),
+                doubled(column(&mut next, 5e-3)),
+            );
+            for placed in [None, Some((&radial[..], &tangential[..]))] {
+                let turned = Turned {
+                    radius: &radius,
+                    placed,
+                };
+                for (entries, largest) in [(0..pins / 2, false), (pins / 2..pins, true)] {
+                    let flank = Flank {
+                        entries,
+                        run: &run,
+                        inverse: &inverse,
+                        radial: &fr,
+                        tangential: &ft,
+                        largest,
+                    };
+                    let start = if largest {
+                        f64::NEG_INFINITY
+                    } else {
+                        f64::INFINITY
+                    };
+                    let mut reference = vec![start; pins];
+                    fold_all(&mut reference, &flank, &turned);
+                    // The reference itself against the plain definition.
+                    for (s, r) in reference.iter().enumerate() {
+                        let direct = flank
+                            .entries
+                            .clone()
+                            .map(|m| {
+                                let at = pins - 1 - m + s;
+                                match placed {
+                                    Some((a, b)) => {
+                                        (run[m] + a[at] * fr[m] + b[at] * ft[m] - radius[at])
+                                            * inverse[m]
+                                    }
+                                    None => (run[m] - radius[at]) * inverse[m],
+                                }
+                            })
+                            .fold(start, |a, v| if largest { a.max(v) } else { a.min(v) });
+                        assert_eq!(r.to_bits(), direct.to_bits(), "rotation {s}");
+                    }
+                    // The baseline, AVX2 and AVX-512 builds of the fold, where the
+                    // processor runs them.
+                    let mut widths: Vec<(&str, Vec<f64>)> = Vec::new();
+                    let mut run_in = |name, f: &dyn Fn(Fold)| {
+                        let mut folded = vec![start; pins];
+                        f(Fold {
+                            extreme: &mut folded,
+                            flank: &flank,
+                            turned: &turned,
+                        });
+                        widths.push((name, folded));
+                    };
+                    run_in("scalar", &|op| Simd::vectorize(pulp::Scalar::new(), op));
+                    #[cfg(target_arch = "x86_64")]
+                    {
+                        if let Some(simd) = pulp::x86::V3::try_new() {
+                            run_in("AVX2", &|op| Simd::vectorize(simd, op));
+                        }
+                        if let Some(simd) = pulp::x86::V4::try_new() {
+                            run_in("AVX-512", &|op| Simd::vectorize(simd, op));
+                        }
+                    }
+                    let mut folded = vec![start; pins];
+                    fold_flank(pulp::Arch::new(), &mut folded, &flank, &turned);
+                    widths.push(("dispatched", folded));
+                    for (name, folded) in widths {
+                        let same = folded
+                            .iter()
+                            .zip(&reference)
+                            .all(|(a, b)| a.to_bits() == b.to_bits());
+                        assert!(same, "{name}, {pins} pins, placed {}", placed.is_some());
+                    }
+                }
+            }
+        }
+    }
+}
