@@ -5,8 +5,8 @@ outside functions that a dependency dispatches to at run time after checking the
 
 Such functions carry their target feature in their name by the crates' convention
 (matrixmultiply's `kernel_target_avx2`, memchr's `find_avx2`, rand_chacha's `impl_avx2`,
-crc32fast's `calculate_avx512`, sha2's `*_shani`/`*_avx2`, ...); every other function
-must be baseline. Instructions are classified by mnemonic and register (objdump -d):
+crc32fast's `calculate_avx512`, sha2's `*_shani`/`*_avx2`, pulp's `V3`/`V4::vectorize`,
+...); every other function must be baseline. Instructions are classified by mnemonic and register (objdump -d):
 a ymm/zmm/k register or a VEX/EVEX mnemonic (v...) is AVX or AVX-512; the SSE3, SSSE3,
 SSE4.1/4.2, POPCNT, LZCNT, BMI1/2, FMA, AES, PCLMUL and SHA mnemonics are listed below.
 
@@ -43,7 +43,11 @@ LEGACY_V = {"verr", "verw"}
 DISPATCHED = re.compile(
     r"avx|sse3|ssse3|sse4|sse41|sse42|fma|bmi|popcnt|lzcnt|pclmul|shani|sha_ni|aesni"
     # sha2's SHA-NI block function, called after its cpufeatures check of sha, sse4.1, ssse3.
-    r"|^sha2::sha256::x86::digest_blocks", re.I)
+    r"|^sha2::sha256::x86::digest_blocks"
+    # pulp's #[target_feature] wrappers of its x86-64-v3 (AVX2, FMA) and v4 (AVX-512)
+    # levels: a V3/V4 value exists only once `try_new` has checked the CPU (Arch::new), and
+    # rvtol's folds run inside them (crates/models/src/reducer/folds.rs).
+    r"|^pulp::x86::v[34]::V[34]::vectorize::imp", re.I)
 
 
 def extension_of(mnemonic, operands):

@@ -277,7 +277,6 @@ fn preload_at(contact: &PinContact, discs: &[DiscPins; 2], u: f64) -> Preload {
 /// reaches an end of its slack). Every fourfold narrowing of the bracket drops the pins no
 /// u left in it can load (`retain_loadable`: the sums keep every term they had).
 fn balance_root(discs: &mut [DiscPins; 2], (mut lo, mut hi): (f64, f64), start: f64) -> f64 {
-    let scale = (hi - lo).max(lo.abs().max(hi.abs()));
     let mut filtered = hi - lo;
     let mut u = if start > lo && start < hi {
         start
@@ -292,7 +291,7 @@ fn balance_root(discs: &mut [DiscPins; 2], (mut lo, mut hi): (f64, f64), start: 
             slope += k;
             size += z;
         }
-        match newton_step((value, slope, size), u, (&mut lo, &mut hi), scale) {
+        match newton_step((value, slope, size), u, (&mut lo, &mut hi)) {
             Step::Root(root) => return root,
             Step::Next(next) => u = next,
         }
@@ -316,7 +315,6 @@ fn newton_step(
     (value, slope, size): (f64, f64, f64),
     u: f64,
     (lo, hi): (&mut f64, &mut f64),
-    scale: f64,
 ) -> Step {
     if value == 0.0 || value.abs() <= 1e-14 * size {
         return Step::Root(u);
@@ -332,7 +330,9 @@ fn newton_step(
     } else {
         0.5 * (*lo + *hi)
     };
-    if (next - u).abs() <= 1e-15 * scale {
+    // Rounding's stagnation: a step within a few ulps of u itself (not of the bracket,
+    // which a pin at the end of a flank, its lever near 0, can make 10⁸ times wider).
+    if (next - u).abs() <= 1e-15 * u.abs().max(next.abs()) {
         Step::Root(next)
     } else {
         Step::Next(next)
@@ -343,13 +343,12 @@ fn newton_step(
 /// terms' size, f(lo) ≤ 0 ≤ f(hi): Newton's step lands on the root once it stands on the
 /// root's piece; it is kept within the bracket that every evaluation narrows (bisection
 /// where it would leave it). Converged when f is below its rounding (10⁻¹⁴ of the size of
-/// its terms) or the step below 10⁻¹⁵ of the bracket: a few evaluations where the regula
+/// its terms) or the step below 10⁻¹⁵ of u: a few evaluations where the regula
 /// falsi of [`root`] takes about fifteen on these sums (the two agree: tested).
 fn newton_root(f: impl Fn(f64) -> (f64, f64, f64), mut lo: f64, mut hi: f64) -> f64 {
-    let scale = (hi - lo).max(lo.abs().max(hi.abs()));
     let mut u = 0.5 * (lo + hi);
     for _ in 0..200 {
-        match newton_step(f(u), u, (&mut lo, &mut hi), scale) {
+        match newton_step(f(u), u, (&mut lo, &mut hi)) {
             Step::Root(root) => return root,
             Step::Next(next) => u = next,
         }
@@ -607,6 +606,45 @@ mod tests {
                     "slack {slack}: {a} against {b}"
                 );
             }
+        }
+    }
+
+    #[test]
+    fn a_pin_at_the_end_of_a_flank_does_not_stop_the_balance_early() {
+        // A pin whose lever is almost 0 (at a flank's end) and whose gap is slightly
+        // negative has g/l of −10¹⁰ rad: the bracket grows 10¹⁴ times wider than the
+        // discs' conflict, and a step criterion relative to it stopped Newton on its first
+        // small step. From starts across the conflict, the root must leave the sum at its
+        // rounding.
+        let gap = |phi: f64| -0.003 + 0.004 * (1.0 - phi.cos()).powi(2);
+        let mut discs = [
+            disc(2e-5, 1e-5, gap),
+            disc(-3e-5, 2e-5, |phi| gap(phi) + 0.001),
+        ];
+        discs[0].push(-1e-5, 1e-15, 0.0);
+        let lo = discs
+            .iter()
+            .map(|p| p.offset - p.slack + p.lag().min(-p.lead()))
+            .fold(f64::INFINITY, f64::min);
+        let hi = discs
+            .iter()
+            .map(|p| p.offset + p.slack + p.lag().max(-p.lead()))
+            .fold(f64::NEG_INFINITY, f64::max);
+        assert!(lo < -1e9, "the bracket is wide: {lo}");
+        let total = |u: f64| {
+            discs.iter().fold((0.0, 0.0), |(v, z), p| {
+                let (t, _, size) = p.settled_moment(u - p.offset);
+                (v + t, z + size)
+            })
+        };
+        for start in [-4e-4, -1e-4, -2e-5, 0.0, 3e-5, 1e-4, 4e-4] {
+            let u = balance_root(&mut discs.clone(), (lo, hi), start);
+            let (value, size) = total(u);
+            let reference = total(start).1.max(total(0.0).1);
+            assert!(
+                value.abs() <= 1e-12 * reference,
+                "start {start}: F({u}) = {value} of terms {size}"
+            );
         }
     }
 

@@ -41,7 +41,7 @@ fn design_disc(rule: &PreloadRule, shift: f64) -> (Vec<f64>, DiscPins) {
 #[test]
 fn alike_discs_balance_as_the_pair_does() {
     // balance::alike is zero_torque of two equal discs with no offset and no slack (a
-    // Newton step on the loaded set against the pair's regula falsi on both discs).
+    // Newton step on one disc's loaded set against the pair's balance of both discs).
     let rule = rule(&[]);
     for shift in [-0.012, -0.010, -0.006] {
         let (gaps, disc) = design_disc(&rule, shift);

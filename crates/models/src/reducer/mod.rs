@@ -44,10 +44,7 @@ use crate::{
 };
 use geometry::{Grid, Reducer};
 use layout::Layout;
-use windows::{
-    disc_window, needle_slack_of, offset_and_shift, pin_gap, row_terms, turned_pitch, RowTable,
-    RowTerms,
-};
+use windows::{disc_window, row_terms, RowTable};
 
 const PARAMS: &[ParamSpec] = &[
     ParamSpec { name: "sun_teeth", unit: "1", description: "z1, sun teeth", default: None },
@@ -250,35 +247,38 @@ impl RvLostMotion {
         -(x[ws] + x[wi]) * self.involute_scale * (self.reducer.center_distance + a1) / cos_beta
     }
 
-    /// Both discs' pins at grid point k, every pin, for the preload's balance.
-    fn pins_at(&self, terms: &RowTerms, x: &[f64], k: usize, discs: &mut [DiscPins; 2]) {
+    /// Both discs' pins at grid point k, every pin, for the preload's balance: each gap
+    /// (the pitch's turn folded in) the row table's run value plus the pin's own terms,
+    /// t_m + δr_i·f_r + δt_i·f_t − ρ_i, as the windows read it.
+    fn pins_at(&self, table: &RowTable, x: &[f64], k: usize, discs: &mut [DiscPins; 2]) {
         let (grid, pins) = (&self.grid, self.reducer.stage.pins);
+        let columns = &grid.columns;
         let kq = k % grid.per_pin;
+        let (radial, rest) = x[self.layout.pins..].split_at(pins);
+        let (tangential, rest) = rest.split_at(pins);
+        let radius = &rest[..pins];
         for (d, disc) in discs.iter_mut().enumerate() {
-            let turn = grid.turn[kq];
-            let (offset, shift) = offset_and_shift(&self.reducer, terms, d, turn);
-            let pitch = turned_pitch(terms, d, turn);
-            let slack = needle_slack_of(&self.reducer, grid, terms, kq, d);
+            let (base, offset, slack) = table.heads[2 * kq + d];
+            let run = &table.runs[(2 * kq + d) * pins..(2 * kq + d + 1) * pins];
             disc.reset(offset, slack);
-            let (base, start) = grid.placement(k, d);
+            let (_, start) = grid.placement(k, d);
             // Pin i meets entry start + i, less z_p past the end of the run.
             let entries = (start..pins).chain(0..start);
             for (i, m) in entries.enumerate() {
                 let j = base + m;
-                let at = self.layout.pins + i;
-                let errors = (x[at], x[at + pins], x[at + 2 * pins]);
-                let (gap, epsilon) = pin_gap(&grid.columns, j, terms, d, errors, shift, pitch);
-                let lever = grid.columns.lever[j];
-                disc.push(gap - lever * epsilon, lever, grid.columns.slip_arm[j]);
+                let gap =
+                    run[m] + radial[i] * columns.radial[j] + tangential[i] * columns.tangential[j]
+                        - radius[i];
+                disc.push(gap, columns.lever[j], columns.slip_arm[j]);
             }
         }
     }
 
     /// The preload of a row whose narrowest window (at grid point `at`) is negative.
-    fn preload(&self, terms: &RowTerms, x: &[f64], at: usize) -> Preload {
+    fn preload(&self, table: &RowTable, x: &[f64], at: usize) -> Preload {
         PINS.with(|discs| {
             let mut discs = discs.borrow_mut();
-            self.pins_at(terms, x, at, &mut discs);
+            self.pins_at(table, x, at, &mut discs);
             preload::zero_torque(self.rule.contact(), &mut discs)
         })
     }
@@ -303,18 +303,19 @@ impl ErrorModel for RvLostMotion {
             return;
         }
         let terms = row_terms(&self.reducer, &self.grid, &self.layout, x);
-        let (widest, sum, least, (narrowest, at)) = TABLE.with(|table| {
+        let (widest, sum, least, narrowest, preload) = TABLE.with(|table| {
             let mut table = table.borrow_mut();
             table.fill(&self.reducer, &self.grid, &self.layout, &terms, x);
-            self.scan_revolution(&table)
+            let (widest, sum, least, (narrowest, at)) = self.scan_revolution(&table);
+            let preload = if narrowest < 0.0 {
+                self.preload(&table, x, at)
+            } else {
+                Preload::NONE
+            };
+            (widest, sum, least, narrowest, preload)
         });
         let involute = self.involute(x) + 0.0;
         let free_involute = involute.max(0.0);
-        let preload = if narrowest < 0.0 {
-            self.preload(&terms, x, at)
-        } else {
-            Preload::NONE
-        };
         let class = self.rule.classify(
             &preload,
             (narrowest < 0.0, involute < 0.0),

@@ -34,7 +34,7 @@
 //! tested).
 
 use super::folds::{fold_flank, Flank, Turned};
-use super::geometry::{needle_slack, Columns, Grid, Reducer, MAX_CRANKS};
+use super::geometry::{needle_slack, Grid, Reducer, MAX_CRANKS};
 use super::layout::{Layout, ECCENTRICS};
 
 /// What a row contributes, reduced once per row.
@@ -178,31 +178,6 @@ pub(crate) fn offset_and_shift(
     let rho = (sigma * (terms.p1[d] * c + terms.p2[d] * s) + terms.rho_const[d])
         / (reducer.cranks as f64 * reducer.center_distance);
     (-across / reducer.pitch_lever() - rho, along)
-}
-
-/// The gap of one pin (mm) at column entry `j`, with the pitch's turn ε at it (rad):
-/// `pin` holds the pin's (radial, tangential, radius) errors, `shift` the disc's T_d,x.
-#[inline(always)]
-pub(crate) fn pin_gap(
-    columns: &Columns,
-    j: usize,
-    terms: &RowTerms,
-    d: usize,
-    (radial, tangential, radius): (f64, f64, f64),
-    shift: f64,
-    pitch: (f64, f64),
-) -> (f64, f64) {
-    let gap = columns.design_gap[j]
-        + terms.equidistant_error * columns.equidistant[j]
-        + terms.shift_error * columns.shift[j]
-        + (terms.pin_circle_error + radial) * columns.radial[j]
-        + tangential * columns.tangential[j]
-        + shift * columns.eccentric[j]
-        + terms.common[d]
-        - radius;
-    // ε at the pin's polar angle ϑ = polar − z_p·Θ + d·π: pitch holds the turned phase.
-    let epsilon = pitch.0 * columns.polar_cos[j] + pitch.1 * columns.polar_sin[j];
-    (gap, epsilon)
 }
 
 /// The window of disc d at grid point k: every pin, read from the grid's columns (one
