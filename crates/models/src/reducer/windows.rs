@@ -340,8 +340,8 @@ fn scan(
 /// and slacks. The z_p points of one run differ only in the rotation `start` by which the
 /// pins meet its entries (pin i meets entry (start + i) mod z_p, and start takes every
 /// value once as k runs over the points of one crank angle, z_c and z_p being coprime), so
-/// [`RowTable::ends`] takes the run entry by entry and every rotation at once: one long
-/// contiguous loop per entry that the compiler turns into packed instructions.
+/// [`RowTable::fill`] folds each run entry by entry over every rotation at once (folds.rs)
+/// into the window ends that [`RowTable::ends`] then looks up.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct RowTable {
     /// Per (kq, d) at 2·kq + d: z_p values t_m.
