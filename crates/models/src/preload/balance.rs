@@ -209,20 +209,7 @@ impl DiscPins {
 /// The zero-torque balance of the two discs. It drops from `discs` the pins that no
 /// output angle of the balance's bracket loads (they do not act on it).
 pub(crate) fn zero_torque(contact: &PinContact, discs: &mut [DiscPins; 2]) -> Preload {
-    // Σ_d τ_d(u) rises with u; beyond these ends every disc pushes one way: below
-    // y = min(L_d, −K_d) no drive pin of disc d is loaded (T_d ≤ 0), above max(L_d, −K_d)
-    // no coast pin (T_d ≥ 0). (−K_d alone bounds it below only while the disc's own flanks
-    // do not overlap, L_d ≥ −K_d; where they do, T_d(−K_d) > 0 already.)
-    let flanks = discs.each_ref().map(|p| (p.lag(), p.lead()));
-    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    // The conflict: the highest lower end and the lowest upper end of the discs' windows.
-    let (mut lower, mut upper) = (f64::NEG_INFINITY, f64::INFINITY);
-    for (p, (lag, lead)) in discs.iter().zip(flanks) {
-        lo = lo.min(p.offset - p.slack + lag.min(-lead));
-        hi = hi.max(p.offset + p.slack + lag.max(-lead));
-        lower = lower.max(p.offset - p.slack - lead);
-        upper = upper.min(p.offset + p.slack + lag);
-    }
+    let ((lo, hi), start) = bracket(discs);
     let margin = 1e-9 * (hi - lo).abs().max(1e-12);
     let (u_lo, u_hi) = (lo - margin, hi + margin);
     // The balance reads only pins that can take load somewhere in the bracket.
@@ -230,12 +217,30 @@ pub(crate) fn zero_torque(contact: &PinContact, discs: &mut [DiscPins; 2]) -> Pr
         disc.retain_loadable(u_lo, u_hi);
     }
     let u = if lo.is_finite() && hi.is_finite() {
-        // Newton from the middle of the conflict between the discs' windows.
-        balance_root(discs, (u_lo, u_hi), 0.5 * (lower + upper))
+        balance_root(discs, (u_lo, u_hi), start)
     } else {
         f64::NAN
     };
     preload_at(contact, discs, u)
+}
+
+/// The output angles [lo, hi] that hold the balance's root, and where Newton starts: the
+/// middle of the conflict between the discs' windows (the highest lower end and the lowest
+/// upper end). Σ_d τ_d(u) rises with u; beyond the ends every disc pushes one way: below
+/// y = min(L_d, −K_d) no drive pin of disc d is loaded (T_d ≤ 0), above max(L_d, −K_d) no
+/// coast pin (T_d ≥ 0). (−K_d alone bounds it below only while the disc's own flanks do
+/// not overlap, L_d ≥ −K_d; where they do, T_d(−K_d) > 0 already.)
+fn bracket(discs: &[DiscPins; 2]) -> ((f64, f64), f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    let (mut lower, mut upper) = (f64::NEG_INFINITY, f64::INFINITY);
+    for p in discs {
+        let (lag, lead) = (p.lag(), p.lead());
+        lo = lo.min(p.offset - p.slack + lag.min(-lead));
+        hi = hi.max(p.offset + p.slack + lag.max(-lead));
+        lower = lower.max(p.offset - p.slack - lead);
+        upper = upper.min(p.offset + p.slack + lag);
+    }
+    ((lo, hi), 0.5 * (lower + upper))
 }
 
 /// The preload of the two discs with the output at u: each disc settled within its slack,
@@ -622,14 +627,7 @@ mod tests {
             disc(-3e-5, 2e-5, |phi| gap(phi) + 0.001),
         ];
         discs[0].push(-1e-5, 1e-15, 0.0);
-        let lo = discs
-            .iter()
-            .map(|p| p.offset - p.slack + p.lag().min(-p.lead()))
-            .fold(f64::INFINITY, f64::min);
-        let hi = discs
-            .iter()
-            .map(|p| p.offset + p.slack + p.lag().max(-p.lead()))
-            .fold(f64::NEG_INFINITY, f64::max);
+        let ((lo, hi), _) = bracket(&discs);
         assert!(lo < -1e9, "the bracket is wide: {lo}");
         let total = |u: f64| {
             discs.iter().fold((0.0, 0.0), |(v, z), p| {
@@ -678,14 +676,7 @@ mod tests {
                 make(2e-4 * (next() - 0.5), 5e-5 * next()),
                 make(2e-4 * (next() - 0.5), 5e-5 * next()),
             ];
-            let lo = discs
-                .iter()
-                .map(|p| p.offset - p.slack + p.lag().min(-p.lead()))
-                .fold(f64::INFINITY, f64::min);
-            let hi = discs
-                .iter()
-                .map(|p| p.offset + p.slack + p.lag().max(-p.lead()))
-                .fold(f64::NEG_INFINITY, f64::max);
+            let ((lo, hi), _) = bracket(&discs);
             let falsi = by_regula_falsi(&discs, lo, hi);
             let newton = balance_root(&mut discs.clone(), (lo, hi), 0.5 * (lo + hi));
             let (a, b) = (
