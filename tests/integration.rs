@@ -16,6 +16,7 @@ mod percentile_intervals;
 mod sampler;
 mod sampling;
 mod sensitivity;
+mod stack;
 mod stiffness;
 mod structure;
 mod transmission_error;

@@ -22,4 +22,5 @@ pub mod sensitivity;
 pub mod sensitivity_report;
 pub mod shapley;
 pub mod shard;
+pub mod stack;
 pub mod target;

@@ -18,7 +18,8 @@ use clap::{Parser, Subcommand};
 use crate::command::{
     allocate::AllocateArgs, baseline::BaselineArgs, check::CheckArgs, curve::CurveArgs,
     evaluate::EvaluateArgs, fit::FitArgs, init::InitArgs, merge::MergeArgs, nominal::NominalArgs,
-    report::ReportArgs, run::RunArgs, sensitivity::SensitivityArgs, validate::ValidateArgs,
+    report::ReportArgs, run::RunArgs, sensitivity::SensitivityArgs, stack::StackArgs,
+    validate::ValidateArgs,
 };
 
 /// Monte Carlo tolerance and deviation statistics for RV reducers.
@@ -50,6 +51,10 @@ enum Command {
     /// estimated from the pace of its first chunks (with --quiet and outside a terminal
     /// too: a batch job learns it in its log).
     Sensitivity(SensitivityArgs),
+    /// Worst case, arithmetic and RSS stacks and the contributor table over the tolerance
+    /// box (each input between its tolerance limits), beside the Monte Carlo run's
+    /// P0.135, P99.865 and out-of-spec share.
+    Stack(StackArgs),
     /// Record the distribution figures of every output, with the band a re-run may move
     /// within, for `rvtol check`.
     ///
@@ -123,6 +128,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Command::Merge(args) => merge::merge(args),
         Command::Nominal(args) => nominal::nominal(args),
         Command::Sensitivity(args) => sensitivity::sensitivity(args),
+        Command::Stack(args) => stack::stack(args),
         Command::Baseline(args) => baseline::baseline(args),
         Command::Check(args) => check::check(args),
         Command::Init(args) => init::init(args),

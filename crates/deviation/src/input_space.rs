@@ -340,6 +340,7 @@ impl InputSpaceBuilder {
             constrained_groups: Vec::new(),
             independent: self.independent,
             constraint_paths: self.constraints.iter().map(|c| c.path.clone()).collect(),
+            constraint_inequalities: inequalities.clone(),
             gaussian_columns: self.gaussian.iter().map(|g| g.column).collect(),
             gaussian_mean: self.gaussian.iter().map(|g| g.mean).collect(),
             variances,
@@ -844,6 +845,9 @@ pub struct InputSpace {
     constrained_groups: Vec<ConstrainedGroup>,
     independent: Vec<(usize, ScalarDistribution)>,
     constraint_paths: Vec<String>,
+    /// The inequalities of the constraints, two per constrained part in the order of
+    /// `constraint_paths`.
+    constraint_inequalities: Vec<LinearInequality>,
     /// The normal columns and their means, in the order they were added.
     gaussian_columns: Vec<usize>,
     gaussian_mean: Vec<f64>,
@@ -886,6 +890,12 @@ impl InputSpace {
             .iter()
             .map(|g| g.pilot_acceptance)
             .product()
+    }
+
+    /// The constraints' inequalities over the columns of a row (001 Eq. 11): two per
+    /// constrained part, in the order of [`InputSpace::constraint_paths`].
+    pub fn inequalities(&self) -> &[LinearInequality] {
+        &self.constraint_inequalities
     }
 
     /// JSON paths of the constrained parts.

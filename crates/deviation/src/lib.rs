@@ -40,7 +40,7 @@ pub use cholesky::{
     EIGENVALUE_MESSAGE_LIMIT,
 };
 pub use conditional::ConditionalSampler;
-pub use constraint::TiltConstraint;
+pub use constraint::{LinearInequality, TiltConstraint};
 pub use displacement::point_displacement;
 pub use empirical::{EmpiricalLaw, MIN_EMPIRICAL_VALUES};
 pub use error::{DeviationError, MatrixKind};

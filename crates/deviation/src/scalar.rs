@@ -122,6 +122,39 @@ pub const RAYLEIGH_QUANTILE: f64 = 3.635_285_597_179_897;
 /// The 99.865 % quantile of |Z| for a standard normal Z, Φ⁻¹(1 − 0.00135/2) = 3.2051.
 pub const FOLDED_QUANTILE: f64 = 3.205_133_180_184_792;
 
+/// The probability below a magnitude's upper tolerance limit, 99.865 % (a normal's +3σ
+/// point, as rounded where the scenario turns a tolerance into a law:
+/// [`RAYLEIGH_QUANTILE`], [`FOLDED_QUANTILE`]).
+pub const TOLERANCE_P: f64 = 0.998_65;
+
+/// The p quantile of |X| for X ~ N(μ, σ²): the t with P(|X| > t) =
+/// Q((t − μ)/σ) + Q((t + μ)/σ) = 1 − p (Q the upper tail, which keeps its relative
+/// precision where p is near 1), by bisection on [0, |μ| + 10σ] to the last bit (the
+/// tail falls as t grows); σ·Φ⁻¹((1 + p)/2) when μ = 0. (statrs' erfc, behind Q, is
+/// good to about 1e-12 absolute there, so t to about 1e-10 relative off centre.)
+fn folded_normal_quantile(mean: f64, sd: f64, p: f64) -> f64 {
+    if sd == 0.0 || mean == 0.0 {
+        // Centred: P(|X| ≤ t) = 2Φ(t/σ) − 1, inverted in closed form.
+        return sd * standard_normal_inverse(0.5 * (1.0 + p)) + mean.abs();
+    }
+    let tail = |t: f64| {
+        standard_normal_upper_tail((t - mean) / sd) + standard_normal_upper_tail((t + mean) / sd)
+    };
+    let (mut low, mut high) = (0.0, mean.abs() + 10.0 * sd);
+    for _ in 0..200 {
+        let middle = 0.5 * (low + high);
+        if middle <= low || middle >= high {
+            break;
+        }
+        if tail(middle) > 1.0 - p {
+            low = middle;
+        } else {
+            high = middle;
+        }
+    }
+    high
+}
+
 pub(crate) fn standard_normal_cdf(x: f64) -> f64 {
     0.5 * erfc(-x / std::f64::consts::SQRT_2)
 }
@@ -351,6 +384,39 @@ impl ScalarDistribution {
                 (upper - lower) / (6.0 * cp),
             )),
             _ => None,
+        }
+    }
+
+    /// The tolerance limits [lower, upper] of the distribution: the box a worst case and
+    /// an RSS stack read. The stated limits where the law has them (a tolerance band's L
+    /// and U, whatever its Cp and mean shift; the ends of a uniform, triangular or
+    /// truncated normal law); μ ± 3σ of a normal; 0 to the 99.865 % point of a magnitude
+    /// (Rayleigh, folded normal: how a scenario turns a tolerance "≤ U" into these laws,
+    /// [`RAYLEIGH_QUANTILE`], [`FOLDED_QUANTILE`]); the 0.135 % and 99.865 % points of a
+    /// lognormal, exp(μ ∓ 3σ); the measured range of an empirical law.
+    pub fn tolerance_limits(&self) -> [f64; 2] {
+        use ScalarDistribution::*;
+        match *self {
+            ToleranceBand { lower, upper, .. }
+            | Uniform { lower, upper }
+            | Triangular { lower, upper, .. }
+            | TruncatedNormal { lower, upper, .. } => [lower, upper],
+            FoldedNormal { mean, sd } => [0.0, folded_normal_quantile(mean, sd, TOLERANCE_P)],
+            Rayleigh { sigma } => [0.0, RAYLEIGH_QUANTILE * sigma],
+            Lognormal { mu, sigma } => [(mu - 3.0 * sigma).exp(), (mu + 3.0 * sigma).exp()],
+            Empirical(ref law) => {
+                let values = law.values();
+                let fold =
+                    |f: fn(f64, f64) -> f64, start: f64| values.iter().copied().fold(start, f);
+                [
+                    fold(f64::min, f64::INFINITY),
+                    fold(f64::max, f64::NEG_INFINITY),
+                ]
+            }
+            ref normal => {
+                let (mean, sd) = normal.as_normal().unwrap_or((f64::NAN, f64::NAN));
+                [mean - 3.0 * sd, mean + 3.0 * sd]
+            }
         }
     }
 
@@ -697,6 +763,45 @@ mod tests {
         assert!((1.0 - (-0.5 * RAYLEIGH_QUANTILE.powi(2)).exp() - 0.99865).abs() < 1e-12);
         let folded = 1.0 - 2.0 * standard_normal_upper_tail(FOLDED_QUANTILE);
         assert!((folded - 0.99865).abs() < 1e-12, "{folded}");
+    }
+
+    #[test]
+    fn tolerance_limits_are_the_stated_limits_or_the_99_865_percent_points() {
+        use ScalarDistribution::*;
+        let band = ToleranceBand {
+            lower: 1.75,
+            upper: 1.81,
+            cp: 1.33,
+            mean_shift: 0.01,
+        };
+        assert_eq!(band.tolerance_limits(), [1.75, 1.81]);
+        let normal = Normal { mean: 2.0, sd: 0.5 };
+        assert_eq!(normal.tolerance_limits(), [0.5, 3.5]);
+        let rayleigh = Rayleigh { sigma: 2.0 };
+        assert_eq!(rayleigh.tolerance_limits(), [0.0, 2.0 * RAYLEIGH_QUANTILE]);
+        // A centred folded normal's limit is FOLDED_QUANTILE·σ (the bisection to 1e-15).
+        let [low, high] = FoldedNormal { mean: 0.0, sd: 3.0 }.tolerance_limits();
+        assert_eq!(low, 0.0);
+        assert!(
+            (high / (3.0 * FOLDED_QUANTILE) - 1.0).abs() < 1e-14,
+            "{high}"
+        );
+        // Off centre: P(|X| ≤ t) = 0.99865 at the limit, from both tails.
+        let (mean, sd) = (1.0, 0.8);
+        let [_, t] = FoldedNormal { mean, sd }.tolerance_limits();
+        // (To 1e-12 in probability, the precision of statrs' erfc that the existing
+        // quantile test above holds FOLDED_QUANTILE to.)
+        let q = standard_normal_upper_tail((t - mean) / sd)
+            + standard_normal_upper_tail((t + mean) / sd);
+        assert!((q - (1.0 - TOLERANCE_P)).abs() < 1e-12, "{q}");
+        let [a, b] = Lognormal {
+            mu: 0.5,
+            sigma: 0.1,
+        }
+        .tolerance_limits();
+        assert_eq!([a, b], [(0.2f64).exp(), (0.8f64).exp()]);
+        let law = crate::EmpiricalLaw::new("v", &[3.0, 1.0, 2.0, 5.0, 4.0], 0.0).unwrap();
+        assert_eq!(Empirical(law).tolerance_limits(), [1.0, 5.0]);
     }
 
     #[test]

@@ -1,6 +1,7 @@
 //! Numbers as the reports print them, in one place so that the text tables, the JUnit
 //! report, the HTML page and the messages read alike: five significant digits
-//! ([`format_sig`]), a change as a signed percentage ([`format_change`]), ppm
+//! ([`format_sig`]; [`format_rounded`] for a derivative's noisy last digits,
+//! [`format_tolerance`] for a tolerance as centre ± half width), a change as a signed percentage ([`format_change`]), ppm
 //! ([`format_ppm`]), counts with thousands separators ([`group_thousands`]), and text
 //! escaped for XML and HTML ([`escape_markup`]). (Numbers in error messages as a person
 //! writes them are rvtol-deviation's `Shown`.)
@@ -26,6 +27,33 @@ pub fn format_sig(x: f64) -> String {
     }
     let decimals = (4 - magnitude).max(0) as usize;
     format!("{x:.decimals$}")
+}
+
+/// [`format_sig`] of x rounded to 7 significant digits first: a derivative by central
+/// differences carries rounding noise in its last digits (0.999999999 for 1), which a
+/// table of five digits should not show as 1.00000 beside 1.0000.
+pub fn format_rounded(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format_sig(x);
+    }
+    let scale = 10f64.powi(6 - x.abs().log10().floor() as i32);
+    format_sig((x * scale).round() / scale)
+}
+
+/// A tolerance interval [lower, upper] as its centre ± its half width, both to three
+/// significant digits of the half width (`200.000 ± 0.145`); exponent form for a half
+/// width below 0.001 or from 100,000 (`2.5000e-5 ± 2.50e-5`).
+pub fn format_tolerance(lower: f64, upper: f64) -> String {
+    let (centre, half) = (0.5 * (lower + upper), 0.5 * (upper - lower));
+    if half == 0.0 || !half.is_finite() {
+        return format_sig(centre);
+    }
+    let magnitude = half.abs().log10().floor() as i32;
+    if !(-3..5).contains(&magnitude) {
+        return format!("{} ± {half:.2e}", format_sig(centre));
+    }
+    let decimals = (2 - magnitude).max(0) as usize;
+    format!("{centre:.decimals$} ± {half:.decimals$}")
 }
 
 /// A figure judged against spec limits as text: [`format_sig`], with a percentile that
@@ -91,4 +119,20 @@ pub fn group_thousands(n: u64) -> String {
         out.push(c);
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_derivative_loses_its_rounding_noise_and_a_tolerance_reads_as_centre_and_half() {
+        assert_eq!(format_rounded(-0.999_999_999_6), "-1.0000");
+        assert_eq!(format_rounded(1_801.234_567), "1801.2");
+        assert_eq!(format_rounded(0.0), "0");
+        assert_eq!(format_tolerance(199.855, 200.145), "200.000 ± 0.145");
+        assert_eq!(format_tolerance(1.75, 1.81), "1.7800 ± 0.0300");
+        assert_eq!(format_tolerance(0.0, 5e-5), "2.5000e-5 ± 2.50e-5");
+        assert_eq!(format_tolerance(3.0, 3.0), "3.0000");
+    }
 }

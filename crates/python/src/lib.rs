@@ -24,10 +24,12 @@ use rvtol_analysis::request::scenario::{ScenarioSource, SourceError};
 use rvtol_analysis::request::sensitivity::{
     SensitivityRequest, ShapleyRequest, DEFAULT_OUTER, DEFAULT_PERMUTATIONS, DEFAULT_SAMPLES,
 };
+use rvtol_analysis::request::stack::StackRequest;
 use rvtol_analysis::request::{machine, memory, Caller};
 use rvtol_analysis::sensitivity::sobol_indices;
 use rvtol_analysis::sensitivity_report::SensitivityReport;
 use rvtol_analysis::shapley::shapley_effects;
+use rvtol_analysis::stack::report::stack_report;
 use rvtol_engine::chunk::SamplingMethod;
 use rvtol_engine::{RunReport, DEFAULT_EXACT_PERCENTILE_LIMIT};
 
@@ -357,6 +359,46 @@ fn sensitivity<'py>(
     parsed(py, &json)
 }
 
+/// The worst case over the tolerance box, the arithmetic and RSS stacks, the contributor
+/// table and the linearisation's R², beside a Monte Carlo run's P0.135, P99.865 and ppm
+/// out of spec (as `rvtol stack`): the JSON report as a dict. `outputs` (a list of names)
+/// defaults to every continuous output, `samples` and `seed` to the scenario's;
+/// `monte_carlo=False` leaves the run out.
+#[pyfunction]
+#[pyo3(signature = (scenario, outputs = None, *, samples = None, seed = None,
+    monte_carlo = true, threads = None, max_memory = None))]
+#[allow(clippy::too_many_arguments)]
+fn stack<'py>(
+    py: Python<'py>,
+    scenario: &Scenario,
+    outputs: Option<Vec<String>>,
+    samples: Option<u64>,
+    seed: Option<u64>,
+    monte_carlo: bool,
+    threads: Option<usize>,
+    max_memory: Option<f64>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let s = &scenario.inner;
+    let request = StackRequest {
+        outputs: outputs.unwrap_or_default(),
+        seed,
+        monte_carlo,
+        samples,
+    };
+    let (settings, run_settings) = request.settings(s, CALLER).map_err(value_error)?;
+    let pool = pool("stack", threads, max_memory, |threads| {
+        memory::stack(s, run_settings.as_ref(), threads)
+    })?;
+    let json = py
+        .detach(|| {
+            pool.install(|| {
+                stack_report(s, &settings, run_settings, &|_| {}).map(|report| report.to_json())
+            })
+        })
+        .map_err(value_error)?;
+    parsed(py, &json)
+}
+
 /// The cheapest tolerances within the scenario's `allocation` bounds that meet `target` on
 /// `output` (as `rvtol allocate`), verified by an independent run: the JSON report as a
 /// dict (its `status` says met, not verified or infeasible).
@@ -445,6 +487,7 @@ fn rvtol(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(run, module)?)?;
     module.add_function(wrap_pyfunction!(evaluate, module)?)?;
     module.add_function(wrap_pyfunction!(sensitivity, module)?)?;
+    module.add_function(wrap_pyfunction!(stack, module)?)?;
     module.add_function(wrap_pyfunction!(allocate, module)?)?;
     module.add_function(wrap_pyfunction!(models, module)?)?;
     module.add("__version__", env!("CARGO_PKG_VERSION"))?;

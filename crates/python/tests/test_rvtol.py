@@ -149,6 +149,20 @@ def test_replicated_sensitivity_is_the_command_line_report(tmp_path):
         rvtol.sensitivity(rvtol.Scenario(path), samples=8192, sampling="rqmc", bootstrap=100)
 
 
+def test_stack_is_the_command_line_report(tmp_path):
+    path = scenario_path("motor-assembly-stack.json")
+    expected = cli_json(tmp_path, "stack", path, "--samples", "20000")
+    report = rvtol.stack(rvtol.Scenario(path), samples=20000)
+    assert report == expected
+    gap = report["outputs"][0]
+    assert gap["worst_case"]["high"]["value"] == pytest.approx(0.483, abs=1e-12)
+    assert gap["rss"][1] == pytest.approx(0.1 + 0.17825, abs=5e-6)
+    alone = rvtol.stack(rvtol.Scenario(path), ["gap_mm"], monte_carlo=False)
+    assert "monte_carlo" not in alone["outputs"][0]
+    with pytest.raises(ValueError, match='output: no output "gap"'):
+        rvtol.stack(rvtol.Scenario(path), ["gap"])
+
+
 def test_allocate_is_the_command_line_report(tmp_path):
     path = scenario_path("allocation-linear.json")
     out = tmp_path / "allocation.json"

@@ -1,18 +1,19 @@
 //! rvtol-report: one self-contained HTML page (inline SVG, no script, nothing loaded from
-//! a network) from rvtol's JSON reports — `run`, `sensitivity`, `allocate` — and the
+//! a network) from rvtol's JSON reports — `run`, `sensitivity`, `allocate`, `stack` — and the
 //! models' nominal curves, for a design review and as a reproducible record.
 //!
 //! The page reads the JSON reports, the stable contract of the engine, and nothing else
-//! of the engine: `rvtol run|sensitivity|allocate --html` renders the report it has just
+//! of the engine: `rvtol run|sensitivity|allocate|stack --html` renders the report it has just
 //! made, `rvtol report` renders saved ones, and both give the same page for the same
 //! reports. Nothing here computes a statistic; the page draws and tabulates what the
 //! reports say. The same reports give the same bytes (no clock, no randomness).
 //!
 //! Layout: [`chart`] draws (plotters, SVG backend), [`html`] builds the markup, this file
-//! reads the reports into sections.
+//! reads the reports into sections (`stack.rs` the stack report's).
 
 pub mod chart;
 pub mod html;
+mod stack;
 
 use rvtol_models::{Curve, CurveStyle};
 use serde_json::Value;
@@ -48,6 +49,8 @@ pub struct Report<'a> {
     pub sensitivity: Option<&'a Value>,
     /// The JSON report of `rvtol allocate`.
     pub allocation: Option<&'a Value>,
+    /// The JSON report of `rvtol stack`.
+    pub stack: Option<&'a Value>,
     /// Model name and its curves with every deviation at its mean.
     pub curves: &'a [(String, Vec<Curve>)],
     /// Why a model's curves are not drawn (a point that is not finite at the nominal
@@ -82,6 +85,8 @@ pub enum Kind {
     Sensitivity,
     /// `rvtol allocate`.
     Allocation,
+    /// `rvtol stack`.
+    Stack,
 }
 
 impl Kind {
@@ -91,6 +96,7 @@ impl Kind {
             Kind::Run => "run",
             Kind::Sensitivity => "sensitivity",
             Kind::Allocation => "allocate",
+            Kind::Stack => "stack",
         }
     }
 }
@@ -107,6 +113,8 @@ pub fn kind_of(report: &Value) -> Option<Kind> {
         Some(Kind::Sensitivity)
     } else if has("target") && has("sources") {
         Some(Kind::Allocation)
+    } else if has("corners") && has("outputs") {
+        Some(Kind::Stack)
     } else {
         None
     }
@@ -186,6 +194,10 @@ pub fn render(report: &Report) -> Result<String, ReportError> {
     if let Some(allocation) = report.allocation {
         sections.push_str(&allocation_section(allocation)?);
         nav.push(("allocation".into(), "Allocation".into()));
+    }
+    if let Some(stack) = report.stack {
+        sections.push_str(&stack::stack_section(stack)?);
+        nav.push(("stack".into(), "Worst case and RSS".into()));
     }
     if !report.curves.is_empty() || !report.curves_left_out.is_empty() {
         sections.push_str(&curves_section(report.curves, report.curves_left_out)?);
@@ -276,6 +288,9 @@ fn record_section(report: &Report) -> String {
     }
     if let Some(allocation) = report.allocation {
         reproduce("allocation report", allocation, "samples");
+    }
+    if let Some(stack) = report.stack {
+        reproduce("stack report", stack, "monte_carlo_samples");
     }
     rows.push(vec![
         "page written by".into(),

@@ -125,6 +125,38 @@ pub fn run(scenario: &Scenario, settings: &RunSettings, threads: usize) -> Memor
     }
 }
 
+/// `rvtol stack`: the most rows it evaluates at once (the box's corners or the linearity
+/// rows, whichever is more) with their outputs, twice (rows and their column-major copy),
+/// and the run's per-thread buffers; or its Monte Carlo run's need
+/// ([`run`]), when it has one and that is more (the two are not held at once).
+pub fn stack(
+    scenario: &Scenario,
+    run_settings: Option<&RunSettings>,
+    threads: usize,
+) -> MemoryNeed {
+    let own = stack_rows(scenario, threads);
+    match run_settings.map(|settings| run(scenario, settings, threads)) {
+        Some(run_need) if run_need.bytes > own.bytes => run_need,
+        _ => own,
+    }
+}
+
+fn stack_rows(scenario: &Scenario, threads: usize) -> MemoryNeed {
+    let rows = (crate::stack::MOST_VERTICES as f64).max(crate::stack::LINEARITY_ROWS as f64);
+    let width = (scenario.input_space.n_columns() + scenario.outputs.len()) as f64;
+    MemoryNeed {
+        bytes: BASE_BYTES
+            + 2.0 * VALUE * rows * width
+            + threads as f64 * run_scratch_per_thread(scenario),
+        what: format!(
+            "{} rows of {} input columns",
+            group_thousands(rows as u64),
+            scenario.input_space.n_columns()
+        ),
+        way_out: fewer_workers(threads),
+    }
+}
+
 /// `rvtol sensitivity`: the row bootstrap keeps N·(2G + 2) values per continuous output
 /// (twice, while one output's are concatenated); every worker holds a chunk's sample
 /// matrices A, B and a mixed one with their column-major copy, and the chunk's values.

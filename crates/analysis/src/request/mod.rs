@@ -2,7 +2,7 @@
 //! Python module cannot drift: where a scenario comes from and how its text is read
 //! ([`scenario`], with the data files it refers to, [`data`]); the settings of each command
 //! with their defaults resolved against the scenario's and their limits checked ([`run`],
-//! [`sensitivity`], [`allocation`], [`gate`], [`shard`]); the columns of the tables
+//! [`sensitivity`], [`allocation`], [`gate`], [`shard`], [`stack`]); the columns of the tables
 //! `evaluate` and `fit` read ([`evaluate`], [`fit`]); what a request needs in memory
 //! ([`memory`]) against what the machine gives ([`machine`]); every file read whole within
 //! a bound ([`input_file`], [`table`]) and the rows written out ([`samples`]). A refused
@@ -22,6 +22,7 @@ pub mod samples;
 pub mod scenario;
 pub mod sensitivity;
 pub mod shard;
+pub mod stack;
 pub mod table;
 
 use rvtol_engine::ScenarioError;

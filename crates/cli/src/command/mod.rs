@@ -20,6 +20,7 @@ pub mod nominal;
 pub mod report;
 pub mod run;
 pub mod sensitivity;
+pub mod stack;
 pub mod validate;
 
 use std::path::{Path, PathBuf};
@@ -375,6 +376,7 @@ fn html_page(
         run: (kind == Kind::Run).then_some(&value),
         sensitivity: (kind == Kind::Sensitivity).then_some(&value),
         allocation: (kind == Kind::Allocation).then_some(&value),
+        stack: (kind == Kind::Stack).then_some(&value),
         curves: &curves,
         curves_left_out: &curves_left_out,
     })

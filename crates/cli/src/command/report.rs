@@ -113,6 +113,7 @@ pub fn report(args: ReportArgs) -> Result<()> {
         run: get(Kind::Run),
         sensitivity: get(Kind::Sensitivity),
         allocation: get(Kind::Allocation),
+        stack: get(Kind::Stack),
         curves: &curves,
         curves_left_out: &curves_left_out,
     })

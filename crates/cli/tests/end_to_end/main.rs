@@ -24,6 +24,7 @@
 //! - `fit`: `rvtol fit` against the library's fit.
 //! - `shard`: `--shard` and `merge`, bit for bit the unsharded command.
 //! - `kubernetes`: the Kubernetes recipe's commands (deploy/kubernetes/).
+//! - `stack`: `rvtol stack`, its JSON and its refusals.
 
 mod common;
 
@@ -40,3 +41,4 @@ mod readme;
 mod report;
 mod scenario_format;
 mod shard;
+mod stack;

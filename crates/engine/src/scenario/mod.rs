@@ -95,6 +95,10 @@ pub struct ColumnInfo {
     pub name: String,
     /// Unit, when known.
     pub unit: Option<String>,
+    /// Tolerance limits [lower, upper] in the column's unit: the box a worst case and an
+    /// RSS stack read ([`rvtol_deviation::ScalarDistribution::tolerance_limits`] of a
+    /// variable, mean ± 3σ of a part component); equal for a column that does not vary.
+    pub tolerance: [f64; 2],
 }
 
 /// A named set of input-space columns: one error source (a part, a variable) or a group of

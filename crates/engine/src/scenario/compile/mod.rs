@@ -176,14 +176,11 @@ impl Compiler<'_> {
     fn add_column(
         &mut self,
         path: &str,
-        name: String,
+        info: ColumnInfo,
         column: usize,
-        unit: Option<String>,
     ) -> Result<(), ScenarioError> {
-        self.columns.push(ColumnInfo {
-            name: name.clone(),
-            unit,
-        });
+        let name = info.name.clone();
+        self.columns.push(info);
         if self.column_by_name.contains_key(&name) {
             return Err(ScenarioError::new(
                 path,

@@ -6,7 +6,7 @@
 use rvtol_deviation::{unit_scale, PartSpec, SixDof};
 
 use super::super::file::PartFile;
-use super::super::InputGroup;
+use super::super::{ColumnInfo, InputGroup};
 use super::{check_name, Compiler};
 use crate::error::ScenarioError;
 
@@ -34,12 +34,13 @@ pub(super) fn compile(compiler: &mut Compiler) {
             columns: (first..first + 6).collect(),
         });
         for (k, component) in SixDof::NAMES.iter().enumerate() {
-            let named = compiler.add_column(
-                &format!("{path}.name"),
-                format!("{}.{component}", part.name),
-                first + k,
-                Some(SixDof::UNITS[k].to_string()),
-            );
+            let sd = spec.covariance[k][k].sqrt();
+            let info = ColumnInfo {
+                name: format!("{}.{component}", part.name),
+                unit: Some(SixDof::UNITS[k].to_string()),
+                tolerance: [spec.mean[k] - 3.0 * sd, spec.mean[k] + 3.0 * sd],
+            };
+            let named = compiler.add_column(&format!("{path}.name"), info, first + k);
             compiler.report(named);
         }
     }

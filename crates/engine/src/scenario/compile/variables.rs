@@ -6,7 +6,7 @@
 use std::collections::BTreeSet;
 
 use super::super::file::{VariableFile, MAX_ARRAY_MEMBERS};
-use super::super::InputGroup;
+use super::super::{ColumnInfo, InputGroup};
 use super::distributions::distribution;
 use super::{check_name, Compiler};
 use crate::error::ScenarioError;
@@ -79,7 +79,12 @@ pub(super) fn compile(compiler: &mut Compiler) {
         for name in names {
             let column = compiler.builder.add_scalar(&path, dist.clone());
             group.push(column);
-            let named = compiler.add_column(&format!("{path}.name"), name, column, unit.clone());
+            let info = ColumnInfo {
+                name,
+                unit: unit.clone(),
+                tolerance: dist.tolerance_limits(),
+            };
+            let named = compiler.add_column(&format!("{path}.name"), info, column);
             compiler.report(named);
         }
         if variable.count.is_some() {
