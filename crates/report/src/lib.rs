@@ -581,7 +581,7 @@ fn output_block(output: &Value, name: &str, unit: &str) -> Result<String, Report
             }
         };
         let (ppm_lo, ppm_hi) = pair(output.get("ppm_out_ci95"));
-        let mut capability = vec![
+        let capability = vec![
             vec!["spec".into(), escape(&spec_text)],
             vec![
                 "Cp (moments, 95 % CI)".into(),
@@ -609,10 +609,13 @@ fn output_block(output: &Value, name: &str, unit: &str) -> Result<String, Report
                 ),
             ],
         ];
-        if let Some(note) = s(output, "capability_note") {
-            capability.push(vec!["note".into(), escape(note)]);
-        }
         tables.push_str(&table(&["capability", "value"], &capability, &[1]));
+        // Below the table, as a paragraph that wraps: in the value column (numbers, kept
+        // on one line) a sentence widened the table past the page and pushed the values
+        // off it.
+        if let Some(note) = s(output, "capability_note") {
+            tables.push_str(&format!("<p class=\"note\">{}</p>\n", escape(note)));
+        }
     }
     out.push_str(&format!(
         "<div class=\"pair\">\n<div>{tables}</div>\n</div>\n"

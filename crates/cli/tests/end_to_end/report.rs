@@ -45,6 +45,17 @@ fn check_page(page: &str, what: &str) {
     ] {
         assert!(!page.contains(bad), "{what}: the page contains {bad:?}");
     }
+    // A value cell stays on one line (numbers, `white-space: nowrap`): a sentence there
+    // widens its table past the page and pushes the values off screen and paper (a
+    // capability note once did).
+    for cell in page.split("<td class=\"num\">").skip(1) {
+        let text = &cell[..cell.find("</td>").unwrap_or(cell.len())];
+        assert!(
+            text.chars().count() <= 60,
+            "{what}: a value cell of {} characters: {text}",
+            text.chars().count()
+        );
+    }
     // The only address is the SVG namespace.
     for (i, _) in page.match_indices("http") {
         assert!(
