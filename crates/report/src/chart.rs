@@ -112,6 +112,29 @@ pub fn tick(v: f64) -> String {
     }
 }
 
+/// Tick labels for an axis over [lo, hi] with about `labels` labels: [`tick`]'s four
+/// significant digits, or as many decimals as the step between labels needs where those
+/// would print one label for all (an output that spans 0.026330 to 0.026334 read
+/// "0.02633" at every tick).
+pub fn axis_ticks(lo: f64, hi: f64, labels: usize) -> impl Fn(&f64) -> String {
+    let step = (hi - lo).abs() / labels.max(1) as f64;
+    let magnitude = lo.abs().max(hi.abs()).log10().floor() as i32;
+    let fine = step > 0.0 && step.is_finite() && step < 10f64.powi(magnitude - 3);
+    let decimals = if fine {
+        (1 - step.log10().floor() as i32).clamp(0, 12) as usize
+    } else {
+        0
+    };
+    move |v: &f64| {
+        if fine {
+            let s = format!("{v:.decimals$}");
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            tick(*v)
+        }
+    }
+}
+
 /// [lo, hi] widened to a non-empty finite range with a margin of `pad` of its width.
 fn padded(lo: f64, hi: f64, pad: f64) -> (f64, f64) {
     let (lo, hi) = if lo.is_finite() && hi.is_finite() && hi >= lo {
@@ -222,7 +245,7 @@ pub fn histogram(
             .y_desc("samples per bin")
             .x_labels(8)
             .y_labels(6)
-            .x_label_formatter(&|v| tick(*v))
+            .x_label_formatter(&axis_ticks(x0, x1, 8))
             .y_label_formatter(&|v| tick(*v))
             .draw()?;
         // Interval bands first, under the bars.
@@ -435,7 +458,7 @@ pub fn probability_plot(
             .x_labels(8)
             .x_desc(x_label)
             .y_desc("cumulative probability (normal scale)")
-            .x_label_formatter(&|v| tick(*v))
+            .x_label_formatter(&axis_ticks(x0, x1, 8))
             .draw()?;
         probability_grid(&root, &mut chart, (x0, x1), (z0, z1))?;
         for (i, line) in lines.iter().enumerate() {
@@ -795,7 +818,7 @@ pub fn curve(curve: &Curve) -> Drawn {
                 .x_desc(curve.x_label.as_str())
                 .y_desc(curve.y_label.as_str())
                 .x_labels(10)
-                .x_label_formatter(&|v| tick(*v))
+                .x_label_formatter(&axis_ticks(x0, x1, 10))
                 .y_label_formatter(&y_tick)
                 .draw()?;
             if y0 < 0.0 && y1 > 0.0 {
@@ -862,6 +885,11 @@ mod tests {
         assert_eq!(tick(250.0), "250");
         assert_eq!(tick(0.000123456), "0.0001235");
         assert_eq!(tick(1234567.0), "1.23e6");
+        // An axis narrower than the fourth digit gets the digits that tell its ticks apart.
+        let narrow = axis_ticks(0.026330, 0.026334, 8);
+        assert_eq!(narrow(&0.026330), "0.02633");
+        assert_eq!(narrow(&0.0263305), "0.0263305");
+        assert_eq!(axis_ticks(0.0, 2.0, 8)(&0.25), "0.25");
     }
 
     #[test]
