@@ -1035,11 +1035,51 @@ pub fn proposal_document(
         .iter()
         .map(|s| s.proposed / s.source.source.current)
         .collect();
-    let scaled = scaling::scaled_document(&document, &sources, &factors, true)?;
+    let mut scaled = scaling::scaled_document(&document, &sources, &factors, true)?;
+    mark_provenance(&mut scaled, allocation);
     let mut text = serde_json::to_string_pretty(&scaled)
         .map_err(|err| ScenarioError::new("(proposal)", err.to_string()))?;
     text.push('\n');
     Ok(text)
+}
+
+/// Names a proposal for what it is: `NAME-allocated`, so that its reports are not taken
+/// for the original's (`rvtol report` composes one scenario's reports), and a
+/// description that opens with where it came from (the rvtol version, the scenario, the
+/// output and target, the seeds, the outcome) before the original's.
+fn mark_provenance(document: &mut Value, allocation: &Allocation) {
+    let Some(fields) = document.as_object_mut() else {
+        return;
+    };
+    let original = fields
+        .get("description")
+        .and_then(Value::as_str)
+        .unwrap_or("")
+        .to_string();
+    let outcome = match (allocation.feasible, allocation.verified) {
+        (false, _) => "infeasible",
+        (true, false) => "not verified",
+        (true, true) => "met",
+    };
+    let provenance = format!(
+        "Tolerances proposed by rvtol {} allocate from scenario {:?}: {} {} (seed {}, verification seed {}, {} samples): {outcome}.",
+        env!("CARGO_PKG_VERSION"),
+        allocation.scenario,
+        allocation.output,
+        allocation.target.expression(),
+        allocation.settings.seed,
+        allocation.settings.verification_seed,
+        allocation.settings.samples,
+    );
+    let description = match original.is_empty() {
+        true => provenance,
+        false => format!("{provenance} {original}"),
+    };
+    fields.insert(
+        "name".into(),
+        Value::from(format!("{}-allocated", allocation.scenario)),
+    );
+    fields.insert("description".into(), Value::from(description));
 }
 
 /// The target figure of a sorted sample, its standard error and 95 % interval.

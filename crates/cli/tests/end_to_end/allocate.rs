@@ -210,7 +210,18 @@ fn written_proposal_reruns_to_the_verified_figures() {
     assert_eq!(code, Some(0), "{stderr}");
     let text = std::fs::read_to_string(proposal.path()).unwrap();
     let written: Value = serde_json::from_str(&text).unwrap();
-    assert_eq!(written["name"], "allocation-linear", "keys and values kept");
+    // Named and described for what it is: a proposal, not the original.
+    assert_eq!(written["name"], "allocation-linear-allocated");
+    let description = written["description"].as_str().unwrap();
+    assert!(
+        description.starts_with("Tolerances proposed by rvtol ")
+            && description.contains("from scenario \"allocation-linear\": gap_mm sd <= 0.015")
+            && description.contains(&format!(
+                "verification seed {}",
+                report["verification"]["seed"]
+            )),
+        "{description}"
+    );
     assert!(written["allocation"].is_object());
     let seed = report["verification"]["seed"].to_string();
     let samples = report["samples"].to_string();
