@@ -20,6 +20,7 @@ use crate::run::{PercentileMethod, RunResult};
 use crate::scenario::Scenario;
 use crate::stats::Histogram;
 use rvtol_deviation::Shown;
+use rvtol_models::ConditionEffect;
 
 /// How percentiles were computed.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -472,6 +473,10 @@ pub struct NominalOutput {
     /// The indicator that excludes the nominal sample, when one does.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub excluded_by: Option<String>,
+    /// The indicator that flags the nominal sample non-conforming (an over-preloaded
+    /// design's lost motion: a value, but an assembly out of spec), when one does.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub flagged_by: Option<String>,
 }
 
 impl NominalReport {
@@ -490,6 +495,14 @@ impl NominalReport {
                     value,
                     excluded_by: match (value, o.condition) {
                         (None, Some((k, _))) => Some(scenario.outputs[k].name.clone()),
+                        _ => None,
+                    },
+                    flagged_by: match o.condition {
+                        Some((k, ConditionEffect::NonConforming))
+                            if values[k].is_some_and(|v| v != 0.0) =>
+                        {
+                            Some(scenario.outputs[k].name.clone())
+                        }
                         _ => None,
                     },
                 })
@@ -517,7 +530,14 @@ impl NominalReport {
                 (None, Some(indicator)) => format!("excluded ({indicator})"),
                 (None, None) => "-".to_string(),
             };
-            text.push_str(&format!("{:<width$}  {:>12}  {}\n", o.name, value, o.unit));
+            let flag = match &o.flagged_by {
+                Some(indicator) => format!("  flagged by {indicator}: does not conform"),
+                None => String::new(),
+            };
+            text.push_str(&format!(
+                "{:<width$}  {:>12}  {}{flag}\n",
+                o.name, value, o.unit
+            ));
         }
         text
     }

@@ -108,6 +108,43 @@ fn run_report_has_the_documented_keys() {
 }
 
 #[test]
+fn nominal_marks_a_design_that_does_not_conform() {
+    // rv20e-hysteresis with its profile-shift error's band moved to +3..+9 µm: the nominal
+    // design is over-preloaded (802 N against the 365 N rated pin force), so its lost
+    // motion is a value of an assembly out of spec, and nominal must say so.
+    let mut scenario: serde_json::Value = serde_json::from_str(&rvtol_tests::shipped_text(
+        scenario("rv20e-hysteresis.json"),
+    ))
+    .unwrap();
+    let variables = scenario["variables"].as_array_mut().unwrap();
+    let shift = (variables.iter_mut())
+        .find(|v| v["name"] == "shift_modification_error")
+        .unwrap();
+    shift["distribution"]["tolerance_band"]["lower"] = 0.003.into();
+    shift["distribution"]["tolerance_band"]["upper"] = 0.009.into();
+    let over = common::TempScenario::new("cli-over-preloaded", &scenario.to_string());
+    let output = run_rvtol(&["nominal", over.path().to_str().unwrap(), "--json", "-"]);
+    assert_eq!(output.status.code(), Some(0));
+    let report: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+    let lost_motion = &report["outputs"][0];
+    assert_eq!(lost_motion["name"], "hysteresis_arcmin");
+    assert_eq!(lost_motion["flagged_by"], "over_preloaded");
+    let text = run_rvtol(&["nominal", over.path().to_str().unwrap()]);
+    let line = String::from_utf8_lossy(&text.stdout)
+        .lines()
+        .find(|l| l.starts_with("hysteresis_arcmin"))
+        .unwrap()
+        .to_string();
+    assert!(
+        line.ends_with("flagged by over_preloaded: does not conform"),
+        "{line}"
+    );
+    // The shipped design is preloaded within the limit: a design state, no mark.
+    let shipped = nominal_report("rv20e-hysteresis.json");
+    assert!(shipped["outputs"][0].get("flagged_by").is_none());
+}
+
+#[test]
 fn nominal_json_gives_the_published_hysteresis_at_the_design_point() {
     // 000 §5.2: 0.5467 arcmin, within 1 % (validation.md), for the design values with every
     // manufacturing error zero. The scenario's nominal is the mean of every input, which for
