@@ -196,19 +196,30 @@ fn staged_run_report(
     let failure = non_finite_failure(path, scenario, &result, execution);
     let report = pool.install(|| rvtol_engine::RunReport::new(scenario, result));
     let json = report.to_json();
-    let mut staged = StagedOutputs::new();
-    stage_report(
-        &mut staged,
-        to.json,
-        to.on_stdout(),
-        || json.clone(),
-        || report.to_text(),
-    )?;
+    let staged = staged_report(to, &json, || report.to_text())?;
     if let Err(failed) = failure {
         staged.print_only()?;
         return Err(failed);
     }
     Ok((staged, json))
+}
+
+/// A report's JSON and text staged for `to`: the JSON file when asked, the text on
+/// standard output unless another of the command's outputs takes it.
+fn staged_report(
+    to: &Destinations,
+    json: &str,
+    text: impl FnOnce() -> String,
+) -> Result<StagedOutputs> {
+    let mut staged = StagedOutputs::new();
+    stage_report(
+        &mut staged,
+        to.json,
+        to.on_stdout(),
+        || json.to_string(),
+        text,
+    )?;
+    Ok(staged)
 }
 
 /// [`emit`] into a command's staged outputs, replaced with the others at its end.

@@ -19,10 +19,10 @@ use rvtol_engine::Scenario;
 
 use super::{
     html_page, load, outputs_ok, partial_target, pool_for, problem_of_file, read, refused,
-    scenario_inputs, stage_report, Destinations, Execution, CALLER,
+    scenario_inputs, staged_report, Destinations, Execution, CALLER,
 };
 use crate::limits::{parse_count, parse_sampling, parse_seed, parse_shard};
-use crate::output::{print, write_bytes, StagedOutputs};
+use crate::output::{print, write_bytes};
 use crate::progress::Progress;
 use crate::BadInput;
 
@@ -166,14 +166,7 @@ pub(super) fn finish_sensitivity(
         .install(|| SensitivityReport::complete(scenario, settings, outputs, shapley))
         .map_err(|err| problem_of_file(path, err))?;
     let json = report.to_json();
-    let mut staged = StagedOutputs::new();
-    stage_report(
-        &mut staged,
-        to.json,
-        to.on_stdout(),
-        || json.clone(),
-        || report.to_text(),
-    )?;
+    let mut staged = staged_report(&to, &json, || report.to_text())?;
     let lost: Vec<String> = report
         .outputs
         .iter()

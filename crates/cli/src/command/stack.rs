@@ -11,11 +11,10 @@ use rvtol_analysis::request::stack::StackRequest;
 use rvtol_analysis::stack::report::stack_report;
 
 use super::{
-    html_page, load, outputs_ok, pool_for, problem_of_file, refused, scenario_inputs, stage_report,
-    Destinations, Execution, CALLER,
+    html_page, load, outputs_ok, pool_for, problem_of_file, refused, scenario_inputs,
+    staged_report, Destinations, Execution, CALLER,
 };
 use crate::limits::{parse_count, parse_seed};
-use crate::output::StagedOutputs;
 use crate::progress::Progress;
 
 /// The arguments of `rvtol stack`.
@@ -81,14 +80,7 @@ pub fn stack(args: StackArgs) -> Result<()> {
     .map_err(|err| problem_of_file(path, err))?;
     bar.finish_and_clear();
     let json = report.to_json();
-    let mut staged = StagedOutputs::new();
-    stage_report(
-        &mut staged,
-        to.json,
-        to.on_stdout(),
-        || json.clone(),
-        || report.to_text(),
-    )?;
+    let mut staged = staged_report(&to, &json, || report.to_text())?;
     if let Some(html) = to.html {
         let page = html_page(html, path, &scenario, rvtol_report::Kind::Stack, &json)?;
         staged.add(html, &page)?;
