@@ -90,7 +90,7 @@ enum Command {
     /// scenario fragment (`variables` and `correlations`, or one part) to paste.
     Fit(FitArgs),
     /// Write one self-contained HTML page (plots, tables, the record to reproduce it)
-    /// from JSON reports of `run`, `sensitivity` and `allocate` of one scenario.
+    /// from JSON reports of `run`, `sensitivity`, `allocate` and `stack` of one scenario.
     Report(ReportArgs),
     /// List the models with their parameters, inputs and outputs.
     Models,

@@ -34,7 +34,7 @@ use rvtol_engine::chunk::CHUNK_SIZE;
 use rvtol_engine::scenario::{Scenario, ScenarioError};
 use rvtol_models::ConditionEffect;
 
-use search::{corner_extremes, improve, swing_corner, swings, Evaluator, Found};
+use search::{corner_extremes, improve, swing_corners, Evaluator, Found, OneAtATime};
 pub use search::{MOST_ROUNDS, MOST_SEARCHED, MOST_VERTICES};
 use tolerance_box::ToleranceBox;
 
@@ -146,17 +146,20 @@ pub fn stack(scenario: &Scenario, settings: &StackSettings) -> Result<Stack, Sce
         &every_gradient,
         &settings.outputs,
     );
-    let swing = swings(&mut evaluator, &tolerance_box, &nominal, &settings.outputs);
+    let one = OneAtATime::of(&mut evaluator, &tolerance_box);
+    let swing: Vec<Vec<f64>> = (settings.outputs.iter())
+        .map(|&o| one.swings(&nominal, o, tolerance_box.coordinates.len()))
+        .collect();
+    let swung = swing_corners(&mut evaluator, &tolerance_box, &one, &settings.outputs);
     let found: Vec<[Option<(Found, bool)>; 2]> = (settings.outputs.iter().enumerate())
-        .zip(corners)
-        .map(|((i, &o), [low, high])| {
+        .zip(corners.into_iter().zip(swung))
+        .map(|((i, &o), ([low, high], [swung_low, swung_high]))| {
             let influence = (gradients[i].as_slice(), swing[i].as_slice());
-            [(low, -1.0), (high, 1.0)].map(|(end, sign)| {
+            [(low, swung_low, -1.0), (high, swung_high, 1.0)].map(|(end, swung, sign)| {
                 let centre = (nominal[o].is_finite()).then(|| Found {
                     row: tolerance_box.centre.clone(),
                     value: nominal[o],
                 });
-                let swung = swing_corner(&mut evaluator, &tolerance_box, o, sign);
                 let starts = [end, swung, centre];
                 let best = (starts.into_iter().flatten())
                     .map(|start| improve(&mut evaluator, &tolerance_box, influence, o, sign, start))

@@ -132,76 +132,104 @@ fn gradient_corner(tolerance_box: &ToleranceBox, gradient: &[f64], sign: f64) ->
     row
 }
 
-/// Per asked output and coordinate, the output's largest change |f − f(m)| when that
-/// coordinate alone goes to each of its corners, the others at the centre: its swing, an
-/// influence that needs no derivative (a centre where the output is flat, as the
-/// preloaded nominal RV's lost motion, has a zero gradient but not a zero swing).
-pub(super) fn swings(
-    evaluator: &mut Evaluator,
-    tolerance_box: &ToleranceBox,
-    nominal: &[f64],
-    outputs: &[usize],
-) -> Vec<Vec<f64>> {
-    let mut rows = Vec::new();
-    let mut owner = Vec::new();
-    for (k, coordinate) in tolerance_box.coordinates.iter().enumerate() {
-        for vertex in &coordinate.vertices {
-            let mut row = tolerance_box.centre.clone();
-            coordinate.set(&mut row, vertex);
-            rows.extend(row);
-            owner.push(k);
-        }
-    }
-    let values = evaluator.outputs(rows);
-    let n_out = evaluator.scenario.outputs.len();
-    (outputs.iter())
-        .map(|&o| {
-            let mut swing = vec![0.0f64; tolerance_box.coordinates.len()];
-            for (r, &k) in owner.iter().enumerate() {
-                let change = (values[r * n_out + o] - nominal[o]).abs();
-                if change.is_finite() {
-                    swing[k] = swing[k].max(change);
-                }
-            }
-            swing
-        })
-        .collect()
+/// The box's centre with one coordinate at a time moved to each of its corners, every
+/// output evaluated once at each: the swings of every output and the corner each
+/// coordinate alone pushes furthest come from these rows.
+pub(super) struct OneAtATime {
+    /// Per row, its coordinate and the index of the corner it takes.
+    moves: Vec<(usize, usize)>,
+    /// Row-major outputs of the rows.
+    values: Vec<f64>,
+    /// Outputs per row.
+    n_out: usize,
 }
 
-/// The corner each coordinate alone pushes furthest in direction `sign` (each at the
-/// vertex of its own best swing, the others' vertices tried from the centre), with its
-/// value; `None` when it has no finite value. A second start for the search, beside the
-/// gradient's corner, which a flat centre leaves uninformed.
-pub(super) fn swing_corner(
-    evaluator: &mut Evaluator,
-    tolerance_box: &ToleranceBox,
-    output: usize,
-    sign: f64,
-) -> Option<Found> {
-    let mut rows = Vec::new();
-    for coordinate in &tolerance_box.coordinates {
-        for vertex in &coordinate.vertices {
-            let mut row = tolerance_box.centre.clone();
-            coordinate.set(&mut row, vertex);
-            rows.extend(row);
+impl OneAtATime {
+    /// Evaluates the rows.
+    pub fn of(evaluator: &mut Evaluator, tolerance_box: &ToleranceBox) -> OneAtATime {
+        let mut rows = Vec::new();
+        let mut moves = Vec::new();
+        for (k, coordinate) in tolerance_box.coordinates.iter().enumerate() {
+            for (j, vertex) in coordinate.vertices.iter().enumerate() {
+                let mut row = tolerance_box.centre.clone();
+                coordinate.set(&mut row, vertex);
+                rows.extend(row);
+                moves.push((k, j));
+            }
+        }
+        OneAtATime {
+            moves,
+            values: evaluator.outputs(rows),
+            n_out: evaluator.scenario.outputs.len(),
         }
     }
-    let values = evaluator.outputs(rows);
-    let n_out = evaluator.scenario.outputs.len();
-    let mut row = tolerance_box.centre.clone();
-    let mut r = 0;
-    for coordinate in &tolerance_box.coordinates {
-        let n = coordinate.vertices.len();
-        let score = |j: usize| match values[(r + j) * n_out + output] {
+
+    /// Per coordinate, the output's largest change |f − f(m)| with that coordinate alone
+    /// at a corner: its swing, an influence that needs no derivative (a centre where the
+    /// output is flat, as the nominal RV-20E's lost motion in its pins, has a zero gradient
+    /// but not a zero swing).
+    pub fn swings(&self, nominal: &[f64], output: usize, coordinates: usize) -> Vec<f64> {
+        let mut swing = vec![0.0f64; coordinates];
+        for (r, &(k, _)) in self.moves.iter().enumerate() {
+            let change = (self.values[r * self.n_out + output] - nominal[output]).abs();
+            if change.is_finite() {
+                swing[k] = swing[k].max(change);
+            }
+        }
+        swing
+    }
+
+    /// The corner where each coordinate sits at the vertex that alone moves `output`
+    /// furthest in direction `sign` (the first among equals, a vertex without a finite
+    /// value last).
+    pub fn corner(&self, tolerance_box: &ToleranceBox, output: usize, sign: f64) -> Vec<f64> {
+        let score = |r: usize| match self.values[r * self.n_out + output] {
             v if v.is_finite() => sign * v,
             _ => f64::NEG_INFINITY,
         };
-        let best = (0..n).fold(0, |b, j| if score(j) > score(b) { j } else { b });
-        coordinate.set(&mut row, &coordinate.vertices[best]);
-        r += n;
+        let mut best: Vec<Option<usize>> = vec![None; tolerance_box.coordinates.len()];
+        for (r, &(k, _)) in self.moves.iter().enumerate() {
+            if best[k].is_none_or(|b| score(r) > score(b)) {
+                best[k] = Some(r);
+            }
+        }
+        let mut row = tolerance_box.centre.clone();
+        for (k, r) in best.iter().enumerate() {
+            if let Some(r) = r {
+                let coordinate = &tolerance_box.coordinates[k];
+                coordinate.set(&mut row, &coordinate.vertices[self.moves[*r].1]);
+            }
+        }
+        row
     }
-    let value = evaluator.outputs(row.clone())[output];
-    value.is_finite().then_some(Found { row, value })
+}
+
+/// Per output of `outputs`, [lowest, highest] of the corners [`OneAtATime::corner`]
+/// gives (evaluated in one batch): a start for the search beside the gradients' corners,
+/// which a flat centre leaves uninformed; `None` where the corner has no finite value.
+pub(super) fn swing_corners(
+    evaluator: &mut Evaluator,
+    tolerance_box: &ToleranceBox,
+    one: &OneAtATime,
+    outputs: &[usize],
+) -> Vec<[Option<Found>; 2]> {
+    let rows: Vec<Vec<f64>> = (outputs.iter())
+        .flat_map(|&o| [-1.0, 1.0].map(|sign| one.corner(tolerance_box, o, sign)))
+        .collect();
+    let values = evaluator.outputs(rows.concat());
+    let n_out = evaluator.scenario.outputs.len();
+    (outputs.iter().enumerate())
+        .map(|(i, &o)| {
+            [0, 1].map(|d| {
+                let r = 2 * i + d;
+                let value = values[r * n_out + o];
+                value.is_finite().then(|| Found {
+                    row: rows[r].clone(),
+                    value,
+                })
+            })
+        })
+        .collect()
 }
 
 /// The coordinate search from `start` for output `output` in direction `sign` (+1 the

@@ -1,5 +1,6 @@
 //! `rvtol report`: one self-contained HTML page from saved JSON reports of one scenario
-//! (run, sensitivity, allocate), with its models' nominal curves when the scenario is given.
+//! (run, sensitivity, allocate, stack), with its models' nominal curves when the scenario
+//! is given.
 
 use std::path::{Path, PathBuf};
 
@@ -13,7 +14,7 @@ use crate::BadInput;
 /// The arguments of `rvtol report`.
 #[derive(Debug, Args)]
 pub struct ReportArgs {
-    /// JSON reports (`--json` of run, sensitivity, allocate), at most one of each.
+    /// JSON reports (`--json` of run, sensitivity, allocate, stack), at most one of each.
     #[arg(required = true)]
     pub reports: Vec<PathBuf>,
     /// The scenario file: adds its description and its models' nominal curves.
