@@ -779,7 +779,8 @@ mod tests {
         assert_eq!(normal.tolerance_limits(), [0.5, 3.5]);
         let rayleigh = Rayleigh { sigma: 2.0 };
         assert_eq!(rayleigh.tolerance_limits(), [0.0, 2.0 * RAYLEIGH_QUANTILE]);
-        // A centred folded normal's limit is FOLDED_QUANTILE·σ (the bisection to 1e-15).
+        // A centred folded normal's limit is FOLDED_QUANTILE·σ (σ·Φ⁻¹((1 + p)/2), Wichura's
+        // inverse to the last bits).
         let [low, high] = FoldedNormal { mean: 0.0, sd: 3.0 }.tolerance_limits();
         assert_eq!(low, 0.0);
         assert!(

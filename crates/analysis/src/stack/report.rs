@@ -11,7 +11,7 @@
 use serde::Serialize;
 
 use super::{OutputStack, Stack, StackSettings, LINEARITY_ROWS, POOR_LINEARITY};
-use rvtol_engine::figures::{output_figures, OrderedNumbers, OutputFigures};
+use rvtol_engine::figures::{output_figures, OrderedNumbers, OutputFigures, SpecFigures};
 use rvtol_engine::format::{
     format_figure, format_ppm, format_rounded, format_sig, format_tolerance, group_thousands,
 };
@@ -87,15 +87,6 @@ pub struct MonteCarloReport {
     pub ppm_out: Option<f64>,
 }
 
-/// Spec limits.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct LimitsReport {
-    /// Lower limit or null.
-    pub lower: Option<f64>,
-    /// Upper limit or null.
-    pub upper: Option<f64>,
-}
-
 /// One output's stack.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct OutputStackReport {
@@ -121,7 +112,7 @@ pub struct OutputStackReport {
     pub note: Option<String>,
     /// The output's spec limits, when set.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub spec: Option<LimitsReport>,
+    pub spec: Option<SpecFigures>,
     /// The Monte Carlo run's figures, when run.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub monte_carlo: Option<MonteCarloReport>,
@@ -259,7 +250,7 @@ fn output_report(
         rss: [y0 - output.rss, y0 + output.rss],
         r_squared: output.r_squared,
         note: note(output),
-        spec: info.spec.map(|s| LimitsReport {
+        spec: info.spec.map(|s| SpecFigures {
             lower: s.lower,
             upper: s.upper,
         }),
