@@ -4,7 +4,8 @@
 //! rows drawn from its shipped scenario, and the random-number floor of an RV-20E row:
 //! exactly the normals the sampler takes from the stream per row, drawn by the same
 //! generator and normal method and used for nothing (the sampler's cost is stated as a
-//! multiple of it).
+//! multiple of it), and a formula of the `expression` model against the same function
+//! written as a built-in model.
 //!
 //! Run with `cargo bench -p rvtol-benches`; each figure is per sample (Throughput::Elements).
 
@@ -190,7 +191,7 @@ fn model_rows(scenario: &Scenario, rows: usize) -> Vec<Vec<f64>> {
         .expect("shipped scenario samples");
     let model_rows: Vec<Vec<f64>> = sampled
         .chunks_exact(n_columns)
-        .map(|row| bound.inputs_of_row(row))
+        .map(|row| bound.inputs_of_row(row, &[]))
         .collect();
     (0..bound.bindings.len())
         .map(|i| model_rows.iter().map(|row| row[i]).collect())
@@ -274,6 +275,107 @@ fn loaded_transmission_error(c: &mut Criterion) {
     group.finish();
 }
 
+/// The nonlinear function of ten inputs the `expression` benchmark times, as a built-in
+/// model would write it.
+struct TenInputs {
+    inputs: Vec<rvtol_models::InputSpec>,
+    outputs: Vec<rvtol_models::OutputSpec>,
+}
+
+/// Its formula, as the expression model reads it.
+const TEN_INPUTS: &str = "sin(x1)*x2 + hypot(x3, x4) + exp(-x5^2) + x6*x7/(1 + x8^2) + sqrt(abs(x9))*cos(x10) + atan2(x1, x10)";
+
+impl rvtol_models::ErrorModel for TenInputs {
+    fn name(&self) -> &'static str {
+        "ten_inputs"
+    }
+    fn inputs(&self) -> &[rvtol_models::InputSpec] {
+        &self.inputs
+    }
+    fn outputs(&self) -> &[rvtol_models::OutputSpec] {
+        &self.outputs
+    }
+    #[inline]
+    fn evaluate(&self, x: &[f64], out: &mut [f64]) {
+        out[0] = x[0].sin() * x[1]
+            + x[2].hypot(x[3])
+            + (-x[4].powi(2)).exp()
+            + x[5] * x[6] / (1.0 + x[7].powi(2))
+            + x[8].abs().sqrt() * x[9].cos()
+            + x[0].atan2(x[9]);
+    }
+}
+
+/// Time per sample of a ten-input nonlinear function written as a formula (the
+/// `expression` model's column program) and as a built-in Rust model, on blocks of
+/// BLOCK_ROWS rows as a run evaluates them (target: the formula at most 2× the built-in).
+fn expression(c: &mut Criterion) {
+    use rvtol_models::{ErrorModel, ParamValue};
+    let names: Vec<String> = (1..=10).map(|i| format!("x{i}")).collect();
+    let text = |s: &str| ParamValue::Text(s.into());
+    let params = rvtol_models::ModelParams::new()
+        .with(
+            "inputs",
+            ParamValue::Object(names.iter().map(|n| (n.clone(), text("1"))).collect()),
+        )
+        .with(
+            "outputs",
+            ParamValue::Object(vec![(
+                "y".into(),
+                ParamValue::Object(vec![
+                    ("formula".into(), text(TEN_INPUTS)),
+                    ("unit".into(), text("1")),
+                ]),
+            )]),
+        );
+    let formula = rvtol_models::Expression::from_params(&params).expect("the formula builds");
+    let built_in = TenInputs {
+        inputs: formula.inputs().to_vec(),
+        outputs: formula.outputs().to_vec(),
+    };
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let columns: Vec<Vec<f64>> = (0..10)
+        .map(|_| (0..ROWS).map(|_| rng.random_range(-2.0..2.0)).collect())
+        .collect();
+    let mut outputs = vec![0.0; BLOCK_ROWS];
+    let mut check = (vec![0.0; ROWS], vec![0.0; ROWS]);
+    for (label, model, out) in [
+        ("formula", &formula as &dyn ErrorModel, &mut check.0),
+        ("built_in", &built_in, &mut check.1),
+    ] {
+        for first in (0..ROWS).step_by(BLOCK_ROWS) {
+            let block: Vec<&[f64]> = columns
+                .iter()
+                .map(|c| &c[first..first + BLOCK_ROWS])
+                .collect();
+            model.evaluate_columns(&block, &mut out[first..first + BLOCK_ROWS]);
+        }
+        assert!(out.iter().all(|y| y.is_finite()), "{label}");
+    }
+    for (a, b) in check.0.iter().zip(&check.1) {
+        assert!((a - b).abs() <= 1e-13 * a.abs().max(1.0), "{a} against {b}");
+    }
+    let mut group = c.benchmark_group("expression_per_sample");
+    group.throughput(Throughput::Elements(ROWS as u64));
+    for (label, model) in [
+        ("formula", &formula as &dyn ErrorModel),
+        ("built_in", &built_in),
+    ] {
+        group.bench_function(label, |b| {
+            b.iter(|| {
+                for first in (0..ROWS).step_by(BLOCK_ROWS) {
+                    let block: Vec<&[f64]> = columns
+                        .iter()
+                        .map(|c| &c[first..first + BLOCK_ROWS])
+                        .collect();
+                    model.evaluate_columns(&block, &mut outputs);
+                }
+            })
+        });
+    }
+    group.finish();
+}
+
 criterion_group!(
     benches,
     normals,
@@ -281,6 +383,7 @@ criterion_group!(
     floor,
     whole_run,
     models,
+    expression,
     loaded_transmission_error
 );
 criterion_main!(benches);

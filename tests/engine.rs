@@ -268,13 +268,13 @@ fn variables_in_other_units_are_converted_to_the_models_units_at_load_time() {
 fn unit_conversion_follows_the_bound_input_and_names_the_unit_in_errors() {
     let skeleton = rvtol_engine::scenario::skeleton::skeleton("linear_stack").unwrap();
     let mut stack: serde_json::Value = serde_json::from_str(&skeleton).unwrap();
-    // linear_stack takes any unit: a variable in µm stays in µm (its numbers mean what the
-    // user wrote).
+    // linear_stack reads its inputs in the stack's unit (mm): a variable in µm is
+    // converted at load time, never added to millimetres as it stands.
     stack["variables"][0]["unit"] = "µm".into();
     stack["variables"][0]["distribution"] = serde_json::json!({"normal": {"mean": 5.0, "sd": 2.0}});
     let scenario = Scenario::from_json(&stack.to_string(), "stack").unwrap();
-    assert_eq!(scenario.columns[0].unit.as_deref(), Some("µm"));
-    assert_eq!(scenario.input_space.mean_row()[0], 5.0);
+    assert_eq!(scenario.columns[0].unit.as_deref(), Some("mm"));
+    assert_eq!(scenario.input_space.mean_row()[0], 5.0 * 1e-3);
     // A distribution error names the unit its values are in.
     stack["variables"][0]["distribution"] =
         serde_json::json!({"normal": {"mean": 5.0, "sd": -2.0}});
@@ -282,23 +282,25 @@ fn unit_conversion_follows_the_bound_input_and_names_the_unit_in_errors() {
         .err()
         .unwrap();
     assert!(err.to_string().contains("(values in µm)"), "{err}");
-    // Converted for an input in mm but also fed to an input of any unit: refused.
+    // Fed to an input in mm and to one in µm (a stack in µm), a variable is converted to
+    // neither, and the input it does not fit says so.
     let mut mixed: serde_json::Value =
         serde_json::from_str(&rewritten_in("rv20e-hysteresis.json", "µm", 1000.0)).unwrap();
     let mut second = stack["models"][0].clone();
+    second["params"]["unit"] = "µm".into();
+    second["params"]["output"] = "stack_um".into();
     second["inputs"]["x1"] = "pin_radius_error".into();
     mixed["models"].as_array_mut().unwrap().push(second);
     mixed["variables"]
         .as_array_mut()
         .unwrap()
-        .push(serde_json::json!({"name": "x2", "unit": "any", "distribution": {"normal": {"mean": 0.0, "sd": 0.0}}}));
+        .push(serde_json::json!({"name": "x2", "unit": "µm", "distribution": {"normal": {"mean": 0.0, "sd": 0.0}}}));
     let err = Scenario::from_json(&mixed.to_string(), "mixed")
         .err()
         .unwrap();
     assert!(
-        err.to_string().contains(
-            "would be converted to mm for the inputs that want mm but not for models[1].inputs.x1"
-        ),
+        err.to_string()
+            .contains("\"pin_radius_error\" is in µm but the input wants mm"),
         "{err}"
     );
     // Another kind of unit is still refused at the binding.

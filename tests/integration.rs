@@ -10,6 +10,7 @@ mod common;
 mod capability_intervals;
 mod conformity;
 mod engine;
+mod expression;
 mod lost_motion;
 mod msrv;
 mod percentile_intervals;

@@ -17,6 +17,7 @@ fn stack_of(scenario: &Scenario) -> Stack {
     let settings = StackSettings {
         seed: scenario.seed,
         outputs: scenario.continuous_outputs(),
+        max_non_finite: 0.0,
     };
     stack(scenario, &settings).unwrap()
 }
@@ -150,6 +151,7 @@ fn every_extreme_keeps_the_eq_11_constraint() {
     let settings = StackSettings {
         seed: 1,
         outputs: vec![scenario.output_index("lost_motion_arcmin").unwrap()],
+        max_non_finite: 0.0,
     };
     let s = stack(&scenario, &settings).unwrap();
     for end in s.outputs[0].worst_case.iter().flatten() {
@@ -176,6 +178,7 @@ fn an_outputs_stack_does_not_depend_on_the_others_asked() {
     let alone = StackSettings {
         seed: 3,
         outputs: vec![lost_motion],
+        max_non_finite: 0.0,
     };
     let every = StackSettings {
         outputs: scenario.continuous_outputs(),
@@ -199,6 +202,7 @@ fn the_stack_is_the_same_on_one_thread_and_on_two() {
     let settings = StackSettings {
         seed: 3,
         outputs: scenario.continuous_outputs(),
+        max_non_finite: 0.0,
     };
     let on = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new()

@@ -36,7 +36,7 @@ fn nominal_inputs(file: &str) -> Vec<f64> {
             row[column] = 0.0;
         }
     }
-    scenario.models[0].inputs_of_row(&row)
+    scenario.models[0].inputs_of_row(&row, &[])
 }
 
 fn torsion(file: &str) -> TorsionCurve {

@@ -1,6 +1,7 @@
 //! Evaluating a scenario's models on a block of sampled inputs held column by column:
 //! each model input is a slice, either a sampled column or a constant column filled once,
-//! the model is called once per block ([`ErrorModel::evaluate_columns`], so no dynamic
+//! or an output of a model above it (the models are evaluated in their order, each block
+//! once), the model is called once per block ([`ErrorModel::evaluate_columns`], so no dynamic
 //! dispatch per sample), and each output lands as a contiguous column for the statistics.
 //! Shared by the Monte Carlo run (column-major blocks straight from the sampler) and the
 //! sensitivity analyses (row-major rows, transposed here); owns its scratch buffers, so
@@ -79,7 +80,7 @@ impl<'a> ChunkEvaluator<'a> {
                     .iter()
                     .filter_map(|binding| match binding {
                         Binding::Constant(value) => Some([*value; 1].repeat(CHUNK_SIZE)),
-                        Binding::Column(_) => None,
+                        Binding::Column(_) | Binding::Output(_) => None,
                     })
                     .flatten()
                     .collect()
@@ -141,6 +142,8 @@ impl<'a> ChunkEvaluator<'a> {
             for (input, binding) in inputs.iter_mut().zip(&bound.bindings) {
                 *input = match binding {
                     Binding::Column(c) => &columns[c * m..(c + 1) * m],
+                    // Written by a model above, for these rows.
+                    Binding::Output(o) => &self.output_columns[*o][first..first + m],
                     Binding::Constant(_) => &constant.next().expect("one column per constant")[..m],
                 };
             }

@@ -1404,7 +1404,7 @@ pub fn nominal(scenario: &Scenario) -> Result<Vec<Option<f64>>, ScenarioError> {
     let row = scenario.input_space.mean_row();
     let mut values = vec![0.0; scenario.outputs.len()];
     for bound in &scenario.models {
-        let inputs = bound.inputs_of_row(&row);
+        let inputs = bound.inputs_of_row(&row, &values);
         let n_out = bound.model.outputs().len();
         bound.model.evaluate(
             &inputs,
@@ -1454,9 +1454,17 @@ pub fn nominal_curves_per_model(
     scenario: &Scenario,
 ) -> Vec<(&'static str, Result<Vec<Curve>, ScenarioError>)> {
     let row = scenario.input_space.mean_row();
+    // The nominal outputs, which a chained model's inputs read.
+    let mut values = vec![0.0; scenario.outputs.len()];
     let mut drawn = Vec::new();
     for (i, bound) in scenario.models.iter().enumerate() {
-        let curves = bound.model.curves(&bound.inputs_of_row(&row));
+        let inputs = bound.inputs_of_row(&row, &values);
+        let n_out = bound.model.outputs().len();
+        bound.model.evaluate(
+            &inputs,
+            &mut values[bound.first_output..bound.first_output + n_out],
+        );
+        let curves = bound.model.curves(&inputs);
         if curves.is_empty() {
             continue;
         }

@@ -10,6 +10,7 @@
 mod crank_elastic_error;
 mod cycloid;
 mod cycloid_pin_contact;
+mod expression;
 mod geometric_hysteresis;
 mod linear_stack;
 mod loaded;
@@ -24,6 +25,7 @@ mod transmission_error;
 
 pub use crank_elastic_error::{CrankElasticError, CrankForces, DiscForces, DiscLoad};
 pub use cycloid_pin_contact::{ContactSolution, CycloidPinContact};
+pub use expression::Expression;
 pub use geometric_hysteresis::{tilt_from_deflection, GeometricHysteresis};
 pub use linear_stack::LinearStack;
 pub use params::{ModelError, ModelParams, ParamValue};
@@ -272,19 +274,62 @@ pub fn all() -> &'static [ModelEntry] {
         torsion_curve::ENTRY,
         transmission_error::ENTRY,
         linear_stack::ENTRY,
+        expression::ENTRY,
         test_functions::ISHIGAMI_ENTRY,
         test_functions::SOBOL_G_ENTRY,
     ]
 }
 
-/// The registry entry of a model by name.
+/// Models registered while the program runs, after the built-in ones: the Python
+/// package's `python` model, whose outputs a Python function computes.
+static REGISTERED: std::sync::RwLock<Vec<&'static ModelEntry>> = std::sync::RwLock::new(Vec::new());
+
+/// Registers a model that is not built in (a front-end's own, such as the Python
+/// package's functions); a second entry of a name known already is ignored.
+pub fn register(entry: &'static ModelEntry) {
+    let mut registered = REGISTERED.write().unwrap_or_else(|e| e.into_inner());
+    let known = all().iter().chain(registered.iter().copied());
+    if !known.into_iter().any(|known| known.name == entry.name) {
+        registered.push(entry);
+    }
+}
+
+/// The registry entry of a model by name: a built-in one, or one [`register`]ed.
 pub fn find(name: &str) -> Option<&'static ModelEntry> {
-    all().iter().find(|entry| entry.name == name)
+    all().iter().find(|entry| entry.name == name).or_else(|| {
+        let registered = REGISTERED.read().unwrap_or_else(|e| e.into_inner());
+        registered.iter().copied().find(|entry| entry.name == name)
+    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_registered_model_is_found_once() {
+        static EXTRA: ModelEntry = ModelEntry {
+            name: "registered_for_a_test",
+            ..test_functions::ISHIGAMI_ENTRY
+        };
+        register(&EXTRA);
+        register(&EXTRA);
+        assert_eq!(find(EXTRA.name).map(|e| e.name), Some(EXTRA.name));
+        let registered = REGISTERED.read().unwrap();
+        assert_eq!(
+            registered.iter().filter(|e| e.name == EXTRA.name).count(),
+            1
+        );
+        drop(registered);
+        // A built-in name stays the built-in model's.
+        static SHADOW: ModelEntry = ModelEntry {
+            name: "ishigami",
+            ..linear_stack::ENTRY
+        };
+        register(&SHADOW);
+        let found = find("ishigami").unwrap();
+        assert_eq!(found.summary, test_functions::ISHIGAMI_ENTRY.summary);
+    }
 
     /// A model with `n` inputs and three outputs: Σx, Σ(i + 1)·x_i and the first input
     /// (7 without inputs), to see where the default column form puts each value.

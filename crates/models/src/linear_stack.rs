@@ -7,7 +7,14 @@
 //!
 //! Parameters: `coefficients` (object: input name → a_i, in the unit of y per unit of the
 //! input), `constant` (c, default 0), `output` (name of y, default `stack`), `unit` (unit
-//! of y, default `mm`).
+//! of y, default `mm`), `input_units` (object: input name → the unit a_i reads it in;
+//! default the stack's unit).
+//!
+//! Every input has a unit, so the engine converts a variable written in another unit of
+//! the same kind (a width in µm into a stack in mm) and refuses one of another kind (an
+//! angle bound to a length): a stack never adds µm to mm as they stand. An input read in
+//! another kind of unit than the stack's (a tilt in rad times a lever in mm/rad) says so
+//! in `input_units`.
 
 use crate::{
     ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputKind, OutputSpec, ParamSpec,
@@ -37,12 +44,18 @@ const PARAMS: &[ParamSpec] = &[
         description: "constant term c",
         default: Some(0.0),
     },
+    ParamSpec {
+        name: "input_units",
+        unit: "",
+        description: "object mapping an input name to the unit its coefficient reads it in (default: the stack's unit)",
+        default: None,
+    },
 ];
 
 /// Registry entry.
 pub const ENTRY: ModelEntry = ModelEntry {
     name: "linear_stack",
-    summary: "linear tolerance stack y = c + Σ a_i·x_i (closed form: mean c + aᵀμ, sd √(aᵀΣa)); params also take `output` (name, default \"stack\") and `unit` (default \"mm\")",
+    summary: "linear tolerance stack y = c + Σ a_i·x_i (closed form: mean c + aᵀμ, sd √(aᵀΣa)); params also take `output` (name, default \"stack\") and `unit` (default \"mm\", also the inputs' unless `input_units` says otherwise)",
     params: PARAMS,
     build: |params| Ok(Box::new(LinearStack::from_params(params)?)),
     example_params: || {
@@ -61,6 +74,23 @@ impl LinearStack {
         if named.is_empty() {
             return Err(ModelError::new("coefficients", "needs at least one input"));
         }
+        let unit = params.text("unit", "mm")?;
+        let input_units = params.object("input_units")?.unwrap_or_default();
+        for (name, value) in &input_units {
+            let key = format!("input_units.{name}");
+            if !named.iter().any(|(input, _)| input == name) {
+                return Err(ModelError::new(key, format!("{name:?} has no coefficient")));
+            }
+            match value {
+                ParamValue::Text(unit) if !unit.trim().is_empty() => {}
+                other => {
+                    return Err(ModelError::new(
+                        key,
+                        format!("expected a unit (a non-empty string), got {}", other.kind()),
+                    ))
+                }
+            }
+        }
         let mut inputs = Vec::with_capacity(named.len());
         let mut coefficients = Vec::with_capacity(named.len());
         for (name, a) in named {
@@ -70,9 +100,16 @@ impl LinearStack {
                     format!("must be a finite number, got {}", Shown(*a)),
                 ));
             }
+            let input_unit = input_units
+                .iter()
+                .find_map(|(input, value)| match value {
+                    ParamValue::Text(unit) if input == name => Some(unit.clone()),
+                    _ => None,
+                })
+                .unwrap_or_else(|| unit.clone());
             inputs.push(InputSpec {
                 name: name.clone(),
-                unit: "any".into(),
+                unit: input_unit,
                 description: "stack input",
             });
             coefficients.push(*a);
@@ -82,8 +119,7 @@ impl LinearStack {
         if output.is_empty() {
             return Err(ModelError::new("output", "must not be empty"));
         }
-        let unit = params.text("unit", "mm")?;
-        params.reject_unknown(&["coefficients", "constant", "output", "unit"])?;
+        params.reject_unknown(&["coefficients", "constant", "output", "unit", "input_units"])?;
         Ok(LinearStack {
             coefficients,
             constant,

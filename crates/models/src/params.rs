@@ -18,6 +18,20 @@ pub enum ParamValue {
     Named(Vec<(String, f64)>),
     /// A text (a name or a unit).
     Text(String),
+    /// An object whose values are not all numbers (the formulas and units of an
+    /// `expression` model), in the scenario's order.
+    Object(Vec<(String, ParamValue)>),
+}
+
+impl ParamValue {
+    /// What kind of value it is, for messages (`a number`, `a string`, `an object`).
+    pub fn kind(&self) -> &'static str {
+        match self {
+            ParamValue::Number(_) => "a number",
+            ParamValue::Text(_) => "a string",
+            ParamValue::Named(_) | ParamValue::Object(_) => "an object",
+        }
+    }
 }
 
 /// An invalid model parameter: `key` is relative to the model's `params` object.
@@ -91,7 +105,7 @@ impl ModelParams {
                 key,
                 format!("must be a finite number, got {}", Shown(*v)),
             )),
-            Some(ParamValue::Named(_)) => {
+            Some(ParamValue::Named(_) | ParamValue::Object(_)) => {
                 Err(ModelError::new(key, "must be a number, got an object"))
             }
             Some(ParamValue::Text(_)) => {
@@ -144,8 +158,38 @@ impl ModelParams {
         self.read.borrow_mut().insert(key.to_string());
         match self.values.get(key) {
             Some(ParamValue::Named(entries)) => Ok(entries),
+            Some(ParamValue::Object(entries)) => {
+                let (name, value) = entries
+                    .iter()
+                    .find(|(_, value)| !matches!(value, ParamValue::Number(_)))
+                    .expect("an object of numbers only is read as Named");
+                Err(ModelError::new(
+                    format!("{key}.{name}"),
+                    format!("expected a number, got {}", value.kind()),
+                ))
+            }
             Some(_) => Err(ModelError::new(key, "must be an object of named numbers")),
             None => Err(ModelError::new(key, "required parameter is missing")),
+        }
+    }
+
+    /// An object's entries in the scenario's order (`None` when absent): an object of
+    /// numbers only is given as entries of numbers.
+    pub fn object(&self, key: &str) -> Result<Option<Vec<(String, ParamValue)>>, ModelError> {
+        self.read.borrow_mut().insert(key.to_string());
+        match self.values.get(key) {
+            Some(ParamValue::Object(entries)) => Ok(Some(entries.clone())),
+            Some(ParamValue::Named(entries)) => Ok(Some(
+                entries
+                    .iter()
+                    .map(|(name, x)| (name.clone(), ParamValue::Number(*x)))
+                    .collect(),
+            )),
+            Some(other) => Err(ModelError::new(
+                key,
+                format!("must be an object, got {}", other.kind()),
+            )),
+            None => Ok(None),
         }
     }
 

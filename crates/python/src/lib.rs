@@ -10,6 +10,8 @@
 //! line's one-line message, options spelt as this module's keywords (a scenario value by
 //! its JSON path).
 
+mod function;
+
 use numpy::{PyArray2, PyReadonlyArray2, ToPyArray};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
@@ -37,12 +39,93 @@ use rvtol_engine::{RunReport, DEFAULT_EXACT_PERCENTILE_LIMIT};
 const CALLER: Caller = Caller::Python;
 
 /// A validated scenario: `Scenario(path)` reads a scenario file, `Scenario(dict)` takes
-/// the scenario as a dict (as the JSON file would hold it).
+/// the scenario as a dict (as the JSON file would hold it); `functions={name: f}` gives
+/// the Python functions its `python` models name (module `function`).
 #[pyclass(module = "rvtol", frozen)]
 struct Scenario {
     inner: rvtol_engine::Scenario,
-    /// The scenario's JSON text (the allocation reads it).
+    /// The scenario's JSON text (the allocation reads it), its `python` models naming
+    /// their functions by key.
     text: String,
+    /// The keys of its functions in the table of module `function`.
+    functions: Vec<String>,
+}
+
+impl Drop for Scenario {
+    fn drop(&mut self) {
+        function::unregister(&self.functions);
+    }
+}
+
+impl Scenario {
+    /// The first problem a call of one of its Python functions had, as a `ValueError`.
+    fn raise_function_error(&self) -> PyResult<()> {
+        match function::take_error(&self.functions) {
+            Some(message) => Err(value_error(message)),
+            None => Ok(()),
+        }
+    }
+}
+
+/// The scenario text with each `python` model's `params.function` replaced by the key
+/// of its function, registered now (the keys returned); a name no model uses, or a model
+/// whose name is not among `functions`, is an error.
+fn with_functions(
+    text: &str,
+    functions: Option<&Bound<'_, PyDict>>,
+) -> PyResult<(String, Vec<String>)> {
+    let Some(functions) = functions else {
+        return Ok((text.to_string(), Vec::new()));
+    };
+    let mut document: serde_json::Value = serde_json::from_str(text).map_err(value_error)?;
+    let mut given: Vec<(String, Py<PyAny>)> = Vec::new();
+    for (name, function) in functions.iter() {
+        let name: String = name
+            .extract()
+            .map_err(|_| PyTypeError::new_err("functions: the keys are names (str)"))?;
+        if !function.is_callable() {
+            return Err(PyTypeError::new_err(format!(
+                "functions[{name:?}]: not callable"
+            )));
+        }
+        given.push((name, function.unbind()));
+    }
+    let mut keys: Vec<(String, String)> = Vec::new();
+    let models = document.get_mut("models").and_then(|m| m.as_array_mut());
+    for (i, model) in models.into_iter().flatten().enumerate() {
+        if model.get("model").and_then(|m| m.as_str()) != Some(function::ENTRY.name) {
+            continue;
+        }
+        let Some(slot) = model.pointer_mut("/params/function") else {
+            continue; // the model says what is missing
+        };
+        let name = slot.as_str().unwrap_or_default().to_string();
+        let Some((_, f)) = given.iter().find(|(n, _)| *n == name) else {
+            return Err(value_error(format!(
+                "models[{i}].params.function: {name:?} is not among the functions given ({})",
+                given
+                    .iter()
+                    .map(|(n, _)| format!("{n:?}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )));
+        };
+        let key = function::register(&name, f.clone_ref(functions.py()));
+        *slot = serde_json::Value::String(key.clone());
+        keys.push((name, key));
+    }
+    if let Some((unused, _)) = given
+        .iter()
+        .find(|(n, _)| !keys.iter().any(|(k, _)| k == n))
+    {
+        let keys: Vec<String> = keys.into_iter().map(|(_, k)| k).collect();
+        function::unregister(&keys);
+        return Err(value_error(format!(
+            "functions[{unused:?}]: no `python` model of the scenario names it (params.function)"
+        )));
+    }
+    let keys = keys.into_iter().map(|(_, k)| k).collect();
+    Ok((document.to_string(), keys))
 }
 
 fn value_error(message: impl std::fmt::Display) -> PyErr {
@@ -97,10 +180,21 @@ fn parsed<'py>(py: Python<'py>, json: &str) -> PyResult<Bound<'py, PyAny>> {
 #[pymethods]
 impl Scenario {
     #[new]
-    fn new(source: &Bound<'_, PyAny>) -> PyResult<Scenario> {
+    #[pyo3(signature = (source, *, functions = None))]
+    fn new(source: &Bound<'_, PyAny>, functions: Option<&Bound<'_, PyDict>>) -> PyResult<Scenario> {
         let (text, name) = scenario_text(source)?;
-        let inner = rvtol_engine::Scenario::from_json(&text, &name).map_err(value_error)?;
-        Ok(Scenario { inner, text })
+        let (text, keys) = with_functions(&text, functions)?;
+        match rvtol_engine::Scenario::from_json(&text, &name) {
+            Ok(inner) => Ok(Scenario {
+                inner,
+                text,
+                functions: keys,
+            }),
+            Err(err) => {
+                function::unregister(&keys);
+                Err(value_error(err))
+            }
+        }
     }
 
     /// The scenario's name.
@@ -130,11 +224,18 @@ impl Scenario {
     fn evaluate<'py>(
         &self,
         py: Python<'py>,
-        inputs: PyReadonlyArray2<'py, f64>,
+        inputs: &Bound<'py, PyAny>,
         threads: Option<usize>,
         max_memory: Option<f64>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        evaluate_rows(py, &self.inner, inputs, threads, max_memory)
+        evaluate_rows(
+            py,
+            &self.inner,
+            &self.functions,
+            inputs,
+            threads,
+            max_memory,
+        )
     }
 
     fn __repr__(&self) -> String {
@@ -147,14 +248,24 @@ impl Scenario {
     }
 }
 
+/// Evaluates `scenario` on given rows (any 2-D array-like of numbers: converted to
+/// float64); `functions` are the keys of its Python functions.
 fn evaluate_rows<'py>(
     py: Python<'py>,
     scenario: &rvtol_engine::Scenario,
-    inputs: PyReadonlyArray2<'py, f64>,
+    functions: &[String],
+    inputs: &Bound<'py, PyAny>,
     threads: Option<usize>,
     max_memory: Option<f64>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let array = inputs.as_array();
+    let converted = py
+        .import("numpy")?
+        .call_method1("asarray", (inputs, "float64"))
+        .map_err(|err| value_error(format!("inputs: not a 2-D array of numbers: {err}")))?;
+    let converted: PyReadonlyArray2<'py, f64> = converted.extract().map_err(|_| {
+        value_error("inputs: a 2-D array (one row per sample, one column per input)")
+    })?;
+    let array = converted.as_array();
     let (rows, columns) = array.dim();
     let n_inputs = scenario.input_space.n_columns();
     if columns != n_inputs {
@@ -176,6 +287,9 @@ fn evaluate_rows<'py>(
     let values: Vec<f64> = array.iter().copied().collect();
     let table =
         py.detach(|| pool.install(|| rvtol_engine::evaluate::evaluate_rows(scenario, values)));
+    if let Some(message) = function::take_error(functions) {
+        return Err(value_error(message));
+    }
     let outputs = numpy::ndarray::Array2::from_shape_vec((rows, table.n_outputs), table.outputs)
         .map_err(value_error)?;
     Ok(outputs.to_pyarray(py))
@@ -193,7 +307,7 @@ fn evaluate<'py>(
     py: Python<'py>,
     model: &str,
     params: Option<&Bound<'py, PyDict>>,
-    inputs: PyReadonlyArray2<'py, f64>,
+    inputs: &Bound<'py, PyAny>,
     threads: Option<usize>,
     max_memory: Option<f64>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
@@ -209,7 +323,7 @@ fn evaluate<'py>(
     let skeleton =
         rvtol_engine::scenario::skeleton::skeleton_with(model, &given).map_err(value_error)?;
     let scenario = rvtol_engine::Scenario::from_json(&skeleton, model).map_err(value_error)?;
-    evaluate_rows(py, &scenario, inputs, threads, max_memory)
+    evaluate_rows(py, &scenario, &[], inputs, threads, max_memory)
 }
 
 /// Runs the Monte Carlo simulation (as `rvtol run`): returns the JSON report as a dict,
@@ -252,21 +366,21 @@ fn run<'py>(
     let pool = pool("run", threads, max_memory, |threads| {
         memory::run(s, &settings, threads)
     })?;
-    let (json, table) = py
-        .detach(|| {
-            pool.install(|| -> Result<_, rvtol_engine::ScenarioError> {
-                let result = rvtol_engine::run(s, settings, &|_| {})?;
-                rvtol_engine::run::check_non_finite(s, &result, max_non_finite)?;
-                let json = RunReport::new(s, result).to_json();
-                let table = if samples_out {
-                    Some(rvtol_engine::sample_table(s, settings)?)
-                } else {
-                    None
-                };
-                Ok((json, table))
-            })
+    let result = py.detach(|| {
+        pool.install(|| -> Result<_, rvtol_engine::ScenarioError> {
+            let result = rvtol_engine::run(s, settings, &|_| {})?;
+            rvtol_engine::run::check_non_finite(s, &result, max_non_finite)?;
+            let json = RunReport::new(s, result).to_json();
+            let table = if samples_out {
+                Some(rvtol_engine::sample_table(s, settings)?)
+            } else {
+                None
+            };
+            Ok((json, table))
         })
-        .map_err(value_error)?;
+    });
+    scenario.raise_function_error()?;
+    let (json, table) = result.map_err(value_error)?;
     let report = parsed(py, &json)?;
     let Some(table) = table else {
         return Ok(report);
@@ -344,18 +458,18 @@ fn sensitivity<'py>(
     let pool = pool("sensitivity", threads, max_memory, |threads| {
         memory::sensitivity(s, &settings, threads)
     })?;
-    let json = py
-        .detach(|| {
-            pool.install(|| -> Result<String, rvtol_engine::ScenarioError> {
-                let outputs = sobol_indices(s, settings, &|_| {})?;
-                let effects = match shapley {
-                    Some(shapley) => Some(shapley_effects(s, shapley)?),
-                    None => None,
-                };
-                Ok(SensitivityReport::complete(s, settings, outputs, effects)?.to_json())
-            })
+    let json = py.detach(|| {
+        pool.install(|| -> Result<String, rvtol_engine::ScenarioError> {
+            let outputs = sobol_indices(s, settings, &|_| {})?;
+            let effects = match shapley {
+                Some(shapley) => Some(shapley_effects(s, shapley)?),
+                None => None,
+            };
+            Ok(SensitivityReport::complete(s, settings, outputs, effects)?.to_json())
         })
-        .map_err(value_error)?;
+    });
+    scenario.raise_function_error()?;
+    let json = json.map_err(value_error)?;
     parsed(py, &json)
 }
 
@@ -363,10 +477,11 @@ fn sensitivity<'py>(
 /// table and the linearisation's R², beside a Monte Carlo run's P0.135, P99.865 and ppm
 /// out of spec (as `rvtol stack`): the JSON report as a dict. `outputs` (a list of names)
 /// defaults to every continuous output, `samples` and `seed` to the scenario's;
-/// `monte_carlo=False` leaves the run out.
+/// `monte_carlo=False` leaves the run out; an output that is not finite in more than
+/// `max_non_finite` of the rows (default 0) raises, as `run` does.
 #[pyfunction]
 #[pyo3(signature = (scenario, outputs = None, *, samples = None, seed = None,
-    monte_carlo = true, threads = None, max_memory = None))]
+    monte_carlo = true, max_non_finite = 0.0, threads = None, max_memory = None))]
 #[allow(clippy::too_many_arguments)]
 fn stack<'py>(
     py: Python<'py>,
@@ -375,6 +490,7 @@ fn stack<'py>(
     samples: Option<u64>,
     seed: Option<u64>,
     monte_carlo: bool,
+    max_non_finite: f64,
     threads: Option<usize>,
     max_memory: Option<f64>,
 ) -> PyResult<Bound<'py, PyAny>> {
@@ -384,18 +500,19 @@ fn stack<'py>(
         seed,
         monte_carlo,
         samples,
+        max_non_finite,
     };
     let (settings, run_settings) = request.settings(s, CALLER).map_err(value_error)?;
     let pool = pool("stack", threads, max_memory, |threads| {
         memory::stack(s, run_settings.as_ref(), threads)
     })?;
-    let json = py
-        .detach(|| {
-            pool.install(|| {
-                stack_report(s, &settings, run_settings, &|_| {}).map(|report| report.to_json())
-            })
+    let json = py.detach(|| {
+        pool.install(|| {
+            stack_report(s, &settings, run_settings, &|_| {}).map(|report| report.to_json())
         })
-        .map_err(value_error)?;
+    });
+    scenario.raise_function_error()?;
+    let json = json.map_err(value_error)?;
     parsed(py, &json)
 }
 
@@ -431,14 +548,14 @@ fn allocate<'py>(
         memory::allocation(s, settings.samples, threads)
     })?;
     let text = &scenario.text;
-    let json = py
-        .detach(|| {
-            pool.install(|| {
-                run_allocation(s, text, output, target, settings, &|_| {})
-                    .map(|allocation| AllocationReport::new(&allocation).to_json())
-            })
+    let json = py.detach(|| {
+        pool.install(|| {
+            run_allocation(s, text, output, target, settings, &|_| {})
+                .map(|allocation| AllocationReport::new(&allocation).to_json())
         })
-        .map_err(value_error)?;
+    });
+    scenario.raise_function_error()?;
+    let json = json.map_err(value_error)?;
     parsed(py, &json)
 }
 
@@ -483,6 +600,7 @@ fn models(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
 /// rvtol: Monte Carlo tolerance and deviation statistics for RV reducers.
 #[pymodule]
 fn rvtol(module: &Bound<'_, PyModule>) -> PyResult<()> {
+    rvtol_models::register(&function::ENTRY);
     module.add_class::<Scenario>()?;
     module.add_function(wrap_pyfunction!(run, module)?)?;
     module.add_function(wrap_pyfunction!(evaluate, module)?)?;

@@ -129,6 +129,109 @@ def test_evaluate_is_the_command_line_evaluate(tmp_path):
     assert np.array_equal(rvtol.Scenario(str(skeleton)).evaluate(rows), y)
 
 
+def test_evaluate_takes_formulas():
+    # An expression model given as a dict: its own inputs and formulas, nothing of the
+    # skeleton's example mixed in; the values are numpy's to the last bit where the
+    # operations are the same (x*y + 2, then hypot).
+    params = {
+        "inputs": {"x": "mm", "y": "mm"},
+        "let": {"r": "hypot(x, y)"},
+        "outputs": {
+            "s": {"formula": "x*y + k", "unit": "mm2"},
+            "r_mm": {"formula": "r", "unit": "mm"},
+        },
+        "k": 2.0,
+    }
+    rows = np.random.default_rng(5).normal(size=(500, 2))
+    y = rvtol.evaluate("expression", params, rows)
+    assert y.shape == (500, 2)
+    assert np.array_equal(y[:, 0], rows[:, 0] * rows[:, 1] + 2.0)
+    assert np.array_equal(y[:, 1], np.hypot(rows[:, 0], rows[:, 1]))
+    params["outputs"]["s"]["formula"] = "x*y + kk"
+    with pytest.raises(ValueError, match=r"^params.outputs.s.formula: character 7: unknown name \"kk\" \(did you mean k\?\)"):
+        rvtol.evaluate("expression", params, rows)
+
+
+def pin_in_hole_with(model):
+    """scenarios/pin-in-hole.json without its allocation, its model replaced (and the
+    spec limits of the outputs it has)."""
+    scenario = json.loads(pathlib.Path(scenario_path("pin-in-hole.json")).read_text())
+    del scenario["allocation"]
+    scenario["models"] = [model]
+    outputs = model["params"]["outputs"]
+    scenario["spec_limits"] = {k: v for k, v in scenario["spec_limits"].items() if k in outputs}
+    return scenario
+
+
+PIN_INPUTS = {"hole_d": "hole", "pin_d": "pin", "x": "hole_x", "y": "hole_y"}
+PIN_UNITS = {"hole_d": "mm", "pin_d": "mm", "x": "mm", "y": "mm"}
+
+
+def pin_gap(columns):
+    # As the expression computes it: half clearance, the offset, their difference and sum.
+    half = (columns["hole_d"] - columns["pin_d"]) / 2
+    offset = np.hypot(columns["x"], columns["y"])
+    return {"gap_mm": half - offset, "float_mm": half + offset}
+
+
+def test_a_python_function_gives_the_expression_models_report():
+    formulas = pin_in_hole_with({
+        "model": "expression",
+        "params": {
+            "inputs": PIN_UNITS,
+            "let": {"half": "(hole_d - pin_d) / 2", "offset": "hypot(x, y)"},
+            "outputs": {
+                "gap_mm": {"formula": "half - offset", "unit": "mm"},
+                "float_mm": {"formula": "half + offset", "unit": "mm"},
+            },
+        },
+        "inputs": PIN_INPUTS,
+    })
+    function = pin_in_hole_with({
+        "model": "python",
+        "params": {
+            "function": "pin",
+            "inputs": PIN_UNITS,
+            "outputs": {"gap_mm": {"unit": "mm"}, "float_mm": {"unit": "mm"}},
+        },
+        "inputs": PIN_INPUTS,
+    })
+    expected = rvtol.run(rvtol.Scenario(formulas), samples=200_000)
+    scenario = rvtol.Scenario(function, functions={"pin": pin_gap})
+    for threads in (1, 2):
+        assert rvtol.run(scenario, samples=200_000, threads=threads) == expected
+    # The µm position errors reached the function in mm, as the units say.
+    gap = next(o for o in expected["outputs"] if o["name"] == "gap_mm")
+    assert abs(gap["mean"] - 0.0066) < 1e-4
+
+
+def test_a_python_function_that_fails_is_named():
+    def broken(columns):
+        raise ZeroDivisionError("the function's own message")
+
+    model = {
+        "model": "python",
+        "params": {"function": "f", "inputs": PIN_UNITS, "outputs": {"gap_mm": {"unit": "mm"}}},
+        "inputs": PIN_INPUTS,
+    }
+    scenario = rvtol.Scenario(pin_in_hole_with(model), functions={"f": broken})
+    with pytest.raises(ValueError, match=r"^function \"f\" raised ZeroDivisionError: the function's own message$"):
+        rvtol.run(scenario, samples=1000)
+    # Lists, float32 and integers are numbers; a short answer is named.
+    as_list = rvtol.Scenario(pin_in_hole_with(model), functions={"f": lambda c: [0] * len(c["x"])})
+    assert rvtol.run(as_list, samples=1000)["outputs"][0]["mean"] == 0.0
+    short = rvtol.Scenario(pin_in_hole_with(model), functions={"f": lambda c: np.zeros(3, np.float32)})
+    with pytest.raises(ValueError, match=r"returned 3 values of \"gap_mm\" for 64 rows"):
+        rvtol.run(short, samples=1000)
+    with pytest.raises(ValueError, match=r"^models\[0\].params.function: \"f\" is not among the functions given \(\"g\"\)$"):
+        rvtol.Scenario(pin_in_hole_with(model), functions={"g": broken})
+    with pytest.raises(TypeError, match=r"functions\[\"f\"\]: not callable"):
+        rvtol.Scenario(pin_in_hole_with(model), functions={"f": 3})
+    # Rows given as integers are converted.
+    rows = np.array([[8, 7, 0, 0]])
+    assert as_list.evaluate(rows).tolist() == [[0.0]]
+
+
 def test_sensitivity_is_the_command_line_report(tmp_path):
     path = scenario_path("shapley-linear-gaussian.json")
     args = ["--samples", "8192", "--bootstrap", "100", "--shapley", "--permutations", "120", "--outer", "64"]
@@ -218,11 +321,12 @@ def test_peers_on_rvtol_models_agree_with_rvtol():
         assert abs(st_ot - ours[name]["total"]) <= 4 * np.hypot(se_ours, se_ot), name
 
 
-def test_readme_example_runs_and_prints_what_it_says(capsys, monkeypatch):
-    """README.md's Python block, executed from the repository root: every `print` line's
-    comment is what it prints."""
+@pytest.mark.parametrize("anchor", ["## rvtol from Python", "**Your own function.**"])
+def test_readme_example_runs_and_prints_what_it_says(capsys, monkeypatch, anchor):
+    """README.md's Python blocks (the first after each anchor), executed from the
+    repository root: every `print` line's comment is what it prints."""
     readme = (ROOT / "README.md").read_text()
-    section = readme[readme.index("## rvtol from Python") :]
+    section = readme[readme.index(anchor) :]
     start = section.index("```python\n") + len("```python\n")
     block = section[start : section.index("```", start)]
     monkeypatch.chdir(ROOT)

@@ -21,6 +21,8 @@ pub struct StackRequest {
     pub monte_carlo: bool,
     /// Its samples.
     pub samples: Option<u64>,
+    /// The share of rows an output may be non-finite in (`--max-non-finite`).
+    pub max_non_finite: f64,
 }
 
 impl Default for StackRequest {
@@ -30,6 +32,7 @@ impl Default for StackRequest {
             seed: None,
             monte_carlo: true,
             samples: None,
+            max_non_finite: 0.0,
         }
     }
 }
@@ -87,6 +90,7 @@ impl StackRequest {
         Ok(StackSettings {
             seed: self.seed.unwrap_or(scenario.seed),
             outputs,
+            max_non_finite: self.max_non_finite,
         })
     }
 }

@@ -54,6 +54,9 @@ pub struct StackSettings {
     pub seed: u64,
     /// The continuous outputs to analyse (indices among the scenario's outputs).
     pub outputs: Vec<usize>,
+    /// The share of rows (of the linearity rows, and of the Monte Carlo run beside) an
+    /// output may be non-finite in without an error (`--max-non-finite`, as a run's).
+    pub max_non_finite: f64,
 }
 
 /// One random column's part in one output's stack.
@@ -327,7 +330,31 @@ fn linearity(
     rng.set_stream(LINEARITY_STREAM_BASE);
     space.sample_rows(&mut rng, &mut rows, &mut space.new_constraint_counts())?;
     let values = evaluator.outputs(rows.clone());
-    let n_out = evaluator.scenario.outputs.len();
+    let scenario = evaluator.scenario;
+    let n_out = scenario.outputs.len();
+    for &o in &settings.outputs {
+        // An excluded sample (its qualifying indicator set) has no value by design.
+        let excluded = |r: usize| match scenario.outputs[o].condition {
+            Some((k, ConditionEffect::Excluded)) => {
+                let flag = values[r * n_out + k];
+                flag.is_finite() && flag != 0.0
+            }
+            _ => false,
+        };
+        let failed = (0..LINEARITY_ROWS)
+            .filter(|&r| !values[r * n_out + o].is_finite() && !excluded(r))
+            .count();
+        if failed as f64 > settings.max_non_finite * LINEARITY_ROWS as f64 {
+            return Err(ScenarioError::new(
+                scenario.model_of_output(o),
+                format!(
+                    "{} is not finite in {failed} of the {LINEARITY_ROWS} rows of the scenario's law the stack draws for R² (more than the {} % allowed, --max-non-finite): the model cannot evaluate part of the scenario",
+                    scenario.outputs[o].name,
+                    rvtol_deviation::Shown(100.0 * settings.max_non_finite)
+                ),
+            ));
+        }
+    }
     Ok((settings.outputs.iter().zip(gradients))
         .map(|(&o, g)| {
             let pairs: Vec<(f64, f64)> = (rows.chunks_exact(n_columns).enumerate())

@@ -161,6 +161,7 @@ pub fn stack_report(
     let figures = match run_settings {
         Some(run) => {
             let mut result = rvtol_engine::run(scenario, run, progress)?;
+            rvtol_engine::run::check_non_finite(scenario, &result, settings.max_non_finite)?;
             Some((output_figures(scenario, &mut result), run.samples))
         }
         None => None,

@@ -62,6 +62,7 @@ pub fn stack(args: StackArgs) -> Result<()> {
         seed: args.seed,
         monte_carlo: !args.no_monte_carlo,
         samples: args.samples,
+        max_non_finite: execution.max_non_finite,
     };
     let (settings, run_settings) =
         (request.settings(&scenario, CALLER)).map_err(|r| refused(path, r))?;

@@ -126,7 +126,7 @@ fn fewer_parts_than_components_still_give_a_usable_part() {
             "parts": part["parts"],
             "models": [{
                 "model": "linear_stack",
-                "params": { "output": "y", "unit": "mm", "coefficients": { "a": 1.0, "b": 30.0 } },
+                "params": { "output": "y", "unit": "mm", "coefficients": { "a": 1.0, "b": 30.0 }, "input_units": { "b": "rad" } },
                 "inputs": { "a": "carrier.du", "b": "carrier.dalpha" }
             }]
         });

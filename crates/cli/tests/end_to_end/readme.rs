@@ -22,6 +22,8 @@
 //!   pointer replaced (several `edit`s may chain through the same file);
 //! - `status N` is the exit code the last command must return (default 0), every earlier
 //!   command must succeed;
+//! - `stderr` shows the last command's standard error instead of its standard output (a
+//!   message a mistake gets);
 //! - `lines` selects the lines of the last command's standard output shown in the block,
 //!   comma-separated: ranges `a-b` and single lines (1-based), `"TEXT" N` for N lines from
 //!   the first line that starts with TEXT (no comma in it; leading blanks ignored), and
@@ -187,6 +189,7 @@ fn produce(example: &Example, root: &Path) -> String {
     std::fs::create_dir_all(&tmp).unwrap();
     let mut status = 0;
     let mut selection = None;
+    let mut from_stderr = false;
     let mut commands = Vec::new();
     for directive in &example.directives {
         let words = split_arguments(&directive.replace("{tmp}", &tmp.to_string_lossy()));
@@ -194,6 +197,7 @@ fn produce(example: &Example, root: &Path) -> String {
             Some("rvtol") | Some("edit") => commands.push(words),
             Some("status") => status = words[1].parse().expect("status N"),
             Some("lines") => selection = Some(directive["lines".len()..].trim().to_string()),
+            Some("stderr") => from_stderr = true,
             _ => panic!("README.md:{}: unknown directive {directive}", example.line),
         }
     }
@@ -223,7 +227,12 @@ fn produce(example: &Example, root: &Path) -> String {
             String::from_utf8_lossy(&output.stderr)
         );
         if i == last {
-            let stdout = String::from_utf8(output.stdout)
+            let stream = if from_stderr {
+                output.stderr
+            } else {
+                output.stdout
+            };
+            let stdout = String::from_utf8(stream)
                 .expect("UTF-8 output")
                 .replace(&format!("{}/", tmp.display()), "");
             shown = match &selection {

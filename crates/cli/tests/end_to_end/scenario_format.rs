@@ -174,7 +174,7 @@ fn array_mistakes_are_refused_with_their_json_path() {
         ),
         (
             Box::new(|d| d["models"][0]["inputs"] = json!({})),
-            "models[0].inputs: 3 model inputs are not bound: e_{1..3} (any); give each a number or a variable name",
+            "models[0].inputs: 3 model inputs are not bound: e_{1..3} (mm); give each a number or a variable name",
         ),
         (
             Box::new(|d| d["models"][0]["inputs"] = json!({ "e_*_*": "e" })),

@@ -41,6 +41,9 @@ pub enum Binding {
     Constant(f64),
     /// A column of the input space.
     Column(usize),
+    /// An output of a model above this one (an index among the scenario's outputs): the
+    /// models form a chain evaluated in their order.
+    Output(usize),
 }
 
 /// A model with its inputs bound to columns or constants.
@@ -54,13 +57,15 @@ pub struct BoundModel {
 }
 
 impl BoundModel {
-    /// The model's input row for one row of the input space: constants and columns.
-    pub fn inputs_of_row(&self, row: &[f64]) -> Vec<f64> {
+    /// The model's input row for one row of the input space (`row`) and the scenario's
+    /// outputs of that row computed so far (`outputs`, those of the models above).
+    pub fn inputs_of_row(&self, row: &[f64], outputs: &[f64]) -> Vec<f64> {
         self.bindings
             .iter()
             .map(|b| match b {
                 Binding::Constant(v) => *v,
                 Binding::Column(column) => row[*column],
+                Binding::Output(o) => outputs[*o],
             })
             .collect()
     }

@@ -12,6 +12,26 @@
 use rvtol_models::ParamValue;
 use serde_json::{json, Map, Value};
 
+/// A parameter value as JSON.
+fn to_json(value: &ParamValue) -> Value {
+    match value {
+        ParamValue::Number(x) => json!(x),
+        ParamValue::Text(text) => json!(text),
+        ParamValue::Named(entries) => Value::Object(
+            entries
+                .iter()
+                .map(|(k, x)| (k.clone(), json!(x)))
+                .collect::<Map<String, Value>>(),
+        ),
+        ParamValue::Object(entries) => Value::Object(
+            entries
+                .iter()
+                .map(|(k, v)| (k.clone(), to_json(v)))
+                .collect::<Map<String, Value>>(),
+        ),
+    }
+}
+
 /// The skeleton scenario of the model `name` as pretty JSON, or the list of models when
 /// there is none of that name.
 pub fn skeleton(name: &str) -> Result<String, String> {
@@ -54,22 +74,17 @@ pub fn skeleton_with(name: &str, given: &Map<String, Value>) -> Result<String, S
             }
         }
         let given = super::compile::model_params("params", given).map_err(|err| err.to_string())?;
+        // An expression's given formulas are a model of their own: the example's
+        // inputs, `let`s and outputs do not mix into them.
+        if entry.name == "expression" {
+            example = rvtol_models::ModelParams::new();
+        }
         for (key, value) in given.entries() {
             example.insert(key.to_string(), value.clone());
         }
     }
     let model =
         (entry.build)(&example).map_err(|err| format!("params.{}: {}", err.key, err.reason))?;
-    let to_json = |value: &ParamValue| match value {
-        ParamValue::Number(x) => json!(x),
-        ParamValue::Text(text) => json!(text),
-        ParamValue::Named(entries) => Value::Object(
-            entries
-                .iter()
-                .map(|(k, x)| (k.clone(), json!(x)))
-                .collect::<Map<String, Value>>(),
-        ),
-    };
     // Parameters in the model's order, then any other key of the example.
     let mut params = Map::new();
     for spec in entry.params {

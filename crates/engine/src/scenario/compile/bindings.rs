@@ -45,90 +45,177 @@ impl Compiler<'_> {
                         .map_err(|reason| ScenarioError::new(binding_path, reason))
                 })
             }
-            serde_json::Value::String(name) => {
-                // A pattern bound to an array takes the member of its index; an
-                // array's name alone names no single column. `None`: a broken
-                // variable, reported already.
-                let column = match (self.arrays.get(name), index) {
-                    (Some((_, members)), Some(k)) => {
-                        members.get(k as usize - 1).copied().map(Some).ok_or_else(|| {
-                            ScenarioError::new(
-                                binding_path,
-                                format!(
-                                    "binds {:?} to member {k} of {name:?}, which has {} members",
-                                    input.name,
-                                    members.len()
-                                ),
-                            )
-                        })
-                    }
-                    (Some((_, members)), None) => Err(ScenarioError::new(
-                        binding_path,
-                        format!(
-                            "{name:?} is an array of {} members: bind it with a pattern (\"{}_*\": {name:?}) or name one member ({name}_1 …)",
-                            members.len(),
-                            input.name
-                        ),
-                    )),
-                    (None, _) => match self.column_by_name.get(name) {
-                        Some(&column) => Ok(Some(column)),
-                        None if self.broken.contains(name) => Ok(None),
-                        None => Err(ScenarioError::new(
-                            binding_path,
-                            format!("no variable or part component named {name:?}"),
-                        )),
-                    },
-                };
-                match column {
-                    Ok(Some(column)) => match &self.columns[column].unit {
-                        // A unit rvtol does not know is the variable's mistake:
-                        // said at its `unit`.
-                        Some(unit)
-                            if input.unit != "any"
-                                && unit != &input.unit
-                                && !super::super::units::is_known(unit)
-                                && variable_index(self.file, name).is_some() =>
-                        {
-                            Err(ScenarioError::new(
-                                format!(
-                                    "variables[{}].unit",
-                                    variable_index(self.file, name).unwrap_or_default()
-                                ),
-                                format!(
-                                    "{unit:?} is not a unit rvtol knows ({}); {binding_path} wants {}",
-                                    super::super::units::known(),
-                                    input.unit
-                                ),
-                            ))
-                        }
-                        Some(unit) if input.unit != "any" && unit != &input.unit => {
-                            Err(ScenarioError::new(
-                                binding_path,
-                                format!(
-                                    "{name:?} is in {unit}{} but the input wants {}",
-                                    if super::super::units::is_known(unit) {
-                                        String::new()
-                                    } else {
-                                        format!(
-                                            ", which is not a unit rvtol knows ({})",
-                                            super::super::units::known()
-                                        )
-                                    },
-                                    input.unit
-                                ),
-                            ))
-                        }
-                        _ => Ok(Some(Binding::Column(column))),
-                    },
-                    Ok(None) => Ok(None),
-                    Err(err) => Err(err),
+            serde_json::Value::String(name)
+                if !self.column_by_name.contains_key(name) && !self.arrays.contains_key(name) =>
+            {
+                match self.output_binding(input, name, binding_path)? {
+                    Some(binding) => Ok(Some(binding)),
+                    None => self.column_binding(model, input, name, binding_path, index),
                 }
+            }
+            serde_json::Value::String(name) => {
+                self.column_binding(model, input, name, binding_path, index)
             }
             other => Err(ScenarioError::new(
                 binding_path,
                 format!("expected a number or a variable name, got {other}"),
             )),
         }
+    }
+
+    /// The binding of an input to the output `name` of a model above (a chain), `None`
+    /// when no model's output has that name. The output's unit must be the input's.
+    fn output_binding(
+        &self,
+        input: &InputSpec,
+        name: &str,
+        binding_path: &str,
+    ) -> Result<Option<Binding>, ScenarioError> {
+        if let Some(o) = self.outputs.iter().position(|output| output.name == name) {
+            let unit = &self.outputs[o].unit;
+            if input.unit != "any" && unit != &input.unit {
+                return Err(ScenarioError::new(
+                    binding_path,
+                    format!(
+                        "output {name:?} is in {unit} but the input wants {}: a chained output is not converted (declare the output in {} or the input in {unit})",
+                        input.unit, input.unit
+                    ),
+                ));
+            }
+            return Ok(Some(Binding::Output(o)));
+        }
+        match self.outputs_below.get(name) {
+            Some(model) if *model == self.models_bound => Err(ScenarioError::new(
+                binding_path,
+                format!("{name:?} is an output of this model: a model cannot read its own output"),
+            )),
+            Some(model) => Err(ScenarioError::new(
+                binding_path,
+                format!(
+                    "{name:?} is an output of models[{model}], below this model: a model reads the outputs of the models above it (order the models so; a chain has no cycle)"
+                ),
+            )),
+            None => Ok(None),
+        }
+    }
+
+    /// The binding of an input to the input-space column `name` (or, with a pattern's
+    /// index, to that member of the array `name`).
+    fn column_binding(
+        &self,
+        model: &dyn ErrorModel,
+        input: &InputSpec,
+        name: &str,
+        binding_path: &str,
+        index: Option<u64>,
+    ) -> Result<Option<Binding>, ScenarioError> {
+        // A pattern bound to an array takes the member of its index; an
+        // array's name alone names no single column. `None`: a broken
+        // variable, reported already.
+        let column = match (self.arrays.get(name), index) {
+            (Some((_, members)), Some(k)) => {
+                members.get(k as usize - 1).copied().map(Some).ok_or_else(|| {
+                    ScenarioError::new(
+                        binding_path,
+                        format!(
+                            "binds {:?} to member {k} of {name:?}, which has {} members",
+                            input.name,
+                            members.len()
+                        ),
+                    )
+                })
+            }
+            (Some((_, members)), None) => Err(ScenarioError::new(
+                binding_path,
+                format!(
+                    "{name:?} is an array of {} members: bind it with a pattern (\"{}_*\": {name:?}) or name one member ({name}_1 …)",
+                    members.len(),
+                    input.name
+                ),
+            )),
+            (None, _) => match self.column_by_name.get(name) {
+                Some(&column) => Ok(Some(column)),
+                None if self.broken.contains(name) => Ok(None),
+                None => Err(ScenarioError::new(
+                    binding_path,
+                    format!("no variable or part component named {name:?}"),
+                )),
+            },
+        };
+        match column {
+            Ok(Some(column)) => match &self.columns[column].unit {
+                // A unit rvtol does not know is the variable's mistake:
+                // said at its `unit`.
+                Some(unit)
+                    if input.unit != "any"
+                        && unit != &input.unit
+                        && !super::super::units::is_known(unit)
+                        && variable_index(self.file, name).is_some() =>
+                {
+                    Err(ScenarioError::new(
+                        format!(
+                            "variables[{}].unit",
+                            variable_index(self.file, name).unwrap_or_default()
+                        ),
+                        format!(
+                            "{unit:?} is not a unit rvtol knows ({}); {binding_path} wants {}",
+                            super::super::units::known(),
+                            input.unit
+                        ),
+                    ))
+                }
+                Some(unit)
+                    if input.unit != "any"
+                        && unit != &input.unit
+                        && super::super::units::is_known(unit)
+                        && !super::super::units::is_known(&input.unit) =>
+                {
+                    Err(ScenarioError::new(
+                        binding_path,
+                        format!(
+                            "{name:?} is in {unit}, but the input's unit {:?} is not one rvtol converts ({}){}",
+                            input.unit,
+                            super::super::units::known(),
+                            unit_hint(model, input, unit)
+                        ),
+                    ))
+                }
+                Some(unit) if input.unit != "any" && unit != &input.unit => {
+                    Err(ScenarioError::new(
+                        binding_path,
+                        format!(
+                            "{name:?} is in {unit}{} but the input wants {}{}",
+                            if super::super::units::is_known(unit) {
+                                String::new()
+                            } else {
+                                format!(
+                                    ", which is not a unit rvtol knows ({})",
+                                    super::super::units::known()
+                                )
+                            },
+                            input.unit,
+                            unit_hint(model, input, unit)
+                        ),
+                    ))
+                }
+                _ => Ok(Some(Binding::Column(column))),
+            },
+            Ok(None) => Ok(None),
+            Err(err) => Err(err),
+        }
+    }
+}
+
+/// What a model whose input units the scenario declares says about a unit that does not
+/// convert: where the input's unit is written.
+fn unit_hint(model: &dyn ErrorModel, input: &InputSpec, unit: &str) -> String {
+    match model.name() {
+        "linear_stack" => format!(
+            " (the stack's unit); a coefficient that reads it in {unit} says so in params.input_units.{}",
+            input.name
+        ),
+        "expression" => format!(" (params.inputs.{})", input.name),
+        _ => String::new(),
     }
 }
 

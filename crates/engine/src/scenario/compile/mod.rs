@@ -84,6 +84,11 @@ pub struct Compiler<'f> {
     bound_units: BTreeMap<String, Vec<(String, String)>>,
     models: Vec<BoundModel>,
     outputs: Vec<OutputInfo>,
+    /// The output names of every model that built, with its index in the file: an input
+    /// bound to one that is not yet among `outputs` names a model below (or its own).
+    outputs_below: BTreeMap<String, usize>,
+    /// The index in the file of the model being bound.
+    models_bound: usize,
     /// Models whose outputs are known (built, bound or not): every output name is known
     /// when all are.
     models_built: usize,
@@ -116,6 +121,8 @@ pub(super) fn compile(
         bound_units: BTreeMap::new(),
         models: Vec::new(),
         outputs: Vec::new(),
+        outputs_below: BTreeMap::new(),
+        models_bound: 0,
         models_built: 0,
         sensitivity_groups: Vec::new(),
         allocation: Vec::new(),

@@ -30,8 +30,19 @@ pub(super) fn compile(compiler: &mut Compiler) {
         )));
     }
     let built = std::mem::take(&mut compiler.built_models);
+    for (i, built) in built.iter().enumerate() {
+        if let Ok((_, model)) = built {
+            for output in model.outputs() {
+                compiler
+                    .outputs_below
+                    .entry(output.name.clone())
+                    .or_insert(i);
+            }
+        }
+    }
     for ((i, model_file), built) in file.models.iter().zip(built) {
         let path = format!("models[{i}]");
+        compiler.models_bound = *i;
         let (entry, model) = match built {
             Ok(built) => built,
             Err(err) => {

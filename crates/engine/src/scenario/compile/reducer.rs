@@ -167,38 +167,60 @@ fn bound_input_units(
     units
 }
 
-/// A model's parameters as written (numbers, texts, objects of named numbers), each at
-/// its JSON path under `path`.
+/// A model's parameters as written (numbers, texts, objects of named numbers, and objects
+/// of those, the formulas of an `expression`), each at its JSON path under `path`.
 pub(crate) fn model_params(
     path: &str,
     map: &serde_json::Map<String, serde_json::Value>,
 ) -> Result<ModelParams, ScenarioError> {
     let mut params = ModelParams::new();
     for (key, value) in map {
-        let value = match value {
-            serde_json::Value::Number(n) => ParamValue::Number(n.as_f64().unwrap_or(f64::NAN)),
-            serde_json::Value::String(s) => ParamValue::Text(s.clone()),
-            serde_json::Value::Object(entries) => {
-                let mut named = Vec::with_capacity(entries.len());
-                for (name, v) in entries {
-                    let number = v.as_f64().ok_or_else(|| {
-                        ScenarioError::new(
-                            format!("{path}.{key}.{name}"),
-                            format!("expected a number, got {v}"),
-                        )
-                    })?;
-                    named.push((name.clone(), number));
-                }
-                ParamValue::Named(named)
-            }
-            other => {
-                return Err(ScenarioError::new(
-                    format!("{path}.{key}"),
-                    format!("expected a number, a string or an object of numbers, got {other}"),
-                ))
-            }
-        };
-        params.insert(key.clone(), value);
+        params.insert(
+            key.clone(),
+            param_value(&format!("{path}.{key}"), value, 0)?,
+        );
     }
     Ok(params)
+}
+
+/// Deepest nesting of objects a model's parameters take (an expression's output is an
+/// object in an object).
+const MOST_PARAM_DEPTH: usize = 3;
+
+/// One parameter value at `path`, nested `depth` objects deep: an object of numbers only
+/// is [`ParamValue::Named`] (a stack's coefficients), any other object an
+/// [`ParamValue::Object`].
+fn param_value(
+    path: &str,
+    value: &serde_json::Value,
+    depth: usize,
+) -> Result<ParamValue, ScenarioError> {
+    Ok(match value {
+        serde_json::Value::Number(n) => ParamValue::Number(n.as_f64().unwrap_or(f64::NAN)),
+        serde_json::Value::String(s) => ParamValue::Text(s.clone()),
+        serde_json::Value::Object(entries) if depth < MOST_PARAM_DEPTH => {
+            if let Some(named) = entries
+                .iter()
+                .map(|(name, v)| Some((name.clone(), v.as_f64()?)))
+                .collect::<Option<Vec<_>>>()
+            {
+                ParamValue::Named(named)
+            } else {
+                let mut object = Vec::with_capacity(entries.len());
+                for (name, v) in entries {
+                    object.push((
+                        name.clone(),
+                        param_value(&format!("{path}.{name}"), v, depth + 1)?,
+                    ));
+                }
+                ParamValue::Object(object)
+            }
+        }
+        other => {
+            return Err(ScenarioError::new(
+                path,
+                format!("expected a number, a string or an object of those, got {other}"),
+            ))
+        }
+    })
 }
