@@ -1396,13 +1396,13 @@ pub fn check_non_finite(
     Ok(())
 }
 
-/// The value of each output with every deviation at its mean (the nominal design):
-/// `None` where the output's qualifying indicator excludes the nominal sample (an
-/// interfering nominal profile). Any other non-finite value is an error naming the model
-/// and the output: a nominal design the model cannot evaluate.
-pub fn nominal(scenario: &Scenario) -> Result<Vec<Option<f64>>, ScenarioError> {
+/// Every model evaluated in order with every deviation at its mean: each model's input
+/// row (a chained input reads the nominal output of a model above) and every output's
+/// value.
+fn nominal_evaluation(scenario: &Scenario) -> (Vec<Vec<f64>>, Vec<f64>) {
     let row = scenario.input_space.mean_row();
     let mut values = vec![0.0; scenario.outputs.len()];
+    let mut model_inputs = Vec::with_capacity(scenario.models.len());
     for bound in &scenario.models {
         let inputs = bound.inputs_of_row(&row, &values);
         let n_out = bound.model.outputs().len();
@@ -1410,7 +1410,17 @@ pub fn nominal(scenario: &Scenario) -> Result<Vec<Option<f64>>, ScenarioError> {
             &inputs,
             &mut values[bound.first_output..bound.first_output + n_out],
         );
+        model_inputs.push(inputs);
     }
+    (model_inputs, values)
+}
+
+/// The value of each output with every deviation at its mean (the nominal design):
+/// `None` where the output's qualifying indicator excludes the nominal sample (an
+/// interfering nominal profile). Any other non-finite value is an error naming the model
+/// and the output: a nominal design the model cannot evaluate.
+pub fn nominal(scenario: &Scenario) -> Result<Vec<Option<f64>>, ScenarioError> {
+    let (_, values) = nominal_evaluation(scenario);
     let excluded = |o: usize| match scenario.outputs[o].condition {
         Some((k, ConditionEffect::Excluded)) => is_set(values[k]),
         _ => false,
@@ -1453,18 +1463,10 @@ pub fn nominal_curves(
 pub fn nominal_curves_per_model(
     scenario: &Scenario,
 ) -> Vec<(&'static str, Result<Vec<Curve>, ScenarioError>)> {
-    let row = scenario.input_space.mean_row();
-    // The nominal outputs, which a chained model's inputs read.
-    let mut values = vec![0.0; scenario.outputs.len()];
+    let (model_inputs, _) = nominal_evaluation(scenario);
     let mut drawn = Vec::new();
-    for (i, bound) in scenario.models.iter().enumerate() {
-        let inputs = bound.inputs_of_row(&row, &values);
-        let n_out = bound.model.outputs().len();
-        bound.model.evaluate(
-            &inputs,
-            &mut values[bound.first_output..bound.first_output + n_out],
-        );
-        let curves = bound.model.curves(&inputs);
+    for (i, (bound, inputs)) in scenario.models.iter().zip(&model_inputs).enumerate() {
+        let curves = bound.model.curves(inputs);
         if curves.is_empty() {
             continue;
         }
