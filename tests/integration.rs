@@ -9,6 +9,7 @@ mod common;
 
 mod capability_intervals;
 mod conformity;
+mod copula;
 mod engine;
 mod expression;
 mod lost_motion;

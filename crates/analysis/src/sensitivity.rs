@@ -213,7 +213,7 @@ pub fn independent_groups(scenario: &Scenario) -> Vec<InputGroup> {
     for group in space.correlated_groups() {
         for (i, &ci) in group.iter().enumerate() {
             for &cj in &group[i + 1..] {
-                if space.covariance(ci, cj) == 0.0 {
+                if !space.dependent(ci, cj) {
                     continue;
                 }
                 if let (Some(a), Some(b)) = (unit_of_column[ci], unit_of_column[cj]) {

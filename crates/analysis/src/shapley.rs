@@ -237,13 +237,15 @@ pub fn shapley_partial(
             for &player in &order[..d - 1] {
                 free.extend(&players[player].columns);
                 let sampler: ConditionalSampler = space.conditional_sampler(&free)?;
-                space.sample_rows(&mut rng, &mut outer_rows, &mut counts)?;
+                // Conditional draws work on normal scores (a copula column's), then values.
+                space.sample_latent_rows(&mut rng, &mut outer_rows, &mut counts)?;
                 for (outer, base) in outer_rows.chunks_exact(n_columns).enumerate() {
                     for inner in 0..settings.inner {
                         let start = (outer * settings.inner + inner) * n_columns;
                         let row = &mut rows[start..start + n_columns];
                         row.copy_from_slice(base);
                         sampler.sample(&mut rng, row, &mut z);
+                        space.latent_to_values(row);
                     }
                 }
                 evaluator.evaluate(&rows, settings.outer * settings.inner);

@@ -10,8 +10,13 @@
 //!
 //! with Σ_GG⁺ the pseudo-inverse (eigenvalues below 1e−12 of the largest dropped), so
 //! singular covariances work; the conditional covariance is factorised with the pivoted
-//! Cholesky. Non-normal scalars are independent of everything and are drawn from their
-//! marginal. Every normal comes from the project's ziggurat ([`Ziggurat`]), the one
+//! Cholesky. A non-normal scalar that the scenario correlates (the Gaussian copula) is
+//! conditioned through its normal score: the sampler works on rows in the space the input
+//! space draws ([`InputSpace::sample_latent_rows`]), where such a column holds its normal
+//! score, and [`InputSpace::latent_to_values`] turns the row into values afterwards; as
+//! the values are an increasing function of the scores, conditioning on one is
+//! conditioning on the other. The other non-normal scalars are independent of everything
+//! and are drawn from their marginal. Every normal comes from the project's ziggurat ([`Ziggurat`]), the one
 //! normal source of every sampling path. Parts with the Eq. 11 constraint are not normal any more; a space with
 //! constraints has no conditional sampler.
 
@@ -56,7 +61,7 @@ impl InputSpace {
         }
         // Only the given columns correlated with a free one enter the regression: the
         // others are independent of the free columns and leave their law unchanged.
-        let mean = self.mean_row();
+        let mean = self.latent_mean_row();
         let free: Vec<usize> = self
             .gaussian_columns()
             .iter()
@@ -73,7 +78,7 @@ impl InputSpace {
             .collect();
         let sub = |rows: &[usize], cols: &[usize]| {
             DMatrix::from_fn(rows.len(), cols.len(), |i, j| {
-                self.covariance(rows[i], cols[j])
+                self.latent_covariance(rows[i], cols[j])
             })
         };
         let s_ff = sub(&free, &free);
@@ -117,8 +122,9 @@ impl InputSpace {
 }
 
 impl ConditionalSampler {
-    /// Overwrites the free columns of `row` with a draw given its other columns. `z` is
-    /// scratch space, reused across calls so that a draw does not allocate.
+    /// Overwrites the free columns of `row` with a draw given its other columns; `row` is
+    /// in the space the input space draws (copula columns as normal scores, module docs).
+    /// `z` is scratch space, reused across calls so that a draw does not allocate.
     pub fn sample<R: Rng + ?Sized>(&self, rng: &mut R, row: &mut [f64], z: &mut Vec<f64>) {
         let n_given = self.given.len();
         z.clear();

@@ -8,7 +8,10 @@
 //! blocks (connected components of Σ's non-zero pattern); each block is drawn as
 //! x = μ + L·z with L from the pivoted Cholesky factor and z standard normal, so a
 //! diagonal Σ costs one normal draw per non-degenerate column and zero-variance columns are
-//! exactly their mean. Non-normal scalars are drawn independently.
+//! exactly their mean. Non-normal scalars are drawn independently, unless the scenario
+//! correlates them: such a scalar joins the joint normal through its normal score z
+//! (mean 0, variance 1) and takes the value F⁻¹(Φ(z)) once its block is drawn, the Gaussian
+//! copula of [`crate::copula`].
 //!
 //! Parts with the 001 Eq. 11 constraint are drawn by rejection: the blocks that hold the
 //! components of an inequality are redrawn until it holds, which conditions the joint
@@ -33,6 +36,7 @@ use rand::{Rng, SeedableRng};
 
 use crate::cholesky::{factorise_covariance, pivoted_cholesky, smallest_eigenvalue};
 use crate::constraint::{LinearInequality, TiltConstraint};
+use crate::copula;
 use crate::error::{DeviationError, MatrixKind};
 use crate::normal::{Ziggurat, ZigguratScratch};
 use crate::part::PartSpec;
@@ -112,8 +116,12 @@ pub struct InputSpaceBuilder {
     correlated_by: BTreeMap<(usize, usize), String>,
     independent: Vec<(usize, ScalarDistribution)>,
     constraints: Vec<ConstraintSpec>,
-    /// For each column, its gaussian index, if normal.
+    /// For each column, its gaussian index, if normal (or a copula column's normal score).
     gaussian_index: Vec<Option<usize>>,
+    /// Non-normal scalars drawn through their normal score (the Gaussian copula).
+    copula: Vec<(usize, ScalarDistribution)>,
+    /// The JSON path of each non-normal scalar, for messages once it is correlated.
+    scalar_labels: BTreeMap<usize, String>,
 }
 
 /// Most columns one correlated group may hold: its dense covariance and factor take
@@ -183,13 +191,17 @@ impl InputSpaceBuilder {
                 self.n_columns += 1;
                 self.gaussian_index.push(None);
                 self.independent.push((column, distribution));
+                self.scalar_labels.insert(column, path.to_string());
                 column
             }
         }
     }
 
-    /// Correlates two normal columns with coefficient `rho`; `path` names the entry. A pair
-    /// may be correlated once: a second entry for it (with any ρ) is an error naming both.
+    /// Correlates two columns with coefficient `rho`; `path` names the entry. A pair may be
+    /// correlated once: a second entry for it (with any ρ) is an error naming both. Between
+    /// normal columns ρ is their correlation; a non-normal scalar is correlated through its
+    /// normal score (the Gaussian copula, [`crate::copula`]), ρ then being the correlation
+    /// of the normal scores.
     pub fn correlate(
         &mut self,
         path: &str,
@@ -210,12 +222,8 @@ impl InputSpaceBuilder {
                 "a variable cannot be correlated with itself",
             ));
         }
-        let gaussian = |c: usize| self.gaussian_index.get(c).copied().flatten();
-        let (Some(a), Some(b)) = (gaussian(column_a), gaussian(column_b)) else {
-            return Err(DeviationError::invalid(
-                path,
-                "only normal variables (normal, tolerance_band, part components) can be correlated",
-            ));
+        let (Some(a), Some(b)) = (self.normal_score(column_a), self.normal_score(column_b)) else {
+            return Err(DeviationError::invalid(path, "no such column to correlate"));
         };
         let key = ordered(a, b);
         if let Some(earlier) = self.correlated_by.get(&key) {
@@ -232,6 +240,28 @@ impl InputSpaceBuilder {
             self.cross.insert(key, covariance);
         }
         Ok(())
+    }
+
+    /// The gaussian index of a column: a normal column's own, or, for a non-normal scalar,
+    /// that of its normal score, which joins the joint normal (mean 0, variance 1) the
+    /// first time the scalar is correlated. `None` for a column that does not exist.
+    fn normal_score(&mut self, column: usize) -> Option<usize> {
+        if let Some(g) = *self.gaussian_index.get(column)? {
+            return Some(g);
+        }
+        let at = self.independent.iter().position(|(c, _)| *c == column)?;
+        let (_, distribution) = self.independent.remove(at);
+        let g = self.gaussian.len();
+        self.gaussian_index[column] = Some(g);
+        self.gaussian.push(GaussianColumn {
+            column,
+            mean: 0.0,
+            label: (self.scalar_labels.get(&column).cloned())
+                .unwrap_or_else(|| format!("column {column}")),
+        });
+        self.variance.push(1.0);
+        self.copula.push((column, distribution));
+        Some(g)
     }
 
     /// Number of columns so far.
@@ -329,8 +359,14 @@ impl InputSpaceBuilder {
         for (g, column) in self.gaussian.iter().enumerate() {
             variances[column.column] = self.variance[g];
         }
-        for (column, distribution) in &self.independent {
+        for (column, distribution) in self.independent.iter().chain(&self.copula) {
             variances[*column] = distribution.variance();
+        }
+        let mut hermite = vec![None; self.n_columns];
+        for (column, distribution) in &self.copula {
+            hermite[*column] = Some(copula::hermite_coefficients(|z| {
+                distribution.from_normal_score(z)
+            }));
         }
         let mut space = InputSpace {
             n_columns: self.n_columns,
@@ -339,6 +375,8 @@ impl InputSpaceBuilder {
             blocks: Vec::new(),
             constrained_groups: Vec::new(),
             independent: self.independent,
+            copula: self.copula,
+            hermite,
             constraint_paths: self.constraints.iter().map(|c| c.path.clone()).collect(),
             constraint_inequalities: inequalities.clone(),
             gaussian_columns: self.gaussian.iter().map(|g| g.column).collect(),
@@ -844,6 +882,12 @@ pub struct InputSpace {
     blocks: Vec<GaussianBlock>,
     constrained_groups: Vec<ConstrainedGroup>,
     independent: Vec<(usize, ScalarDistribution)>,
+    /// Non-normal scalars drawn through their normal score, which the sampler draws in
+    /// their column first (the Gaussian copula, [`crate::copula`]).
+    copula: Vec<(usize, ScalarDistribution)>,
+    /// For each copula column, the Hermite coefficients of its value as a function of its
+    /// normal score (for [`InputSpace::covariance`]).
+    hermite: Vec<Option<Vec<f64>>>,
     constraint_paths: Vec<String>,
     /// The inequalities of the constraints, two per constrained part in the order of
     /// `constraint_paths`.
@@ -903,19 +947,48 @@ impl InputSpace {
         &self.constraint_paths
     }
 
-    /// The normal columns (part components, normal and tolerance-band scalars), in the order
-    /// they were added.
+    /// The normal columns (part components, normal and tolerance-band scalars, and the
+    /// normal scores of the copula columns), in the order they were added.
     pub fn gaussian_columns(&self) -> &[usize] {
         &self.gaussian_columns
     }
 
-    /// The covariance of two columns as specified, before the constraints: the variance on
-    /// the diagonal (of any distribution), the scenario's covariance between two normal
-    /// columns of one correlated group, 0 otherwise.
+    /// The covariance of two columns' values as specified, before the constraints: the
+    /// variance on the diagonal (of any distribution), the scenario's covariance between
+    /// two normal columns of one correlated group, Mehler's series where a copula column
+    /// takes part (`copula.rs`: exact with a normal partner, a truncated series between
+    /// two non-normal laws), 0 otherwise.
     pub fn covariance(&self, column_a: usize, column_b: usize) -> f64 {
         if column_a == column_b {
             return self.variances[column_a];
         }
+        // One order for the series, so that the matrix is symmetric to the bit.
+        let (column_a, column_b) = (column_a.min(column_b), column_a.max(column_b));
+        let latent = self.latent_covariance(column_a, column_b);
+        let (ha, hb) = (&self.hermite[column_a], &self.hermite[column_b]);
+        if latent == 0.0 || (ha.is_none() && hb.is_none()) {
+            return latent;
+        }
+        let (sa, sb) = (
+            self.latent_covariance(column_a, column_a).sqrt(),
+            self.latent_covariance(column_b, column_b).sqrt(),
+        );
+        // A normal column is its normal score times σ: one coefficient, σ.
+        let coefficients = |h: &Option<Vec<f64>>, sd: f64| match h {
+            Some(h) => h.clone(),
+            None => vec![sd],
+        };
+        copula::mehler_covariance(
+            &coefficients(ha, sa),
+            &coefficients(hb, sb),
+            latent / (sa * sb),
+        )
+    }
+
+    /// The covariance of two columns in the space the sampler draws them: a copula
+    /// column's normal score (variance 1) in place of its value; the value's covariance
+    /// for every other column.
+    pub(crate) fn latent_covariance(&self, column_a: usize, column_b: usize) -> f64 {
         match (
             self.covariance_position[column_a],
             self.covariance_position[column_b],
@@ -923,18 +996,38 @@ impl InputSpace {
             (Some((group_a, i)), Some((group_b, j))) if group_a == group_b => {
                 self.covariance_blocks[group_a][(i, j)]
             }
+            _ if column_a == column_b => match self.hermite[column_a] {
+                Some(_) => 1.0,
+                None => self.variances[column_a],
+            },
             _ => 0.0,
         }
     }
 
+    /// Whether the scenario makes two columns dependent (a non-zero correlation between
+    /// them, of their values or their normal scores).
+    pub fn dependent(&self, column_a: usize, column_b: usize) -> bool {
+        column_a != column_b && self.latent_covariance(column_a, column_b) != 0.0
+    }
+
+    /// The non-normal scalars that the scenario correlates, drawn through their normal
+    /// score (the Gaussian copula), with their laws.
+    pub fn copula_columns(&self) -> &[(usize, ScalarDistribution)] {
+        &self.copula
+    }
+
     /// The normal columns, their mean vector and their dense joint covariance (as specified,
     /// before the constraints), built on demand: for tests and diagnostics of small spaces
-    /// (it takes (number of normal columns)² values).
+    /// (it takes (number of normal columns)² values). A copula column enters as its normal
+    /// score (mean 0, variance 1).
     pub fn gaussian_specification(&self) -> (Vec<usize>, DVector<f64>, DMatrix<f64>) {
+        let columns = &self.gaussian_columns;
         (
-            self.gaussian_columns.clone(),
+            columns.clone(),
             DVector::from_column_slice(&self.gaussian_mean),
-            self.covariance_matrix(&self.gaussian_columns),
+            DMatrix::from_fn(columns.len(), columns.len(), |i, j| {
+                self.latent_covariance(columns[i], columns[j])
+            }),
         )
     }
 
@@ -977,10 +1070,39 @@ impl InputSpace {
         for (&column, &mean) in self.gaussian_columns.iter().zip(&self.gaussian_mean) {
             row[column] = mean;
         }
-        for (column, distribution) in &self.independent {
+        for (column, distribution) in self.independent.iter().chain(&self.copula) {
             row[*column] = distribution.mean();
         }
         row
+    }
+
+    /// The row of means in the space the sampler draws: [`InputSpace::mean_row`] with a
+    /// copula column's normal score at its mean, 0.
+    pub(crate) fn latent_mean_row(&self) -> Vec<f64> {
+        let mut row = self.mean_row();
+        for (column, _) in &self.copula {
+            row[*column] = 0.0;
+        }
+        row
+    }
+
+    /// Turns the copula columns of a row drawn in the latent space
+    /// ([`InputSpace::sample_latent_rows`], [`crate::ConditionalSampler`]) from normal scores
+    /// into values; every other column is its value already.
+    pub fn latent_to_values(&self, row: &mut [f64]) {
+        for (column, distribution) in &self.copula {
+            row[*column] = distribution.from_normal_score(row[*column]);
+        }
+    }
+
+    /// Turns the copula columns of a column-major block of `n_rows` rows from normal
+    /// scores into values.
+    fn copula_to_values(&self, columns: &mut [f64], n_rows: usize) {
+        for (column, distribution) in &self.copula {
+            for x in column_mut(columns, *column, n_rows) {
+                *x = distribution.from_normal_score(*x);
+            }
+        }
     }
 
     /// Fills `rows` (row-major, a multiple of `n_columns()` long) with independent draws.
@@ -1004,13 +1126,40 @@ impl InputSpace {
         counts: &mut ConstraintCounts,
         scratch: &mut SamplerScratch,
     ) -> Result<(), DeviationError> {
+        self.draw_rows(rng, rows, counts, scratch, false)
+    }
+
+    /// [`InputSpace::sample_rows`] in the space the sampler draws: the copula columns hold
+    /// their normal scores (the same stream; [`InputSpace::latent_to_values`] turns them
+    /// into the values [`InputSpace::sample_rows`] gives). For conditional draws
+    /// ([`crate::ConditionalSampler`]), which condition the normal scores.
+    pub fn sample_latent_rows<R: Rng + ?Sized>(
+        &self,
+        rng: &mut R,
+        rows: &mut [f64],
+        counts: &mut ConstraintCounts,
+    ) -> Result<(), DeviationError> {
+        self.draw_rows(rng, rows, counts, &mut SamplerScratch::default(), true)
+    }
+
+    fn draw_rows<R: Rng + ?Sized>(
+        &self,
+        rng: &mut R,
+        rows: &mut [f64],
+        counts: &mut ConstraintCounts,
+        scratch: &mut SamplerScratch,
+        latent: bool,
+    ) -> Result<(), DeviationError> {
         if self.n_columns == 0 {
             return Ok(());
         }
         let n_rows = rows.len() / self.n_columns;
         let mut columns = std::mem::take(&mut scratch.columns);
         let block = prefix(&mut columns, n_rows * self.n_columns);
-        let drawn = self.sample_columns_with(rng, block, counts, scratch);
+        let drawn = self.sample_latent_columns(rng, block, counts, scratch);
+        if !latent {
+            self.copula_to_values(block, n_rows);
+        }
         if drawn.is_ok() {
             for (c, column) in block.chunks_exact(n_rows.max(1)).enumerate() {
                 for (row, &value) in rows.chunks_exact_mut(self.n_columns).zip(column) {
@@ -1038,7 +1187,23 @@ impl InputSpace {
     ///    Rayleigh law, consecutive);
     /// 4. each constraint group in turn: batches of candidates (the rotated z_s of a pair and
     ///    the compaction of singles), or row by row for groups with dense blocks.
+    ///
+    /// A copula column's normal score is drawn with its block; its value is F⁻¹(Φ(z)) of
+    /// that draw (no further stream).
     pub fn sample_columns_with<R: Rng + ?Sized>(
+        &self,
+        rng: &mut R,
+        columns: &mut [f64],
+        counts: &mut ConstraintCounts,
+        scratch: &mut SamplerScratch,
+    ) -> Result<(), DeviationError> {
+        self.sample_latent_columns(rng, columns, counts, scratch)?;
+        self.copula_to_values(columns, columns.len() / self.n_columns.max(1));
+        Ok(())
+    }
+
+    /// [`InputSpace::sample_columns_with`] with the copula columns left as normal scores.
+    fn sample_latent_columns<R: Rng + ?Sized>(
         &self,
         rng: &mut R,
         columns: &mut [f64],
@@ -1403,26 +1568,6 @@ mod tests {
         // A chain with ρ = 0.4 is positive definite (smallest eigenvalue 1 − 0.8·cos(π/(n + 1))
         // > 0.2): it builds.
         chain(n, 0.4).build("correlations").unwrap();
-    }
-
-    #[test]
-    fn correlating_a_uniform_is_an_error() {
-        let mut builder = InputSpaceBuilder::new();
-        let a = builder.add_scalar(
-            "variables[0]",
-            ScalarDistribution::Uniform {
-                lower: 0.0,
-                upper: 1.0,
-            },
-        );
-        let b = builder.add_scalar(
-            "variables[1]",
-            ScalarDistribution::Normal { mean: 0.0, sd: 1.0 },
-        );
-        let err = builder.correlate("correlations[0]", a, b, 0.5).unwrap_err();
-        assert!(err
-            .to_string()
-            .starts_with("correlations[0]: only normal variables"));
     }
 
     #[test]

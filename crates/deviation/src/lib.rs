@@ -15,6 +15,8 @@
 //! - all normal components of a scenario form one multivariate normal, drawn by
 //!   [`InputSpace`] from a pivoted Cholesky factor ([`pivoted_cholesky`]) so that positive
 //!   semi-definite covariances work and zero-variance components are exactly their mean;
+//!   a correlated scalar of another law joins it through its normal score (the Gaussian
+//!   copula, `copula.rs`);
 //! - the vector expression φ = ε + θ (001 Eq. 5–8) turns a part's deviation into the
 //!   displacement of a point on it ([`point_displacement`]).
 //!
@@ -23,6 +25,7 @@
 mod cholesky;
 mod conditional;
 mod constraint;
+mod copula;
 mod displacement;
 mod empirical;
 mod error;
@@ -41,6 +44,7 @@ pub use cholesky::{
 };
 pub use conditional::ConditionalSampler;
 pub use constraint::{LinearInequality, TiltConstraint};
+pub use copula::{normal_score_from_spearman, spearman_from_normal_score};
 pub use displacement::point_displacement;
 pub use empirical::{EmpiricalLaw, MIN_EMPIRICAL_VALUES};
 pub use error::{DeviationError, MatrixKind};

@@ -155,6 +155,40 @@ fn folded_normal_quantile(mean: f64, sd: f64, p: f64) -> f64 {
     high
 }
 
+/// The t with P(|X| > t) = q for X ~ N(μ, σ²), σ > 0 and μ ≠ 0 (the copula's inverse, a
+/// tail given as q to keep its precision): Q((t − μ)/σ) + Q((t + μ)/σ) = q, by Newton
+/// steps kept inside a bisection bracket on [0, |μ| + 40σ] (the tail falls as t grows,
+/// with slope −(φ((t − μ)/σ) + φ((t + μ)/σ))/σ); about five steps to round-off.
+fn folded_normal_beyond(mean: f64, sd: f64, q: f64) -> f64 {
+    let tail = |t: f64| {
+        standard_normal_upper_tail((t - mean) / sd) + standard_normal_upper_tail((t + mean) / sd)
+    };
+    let (mut low, mut high) = (0.0, mean.abs() + 40.0 * sd);
+    let mut t = mean.abs();
+    for _ in 0..200 {
+        let excess = tail(t) - q;
+        if excess > 0.0 {
+            low = t;
+        } else {
+            high = t;
+        }
+        let slope = (standard_normal_density((t - mean) / sd)
+            + standard_normal_density((t + mean) / sd))
+            / sd;
+        let newton = t + excess / slope;
+        let next = if newton > low && newton < high {
+            newton
+        } else {
+            0.5 * (low + high)
+        };
+        if next == t || high - low <= f64::EPSILON * high {
+            break;
+        }
+        t = next;
+    }
+    t
+}
+
 pub(crate) fn standard_normal_cdf(x: f64) -> f64 {
     0.5 * erfc(-x / std::f64::consts::SQRT_2)
 }
@@ -568,6 +602,60 @@ impl ScalarDistribution {
                 let (mean, sd) = normal.as_normal().unwrap_or((0.0, 0.0));
                 mean + sd * standard_normal_inverse(u)
             }
+        }
+    }
+
+    /// The value whose normal score is z: F⁻¹(Φ(z)), the marginal transform of the
+    /// Gaussian copula (`docs/models.md` §3). Monotone in z, so a rank correlation of the
+    /// normal scores is the rank correlation of the values. The tail that matters is taken
+    /// as such: Q(z) = 1 − Φ(z) from erfc where a law's upper quantile needs it (Rayleigh
+    /// σ·√(−2·ln Q(z)), the folded normal, the triangular law's upper side), so z = 8
+    /// still gives a finite value beyond the bulk. The lognormal is exp(μ + σz) exactly;
+    /// the folded normal solves P(|X| > x) = Q(z) (closed form when centred:
+    /// x = σ·√2·erfc⁻¹(Q(z))); the other laws take their [`Self::from_uniform`] at Φ(z)
+    /// (an empirical law at most the last value below 1, so that a smoothed one keeps its
+    /// kernel draw inside the share of its largest value).
+    pub fn from_normal_score(&self, z: f64) -> f64 {
+        let below = standard_normal_cdf(z);
+        let above = standard_normal_upper_tail(z);
+        match *self {
+            ScalarDistribution::Lognormal { mu, sigma } => (mu + sigma * z).exp(),
+            ScalarDistribution::Rayleigh { sigma } => {
+                // ln(1 − Φ(z)): from Q(z) in the upper half, ln_1p(−Φ(z)) in the lower.
+                let log_above = if z > 0.0 {
+                    above.ln()
+                } else {
+                    (-below).ln_1p()
+                };
+                sigma * (-2.0 * log_above).sqrt()
+            }
+            ScalarDistribution::FoldedNormal { mean, sd } => {
+                if sd == 0.0 || mean == 0.0 {
+                    sd * std::f64::consts::SQRT_2 * erfc_inv(above) + mean.abs()
+                } else {
+                    folded_normal_beyond(mean, sd, above)
+                }
+            }
+            ScalarDistribution::Triangular { lower, mode, upper } => {
+                let width = upper - lower;
+                if width == 0.0 {
+                    return lower;
+                }
+                if below < (mode - lower) / width {
+                    lower + (below * width * (mode - lower)).sqrt()
+                } else {
+                    upper - (above * width * (upper - mode)).sqrt()
+                }
+            }
+            ScalarDistribution::Empirical(_) => {
+                self.from_uniform(below.min(1.0 - f64::EPSILON / 2.0))
+            }
+            ref normal @ (ScalarDistribution::Normal { .. }
+            | ScalarDistribution::ToleranceBand { .. }) => {
+                let (mean, sd) = normal.as_normal().unwrap_or((0.0, 0.0));
+                mean + sd * z
+            }
+            _ => self.from_uniform(below),
         }
     }
 

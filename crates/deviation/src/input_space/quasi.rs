@@ -4,7 +4,9 @@
 //! One uniform per dimension, in this order: each unconstrained normal single
 //! (x = μ + σ·Φ⁻¹(u)), each correlated block (its `rank` standard normals Φ⁻¹(u), then
 //! x = μ + L·z), each non-normal scalar ([`ScalarDistribution::from_uniform`]), each
-//! constrained group (its `rank` normals, below).
+//! constrained group (its `rank` normals, below). A correlated non-normal scalar is part
+//! of its block as its normal score z and takes its value F⁻¹(Φ(z)) at the end, as in the
+//! random sampler.
 //!
 //! A constrained group is the joint normal x = μ + L·z of its columns (L the block-diagonal
 //! factor of its singles and blocks, rank r) conditioned on its inequalities aⱼ·x ≤ cⱼ.
@@ -456,6 +458,7 @@ impl InputSpace {
                 }
             }
         }
+        self.copula_to_values(columns, n_rows);
         Ok(())
     }
 }

@@ -238,7 +238,13 @@ pub(super) enum DistributionFile {
 #[serde(deny_unknown_fields)]
 pub(super) struct CorrelationFile {
     pub(super) between: [String; 2],
-    pub(super) rho: f64,
+    /// The correlation of the two quantities' normal scores (for two normals, their
+    /// correlation).
+    #[serde(default)]
+    pub(super) rho: Option<f64>,
+    /// Spearman's rank correlation, in place of `rho`.
+    #[serde(default)]
+    pub(super) spearman: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]

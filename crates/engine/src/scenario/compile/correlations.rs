@@ -1,10 +1,48 @@
 //! The `correlations` section: a correlation between two named columns (a variable, an
 //! array's member, a part's component) enters the joint normal, which is then built and
 //! checked as a whole (positive semi-definite per correlated group) — the input space the
-//! models' bindings refer to.
+//! models' bindings refer to. A correlation is given as `rho`, the correlation of the
+//! normal scores (of the values, between two normals), or as `spearman`, the rank
+//! correlation, turned into the former by ρ = 2·sin(π·ρ_S/6) (the Gaussian copula,
+//! rvtol-deviation's `copula.rs`).
 
+use rvtol_deviation::normal_score_from_spearman;
+
+use super::super::file::CorrelationFile;
 use super::Compiler;
 use crate::error::ScenarioError;
+
+/// The normal-score correlation of an entry: its `rho`, or its `spearman` converted; one of
+/// them, in [−1, 1].
+fn normal_score_correlation(
+    path: &str,
+    correlation: &CorrelationFile,
+) -> Result<f64, ScenarioError> {
+    match (correlation.rho, correlation.spearman) {
+        (Some(rho), None) => Ok(rho),
+        (None, Some(spearman)) => {
+            let at = format!("{path}.spearman");
+            if spearman.is_nan() || spearman.abs() > 1.0 {
+                return Err(ScenarioError::new(
+                    at,
+                    format!(
+                        "a rank correlation must lie in [-1, 1], got {}",
+                        rvtol_deviation::Shown(spearman)
+                    ),
+                ));
+            }
+            Ok(normal_score_from_spearman(spearman))
+        }
+        (Some(_), Some(_)) => Err(ScenarioError::new(
+            path,
+            "give either rho (the correlation of the normal scores) or spearman (the rank correlation), not both",
+        )),
+        (None, None) => Err(ScenarioError::new(
+            path,
+            "give rho (the correlation; of the normal scores for a non-normal quantity) or spearman (the rank correlation)",
+        )),
+    }
+}
 
 /// Compiles every correlation and builds the input space.
 pub(super) fn compile(compiler: &mut Compiler) {
@@ -38,9 +76,16 @@ pub(super) fn compile(compiler: &mut Compiler) {
                 }
             }
         }
-        if resolved {
+        let rho = match normal_score_correlation(&path, correlation) {
+            Ok(rho) => Some(rho),
+            Err(err) => {
+                compiler.problems.push(err);
+                None
+            }
+        };
+        if let (true, Some(rho)) = (resolved, rho) {
             let correlated = (compiler.builder)
-                .correlate(&path, ends[0], ends[1], correlation.rho)
+                .correlate(&path, ends[0], ends[1], rho)
                 .map_err(ScenarioError::from);
             compiler.report(correlated);
         }
