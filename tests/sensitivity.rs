@@ -470,3 +470,82 @@ fn user_defined_groups_replace_their_members() {
         "sensitivity_groups[0].members[1]: \"cycloid_radial_runout\" is already in a group"
     );
 }
+
+/// Φ₂(h, h; r), the bivariate standard normal CDF on the diagonal: Φ(h)² plus
+/// ∫₀^r exp(−h²/(1 + ρ))/(2π√(1 − ρ²)) dρ (∂Φ₂/∂ρ is the bivariate density, Plackett
+/// 1954), by Simpson's rule on 2000 intervals (the integrand is smooth for r < 1).
+fn bivariate_diagonal(h: f64, r: f64) -> f64 {
+    use statrs::distribution::{ContinuousCDF, Normal};
+    let density = |rho: f64| {
+        (-h * h / (1.0 + rho)).exp() / (2.0 * std::f64::consts::PI * (1.0 - rho * rho).sqrt())
+    };
+    let n = 2000;
+    let step = r / n as f64;
+    let simpson: f64 = (0..=n)
+        .map(|i| {
+            let weight = if i == 0 || i == n {
+                1.0
+            } else if i % 2 == 1 {
+                4.0
+            } else {
+                2.0
+            };
+            weight * density(i as f64 * step)
+        })
+        .sum::<f64>()
+        * step
+        / 3.0;
+    Normal::standard().cdf(h).powi(2) + simpson
+}
+
+#[test]
+fn failure_indicator_indices_cover_their_closed_form() {
+    // y = x1 + x2, x1 ~ N(0, 1), x2 ~ N(0, 0.5²) independent, spec y ≤ t = 1: the
+    // indicator I = 1{y > t} has p = Q(t/σ), σ² = 1.25. E[I | x1] = Φ((x1 − t)/σ2), so
+    // Var E[I | x1] = Φ₂(h, h; σ1²/σ²) − p² with h = −t/σ (E[Φ(az + b)²] for z standard
+    // normal is Φ₂ on the diagonal at b/√(1 + a²), correlation a²/(1 + a²)); likewise for
+    // x2. S_i = that over p(1 − p); with two independent inputs S_T1 = 1 − S_2. Coverage
+    // of the 95 % intervals over 10 seeds (binomial floor, as above), and the reported
+    // share p within 5 standard errors of the run's rows.
+    use statrs::distribution::{ContinuousCDF, Normal};
+    let (s1, s2, t) = (1.0f64, 0.5f64, 1.0f64);
+    let sigma = s1.hypot(s2);
+    let h = -t / sigma;
+    let p = Normal::standard().cdf(h);
+    let first =
+        |si: f64| (bivariate_diagonal(h, si * si / (sigma * sigma)) - p * p) / (p * (1.0 - p));
+    let exact = [(first(s1), 1.0 - first(s2)), (first(s2), 1.0 - first(s1))];
+    let document = serde_json::json!({
+        "name": "threshold",
+        "variables": [
+            { "name": "x1", "distribution": { "normal": { "mean": 0.0, "sd": s1 } } },
+            { "name": "x2", "distribution": { "normal": { "mean": 0.0, "sd": s2 } } }
+        ],
+        "models": [{
+            "model": "linear_stack",
+            "params": { "output": "y", "unit": "1", "coefficients": { "a": 1.0, "b": 1.0 } },
+            "inputs": { "a": "x1", "b": "x2" }
+        }],
+        "spec_limits": { "y": { "upper": t } }
+    });
+    let scenario = Scenario::from_json(&document.to_string(), "threshold").unwrap();
+    let (mut covered, mut total) = (0, 0);
+    for seed in 1..=10 {
+        let outputs = sobol_indices(&scenario, settings(seed), &|_| {}).unwrap();
+        let failure = outputs.iter().find(|o| o.name == "y out of spec").unwrap();
+        let n = 2.0 * BASE_SAMPLES as f64;
+        assert!(
+            (failure.mean - p).abs() < SIGMA_BOUND * (p * (1.0 - p) / n).sqrt(),
+            "share {} against {p}",
+            failure.mean
+        );
+        for index in &failure.indices {
+            let (s, st) = exact[if index.group == "x1" { 0 } else { 1 }];
+            for (value, interval) in [(s, index.first_order.interval), (st, index.total.interval)] {
+                total += 1;
+                covered += u64::from(interval[0] <= value && value <= interval[1]);
+            }
+        }
+    }
+    assert_coverage(covered, total);
+}

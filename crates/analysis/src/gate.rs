@@ -156,6 +156,10 @@ pub struct Baseline {
     pub rvtol_version: String,
     /// Scenario name.
     pub scenario: String,
+    /// SHA-256 of the scenario text the baseline ran (data files written in), hex; absent
+    /// in a baseline written before it was recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scenario_sha256: Option<String>,
     /// The scenario file as it was, to point at what changed.
     pub scenario_file: serde_json::Value,
     /// Seed of the baseline run.
@@ -620,6 +624,7 @@ pub fn baseline_of(
     Ok(Baseline {
         rvtol_version: env!("CARGO_PKG_VERSION").to_string(),
         scenario: scenario.name.clone(),
+        scenario_sha256: Some(scenario.digest.clone()),
         scenario_file: serde_json::from_str(scenario_text)
             .map_err(|err| ScenarioError::new("JSON syntax", err.to_string()))?,
         seed,
@@ -801,6 +806,12 @@ pub struct CheckReport {
     pub rvtol_version: &'static str,
     /// Scenario name.
     pub scenario: String,
+    /// SHA-256 of the scenario text checked, hex.
+    pub scenario_sha256: String,
+    /// SHA-256 of the baseline's scenario text, when the baseline records it (a different
+    /// digest: the scenario changed, `scenario_changes` says where).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub baseline_scenario_sha256: Option<String>,
     /// Seed of the check run.
     pub seed: u64,
     /// Samples of the check run.
@@ -1033,6 +1044,8 @@ pub fn check_result(
     Ok(CheckReport {
         rvtol_version: env!("CARGO_PKG_VERSION"),
         scenario: scenario.name.clone(),
+        scenario_sha256: scenario.digest.clone(),
+        baseline_scenario_sha256: baseline.scenario_sha256.clone(),
         seed,
         samples,
         scenario_changes: json_differences(&baseline.scenario_file, &current, 8),

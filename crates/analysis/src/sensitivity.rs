@@ -1,6 +1,13 @@
 //! Variance-based sensitivity of every continuous output to the scenario's error sources:
 //! Sobol' first-order and total indices with confidence intervals (bootstrap, or from the
-//! replicates of a Latin hypercube or scrambled Sobol' design).
+//! replicates of a Latin hypercube or scrambled Sobol' design). The same estimators rank
+//! the failures ([`Analysed`]): for every output with spec limits, the indicator of a
+//! sample that does not conform (1, else 0: the run's out-of-spec rule sample by sample,
+//! [`rvtol_engine::run::sample_out_of_spec`]), and every indicator output (a preload, an
+//! interference). The Sobol' indices of a 0/1 quantity Y with P(Y = 1) = p apportion its
+//! variance p(1 − p): S_g = Var E[Y | X_g]/(p(1 − p)) is how much knowing group g alone
+//! tells whether an assembly fails, and S_Tg the share that involves g at all; the model
+//! evaluations are the same, no run is added.
 //!
 //! Estimators, from two independent sample matrices A and B of N rows and, per group g,
 //! the matrices A_B^(g) (A with g's columns taken from B) and B_A^(g) (the converse):
@@ -133,7 +140,7 @@ impl SensitivitySettings {
         let values = self
             .base_samples
             .saturating_mul(variants)
-            .saturating_mul(scenario.continuous_outputs().len() as u64);
+            .saturating_mul(analysed_quantities(scenario).len() as u64);
         if values <= self.row_bootstrap_limit {
             IntervalMethod::Rows
         } else {
@@ -178,16 +185,101 @@ pub struct GroupIndices {
 /// The indices of one output, groups sorted by decreasing total index.
 #[derive(Debug, Clone, PartialEq)]
 pub struct OutputSensitivity {
-    /// Output name.
+    /// Output name (for a conformity indicator, the output's name and ` out of spec`).
     pub name: String,
-    /// Output unit.
+    /// Output unit (`1` for a 0/1 quantity).
     pub unit: String,
+    /// What is apportioned.
+    pub quantity: Analysed,
+    /// Mean of the quantity over the 2N rows of A and B (for a 0/1 quantity, the share of
+    /// rows where it is 1).
+    pub mean: f64,
     /// Variance V of the output.
     pub variance: f64,
     /// Rows left out because a value was not finite.
     pub non_finite_rows: u64,
     /// One entry per group.
     pub indices: Vec<GroupIndices>,
+}
+
+/// A quantity whose variance a sensitivity analysis apportions.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Analysed {
+    /// A continuous output's value (the scenario's output index).
+    Value(usize),
+    /// 1 where a sample of the continuous output does not conform to its spec limits, 0
+    /// where it does ([`rvtol_engine::run::sample_out_of_spec`]).
+    OutOfSpec(usize),
+    /// An indicator output's 0/1 value.
+    Indicator(usize),
+}
+
+impl Analysed {
+    /// The scenario output it is computed from.
+    pub fn output(self) -> usize {
+        match self {
+            Analysed::Value(o) | Analysed::OutOfSpec(o) | Analysed::Indicator(o) => o,
+        }
+    }
+
+    /// Its name in reports: the output's, with ` out of spec` for a conformity indicator.
+    pub fn name(self, scenario: &Scenario) -> String {
+        let name = &scenario.outputs[self.output()].name;
+        match self {
+            Analysed::OutOfSpec(_) => format!("{name} out of spec"),
+            _ => name.clone(),
+        }
+    }
+
+    /// Its unit: the output's for a value, `1` for a 0/1 quantity.
+    pub fn unit(self, scenario: &Scenario) -> String {
+        match self {
+            Analysed::Value(o) => scenario.outputs[o].unit.clone(),
+            _ => "1".to_string(),
+        }
+    }
+
+    /// `value`, `out_of_spec` or `indicator`.
+    pub fn kind(self) -> &'static str {
+        match self {
+            Analysed::Value(_) => "value",
+            Analysed::OutOfSpec(_) => "out_of_spec",
+            Analysed::Indicator(_) => "indicator",
+        }
+    }
+
+    /// Its values over `m` rows from the evaluated outputs `columns` (`columns[o][row]`).
+    fn column(self, scenario: &Scenario, columns: &[Vec<f64>], m: usize) -> Vec<f64> {
+        match self {
+            Analysed::Value(o) | Analysed::Indicator(o) => columns[o][..m].to_vec(),
+            Analysed::OutOfSpec(o) => {
+                let flags = scenario.outputs[o].condition.map(|(k, _)| &columns[k][..m]);
+                (0..m)
+                    .map(|r| {
+                        let flag = flags.map_or(0.0, |f| f[r]);
+                        let out =
+                            rvtol_engine::run::sample_out_of_spec(scenario, o, columns[o][r], flag);
+                        f64::from(u8::from(out))
+                    })
+                    .collect()
+            }
+        }
+    }
+}
+
+/// What a sensitivity analysis of `scenario` apportions, in report order: every continuous
+/// output's value, then the conformity indicator of each one with spec limits, then every
+/// indicator output.
+pub fn analysed_quantities(scenario: &Scenario) -> Vec<Analysed> {
+    let continuous = scenario.continuous_outputs();
+    let values = continuous.iter().map(|&o| Analysed::Value(o));
+    let out_of_spec = (continuous.iter())
+        .filter(|&&o| scenario.outputs[o].spec.is_some())
+        .map(|&o| Analysed::OutOfSpec(o));
+    let indicators = (0..scenario.outputs.len())
+        .filter(|&o| scenario.outputs[o].kind == rvtol_models::OutputKind::Indicator)
+        .map(Analysed::Indicator);
+    values.chain(out_of_spec).chain(indicators).collect()
 }
 
 /// The scenario's sensitivity groups (its `sensitivity_groups`, then each remaining
@@ -249,11 +341,11 @@ pub fn independent_groups(scenario: &Scenario) -> Vec<InputGroup> {
     groups
 }
 
-/// Model values of one chunk: `values[output][variant][row]` over the continuous outputs,
+/// Model values of one chunk: `values[quantity][variant][row]` over the analysed quantities,
 /// variant 0 = A, 1 = B, 2 + g = A_B^(g), 2 + G + g = B_A^(g).
 pub type ChunkValues = Vec<Vec<Vec<f64>>>;
 
-/// Per continuous output: the estimator's sums over each block of a chunk, and the chunk's
+/// Per analysed quantity: the estimator's sums over each block of a chunk, and the chunk's
 /// rows left out because a value was not finite.
 pub type ChunkBlocks = Vec<(Vec<BlockSums>, u64)>;
 
@@ -266,7 +358,7 @@ fn evaluate_chunk(
     chunk: u64,
     side_by_side: bool,
 ) -> Result<ChunkValues, ScenarioError> {
-    let (groups, continuous) = (&plan.groups, &plan.continuous);
+    let (groups, analysed) = (&plan.groups, &plan.analysed);
     let (replicate, first_row, _, m) = settings.sampling.chunk_rows(settings.base_samples, chunk);
     let space = &scenario.input_space;
     let n_columns = space.n_columns();
@@ -329,13 +421,13 @@ fn evaluate_chunk(
                     }
                 };
                 evaluator.evaluate_columns_at(matrix, m, 0);
-                (continuous.iter())
-                    .map(|&o| evaluator.output_columns[o][..m].to_vec())
+                (analysed.iter())
+                    .map(|a| a.column(scenario, &evaluator.output_columns, m))
                     .collect()
             },
         )
         .collect();
-    let mut values: ChunkValues = vec![Vec::with_capacity(variants); continuous.len()];
+    let mut values: ChunkValues = vec![Vec::with_capacity(variants); analysed.len()];
     for variant in per_variant {
         for (slot, column) in variant.into_iter().enumerate() {
             values[slot].push(column);
@@ -375,9 +467,14 @@ fn replicate_centres(
     let mut evaluator = ChunkEvaluator::new(scenario);
     evaluator.evaluate_columns_at(&rows, CHUNK_SIZE, 0);
     Ok(plan
-        .continuous
+        .analysed
         .iter()
-        .map(|&o| finite_mean(evaluator.output_columns[o][..CHUNK_SIZE].iter()))
+        .map(|a| {
+            finite_mean(
+                a.column(scenario, &evaluator.output_columns, CHUNK_SIZE)
+                    .iter(),
+            )
+        })
         .collect())
 }
 
@@ -468,6 +565,11 @@ impl BlockSums {
         (first, total)
     }
 
+    /// The mean of the values these sums were taken of, centred on `centre`.
+    fn mean(&self, centre: f64) -> f64 {
+        centre + self.sum / (2.0 * self.rows as f64)
+    }
+
     /// (variance V of the 2·rows values f_A, f_B, first-order indices, total indices):
     /// V = (Σ(f_A² + f_B²)/2n − mean²)·2n/(2n − 1), S_g = first_g/(2n)/V, ST_g =
     /// total_g/(4n)/V (module docs).
@@ -519,7 +621,7 @@ pub struct SobolPartial {
 /// The checked settings of one analysis.
 struct SobolPlan {
     groups: Vec<InputGroup>,
-    continuous: Vec<usize>,
+    analysed: Vec<Analysed>,
     method: IntervalMethod,
     /// A replicated design's points: 2D dimensions, A the first D, B the last D.
     points: Option<PointSet>,
@@ -565,7 +667,7 @@ fn sobol_plan(
     };
     Ok(SobolPlan {
         groups,
-        continuous: scenario.continuous_outputs(),
+        analysed: analysed_quantities(scenario),
         method: settings.interval_method(scenario),
         points,
     })
@@ -687,7 +789,7 @@ pub fn merge_sobol(
     if next != n_chunks {
         return broken(format!("chunks {next}..{n_chunks} are missing"));
     }
-    let n_outputs = plan.continuous.len();
+    let n_outputs = plan.analysed.len();
     let n_variants = 2 * plan.groups.len() + 2;
     match plan.method {
         IntervalMethod::Rows => {
@@ -744,10 +846,11 @@ pub fn merge_sobol(
                     _ => return broken("a partial's block sums do not fit the analysis".into()),
                 }
             }
+            let centres = centres_seen.unwrap_or_default();
             Ok(if plan.method == IntervalMethod::Replicates {
-                indices_from_replicates(scenario, &plan, settings, &chunks)?
+                indices_from_replicates(scenario, &plan, settings, &chunks, &centres)?
             } else {
-                indices_from_blocks(scenario, &plan, settings, &chunks)?
+                indices_from_blocks(scenario, &plan, settings, &chunks, &centres)?
             })
         }
     }
@@ -760,16 +863,17 @@ fn indices_from_replicates(
     plan: &SobolPlan,
     settings: SensitivitySettings,
     chunks: &[ChunkBlocks],
+    centres: &[f64],
 ) -> Result<Vec<OutputSensitivity>, ScenarioError> {
-    let (groups, continuous) = (&plan.groups, &plan.continuous);
+    let (groups, analysed) = (&plan.groups, &plan.analysed);
     let n_groups = groups.len();
     let sampling = settings.sampling;
     let t = student_t_quantile(
         (sampling.replicates - 1) as f64,
         0.5 + settings.confidence / 2.0,
     );
-    let mut results = Vec::with_capacity(continuous.len());
-    for (slot, &o) in continuous.iter().enumerate() {
+    let mut results = Vec::with_capacity(analysed.len());
+    for (slot, &quantity) in analysed.iter().enumerate() {
         let mut replicates = vec![BlockSums::new(n_groups); sampling.replicates as usize];
         let mut non_finite_rows = 0;
         for (chunk, blocks) in (0..).zip(chunks) {
@@ -794,7 +898,7 @@ fn indices_from_replicates(
         }
         if replicates.iter().any(|r| r.rows < 2) {
             return Err(ScenarioError::new(
-                format!("(output {})", scenario.outputs[o].name),
+                format!("(output {})", quantity.name(scenario)),
                 "a replicate has fewer than 2 finite rows: the sensitivity is undefined",
             ));
         }
@@ -804,7 +908,7 @@ fn indices_from_replicates(
         let estimates = replicates.iter().map(BlockSums::first_and_total).collect();
         results.push(output_sensitivity(
             scenario,
-            o,
+            (quantity, all.mean(centres[slot])),
             groups,
             settings,
             variance,
@@ -823,11 +927,12 @@ fn indices_from_blocks(
     plan: &SobolPlan,
     settings: SensitivitySettings,
     chunks: &[ChunkBlocks],
+    centres: &[f64],
 ) -> Result<Vec<OutputSensitivity>, ScenarioError> {
-    let (groups, continuous) = (&plan.groups, &plan.continuous);
+    let (groups, analysed) = (&plan.groups, &plan.analysed);
     let n_groups = groups.len();
-    let mut results = Vec::with_capacity(continuous.len());
-    for (slot, &o) in continuous.iter().enumerate() {
+    let mut results = Vec::with_capacity(analysed.len());
+    for (slot, &quantity) in analysed.iter().enumerate() {
         let blocks: Vec<&BlockSums> = chunks
             .iter()
             .flat_map(|chunk| chunk[slot].0.iter())
@@ -846,7 +951,7 @@ fn indices_from_blocks(
         }
         if all.rows < 2 || blocks.len() < 2 {
             return Err(ScenarioError::new(
-                format!("(output {})", scenario.outputs[o].name),
+                format!("(output {})", quantity.name(scenario)),
                 "fewer than 2 finite rows: the sensitivity is undefined",
             ));
         }
@@ -865,7 +970,7 @@ fn indices_from_blocks(
             .collect();
         results.push(output_sensitivity(
             scenario,
-            o,
+            (quantity, all.mean(centres[slot])),
             groups,
             settings,
             variance,
@@ -910,11 +1015,12 @@ impl Spread {
     }
 }
 
-/// The indices of output `o` with their intervals, groups sorted by decreasing total index.
+/// The indices of `quantity` (with its mean) and their intervals, groups sorted by
+/// decreasing total index.
 #[allow(clippy::too_many_arguments)]
 fn output_sensitivity(
     scenario: &Scenario,
-    o: usize,
+    (quantity, mean): (Analysed, f64),
     groups: &[InputGroup],
     settings: SensitivitySettings,
     variance: f64,
@@ -939,8 +1045,10 @@ fn output_sensitivity(
         .collect();
     group_indices.sort_by(|a, b| b.total.value.total_cmp(&a.total.value));
     OutputSensitivity {
-        name: scenario.outputs[o].name.clone(),
-        unit: scenario.outputs[o].unit.clone(),
+        name: quantity.name(scenario),
+        unit: quantity.unit(scenario),
+        quantity,
+        mean,
         variance,
         non_finite_rows,
         indices: group_indices,
@@ -1064,10 +1172,10 @@ fn indices_from_rows(
     settings: SensitivitySettings,
     chunks: &[ChunkValues],
 ) -> Result<Vec<OutputSensitivity>, ScenarioError> {
-    let (groups, continuous) = (&plan.groups, &plan.continuous);
+    let (groups, analysed) = (&plan.groups, &plan.analysed);
     let n_variants = 2 * groups.len() + 2;
-    let mut results = Vec::with_capacity(continuous.len());
-    for (slot, &o) in continuous.iter().enumerate() {
+    let mut results = Vec::with_capacity(analysed.len());
+    for (slot, &quantity) in analysed.iter().enumerate() {
         // Concatenate the chunks in order: f[variant][row].
         let mut f: Vec<Vec<f64>> =
             vec![Vec::with_capacity(settings.base_samples as usize); n_variants];
@@ -1083,7 +1191,7 @@ fn indices_from_rows(
         let non_finite_rows = (n - finite_rows.len()) as u64;
         if finite_rows.len() < 2 {
             return Err(ScenarioError::new(
-                format!("(output {})", scenario.outputs[o].name),
+                format!("(output {})", quantity.name(scenario)),
                 "fewer than 2 finite rows: the sensitivity is undefined",
             ));
         }
@@ -1118,7 +1226,7 @@ fn indices_from_rows(
                 .collect();
         results.push(output_sensitivity(
             scenario,
-            o,
+            (quantity, centre),
             groups,
             settings,
             variance,

@@ -1,13 +1,15 @@
 //! The report of `rvtol sensitivity`: JSON (`rvtol_version`, `scenario`, `seed`,
 //! `base_samples`, `evaluations`, `bootstrap` and `bootstrap_unit` (Monte Carlo) or
 //! `sampling` (a replicated design), `confidence`, `method`, and `outputs`, each
-//! with `name`, `unit`, `variance`, `non_finite_rows` and `indices`: per input group
-//! `input`, `first_order`, `first_order_ci`, `total`, `total_ci`, sorted by decreasing
-//! total index) and a readable ranking table per output.
+//! with `name`, `unit`, `kind` (`value`; `out_of_spec` for an output's conformity
+//! indicator, `indicator` for an indicator output, both 0/1 with their `share` of rows at
+//! 1), `variance`, `non_finite_rows` and `indices`: per input group `input`,
+//! `first_order`, `first_order_ci`, `total`, `total_ci`, sorted by decreasing total index)
+//! and a readable ranking table per output.
 
 use serde::Serialize;
 
-use crate::sensitivity::{IntervalMethod, OutputSensitivity, SensitivitySettings};
+use crate::sensitivity::{Analysed, IntervalMethod, OutputSensitivity, SensitivitySettings};
 use rvtol_engine::format::{format_sig, group_thousands};
 use rvtol_engine::report::SamplingReport;
 use rvtol_engine::scenario::Scenario;
@@ -17,6 +19,11 @@ const ESTIMATORS: &str = "Sobol' indices of independent input groups: first orde
 
 /// The intervals of a replicated design, in words.
 const REPLICATE_INTERVAL_METHOD: &str = "index of all N rows +- t(0.975, R-1)*s/sqrt(R), s the standard deviation of the index over the R independent replicates";
+
+/// A share as a percentage with four significant digits (`2.153 %`).
+fn percent(share: f64) -> String {
+    format!("{} %", format_sig(100.0 * share))
+}
 
 /// Most rows of the linearised screening that completes a sensitivity report.
 pub const SCREENING_ROWS: u64 = 65_536;
@@ -74,10 +81,16 @@ pub struct ScreeningReport {
 /// One output's ranking.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct OutputSensitivityReport {
-    /// Output name.
+    /// Output name (an output's conformity indicator: its name and ` out of spec`).
     pub name: String,
     /// Unit.
     pub unit: String,
+    /// `value`, `out_of_spec` or `indicator` ([`crate::sensitivity::Analysed::kind`]).
+    pub kind: &'static str,
+    /// For a 0/1 quantity, the share of the 2N rows of A and B at 1 (out of spec, or
+    /// flagged); its variance is share·(1 − share)·2N/(2N − 1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub share: Option<f64>,
     /// Output variance.
     pub variance: f64,
     /// Rows left out for non-finite values.
@@ -103,6 +116,8 @@ pub struct SensitivityReport {
     pub rvtol_version: &'static str,
     /// Scenario name.
     pub scenario: String,
+    /// SHA-256 of the scenario text as loaded (data files written in), hex.
+    pub scenario_sha256: String,
     /// Seed.
     pub seed: u64,
     /// Base samples N.
@@ -150,6 +165,7 @@ impl SensitivityReport {
         SensitivityReport {
             rvtol_version: env!("CARGO_PKG_VERSION"),
             scenario: scenario.name.clone(),
+            scenario_sha256: scenario.digest.clone(),
             seed: settings.seed,
             base_samples: settings.base_samples,
             evaluations: settings.base_samples * (2 * groups + 2),
@@ -176,10 +192,17 @@ impl SensitivityReport {
                 .map(|o| OutputSensitivityReport {
                     name: o.name,
                     unit: o.unit,
+                    kind: o.quantity.kind(),
+                    share: (!matches!(o.quantity, Analysed::Value(_))).then_some(o.mean),
                     variance: o.variance,
                     non_finite_rows: o.non_finite_rows,
                     note: (o.variance.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater))
-                        .then(|| "the output does not vary: no variance to apportion".to_string()),
+                        .then(|| match o.quantity {
+                            Analysed::Value(_) => "the output does not vary: no variance to apportion",
+                            Analysed::OutOfSpec(_) if o.mean == 0.0 => "no row of A and B is out of spec: nothing to rank (more base samples reach a smaller share)",
+                            Analysed::OutOfSpec(_) => "every row of A and B is out of spec: nothing to rank",
+                            Analysed::Indicator(_) => "the indicator takes one value in every row of A and B: nothing to rank",
+                        }.to_string()),
                     indices: o
                         .indices
                         .into_iter()
@@ -321,12 +344,25 @@ impl SensitivityReport {
             } else {
                 format!(" {}²", output.unit)
             };
-            lines.push(format!(
-                "{} ({}), variance {}{squared_unit}",
-                output.name,
-                output.unit,
-                format_sig(output.variance),
-            ));
+            lines.push(match output.share {
+                Some(share) => format!(
+                    "{}: {}{} of the rows of A and B, variance {}",
+                    output.name,
+                    if output.kind == "indicator" {
+                        "set in "
+                    } else {
+                        ""
+                    },
+                    percent(share),
+                    format_sig(output.variance),
+                ),
+                None => format!(
+                    "{} ({}), variance {}{squared_unit}",
+                    output.name,
+                    output.unit,
+                    format_sig(output.variance),
+                ),
+            });
             if let Some(note) = &output.note {
                 lines.push(format!("  {note}"));
                 continue;

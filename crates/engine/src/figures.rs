@@ -108,6 +108,10 @@ pub struct HistogramFigures {
     pub bin_width: f64,
     /// Counts per bin.
     pub counts: Vec<u64>,
+    /// Of them, the samples an indicator flags non-conforming, per bin (their values
+    /// stand, but the assemblies do not conform): when the output has such samples.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub flagged: Option<Vec<u64>>,
 }
 
 /// Capability figures of an output with spec limits.
@@ -348,6 +352,7 @@ impl OutputContext<'_> {
                 lower_edge: found.histogram.lower_edge,
                 bin_width: found.histogram.bin_width,
                 counts: found.histogram.counts,
+                flagged: found.flagged_counts,
             },
             events: indicator.then_some(acc.nonzero),
             fraction: indicator.then_some(interval.fraction),
@@ -444,6 +449,8 @@ struct PercentileFigures {
     bounds: Vec<f64>,
     intervals: Vec<[Option<f64>; 2]>,
     histogram: Histogram,
+    /// The histogram's counts of flagged samples alone, when there are any.
+    flagged_counts: Option<Vec<u64>>,
     of_values: Option<Vec<Option<f64>>>,
 }
 
@@ -472,6 +479,8 @@ fn percentile_figures(
                 _ => &[],
             };
             let mut histogram = Histogram::from_values(values, min, max, HISTOGRAM_BINS);
+            let flagged_counts = (!flagged.is_empty())
+                .then(|| Histogram::from_values(flagged, min, max, HISTOGRAM_BINS).counts);
             histogram.add_values(flagged);
             // The plain percentiles of the values, before the selection reorders them.
             let of_values = (beyond > 0).then(|| {
@@ -493,6 +502,7 @@ fn percentile_figures(
                 values: found.iter().map(|f| f.map(|f| f.value)).collect(),
                 bounds: vec![0.0; PERCENTS.len()],
                 histogram,
+                flagged_counts,
                 of_values,
             }
         }
@@ -551,9 +561,11 @@ fn sketch_percentile_figures(
         })
         .collect();
     let mut histogram = histogram_of_standardised_sketch(sketch, center, scale, read.min, read.max);
+    let mut flagged_counts = None;
     if let Some(flagged) = flagged {
         let more = histogram_of_standardised_sketch(flagged, center, scale, read.min, read.max);
         histogram.add_counts(&more);
+        flagged_counts = more.counts.iter().any(|&c| c > 0).then_some(more.counts);
     }
     let of_values = (beyond > 0).then(|| {
         let mut all = sketch.clone();
@@ -601,6 +613,7 @@ fn sketch_percentile_figures(
             })
             .collect(),
         histogram,
+        flagged_counts,
         of_values,
     }
 }
@@ -625,6 +638,7 @@ fn indicator_percentile_figures(events: u64, n: u64) -> PercentileFigures {
             bin_width: 0.5,
             counts: vec![zeros, events],
         },
+        flagged_counts: None,
         of_values: None,
     }
 }

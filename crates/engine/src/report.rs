@@ -76,6 +76,8 @@ pub struct RunReport {
     pub rvtol_version: &'static str,
     /// Scenario name.
     pub scenario: String,
+    /// SHA-256 of the scenario text as loaded (data files written in), hex.
+    pub scenario_sha256: String,
     /// Seed.
     pub seed: u64,
     /// Samples drawn.
@@ -131,6 +133,7 @@ impl RunReport {
         RunReport {
             rvtol_version: env!("CARGO_PKG_VERSION"),
             scenario: scenario.name.clone(),
+            scenario_sha256: scenario.digest.clone(),
             seed: result.seed,
             samples: result.samples,
             chunk_size: CHUNK_SIZE,
@@ -457,6 +460,8 @@ pub struct NominalReport {
     pub rvtol_version: &'static str,
     /// Scenario name.
     pub scenario: String,
+    /// SHA-256 of the scenario text as loaded (data files written in), hex.
+    pub scenario_sha256: String,
     /// One entry per output.
     pub outputs: Vec<NominalOutput>,
 }
@@ -485,6 +490,7 @@ impl NominalReport {
         NominalReport {
             rvtol_version: env!("CARGO_PKG_VERSION"),
             scenario: scenario.name.clone(),
+            scenario_sha256: scenario.digest.clone(),
             outputs: scenario
                 .outputs
                 .iter()

@@ -1307,6 +1307,30 @@ fn is_set(flag: f64) -> bool {
     flag.is_finite() && flag != 0.0
 }
 
+/// Whether one sample of output `o` does not conform, by the rule of
+/// [`OutputAccumulator::out_of_spec`] sample by sample: its value outside the spec limits
+/// or not finite, its qualifying indicator excluding it, or flagging it non-conforming
+/// (unless the spec says flagged samples conform within the limits). `value` is the
+/// output's, `flag` the value of its qualifying indicator (ignored without one). Without
+/// spec limits only the flags and a non-finite value count.
+pub fn sample_out_of_spec(scenario: &Scenario, o: usize, value: f64, flag: f64) -> bool {
+    let info = &scenario.outputs[o];
+    match info.condition {
+        Some((_, ConditionEffect::Excluded)) if is_set(flag) => return true,
+        Some((_, ConditionEffect::NonConforming)) if is_set(flag) && !info.flagged_conform => {
+            return true
+        }
+        _ => {}
+    }
+    if !value.is_finite() {
+        return true;
+    }
+    info.spec.is_some_and(|limits| {
+        limits.lower.is_some_and(|lower| value < lower)
+            || limits.upper.is_some_and(|upper| value > upper)
+    })
+}
+
 /// Counts `count` non-finite values among `values` and records the first one's sample.
 fn note_non_finite(acc: &mut OutputAccumulator, values: &[f64], count: usize, first: u64) {
     if count > 0 {

@@ -207,12 +207,15 @@ fn canvas(out: &mut String, height: u32) -> Result<DrawingArea<SVGBackend<'_>, S
 
 /// Histogram of a run's output (bins from the report) against its spec limits, with the
 /// P0.135, P50 and P99.865 markers and their 95 % intervals as shaded bands.
+#[allow(clippy::too_many_arguments)]
 pub fn histogram(
     title: &str,
     x_label: &str,
     lower_edge: f64,
     bin_width: f64,
     counts: &[u64],
+    flagged: Option<&[u64]>,
+    corner: Option<&str>,
     limits: Limits,
     markers: &[Marker],
 ) -> Drawn {
@@ -261,25 +264,56 @@ pub fn histogram(
                 )))?;
             }
         }
+        // The flagged samples of a bin (their values stand, the assemblies do not conform)
+        // stacked on its other samples, in their own colour.
+        let flagged_of = |i: usize| flagged.and_then(|f| f.get(i)).copied().unwrap_or(0);
         let bars = COLOURS[0];
         chart
             .draw_series(
                 counts
                     .iter()
                     .enumerate()
-                    .filter(|(_, &c)| c > 0)
+                    .filter(|&(i, &c)| c > flagged_of(i))
                     .map(|(i, &c)| {
                         let left = lower_edge + bin_width * i as f64;
                         Rectangle::new(
-                            [(left, 0.0), (left + bin_width, c as f64)],
+                            [(left, 0.0), (left + bin_width, (c - flagged_of(i)) as f64)],
                             bars.mix(0.75).filled(),
                         )
                     }),
             )?
-            .label("samples")
+            .label(if flagged.is_some() {
+                "conforming by their flags"
+            } else {
+                "samples"
+            })
             .legend(move |(x, y)| {
                 Rectangle::new([(x, y - 5), (x + 14, y + 5)], bars.mix(0.75).filled())
             });
+        if flagged.is_some() {
+            let orange = COLOURS[4];
+            chart
+                .draw_series(
+                    counts
+                        .iter()
+                        .enumerate()
+                        .filter(|&(i, _)| flagged_of(i) > 0)
+                        .map(|(i, &c)| {
+                            let left = lower_edge + bin_width * i as f64;
+                            Rectangle::new(
+                                [
+                                    (left, (c - flagged_of(i)) as f64),
+                                    (left + bin_width, c as f64),
+                                ],
+                                orange.mix(0.85).filled(),
+                            )
+                        }),
+                )?
+                .label("flagged non-conforming")
+                .legend(move |(x, y)| {
+                    Rectangle::new([(x, y - 5), (x + 14, y + 5)], orange.mix(0.85).filled())
+                });
+        }
         for (k, marker) in markers.iter().enumerate() {
             if !marker.value.is_finite() {
                 continue;
@@ -326,6 +360,14 @@ pub fn histogram(
         }
         // No legend: the labels on the lines and the caption say what they are, and a
         // legend box would cover a tail.
+        if let Some(corner) = corner {
+            let (xs, ys) = chart.plotting_area().get_pixel_range();
+            root.draw(&Text::new(
+                corner.to_string(),
+                (xs.end - 6, ys.start + 4),
+                anchored(12, HPos::Right, VPos::Top).color(&COLOURS[4].mix(1.0)),
+            ))?;
+        }
         if !far.is_empty() {
             let (xs, ys) = chart.plotting_area().get_pixel_range();
             root.draw(&Text::new(
@@ -908,6 +950,8 @@ mod tests {
             0.0,
             0.1,
             &[1, 5, 9, 5, 1],
+            Some(&[0, 0, 2, 5, 1]),
+            Some("out of spec 12 %"),
             Limits {
                 lower: Some(0.05),
                 upper: Some(f64::NAN),
@@ -921,5 +965,9 @@ mod tests {
         .unwrap();
         assert!(svg.contains("LSL 0.05") && svg.contains("P50"));
         assert!(!svg.contains("NaN") && !svg.contains("inf"));
+        // The flagged counts stack on the other samples in their own colour (COLOURS[4]:
+        // one bar per bin that holds any, 3, and the corner note in it).
+        assert_eq!(svg.matches("fill=\"#D9822B\"").count(), 3 + 1, "{svg}");
+        assert!(svg.contains("out of spec 12 %"));
     }
 }

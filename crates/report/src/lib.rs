@@ -232,6 +232,26 @@ pub fn render(report: &Report) -> Result<String, ReportError> {
 fn record_section(report: &Report) -> String {
     let record = &report.record;
     let mut rows: Vec<Vec<String>> = vec![vec!["scenario".into(), escape(&record.scenario)]];
+    // The digest of the scenario text every report was computed from (`rvtol report`
+    // composes reports of one text only).
+    let digest = [
+        report.run,
+        report.sensitivity,
+        report.allocation,
+        report.stack,
+    ]
+    .into_iter()
+    .flatten()
+    .find_map(|json| s(json, "scenario_sha256"));
+    if let Some(digest) = digest {
+        rows.push(vec![
+            "scenario SHA-256".into(),
+            format!(
+                "<code>{}</code> (of the scenario text, data files written in)",
+                escape(digest)
+            ),
+        ]);
+    }
     if let Some(source) = &record.source {
         rows.push(vec![
             "scenario file".into(),
@@ -434,6 +454,135 @@ fn run_section(run: &Value) -> Result<String, ReportError> {
     Ok(out)
 }
 
+/// The histogram and the cumulative plot of an output, side by side.
+fn distribution_figures(
+    output: &Value,
+    name: &str,
+    label: &str,
+    limits: Limits,
+    all_markers: &[Marker],
+) -> Result<String, ReportError> {
+    let mut out = String::new();
+    let three: Vec<Marker> = all_markers
+        .iter()
+        .filter(|m| [0.135, 50.0, 99.865].contains(&m.percent))
+        .cloned()
+        .collect();
+    let histogram = output.get("histogram");
+    let counts: Vec<u64> = histogram
+        .and_then(|h| h.get("counts"))
+        .and_then(Value::as_array)
+        .map(|c| c.iter().filter_map(Value::as_u64).collect())
+        .unwrap_or_default();
+    let flagged: Option<Vec<u64>> = histogram
+        .and_then(|h| h.get("flagged"))
+        .and_then(Value::as_array)
+        .map(|c| c.iter().filter_map(Value::as_u64).collect())
+        .filter(|c: &Vec<u64>| c.len() == counts.len());
+    let lower_edge = histogram.and_then(|h| f(h, "lower_edge"));
+    let bin_width = histogram.and_then(|h| f(h, "bin_width"));
+    let total: u64 = counts.iter().sum();
+    let flagged_total: u64 = flagged.iter().flatten().sum();
+    // On the chart, where flagged samples hide among the values: the out-of-spec share.
+    let corner = (flagged_total > 0).then(|| {
+        format!(
+            "out of spec {} % (flagged {} %)",
+            number(f(output, "ppm_out").map(|ppm| ppm / 1e4)),
+            number(Some(100.0 * flagged_total as f64 / total as f64))
+        )
+    });
+    out.push_str("<div class=\"pair\">\n");
+    match (lower_edge, bin_width) {
+        (Some(lower_edge), Some(bin_width)) if total > 0 => {
+            let svg = chart::histogram(
+                &format!("{name}: histogram"),
+                label,
+                lower_edge,
+                bin_width,
+                &counts,
+                flagged.as_deref(),
+                corner.as_deref(),
+                limits,
+                &three,
+            )?;
+            let flagged_note = if flagged_total > 0 {
+                format!(
+                    " Orange: the {} samples ({} %) an indicator flags non-conforming, drawn at \
+                     their values but out of spec; the percentiles and the ppm place them beyond \
+                     the limits.",
+                    thousands(flagged_total),
+                    number(Some(100.0 * flagged_total as f64 / total as f64))
+                )
+            } else {
+                String::new()
+            };
+            out.push_str(&figure(
+                &svg,
+                &format!(
+                    "Histogram of the {} samples with a value, {} bins. Dashed: P0.135, P50, P99.865, \
+                     their 95 % intervals shaded. Red: spec limits.{flagged_note}",
+                    thousands(total),
+                    counts.len()
+                ),
+            ));
+            // The cumulative fraction at the bin edges of `counts` less `without` per bin.
+            let cumulative_of = |without: &dyn Fn(usize) -> u64| {
+                let mut sum = 0u64;
+                (counts.iter().enumerate())
+                    .map(|(k, c)| {
+                        sum += c - without(k);
+                        (
+                            lower_edge + bin_width * (k + 1) as f64,
+                            sum as f64 / total as f64,
+                        )
+                    })
+                    .collect::<Vec<_>>()
+            };
+            let mut curves = vec![Cumulative {
+                label: if flagged_total > 0 {
+                    "every value (flagged included), cumulative at the bin edges".into()
+                } else {
+                    "histogram, cumulative at the bin edges".into()
+                },
+                points: cumulative_of(&|_| 0),
+            }];
+            if let Some(flagged) = flagged.as_ref().filter(|_| flagged_total > 0) {
+                curves.push(Cumulative {
+                    label: "conforming by their flags: the flagged ones lie beyond".into(),
+                    points: cumulative_of(&|k| flagged[k]),
+                });
+            }
+            let svg = chart::probability_plot(
+                &format!("{name}: cumulative distribution"),
+                label,
+                &curves,
+                all_markers,
+                limits,
+                None,
+            )?;
+            out.push_str(&figure(
+                &svg,
+                &format!(
+                    "Cumulative distribution on a normal probability scale (a normal distribution \
+                     is a straight line; the tails are spread out): the histogram's cumulative \
+                     fraction at its bin edges, and the seven reported percentiles with their 95 % \
+                     intervals.{}",
+                    if flagged_total > 0 {
+                        " The second curve leaves the flagged samples out (it ends below 1 by \
+                         their share): the reported percentiles read that one, the flagged \
+                         samples placed beyond the limits."
+                    } else {
+                        ""
+                    }
+                ),
+            ));
+        }
+        _ => out.push_str("<p class=\"note\">No sample has a value: nothing to draw.</p>\n"),
+    }
+    out.push_str("</div>\n");
+    Ok(out)
+}
+
 fn output_block(output: &Value, name: &str, unit: &str) -> Result<String, ReportError> {
     let label = if unit.is_empty() {
         name.to_string()
@@ -451,71 +600,13 @@ fn output_block(output: &Value, name: &str, unit: &str) -> Result<String, Report
         upper: spec.and_then(|s| f(s, "upper")),
     };
     let all_markers = markers(output);
-    let three: Vec<Marker> = all_markers
-        .iter()
-        .filter(|m| [0.135, 50.0, 99.865].contains(&m.percent))
-        .cloned()
-        .collect();
-    let histogram = output.get("histogram");
-    let counts: Vec<u64> = histogram
-        .and_then(|h| h.get("counts"))
-        .and_then(Value::as_array)
-        .map(|c| c.iter().filter_map(Value::as_u64).collect())
-        .unwrap_or_default();
-    let lower_edge = histogram.and_then(|h| f(h, "lower_edge"));
-    let bin_width = histogram.and_then(|h| f(h, "bin_width"));
-    let total: u64 = counts.iter().sum();
-    out.push_str("<div class=\"pair\">\n");
-    match (lower_edge, bin_width) {
-        (Some(lower_edge), Some(bin_width)) if total > 0 => {
-            let svg = chart::histogram(
-                &format!("{name}: histogram"),
-                &label,
-                lower_edge,
-                bin_width,
-                &counts,
-                limits,
-                &three,
-            )?;
-            out.push_str(&figure(
-                &svg,
-                &format!(
-                    "Histogram of the {} samples with a value, {} bins. Dashed: P0.135, P50, P99.865, \
-                     their 95 % intervals shaded. Red: spec limits.",
-                    thousands(total),
-                    counts.len()
-                ),
-            ));
-            let mut cumulative = Vec::with_capacity(counts.len());
-            let mut sum = 0u64;
-            for (k, c) in counts.iter().enumerate() {
-                sum += c;
-                cumulative.push((
-                    lower_edge + bin_width * (k + 1) as f64,
-                    sum as f64 / total as f64,
-                ));
-            }
-            let svg = chart::probability_plot(
-                &format!("{name}: cumulative distribution"),
-                &label,
-                &[Cumulative {
-                    label: "histogram, cumulative at the bin edges".into(),
-                    points: cumulative,
-                }],
-                &all_markers,
-                limits,
-                None,
-            )?;
-            out.push_str(&figure(
-                &svg,
-                "Cumulative distribution on a normal probability scale (a normal distribution is a \
-                 straight line; the tails are spread out): the histogram's cumulative fraction at its \
-                 bin edges, and the seven reported percentiles with their 95 % intervals.",
-            ));
-        }
-        _ => out.push_str("<p class=\"note\">No sample has a value: nothing to draw.</p>\n"),
-    }
-    out.push_str("</div>\n");
+    out.push_str(&distribution_figures(
+        output,
+        name,
+        &label,
+        limits,
+        &all_markers,
+    )?);
     // Figures.
     let count = |key: &str| output.get(key).and_then(Value::as_u64).unwrap_or(0);
     let mut rows = vec![
@@ -666,6 +757,23 @@ fn sensitivity_section(report: &Value) -> Result<String, ReportError> {
             anchor("sens", name),
             escape(name)
         ));
+        if let Some(share) = f(output, "share") {
+            let what = match s(output, "kind") {
+                Some("out_of_spec") => {
+                    "out of spec (the run's rule: outside the limits, not \
+                     finite, or flagged non-conforming)"
+                }
+                _ => "set",
+            };
+            out.push_str(&format!(
+                "<p class=\"note\">A 0/1 quantity, {what} in {} % of the rows of A and B: its \
+                 Sobol' indices say which sources decide whether an assembly fails.</p>\n",
+                number(Some(100.0 * share))
+            ));
+        }
+        if let Some(note) = s(output, "note") {
+            out.push_str(&format!("<p class=\"note\">{}.</p>\n", escape(note)));
+        }
         let mut indices: Vec<&Value> = output
             .get("indices")
             .and_then(Value::as_array)
@@ -773,11 +881,13 @@ fn sensitivity_section(report: &Value) -> Result<String, ReportError> {
                 ]
             })
             .collect();
-        out.push_str(&table(
-            &["source", "first order", "95 % CI", "total", "95 % CI"],
-            &rows,
-            &[1, 2, 3, 4],
-        ));
+        if !rows.is_empty() {
+            out.push_str(&table(
+                &["source", "first order", "95 % CI", "total", "95 % CI"],
+                &rows,
+                &[1, 2, 3, 4],
+            ));
+        }
     }
     out.push_str("</section>\n");
     Ok(out)

@@ -171,6 +171,8 @@ pub struct CommonScale {
 pub struct Allocation {
     /// Scenario name.
     pub scenario: String,
+    /// SHA-256 of the scenario text as loaded (data files written in), hex.
+    pub scenario_sha256: String,
     /// The constrained output.
     pub output: String,
     /// Its unit.
@@ -213,6 +215,7 @@ pub struct Allocation {
 struct Problem<'a> {
     document: Value,
     name: &'a str,
+    digest: &'a str,
     sources: Vec<AllocatableSource>,
     output: usize,
     output_name: &'a str,
@@ -519,6 +522,7 @@ fn allocate_tolerances(
     let problem = Problem {
         document,
         name: &scenario.name,
+        digest: &scenario.digest,
         sources,
         output: output_index,
         output_name: output,
@@ -662,6 +666,7 @@ impl Problem<'_> {
         let current_cost = sources.iter().map(|s| s.current_cost).sum::<Option<f64>>();
         Ok(Allocation {
             scenario: self.name.to_string(),
+            scenario_sha256: self.digest.to_string(),
             output: self.output_name.to_string(),
             unit: unit.to_string(),
             target: self.target,

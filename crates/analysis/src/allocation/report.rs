@@ -103,6 +103,8 @@ pub struct AllocationReport {
     pub rvtol_version: &'static str,
     /// Scenario name.
     pub scenario: String,
+    /// SHA-256 of the scenario text as loaded (data files written in), hex.
+    pub scenario_sha256: String,
     /// The constrained output.
     pub output: String,
     /// Its unit.
@@ -199,6 +201,7 @@ impl AllocationReport {
         AllocationReport {
             rvtol_version: env!("CARGO_PKG_VERSION"),
             scenario: a.scenario.clone(),
+            scenario_sha256: a.scenario_sha256.clone(),
             output: a.output.clone(),
             unit: a.unit.clone(),
             target: a.target.expression(),

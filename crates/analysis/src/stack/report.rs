@@ -127,6 +127,8 @@ pub struct StackReport {
     pub rvtol_version: &'static str,
     /// Scenario name.
     pub scenario: String,
+    /// SHA-256 of the scenario text as loaded (data files written in), hex.
+    pub scenario_sha256: String,
     /// Seed of the linearity rows.
     pub seed: u64,
     /// The methods, in words.
@@ -188,6 +190,7 @@ impl StackReport {
         StackReport {
             rvtol_version: env!("CARGO_PKG_VERSION"),
             scenario: scenario.name.clone(),
+            scenario_sha256: scenario.digest.clone(),
             seed: settings.seed,
             method: METHOD,
             corners: stack.corners,

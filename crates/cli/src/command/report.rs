@@ -48,6 +48,11 @@ pub fn report(args: ReportArgs) -> Result<()> {
         .into());
     }
     let scenario_of = |v: &serde_json::Value| v["scenario"].as_str().unwrap_or("").to_string();
+    let digest_of = |v: &serde_json::Value| v["scenario_sha256"].as_str().map(str::to_string);
+    let shown = |digest: &Option<String>| match digest {
+        Some(digest) => format!("text sha256 {}…", &digest[..digest.len().min(12)]),
+        None => "a text of unrecorded digest".to_string(),
+    };
     let mut found: Vec<(Kind, serde_json::Value, &Path)> = Vec::new();
     for file in files {
         let text = read_text(file)?;
@@ -66,6 +71,18 @@ pub fn report(args: ReportArgs) -> Result<()> {
                     "{}: a report of scenario '{this}', but {} is of '{that}'; one page shows one scenario",
                     file.display(),
                     first_file.display()
+                ))
+                .into());
+            }
+            let (this, that) = (digest_of(&value), digest_of(first));
+            if this != that {
+                return Err(BadInput(format!(
+                    "{}: a report of scenario '{}' ({}), but {} is of another text of it ({}); one page shows one scenario text: run the analyses again on one file",
+                    file.display(),
+                    scenario_of(&value),
+                    shown(&this),
+                    first_file.display(),
+                    shown(&that)
                 ))
                 .into());
             }
@@ -95,6 +112,16 @@ pub fn report(args: ReportArgs) -> Result<()> {
                 "{}: scenario '{}', but the reports are of '{name}'",
                 path.display(),
                 scenario.name
+            ))
+            .into());
+        }
+        let reports_digest = found.first().and_then(|(_, v, _)| digest_of(v));
+        if reports_digest.as_deref() != Some(scenario.digest.as_str()) {
+            return Err(BadInput(format!(
+                "{}: not the scenario text the reports were computed from (its text sha256 {}…, the reports' {}); give the file they ran, or run them again",
+                path.display(),
+                &scenario.digest[..12],
+                shown(&reports_digest)
             ))
             .into());
         }

@@ -2051,7 +2051,10 @@ fn the_greek_mu_is_read_as_the_micro_sign_in_units() {
             "-",
         ]);
         assert_eq!(out.status.code(), Some(0), "{label}: {}", text(&out.stderr));
-        reports.push(out.stdout);
+        // The two texts differ (µ, μ), so do their digests; every figure is the same.
+        let mut report: Value = serde_json::from_slice(&out.stdout).expect("a JSON report");
+        report["scenario_sha256"] = Value::Null;
+        reports.push(report);
     }
     assert_eq!(reports[0], reports[1], "µ and μ give one run");
     // A variable in μm bound to an input in mm is converted as one in µm.

@@ -9,6 +9,7 @@
 use crate::common;
 
 use common::{run_rvtol, scenario, workspace_dir};
+use rvtol_engine::format::group_thousands as thousands;
 use serde_json::Value;
 
 fn temp_dir(label: &str) -> std::path::PathBuf {
@@ -134,6 +135,22 @@ fn run_html_of_every_shipped_scenario_has_its_plots() {
                     "{stem}: {name} {marker}"
                 );
             }
+            // Samples flagged non-conforming are drawn apart, their count in the caption.
+            if let Some(flagged) = output["histogram"]["flagged"].as_array() {
+                let count: u64 = flagged.iter().filter_map(Value::as_u64).sum();
+                let counts: u64 = output["histogram"]["counts"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .filter_map(Value::as_u64)
+                    .sum();
+                assert!(count > 0 && count <= counts, "{stem}: {name} flagged");
+                assert!(page.contains("flagged non-conforming"), "{stem}: legend");
+                assert!(
+                    page.contains(&format!("Orange: the {} samples", thousands(count))),
+                    "{stem}: {name} caption"
+                );
+            }
             if let Some(spec) = output.get("spec") {
                 for (key, label) in [("lower", "LSL"), ("upper", "USL")] {
                     if spec[key].is_number() {
@@ -250,6 +267,60 @@ fn report_composes_run_sensitivity_and_allocation_into_one_page() {
     assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
     assert!(stderr.contains("one page shows one scenario"), "{stderr}");
     assert!(!std::path::Path::new(&target).exists());
+    // Every report records the SHA-256 of the text it ran, and the page shows it.
+    let digest_of = |file: &str| -> String {
+        let json: Value = serde_json::from_str(&std::fs::read_to_string(file).unwrap()).unwrap();
+        json["scenario_sha256"].as_str().unwrap().to_string()
+    };
+    let digest = digest_of(&path("run.json"));
+    assert!(digest.len() == 64 && digest.chars().all(|c| c.is_ascii_hexdigit()));
+    assert_eq!(digest, digest_of(&path("sens.json")));
+    assert_eq!(digest, digest_of(&path("alloc.json")));
+    assert!(page.contains(&format!("<code>{digest}</code>")));
+    // The same scenario name with another text (edited after the run): its report is
+    // refused beside the first's, and so is the edited file as the page's scenario.
+    let mut edited: Value = serde_json::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
+    edited["description"] = Value::from("edited after the run");
+    std::fs::write(path("edited.json"), edited.to_string()).unwrap();
+    ok(&run_rvtol(&[
+        "run",
+        &path("edited.json"),
+        "--samples",
+        "1000",
+        "--json",
+        &path("edited-run.json"),
+        "--quiet",
+    ]));
+    assert_ne!(digest, digest_of(&path("edited-run.json")));
+    let refused = |args: &[&str], says: &str| {
+        let output = run_rvtol(args);
+        assert_eq!(output.status.code(), Some(2));
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+        assert!(stderr.contains(says), "{stderr}");
+        assert!(!std::path::Path::new(&target).exists());
+    };
+    refused(
+        &[
+            "report",
+            &path("sens.json"),
+            &path("edited-run.json"),
+            "-o",
+            &target,
+        ],
+        "another text of it",
+    );
+    refused(
+        &[
+            "report",
+            &path("run.json"),
+            "--scenario",
+            &path("edited.json"),
+            "-o",
+            &target,
+        ],
+        "not the scenario text the reports were computed from",
+    );
     // Two run reports, and a file that is no report.
     let output = run_rvtol(&[
         "report",

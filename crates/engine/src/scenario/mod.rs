@@ -146,6 +146,19 @@ pub struct Scenario {
     pub allocation: Vec<AllocatableSource>,
     /// The discrete design choices `rvtol allocate` may make (`allocation.levers`).
     pub allocation_levers: Vec<Lever>,
+    /// SHA-256 of the scenario text as loaded (data files written in), lower-case hex:
+    /// every report records it, so that a report, a page or a baseline is tied to the
+    /// exact text that produced it ([`scenario_digest`]).
+    pub digest: String,
+}
+
+/// The SHA-256 of a scenario text (its UTF-8 bytes), lower-case hex.
+pub fn scenario_digest(text: &str) -> String {
+    use sha2::{Digest, Sha256};
+    Sha256::digest(text.as_bytes())
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
 }
 
 impl Scenario {
@@ -165,7 +178,8 @@ impl Scenario {
     ) -> Result<Scenario, Vec<ScenarioError>> {
         let (file, mut problems) = file::parse(text).map_err(|err| vec![err])?;
         match compile::compile(file, fallback_name, &mut problems) {
-            Some(scenario) if problems.is_empty() => {
+            Some(mut scenario) if problems.is_empty() => {
+                scenario.digest = scenario_digest(text);
                 // The file's sampling against its own samples (at least 1, checked by the
                 // compiler) and input space.
                 (scenario.sampling)

@@ -162,6 +162,7 @@ pub(super) fn compile(
         outputs,
         allocation,
         allocation_levers,
+        digest: String::new(),
     })
 }
 
