@@ -841,7 +841,21 @@ fn sensitivity_section(report: &Value) -> Result<String, ReportError> {
             .and_then(Value::as_array)
             .map(|a| a.iter().collect())
             .unwrap_or_default();
-        if !sources.is_empty() {
+        let r_squared = screening.and_then(|s| f(s, "r_squared"));
+        let poor = rvtol_analysis::stack::POOR_LINEARITY;
+        let linear_enough = r_squared.is_some_and(|r2| r2 >= poor);
+        if !sources.is_empty() && !linear_enough {
+            // A chart of contributions the linearisation does not support would be read
+            // as a ranking: say why it is not drawn instead.
+            out.push_str(&format!(
+                "<p class=\"note\">Linearised contributions not drawn: the linear fit to the \
+                 samples explains R² = {} of the output's variation (below {poor}), so the \
+                 first-order Taylor shares at the nominal do not describe this output; the \
+                 Sobol' indices are the ranking. The shares are in the JSON report.</p>\n",
+                number(r_squared)
+            ));
+        }
+        if !sources.is_empty() && linear_enough {
             let rows: Vec<BarRow> = sources
                 .iter()
                 .map(|v| BarRow {
@@ -859,10 +873,10 @@ fn sensitivity_section(report: &Value) -> Result<String, ReportError> {
                 &svg,
                 &format!(
                     "First-order Taylor expansion at the nominal: each source's (∂y/∂x)²·Var(x) as a \
-                     share of their sum. R² of the linear fit to the samples: {} — where it is far \
-                     below 1 the model is not linear over the tolerances, and the Sobol' indices are \
-                     the ranking to trust.",
-                    number(screening.and_then(|s| f(s, "r_squared")))
+                     share of their sum. R² of the linear fit to the samples: {} (drawn from \
+                     {poor} up; below, the model is not linear over the tolerances, and the \
+                     Sobol' indices are the ranking to trust).",
+                    number(r_squared)
                 ),
             ));
         }
@@ -1068,12 +1082,40 @@ fn before_and_after(
     } else {
         format!("{output} ({unit})")
     };
+    let spec = report.get("spec");
+    let limits = Limits {
+        lower: spec.and_then(|s| f(s, "lower")),
+        upper: spec.and_then(|s| f(s, "upper")),
+    };
+    // Where a run's quantiles stop: the samples beyond the limits (flagged, excluded, not
+    // finite) have no value on this axis, so its curve ends below 100 %.
+    let ends: Vec<String> = (lines.iter())
+        .filter_map(|line| {
+            let last = line.points.last()?.1;
+            (last < 0.99).then(|| format!("{} at {} %", line.label, number(Some(100.0 * last))))
+        })
+        .collect();
+    let ends = if ends.is_empty() {
+        String::new()
+    } else {
+        format!(
+            " A curve ends where its samples beyond the limits begin (flagged non-conforming, \
+             excluded or not finite: no value to draw): {}.",
+            ends.join("; ")
+        )
+    };
+    let drawn = match (target_line.is_some(), limits.lower.or(limits.upper).is_some()) {
+        (true, true) => "; the target and the spec limits drawn",
+        (true, false) => "; the target drawn",
+        (false, true) => "; the spec limits drawn",
+        (false, false) => "",
+    };
     let svg = chart::probability_plot(
         &format!("{output}: before and after"),
         &label,
         &lines,
         &[],
-        Limits::default(),
+        limits,
         target_line.map(|(value, percent)| chart::Target {
             value,
             percent,
@@ -1082,8 +1124,11 @@ fn before_and_after(
     )?;
     Ok(figure(
         &svg,
-        "The targeted output's cumulative distribution today and with the proposed tolerances \
-         (the independent verification run), on a normal probability scale.",
+        &format!(
+            "The targeted output's cumulative distribution today and with the proposed \
+             tolerances (the independent verification run), on a normal probability \
+             scale{drawn}.{ends}"
+        ),
     ))
 }
 
@@ -1250,4 +1295,33 @@ pub fn curve_csv(curve: &Curve) -> String {
 /// The curve as a standalone SVG chart (`rvtol curve`).
 pub fn curve_svg(curve: &Curve) -> Result<String, ReportError> {
     Ok(chart::curve(curve)?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_before_and_after_plot_draws_the_spec_and_says_where_a_curve_ends() {
+        // Today's quantiles stop at 90 %: the rest of the samples lie beyond the limit
+        // (null values, as the allocation report writes them); the verification run's
+        // curve is whole.
+        let p = [0.135, 2.275, 50.0, 84.134, 90.0, 97.725, 99.865];
+        let report = serde_json::json!({
+            "spec": { "lower": null, "upper": 1.0 },
+            "current": { "quantiles": { "p": p, "value": [0.1, 0.2, 0.5, 0.8, 0.95, null, null] } },
+            "verification": {
+                "seed": 7,
+                "quantiles": { "p": p, "value": [0.1, 0.15, 0.3, 0.5, 0.6, 0.8, 0.9] }
+            }
+        });
+        let html = before_and_after(&report, "y", "mm", "p99.865 <= 1").unwrap();
+        assert!(html.contains("USL 1"), "the spec limit is drawn");
+        assert!(html.contains("target p99.865 &lt;= 1") || html.contains("target p99.865 <= 1"));
+        assert!(html.contains("today at 90"), "{html}");
+        assert!(
+            !html.contains("(seed 7) at"),
+            "a whole curve has no end note"
+        );
+    }
 }

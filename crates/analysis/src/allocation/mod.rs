@@ -173,6 +173,8 @@ pub struct Allocation {
     pub scenario: String,
     /// SHA-256 of the scenario text as loaded (data files written in), hex.
     pub scenario_sha256: String,
+    /// The output's spec limits, when the scenario sets them.
+    pub spec: Option<SpecLimits>,
     /// The constrained output.
     pub output: String,
     /// Its unit.
@@ -667,6 +669,7 @@ impl Problem<'_> {
         Ok(Allocation {
             scenario: self.name.to_string(),
             scenario_sha256: self.digest.to_string(),
+            spec: self.limits,
             output: self.output_name.to_string(),
             unit: unit.to_string(),
             target: self.target,

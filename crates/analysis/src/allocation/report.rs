@@ -105,6 +105,9 @@ pub struct AllocationReport {
     pub scenario: String,
     /// SHA-256 of the scenario text as loaded (data files written in), hex.
     pub scenario_sha256: String,
+    /// The output's spec limits, when the scenario sets them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub spec: Option<rvtol_engine::figures::SpecFigures>,
     /// The constrained output.
     pub output: String,
     /// Its unit.
@@ -202,6 +205,10 @@ impl AllocationReport {
             rvtol_version: env!("CARGO_PKG_VERSION"),
             scenario: a.scenario.clone(),
             scenario_sha256: a.scenario_sha256.clone(),
+            spec: a.spec.map(|limits| rvtol_engine::figures::SpecFigures {
+                lower: limits.lower,
+                upper: limits.upper,
+            }),
             output: a.output.clone(),
             unit: a.unit.clone(),
             target: a.target.expression(),

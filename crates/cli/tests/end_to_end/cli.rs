@@ -392,6 +392,7 @@ fn curve_writes_csv_and_svg_for_the_transmission_error_and_torsion_models() {
         "transmission_error_detail",
         "transmission_error_spectrum",
         "torsion_curve",
+        "torsion_curve_3_percent",
     ] {
         let svg = std::fs::read_to_string(dir.join(format!("{stem}.svg"))).unwrap();
         assert!(
