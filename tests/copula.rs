@@ -5,19 +5,12 @@
 //! correlated uniform × normal pair match their closed form; a malformed entry is refused
 //! with its path.
 
-use rvtol_engine::report::RunReport;
-use rvtol_engine::{merge, run_chunks, sample_table, shard_range, RunSettings, Sampling, Scenario};
-use rvtol_tests::run_with_threads;
+use rvtol_deviation::sample_spearman;
+use rvtol_engine::{sample_table, Scenario};
+use rvtol_tests::{
+    assert_effects_near, assert_same_bits_for_threads_and_shards, refusal, run_settings,
+};
 use serde_json::{json, Value};
-
-fn settings(samples: u64, seed: u64) -> RunSettings {
-    RunSettings {
-        samples,
-        seed,
-        exact_percentile_limit: rvtol_engine::DEFAULT_EXACT_PERCENTILE_LIMIT,
-        sampling: Sampling::default(),
-    }
-}
 
 fn scenario(document: &Value) -> Scenario {
     Scenario::from_json(&document.to_string(), "test").unwrap_or_else(|err| panic!("{err}"))
@@ -50,34 +43,6 @@ fn grinding(samples: u64, correlation: Value) -> Value {
     })
 }
 
-/// Mid-ranks (ties share the mean of their ranks).
-fn ranks(values: &[f64]) -> Vec<f64> {
-    let mut order: Vec<usize> = (0..values.len()).collect();
-    order.sort_by(|&a, &b| values[a].total_cmp(&values[b]));
-    let mut ranks = vec![0.0; values.len()];
-    let mut i = 0;
-    while i < order.len() {
-        let mut j = i;
-        while j + 1 < order.len() && values[order[j + 1]] == values[order[i]] {
-            j += 1;
-        }
-        for &k in &order[i..=j] {
-            ranks[k] = 0.5 * (i + j) as f64;
-        }
-        i = j + 1;
-    }
-    ranks
-}
-
-fn pearson(x: &[f64], y: &[f64]) -> f64 {
-    let n = x.len() as f64;
-    let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
-    let sxy: f64 = x.iter().zip(y).map(|(a, b)| (a - mx) * (b - my)).sum();
-    let sxx: f64 = x.iter().map(|a| (a - mx).powi(2)).sum();
-    let syy: f64 = y.iter().map(|b| (b - my).powi(2)).sum();
-    sxy / (sxx * syy).sqrt()
-}
-
 #[test]
 fn a_spearman_correlation_is_the_rank_correlation_of_the_values() {
     // n = 200 000: atanh(r_S) has standard error √(1.06/(n − 3)) under a Gaussian copula
@@ -88,7 +53,7 @@ fn a_spearman_correlation_is_the_rank_correlation_of_the_values() {
         n,
         json!({ "between": ["runout", "pitch"], "spearman": target }),
     );
-    let table = sample_table(&scenario(&document), settings(n, 5)).unwrap();
+    let table = sample_table(&scenario(&document), run_settings(n, 5)).unwrap();
     let (runout, pitch): (Vec<f64>, Vec<f64>) = table
         .outputs
         .chunks_exact(table.n_outputs)
@@ -98,7 +63,7 @@ fn a_spearman_correlation_is_the_rank_correlation_of_the_values() {
         runout.iter().all(|&r| r >= 0.0),
         "a runout is never negative"
     );
-    let r = pearson(&ranks(&runout), &ranks(&pitch));
+    let r = sample_spearman(&runout, &pitch);
     let se = (1.06 / (n as f64 - 3.0)).sqrt();
     assert!(
         (r.atanh() - f64::atanh(target)).abs() < 4.0 * se,
@@ -123,24 +88,8 @@ fn copula_reports_have_the_same_bits_for_any_thread_and_shard_count() {
         json!({ "between": ["pitch", "runout"], "spearman": -0.4 }),
     );
     let scenario = scenario(&document);
-    let settings = settings(n, 5);
-    let one = run_with_threads(&scenario, settings, 1);
-    assert_eq!(one, run_with_threads(&scenario, settings, 2));
-    assert_eq!(one, run_with_threads(&scenario, settings, 4));
-    for shards in [1u64, 3] {
-        let partials = (0..shards)
-            .map(|k| {
-                let chunks = shard_range(settings.chunk_count(), k, shards);
-                run_chunks(&scenario, settings, chunks, &|_| {}).unwrap()
-            })
-            .collect();
-        let merged = merge(&scenario, settings, partials).unwrap();
-        assert_eq!(
-            one,
-            RunReport::new(&scenario, merged).to_json(),
-            "{shards} shards"
-        );
-    }
+    let settings = run_settings(n, 5);
+    assert_same_bits_for_threads_and_shards(&scenario, settings);
 }
 
 #[test]
@@ -183,22 +132,7 @@ fn shapley_effects_of_a_correlated_uniform_match_the_closed_form() {
     };
     let effects = &shapley_effects(&scenario(&document), settings).unwrap()[0].1;
     let share_x = 3.0 * (rho * rho / 2.0).asin() / std::f64::consts::PI;
-    for (effect, expected) in effects.iter().zip([1.0 - share_x, share_x]) {
-        assert!(
-            (effect.effect - expected).abs() < 0.01,
-            "{}: {} vs {expected}",
-            effect.input,
-            effect.effect
-        );
-    }
-}
-
-/// The one line a scenario is refused with.
-fn refusal(document: &Value) -> String {
-    match Scenario::from_json(&document.to_string(), "test") {
-        Ok(_) => panic!("accepted"),
-        Err(err) => err.to_string(),
-    }
+    assert_effects_near(effects, [1.0 - share_x, share_x], 0.01);
 }
 
 #[test]

@@ -4,20 +4,13 @@
 //! out-of-spec share matches its closed form; malformed formulas are refused with one line
 //! naming the JSON path and the character.
 
-use rvtol_engine::report::RunReport;
-use rvtol_engine::{merge, run_chunks, sample_table, shard_range, RunSettings, Sampling, Scenario};
-use rvtol_tests::{run_with_threads, scenario_path, SIGMA_BOUND};
+use rvtol_engine::{sample_table, Scenario};
+use rvtol_tests::{
+    assert_same_bits_for_threads_and_shards, refusal, run_settings, run_with_threads,
+    scenario_path, SIGMA_BOUND,
+};
 use serde_json::{json, Value};
 use statrs::distribution::{ContinuousCDF, Normal};
-
-fn settings(samples: u64, seed: u64) -> RunSettings {
-    RunSettings {
-        samples,
-        seed,
-        exact_percentile_limit: rvtol_engine::DEFAULT_EXACT_PERCENTILE_LIMIT,
-        sampling: Sampling::default(),
-    }
-}
 
 fn shipped(file: &str) -> Value {
     serde_json::from_str(&std::fs::read_to_string(scenario_path(file)).unwrap()).unwrap()
@@ -66,7 +59,7 @@ fn both(file: &str, formula: &str, unit: &str, input_units: Value) -> (Vec<f64>,
     let seed = original["seed"].as_u64().unwrap();
     let table = |document: &Value| {
         let scenario = scenario(document);
-        let table = sample_table(&scenario, settings(100_000, seed)).unwrap();
+        let table = sample_table(&scenario, run_settings(100_000, seed)).unwrap();
         (0..table.rows)
             .map(|r| table.outputs[r * table.n_outputs])
             .collect::<Vec<f64>>()
@@ -151,7 +144,7 @@ fn pin_in_hole_failure_rate_matches_its_closed_form() {
         + sigma / v.sqrt() * (-m * m / (2.0 * v)).exp() * phi(m * sigma / (s * v.sqrt()));
     let n = 2_000_000u64;
     let scenario = scenario(&pin_in_hole(n));
-    let table = sample_table(&scenario, settings(n, 11)).unwrap();
+    let table = sample_table(&scenario, run_settings(n, 11)).unwrap();
     let failed = (0..table.rows).filter(|&r| table.outputs[r] < 0.0).count() as f64;
     let estimate = failed / n as f64;
     let se = (p * (1.0 - p) / n as f64).sqrt();
@@ -171,32 +164,8 @@ fn pin_in_hole_failure_rate_matches_its_closed_form() {
 #[test]
 fn reports_have_the_same_bits_for_any_thread_and_shard_count() {
     let scenario = scenario(&pin_in_hole(300_000));
-    let settings = settings(300_000, 11);
-    let one = run_with_threads(&scenario, settings, 1);
-    assert_eq!(one, run_with_threads(&scenario, settings, 2));
-    assert_eq!(one, run_with_threads(&scenario, settings, 4));
-    for shards in [1u64, 3] {
-        let partials = (0..shards)
-            .map(|k| {
-                let chunks = shard_range(settings.chunk_count(), k, shards);
-                run_chunks(&scenario, settings, chunks, &|_| {}).unwrap()
-            })
-            .collect();
-        let merged = merge(&scenario, settings, partials).unwrap();
-        assert_eq!(
-            one,
-            RunReport::new(&scenario, merged).to_json(),
-            "{shards} shards"
-        );
-    }
-}
-
-/// The one line a scenario is refused with.
-fn refusal(document: &Value) -> String {
-    match Scenario::from_json(&document.to_string(), "test") {
-        Ok(_) => panic!("accepted"),
-        Err(err) => err.to_string(),
-    }
+    let settings = run_settings(300_000, 11);
+    assert_same_bits_for_threads_and_shards(&scenario, settings);
 }
 
 #[test]
@@ -298,7 +267,7 @@ fn chained(samples: u64) -> Value {
 #[test]
 fn a_chain_of_models_equals_the_same_computation_as_one_formula() {
     let n = 50_000;
-    let one = sample_table(&scenario(&pin_in_hole(n)), settings(n, 11)).unwrap();
+    let one = sample_table(&scenario(&pin_in_hole(n)), run_settings(n, 11)).unwrap();
     let chain_scenario = scenario(&chained(n));
     let names: Vec<&str> = chain_scenario
         .outputs
@@ -306,7 +275,7 @@ fn a_chain_of_models_equals_the_same_computation_as_one_formula() {
         .map(|o| o.name.as_str())
         .collect();
     assert_eq!(names, ["offset_mm", "gap_mm"]);
-    let chain = sample_table(&chain_scenario, settings(n, 11)).unwrap();
+    let chain = sample_table(&chain_scenario, run_settings(n, 11)).unwrap();
     assert_eq!(one.inputs, chain.inputs);
     for r in 0..n as usize {
         let (x, y) = (one.inputs[r * 4 + 2], one.inputs[r * 4 + 3]);
@@ -325,7 +294,7 @@ fn a_chain_of_models_equals_the_same_computation_as_one_formula() {
     let nominal = rvtol_engine::nominal(&chain_scenario).unwrap();
     assert_eq!(nominal, [Some(0.0), Some((10.012 - 9.992) / 2.0)]);
     // The same bits for any thread count.
-    let settings = settings(100_000, 5);
+    let settings = run_settings(100_000, 5);
     let report = run_with_threads(&chain_scenario, settings, 1);
     assert_eq!(report, run_with_threads(&chain_scenario, settings, 2));
 }

@@ -87,6 +87,67 @@ pub fn run_with_threads(
     rvtol_engine::report::RunReport::new(scenario, result).to_json()
 }
 
+/// Run settings of `samples` Monte Carlo rows from `seed`, exact percentiles up to the
+/// default limit.
+pub fn run_settings(samples: u64, seed: u64) -> rvtol_engine::RunSettings {
+    rvtol_engine::RunSettings {
+        samples,
+        seed,
+        exact_percentile_limit: rvtol_engine::DEFAULT_EXACT_PERCENTILE_LIMIT,
+        sampling: rvtol_engine::Sampling::default(),
+    }
+}
+
+/// Asserts every Shapley effect within `tolerance` of its expected share (in order).
+pub fn assert_effects_near(
+    effects: &[rvtol_analysis::shapley::ShapleyEffect],
+    expected: impl IntoIterator<Item = f64>,
+    tolerance: f64,
+) {
+    for (effect, expected) in effects.iter().zip(expected) {
+        assert!(
+            (effect.effect - expected).abs() < tolerance,
+            "{}: {} vs {expected}",
+            effect.input,
+            effect.effect
+        );
+    }
+}
+
+/// The one line a scenario document is refused with (panics when it is accepted).
+pub fn refusal(document: &serde_json::Value) -> String {
+    match rvtol_engine::Scenario::from_json(&document.to_string(), "test") {
+        Ok(_) => panic!("accepted"),
+        Err(err) => err.to_string(),
+    }
+}
+
+/// Asserts that a run's report has the same bits for 1, 2 and 4 threads and for 1 and 3
+/// shards merged (the reproducibility contract).
+pub fn assert_same_bits_for_threads_and_shards(
+    scenario: &rvtol_engine::Scenario,
+    settings: rvtol_engine::RunSettings,
+) {
+    use rvtol_engine::{merge, run_chunks, shard_range};
+    let one = run_with_threads(scenario, settings, 1);
+    assert_eq!(one, run_with_threads(scenario, settings, 2), "2 threads");
+    assert_eq!(one, run_with_threads(scenario, settings, 4), "4 threads");
+    for shards in [1u64, 3] {
+        let partials = (0..shards)
+            .map(|k| {
+                let chunks = shard_range(settings.chunk_count(), k, shards);
+                run_chunks(scenario, settings, chunks, &|_| {}).unwrap()
+            })
+            .collect();
+        let merged = merge(scenario, settings, partials).unwrap();
+        assert_eq!(
+            one,
+            rvtol_engine::report::RunReport::new(scenario, merged).to_json(),
+            "{shards} shards"
+        );
+    }
+}
+
 /// A shipped scenario's text as rvtol loads it from its file: the reducer file and the data
 /// files it names written in (so the text stands alone, wherever it is written or parsed).
 pub fn shipped_text(path: impl AsRef<std::path::Path>) -> String {

@@ -386,15 +386,8 @@ fn shapley_effects_of_a_linear_gaussian_model_match_the_closed_form() {
         seed: 9,
     };
     let effects = &shapley_effects(&scenario, settings).unwrap()[0].1;
-    for (effect, expected) in effects.iter().zip(&exact) {
-        // Issue acceptance: within 0.01 of the closed form.
-        assert!(
-            (effect.effect - expected).abs() < 0.01,
-            "{}: {} vs {expected}",
-            effect.input,
-            effect.effect
-        );
-    }
+    // Issue acceptance: within 0.01 of the closed form.
+    rvtol_tests::assert_effects_near(effects, exact.iter().copied(), 0.01);
 }
 
 #[test]

@@ -1,4 +1,5 @@
-//! The Gaussian copula: dependence between quantities of any marginal law.
+//! The Gaussian copula: dependence between quantities of any marginal law (and the
+//! sample rank correlation that checks it, [`sample_spearman`]).
 //!
 //! A scalar of a non-normal law that the scenario correlates is drawn through its normal
 //! score: a standard normal z joins the joint normal of the scenario (correlated with the
@@ -82,10 +83,62 @@ pub fn mehler_covariance(a: &[f64], b: &[f64], rho: f64) -> f64 {
         .sum()
 }
 
+/// Spearman's rank correlation of two samples: the Pearson correlation of their mid-ranks
+/// (tied values share the mean of their ranks). NaN when a sample is constant or the two
+/// differ in length.
+pub fn sample_spearman(x: &[f64], y: &[f64]) -> f64 {
+    if x.len() != y.len() {
+        return f64::NAN;
+    }
+    pearson(&mid_ranks(x), &mid_ranks(y))
+}
+
+/// Mid-ranks (0-based; ties share the mean of their ranks).
+fn mid_ranks(values: &[f64]) -> Vec<f64> {
+    let mut order: Vec<usize> = (0..values.len()).collect();
+    order.sort_by(|&a, &b| values[a].total_cmp(&values[b]));
+    let mut ranks = vec![0.0; values.len()];
+    let mut i = 0;
+    while i < order.len() {
+        let mut j = i;
+        while j + 1 < order.len() && values[order[j + 1]] == values[order[i]] {
+            j += 1;
+        }
+        for &k in &order[i..=j] {
+            ranks[k] = 0.5 * (i + j) as f64;
+        }
+        i = j + 1;
+    }
+    ranks
+}
+
+/// Pearson's correlation of two equally long samples.
+fn pearson(x: &[f64], y: &[f64]) -> f64 {
+    let n = x.len() as f64;
+    let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+    let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
+    for (a, b) in x.iter().zip(y) {
+        sxy += (a - mx) * (b - my);
+        sxx += (a - mx) * (a - mx);
+        syy += (b - my) * (b - my);
+    }
+    sxy / (sxx * syy).sqrt()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::ScalarDistribution;
+
+    #[test]
+    fn sample_spearman_uses_mid_ranks() {
+        // x = [1, 2, 2, 3] has mid-ranks [0, 1.5, 1.5, 3], y = [1, 3, 2, 4] ranks
+        // [0, 2, 1, 3]: deviations (−1.5, 0, 0, 1.5) and (−1.5, 0.5, −0.5, 1.5), so
+        // r = 4.5/√(4.5·5) = 0.948683…
+        let r = sample_spearman(&[1.0, 2.0, 2.0, 3.0], &[1.0, 3.0, 2.0, 4.0]);
+        assert!((r - 4.5 / (22.5f64).sqrt()).abs() < 1e-15, "{r}");
+        assert!(sample_spearman(&[1.0, 2.0], &[1.0]).is_nan());
+    }
 
     #[test]
     fn spearman_and_normal_score_correlations_invert_each_other() {
@@ -140,37 +193,6 @@ mod tests {
     use crate::{EmpiricalLaw, InputSpace, InputSpaceBuilder};
     use rand::SeedableRng;
 
-    /// Mid-ranks (ties share the mean of their ranks).
-    fn ranks(values: &[f64]) -> Vec<f64> {
-        let mut order: Vec<usize> = (0..values.len()).collect();
-        order.sort_by(|&a, &b| values[a].total_cmp(&values[b]));
-        let mut ranks = vec![0.0; values.len()];
-        let mut i = 0;
-        while i < order.len() {
-            let mut j = i;
-            while j + 1 < order.len() && values[order[j + 1]] == values[order[i]] {
-                j += 1;
-            }
-            for &k in &order[i..=j] {
-                ranks[k] = 0.5 * (i + j) as f64;
-            }
-            i = j + 1;
-        }
-        ranks
-    }
-
-    fn pearson(x: &[f64], y: &[f64]) -> f64 {
-        let n = x.len() as f64;
-        let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
-        let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
-        for (a, b) in x.iter().zip(y) {
-            sxy += (a - mx) * (b - my);
-            sxx += (a - mx) * (a - mx);
-            syy += (b - my) * (b - my);
-        }
-        sxy / (sxx * syy).sqrt()
-    }
-
     /// Two columns of `n` rows of a two-column space.
     fn draw(space: &InputSpace, n: usize, seed: u64) -> (Vec<f64>, Vec<f64>) {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
@@ -198,7 +220,7 @@ mod tests {
     fn assert_spearman(space: &InputSpace, target: f64, seed: u64) {
         let n = 200_000;
         let (x, y) = draw(space, n, seed);
-        let r = pearson(&ranks(&x), &ranks(&y));
+        let r = sample_spearman(&x, &y);
         let se = (1.06 / (n as f64 - 3.0)).sqrt();
         assert!(
             (r.atanh() - target.atanh()).abs() < 4.0 * se,

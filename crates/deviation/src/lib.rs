@@ -44,7 +44,7 @@ pub use cholesky::{
 };
 pub use conditional::ConditionalSampler;
 pub use constraint::{LinearInequality, TiltConstraint};
-pub use copula::{normal_score_from_spearman, spearman_from_normal_score};
+pub use copula::{normal_score_from_spearman, sample_spearman, spearman_from_normal_score};
 pub use displacement::point_displacement;
 pub use empirical::{EmpiricalLaw, MIN_EMPIRICAL_VALUES};
 pub use error::{DeviationError, MatrixKind};

@@ -1104,7 +1104,10 @@ fn before_and_after(
             ends.join("; ")
         )
     };
-    let drawn = match (target_line.is_some(), limits.lower.or(limits.upper).is_some()) {
+    let drawn = match (
+        target_line.is_some(),
+        limits.lower.or(limits.upper).is_some(),
+    ) {
         (true, true) => "; the target and the spec limits drawn",
         (true, false) => "; the target drawn",
         (false, true) => "; the spec limits drawn",
