@@ -20,7 +20,7 @@ const ESTIMATORS: &str = "Sobol' indices of independent input groups: first orde
 /// The intervals of a replicated design, in words.
 const REPLICATE_INTERVAL_METHOD: &str = "index of all N rows +- t(0.975, R-1)*s/sqrt(R), s the standard deviation of the index over the R independent replicates";
 
-/// A share as a percentage with four significant digits (`2.153 %`).
+/// A share as a percentage with five significant digits (`2.1530 %`).
 fn percent(share: f64) -> String {
     format!("{} %", format_sig(100.0 * share))
 }

@@ -974,13 +974,10 @@ impl InputSpace {
             self.latent_covariance(column_b, column_b).sqrt(),
         );
         // A normal column is its normal score times σ: one coefficient, σ.
-        let coefficients = |h: &Option<Vec<f64>>, sd: f64| match h {
-            Some(h) => h.clone(),
-            None => vec![sd],
-        };
+        let (one_a, one_b) = ([sa], [sb]);
         copula::mehler_covariance(
-            &coefficients(ha, sa),
-            &coefficients(hb, sb),
+            ha.as_deref().unwrap_or(&one_a),
+            hb.as_deref().unwrap_or(&one_b),
             latent / (sa * sb),
         )
     }
