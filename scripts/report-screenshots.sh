@@ -6,43 +6,14 @@
 #
 # Needs Debian's chromium (apt-get install chromium) and Node.js with npm; installs
 # playwright-core (the browser driver only, no browser download) into OUT_DIR/node.
-# Sample counts are kept small so that the whole script runs in a few minutes.
+# The pages are scripts/report-pages.sh's.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out="${1:-target/report-screenshots}"
-mkdir -p "$out/html" "$out/png"
+mkdir -p "$out/png"
 out="$(cd "$out" && pwd)"
 command -v chromium >/dev/null || { echo "error: chromium not found (apt-get install chromium)" >&2; exit 2; }
-cargo build --release -p rvtol --quiet
-rvtol=target/release/rvtol
-for scenario in scenarios/*.json; do
-  name="$(basename "$scenario" .json)"
-  json="$out/html/$name.run.json"
-  case "$name" in
-    rv40e-transmission*) samples=2000 ;;
-    *torsion*|rv40e-elastic|rv80e-contact) samples=20000 ;;
-    *) samples=100000 ;;
-  esac
-  "$rvtol" run "$scenario" --samples "$samples" --json "$json" --quiet > "$out/html/$name.run.txt" || true
-  reports=("$json")
-  case "$name" in
-    rv20e-hysteresis|ishigami|sobol-g|linear-stack-correlated|allocation-linear)
-      "$rvtol" sensitivity "$scenario" --samples 4096 --bootstrap 200 --json "$out/html/$name.sensitivity.json" --quiet > /dev/null
-      reports+=("$out/html/$name.sensitivity.json") ;;
-    shapley-linear-gaussian)
-      "$rvtol" sensitivity "$scenario" --samples 4096 --bootstrap 200 --shapley --json "$out/html/$name.sensitivity.json" --quiet > /dev/null
-      reports+=("$out/html/$name.sensitivity.json") ;;
-  esac
-  case "$name" in
-    allocation-linear)
-      "$rvtol" allocate "$scenario" --output gap_mm --target "sd <= 0.02" --json "$out/html/$name.allocation.json" --quiet > /dev/null || true
-      reports+=("$out/html/$name.allocation.json") ;;
-    rv20e-selective-fitting)
-      "$rvtol" allocate "$scenario" --output hysteresis_arcmin --target "p99.865 <= 1.0" --json "$out/html/$name.allocation.json" --quiet > /dev/null || true
-      reports+=("$out/html/$name.allocation.json") ;;
-  esac
-  "$rvtol" report "${reports[@]}" --scenario "$scenario" -o "$out/html/$name.html" > /dev/null
-done
+scripts/report-pages.sh "$out"
 node_dir="$out/node"
 if [ ! -d "$node_dir/node_modules/playwright-core" ]; then
   mkdir -p "$node_dir"

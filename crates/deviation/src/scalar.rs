@@ -403,6 +403,58 @@ impl ScalarDistribution {
         Ok(())
     }
 
+    /// The law's name and its parameters as the scenario states them, for a record of the
+    /// inputs (an empirical law: the number of values and the kernel bandwidth).
+    pub fn law(&self) -> (&'static str, Vec<(&'static str, f64)>) {
+        use ScalarDistribution::*;
+        match *self {
+            Normal { mean, sd } => ("normal", vec![("mean", mean), ("sd", sd)]),
+            ToleranceBand {
+                lower,
+                upper,
+                cp,
+                mean_shift,
+            } => (
+                "tolerance band",
+                vec![
+                    ("lower", lower),
+                    ("upper", upper),
+                    ("cp", cp),
+                    ("mean_shift", mean_shift),
+                ],
+            ),
+            Uniform { lower, upper } => ("uniform", vec![("lower", lower), ("upper", upper)]),
+            Triangular { lower, mode, upper } => (
+                "triangular",
+                vec![("lower", lower), ("mode", mode), ("upper", upper)],
+            ),
+            TruncatedNormal {
+                mean,
+                sd,
+                lower,
+                upper,
+            } => (
+                "truncated normal",
+                vec![
+                    ("mean", mean),
+                    ("sd", sd),
+                    ("lower", lower),
+                    ("upper", upper),
+                ],
+            ),
+            FoldedNormal { mean, sd } => ("folded normal", vec![("mean", mean), ("sd", sd)]),
+            Rayleigh { sigma } => ("rayleigh", vec![("sigma", sigma)]),
+            Lognormal { mu, sigma } => ("lognormal", vec![("mu", mu), ("sigma", sigma)]),
+            Empirical(ref law) => (
+                "empirical",
+                vec![
+                    ("values", law.values().len() as f64),
+                    ("bandwidth", law.bandwidth()),
+                ],
+            ),
+        }
+    }
+
     /// Mean and standard deviation when the distribution is normal (it then joins the
     /// joint multivariate normal); `None` otherwise.
     pub fn as_normal(&self) -> Option<(f64, f64)> {

@@ -3,8 +3,9 @@
 //! [`crate::figures`] computes; the engine renders, the CLI writes.
 //!
 //! JSON of `run`: `rvtol_version`, `scenario`, `seed`, `samples`, `chunk_size`,
-//! `percentile_method`, `constraint` (when a part has the 001 Eq. 11 constraint) and
-//! `outputs`, an array with per output `name`, `unit`, `kind`, `n`, `non_finite`, `mean`,
+//! `percentile_method`, `constraint` (when a part has the 001 Eq. 11 constraint),
+//! `inputs` (per random column `source`, `column`, `unit`, `distribution`, `parameters`,
+//! `mean`, `sd`, `tolerance`, `correlated_with`, `constrained`) and `outputs`, an array with per output `name`, `unit`, `kind`, `n`, `non_finite`, `mean`,
 //! `sd`, `skewness`, `excess_kurtosis`, `min`, `max`, `percentiles` (keyed by the percent
 //! as a string), `histogram`; indicator outputs add `events`, `fraction`, `fraction_ci95`;
 //! outputs with spec limits add `spec`, `cp` (null when one-sided) with `cp_ci95`, `cpk`
@@ -14,7 +15,7 @@
 use serde::Serialize;
 
 use crate::chunk::CHUNK_SIZE;
-use crate::figures::{output_figures, OutputFigures};
+use crate::figures::{output_figures, OrderedNumbers, OutputFigures};
 use crate::format::{format_figure, format_ppm, format_sig, group_thousands};
 use crate::run::{PercentileMethod, RunResult};
 use crate::scenario::Scenario;
@@ -69,6 +70,73 @@ pub struct SamplingReport {
 /// What `interval_method` says.
 const REPLICATE_INTERVAL_METHOD: &str = "figure of all rows +- t(0.975, R-1)*s/sqrt(R), s the standard deviation of the figure over the R independent replicates";
 
+/// One random input (a column of the input space) as the scenario states it: the record
+/// of what the run drew.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct InputReport {
+    /// Its error source (the part or variable).
+    pub source: String,
+    /// The column (`variable` or `part.component`).
+    pub column: String,
+    /// Its unit, when known.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub unit: Option<String>,
+    /// The law's name (`normal`, `tolerance band`, `uniform`, ...).
+    pub distribution: &'static str,
+    /// Its parameters as stated.
+    pub parameters: OrderedNumbers,
+    /// The law's mean.
+    pub mean: f64,
+    /// The law's standard deviation.
+    pub sd: f64,
+    /// Tolerance limits [lower, upper]: the stated limits, or mean ± 3 sd of a normal, or
+    /// the 99.865 % point of a magnitude (what `rvtol stack` reads).
+    pub tolerance: [f64; 2],
+    /// The columns the scenario correlates with it (of their values or normal scores).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub correlated_with: Vec<String>,
+    /// Whether the 001 Eq. 11 constraint restricts it (its law is then the stated one
+    /// conditioned on the constraint).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub constrained: bool,
+}
+
+/// The random inputs of a scenario, source by source ([`InputReport`]); columns that do not
+/// vary are left out.
+pub fn input_reports(scenario: &Scenario) -> Vec<InputReport> {
+    let space = &scenario.input_space;
+    let constrained: Vec<usize> = (space.inequalities().iter())
+        .flat_map(|inequality| inequality.columns)
+        .collect();
+    let mut inputs = Vec::new();
+    for source in &scenario.sources {
+        for &column in source.columns.iter().filter(|&&c| space.is_random(c)) {
+            let info = &scenario.columns[column];
+            let law = &info.law;
+            inputs.push(InputReport {
+                source: source.name.clone(),
+                column: info.name.clone(),
+                unit: info.unit.clone(),
+                distribution: law.name,
+                parameters: OrderedNumbers(
+                    (law.parameters.iter())
+                        .map(|&(key, value)| (key.to_string(), value))
+                        .collect(),
+                ),
+                mean: law.mean,
+                sd: law.sd,
+                tolerance: info.tolerance,
+                correlated_with: (0..scenario.columns.len())
+                    .filter(|&other| space.dependent(column, other))
+                    .map(|other| scenario.columns[other].name.clone())
+                    .collect(),
+                constrained: constrained.contains(&column),
+            });
+        }
+    }
+    inputs
+}
+
 /// The report of `rvtol run`.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct RunReport {
@@ -92,6 +160,8 @@ pub struct RunReport {
     /// How the rows were drawn, for a Latin hypercube or RQMC run (absent: Monte Carlo).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sampling: Option<SamplingReport>,
+    /// The random inputs as the scenario states them ([`InputReport`]).
+    pub inputs: Vec<InputReport>,
     /// One entry per output.
     pub outputs: Vec<OutputFigures>,
 }
@@ -145,6 +215,7 @@ impl RunReport {
                 points_per_replicate: result.samples / result.sampling.replicates,
                 interval_method: REPLICATE_INTERVAL_METHOD,
             }),
+            inputs: input_reports(scenario),
             outputs,
         }
     }

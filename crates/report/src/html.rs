@@ -79,7 +79,9 @@ p.note { color: #555; font-size: 13.5px; max-width: 980px; }
 table { border-collapse: collapse; margin: 8px 0 16px; font-size: 13.5px; }
 th, td { border-bottom: 1px solid #ddd; padding: 3px 10px; text-align: left; vertical-align: top; }
 th { background: #f3f5f8; font-weight: 600; }
-td.num, th.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
+td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
+th.num { text-align: right; }
+td small { color: #555; }
 table.meta td:first-child { color: #555; white-space: nowrap; }
 .pair { display: grid; grid-template-columns: repeat(auto-fit, minmax(520px, 1fr)); gap: 12px; }
 figure { margin: 6px 0; }
@@ -90,6 +92,18 @@ svg.chart { width: 100%; height: auto; border: 1px solid #eee; }
 nav { font-size: 14px; margin: 8px 0 0; }
 nav a { margin-right: 14px; color: #1f4e79; }
 footer { margin-top: 48px; font-size: 12.5px; color: #777; }
+@page { size: A4; margin: 12mm 10mm; }
+@media print {
+  body { max-width: none; padding: 0; font-size: 10.5px; }
+  h1 { font-size: 19px; } h2 { font-size: 15px; margin-top: 20px; } h3 { font-size: 12.5px; }
+  p.note, figcaption { font-size: 9.5px; }
+  table { font-size: 9px; }
+  th, td { padding: 1px 4px; }
+  .pair { grid-template-columns: 1fr 1fr; }
+  nav { display: none; }
+  h2, h3 { break-after: avoid; }
+  figure, tr { break-inside: avoid; }
+}
 "#;
 
 /// The page around its body.

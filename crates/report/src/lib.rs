@@ -9,10 +9,12 @@
 //! reports say. The same reports give the same bytes (no clock, no randomness).
 //!
 //! Layout: [`chart`] draws (plotters, SVG backend), [`html`] builds the markup, this file
-//! reads the reports into sections (`stack.rs` the stack report's).
+//! reads the reports into sections (`inputs.rs` the run's inputs, `stack.rs` the stack
+//! report's).
 
 pub mod chart;
 pub mod html;
+mod inputs;
 mod stack;
 
 use rvtol_models::{Curve, CurveStyle};
@@ -183,6 +185,12 @@ pub fn render(report: &Report) -> Result<String, ReportError> {
     let mut body = String::new();
     let mut nav: Vec<(String, String)> = vec![("record".into(), "Record".into())];
     let mut sections = String::new();
+    if let Some(inputs) =
+        (report.run).and_then(|run| inputs::inputs_section(run, report.sensitivity, report.stack))
+    {
+        sections.push_str(&inputs);
+        nav.push(("inputs".into(), "Inputs".into()));
+    }
     if let Some(run) = report.run {
         sections.push_str(&run_section(run)?);
         nav.push(("run".into(), "Output distributions".into()));

@@ -367,6 +367,8 @@ pub fn allocate(
         .collect();
     allocation.lever_options = options;
     allocation.evaluations = done.get();
+    // The record is of the scenario text the user gave, not of the chosen variant's.
+    allocation.scenario_sha256 = scenario.digest.clone();
     Ok(allocation)
 }
 

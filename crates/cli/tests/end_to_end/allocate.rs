@@ -327,6 +327,19 @@ fn rv20e_shop_floor_fitting_reaches_one_arcmin_with_pin_classes() {
     let chosen = &report["levers"][0];
     assert_eq!(chosen["lever"], "pin_classes");
     assert!(chosen["value"].as_f64().unwrap() > 1.0, "{chosen:#}");
+    // The report is of the text the user gave (as every other report of it), not of the
+    // lever variant it chose: a page composes it with the scenario's run.
+    let nominal = run_rvtol(&[
+        "nominal",
+        workspace_dir()
+            .join("scenarios/rv20e-selective-fitting.json")
+            .to_str()
+            .unwrap(),
+        "--json",
+        "-",
+    ]);
+    let nominal: Value = serde_json::from_slice(&nominal.stdout).unwrap();
+    assert_eq!(report["scenario_sha256"], nominal["scenario_sha256"]);
 }
 
 #[test]

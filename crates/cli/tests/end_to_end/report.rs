@@ -109,6 +109,17 @@ fn run_html_of_every_shipped_scenario_has_its_plots() {
             page.contains(&format!("seed {}", report["seed"])),
             "{stem}: seed"
         );
+        // The inputs on the record: a row per random input of the run's JSON.
+        let inputs = report["inputs"].as_array().unwrap();
+        assert!(!inputs.is_empty(), "{stem}: inputs");
+        assert!(page.contains("<section id=\"inputs\">"), "{stem}: inputs");
+        for input in inputs {
+            let column = input["column"].as_str().unwrap();
+            assert!(
+                page.contains(&format!("<tr><td>{column}")),
+                "{stem}: {column}"
+            );
+        }
         let mut continuous = 0;
         for output in report["outputs"].as_array().unwrap() {
             let name = output["name"].as_str().unwrap();
@@ -389,6 +400,139 @@ fn a_page_path_that_is_not_utf8_is_recorded_lossily_not_a_panic() {
     assert!(
         page.contains("page-\u{fffd}.html"),
         "the command line, lossily"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn the_run_records_its_inputs_and_the_page_tabulates_them_with_their_contributions() {
+    // The correlated linear stack: its law as the scenario file states it, in the run's
+    // JSON and on the page, with each source's total Sobol' index and each input's RSS
+    // share beside it when the sensitivity and stack reports are composed with the run.
+    let dir = temp_dir("inputs");
+    let path = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let file = scenario("linear-stack-correlated.json");
+    for (command, json, extra) in [
+        ("run", "run.json", &["--samples", "20000"][..]),
+        (
+            "sensitivity",
+            "sens.json",
+            &["--samples", "1024", "--bootstrap", "20"],
+        ),
+        ("stack", "stack.json", &["--samples", "2000"]),
+    ] {
+        let mut args = vec![command, file.as_str(), "--json"];
+        let out = path(json);
+        args.push(&out);
+        args.extend_from_slice(extra);
+        args.push("--quiet");
+        ok(&run_rvtol(&args));
+    }
+    let read = |name: &str| -> Value {
+        serde_json::from_str(&std::fs::read_to_string(path(name)).unwrap()).unwrap()
+    };
+    let run = read("run.json");
+    let inputs = run["inputs"].as_array().unwrap();
+    let by_column = |column: &str| -> &Value {
+        (inputs.iter())
+            .find(|i| i["column"] == column)
+            .unwrap_or_else(|| panic!("{column} not among the inputs: {inputs:#?}"))
+    };
+    // carrier.dgamma has sd 0: not random, not listed; five carrier components and three
+    // variables are.
+    assert_eq!(inputs.len(), 8, "{inputs:#?}");
+    assert!(inputs.iter().all(|i| i["column"] != "carrier.dgamma"));
+    // The file's "tolerance_band": L 24.98, U 25.02, Cp 1.33: σ = (U − L)/(6·Cp).
+    let bore = by_column("bore_depth");
+    assert_eq!(bore["source"], "bore_depth");
+    assert_eq!(bore["distribution"], "tolerance band");
+    assert_eq!(bore["parameters"]["cp"], 1.33);
+    assert_eq!(bore["unit"], "mm");
+    assert!((bore["mean"].as_f64().unwrap() - 25.0).abs() < 1e-12);
+    let sd = 0.04 / (6.0 * 1.33);
+    assert!((bore["sd"].as_f64().unwrap() - sd).abs() < 1e-15);
+    assert_eq!(bore["tolerance"], serde_json::json!([24.98, 25.02]));
+    assert_eq!(bore["correlated_with"], serde_json::json!(["carrier.dw"]));
+    // The mean shift moves the mean: 9.95 + 0.002.
+    let spacer = by_column("spacer_width");
+    assert!((spacer["mean"].as_f64().unwrap() - 9.952).abs() < 1e-12);
+    assert_eq!(
+        spacer["correlated_with"],
+        serde_json::json!(["bearing_width"])
+    );
+    // A part component: a normal of the part's joint law, ±3 sd its tolerance.
+    let du = by_column("carrier.du");
+    assert_eq!(du["source"], "carrier");
+    assert_eq!(du["distribution"], "normal");
+    assert_eq!(du["sd"], 0.003);
+    let tolerance = du["tolerance"].as_array().unwrap();
+    assert!((tolerance[0].as_f64().unwrap() + 3.0 * 0.003).abs() < 1e-15);
+    assert!((tolerance[1].as_f64().unwrap() - 3.0 * 0.003).abs() < 1e-15);
+    assert_eq!(du["correlated_with"], serde_json::json!(["carrier.dbeta"]));
+    assert!(du.get("constrained").is_none());
+    // The page: a row per input, the contributions read from the composed reports.
+    let html = path("page.html");
+    ok(&run_rvtol(&[
+        "report",
+        &path("run.json"),
+        &path("sens.json"),
+        &path("stack.json"),
+        "-o",
+        &html,
+    ]));
+    let page = std::fs::read_to_string(&html).unwrap();
+    check_page(&page, "inputs");
+    let section = &page[page
+        .find("<section id=\"inputs\">")
+        .expect("an inputs section")..];
+    let section = &section[..section.find("</section>").unwrap()];
+    for input in inputs {
+        let column = input["column"].as_str().unwrap();
+        assert!(section.contains(&format!("<td>{column}")), "{column}");
+    }
+    assert!(section.contains("S_T · axial_gap_mm"));
+    assert!(section.contains("RSS % · axial_gap_mm"));
+    let row_of = |column: &str| -> &str {
+        let start = section.find(&format!("<tr><td>{column}")).unwrap();
+        &section[start..start + section[start..].find("</tr>").unwrap()]
+    };
+    let number = |v: &Value| rvtol_engine::format::format_sig(v.as_f64().unwrap());
+    // bore_depth is correlated with the carrier: one Sobol' group holds both.
+    let sensitivity = read("sens.json");
+    let group = (sensitivity["outputs"][0]["indices"]
+        .as_array()
+        .unwrap()
+        .iter())
+    .find(|g| {
+        let name = g["input"].as_str().unwrap();
+        name.split('+').any(|n| n == "bore_depth")
+    })
+    .unwrap();
+    assert!(
+        group["input"].as_str().unwrap().contains("carrier"),
+        "{group:#}"
+    );
+    let bore_row = row_of("bore_depth");
+    assert!(
+        bore_row.contains(&format!(
+            "<td class=\"num\">{}</td>",
+            number(&group["total"])
+        )),
+        "{bore_row}"
+    );
+    let stack = read("stack.json");
+    let share = (stack["outputs"][0]["contributors"]
+        .as_array()
+        .unwrap()
+        .iter())
+    .find(|c| c["column"] == "bore_depth")
+    .unwrap();
+    assert!(
+        bore_row.contains(&format!(
+            "<td class=\"num\">{}</td>",
+            number(&share["rss_percent"])
+        )),
+        "{bore_row}"
     );
     std::fs::remove_dir_all(&dir).ok();
 }

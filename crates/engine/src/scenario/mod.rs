@@ -104,6 +104,23 @@ pub struct ColumnInfo {
     /// RSS stack read ([`rvtol_deviation::ScalarDistribution::tolerance_limits`] of a
     /// variable, mean ± 3σ of a part component); equal for a column that does not vary.
     pub tolerance: [f64; 2],
+    /// Its law as the scenario states it, for the record of the inputs.
+    pub law: ColumnLaw,
+}
+
+/// The law of one column as the scenario states it (after unit conversion): a part
+/// component is a normal of its part's joint law (the 001 Eq. 11 constraint, where the part
+/// has one, is not applied to these figures).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ColumnLaw {
+    /// The law's name (`normal`, `tolerance band`, `uniform`, ...).
+    pub name: &'static str,
+    /// Its parameters as stated ([`rvtol_deviation::ScalarDistribution::law`]).
+    pub parameters: Vec<(&'static str, f64)>,
+    /// Its mean.
+    pub mean: f64,
+    /// Its standard deviation.
+    pub sd: f64,
 }
 
 /// A named set of input-space columns: one error source (a part, a variable) or a group of

@@ -6,7 +6,7 @@
 use rvtol_deviation::{unit_scale, PartSpec, SixDof};
 
 use super::super::file::PartFile;
-use super::super::{ColumnInfo, InputGroup};
+use super::super::{ColumnInfo, ColumnLaw, InputGroup};
 use super::{check_name, Compiler};
 use crate::error::ScenarioError;
 
@@ -39,6 +39,12 @@ pub(super) fn compile(compiler: &mut Compiler) {
                 name: format!("{}.{component}", part.name),
                 unit: Some(SixDof::UNITS[k].to_string()),
                 tolerance: [spec.mean[k] - 3.0 * sd, spec.mean[k] + 3.0 * sd],
+                law: ColumnLaw {
+                    name: "normal",
+                    parameters: vec![("mean", spec.mean[k]), ("sd", sd)],
+                    mean: spec.mean[k],
+                    sd,
+                },
             };
             let named = compiler.add_column(&format!("{path}.name"), info, first + k);
             compiler.report(named);

@@ -6,7 +6,7 @@
 use std::collections::BTreeSet;
 
 use super::super::file::{VariableFile, MAX_ARRAY_MEMBERS};
-use super::super::{ColumnInfo, InputGroup};
+use super::super::{ColumnInfo, ColumnLaw, InputGroup};
 use super::distributions::distribution;
 use super::{check_name, Compiler};
 use crate::error::ScenarioError;
@@ -83,6 +83,7 @@ pub(super) fn compile(compiler: &mut Compiler) {
                 name,
                 unit: unit.clone(),
                 tolerance: dist.tolerance_limits(),
+                law: column_law(&dist),
             };
             let named = compiler.add_column(&format!("{path}.name"), info, column);
             compiler.report(named);
@@ -155,5 +156,16 @@ fn array_members(
             format!("{path}.count"),
             format!("an array has 1 to {MAX_ARRAY_MEMBERS} members, got {n}"),
         )),
+    }
+}
+
+/// The record of a variable's law.
+fn column_law(dist: &rvtol_deviation::ScalarDistribution) -> ColumnLaw {
+    let (name, parameters) = dist.law();
+    ColumnLaw {
+        name,
+        parameters,
+        mean: dist.mean(),
+        sd: dist.variance().sqrt(),
     }
 }
