@@ -9,8 +9,9 @@ For each HTML_DIR/*.html (the pages scripts/report-pages.sh writes):
 - on paper: the page is printed to PDF by headless Chromium (the page's own @page rule
   asks for A4); every page of the PDF must be A4, every word of its text layer (read with
   poppler's `pdftotext -bbox`) must lie within the page, and every word of every table
-  cell of the HTML must be among the PDF's words (a value pushed off the paper is not
-  printed at all, so it is missing there);
+  cell and of every chart's text (title, axis labels, ticks, legend) must be among the
+  PDF's words (a value or a chart pushed off the paper is not printed at all, so it is
+  missing there);
 - on screen: a copy of the page with a measuring script is laid out by headless Chromium
   in a 1280 px wide window; no table cell may reach past the window's right edge and the
   page may not scroll sideways.
@@ -50,7 +51,8 @@ CHROMIUM_FLAGS = [
 
 
 class TableCells(html.parser.HTMLParser):
-    """The text of every table cell (th, td) of an HTML page, outside SVG drawings."""
+    """The text of every table cell (th, td) of an HTML page and of every text of its
+    charts (the SVG's text elements: titles, axis labels, ticks, legends)."""
 
     def __init__(self):
         super().__init__(convert_charrefs=True)
@@ -61,7 +63,7 @@ class TableCells(html.parser.HTMLParser):
     def handle_starttag(self, tag, attrs):
         if tag == "svg":
             self._svg += 1
-        elif tag in ("td", "th") and not self._svg:
+        elif (tag in ("td", "th") and not self._svg) or (tag == "text" and self._svg):
             self._cell = []
         elif tag == "br" and self._cell is not None:
             self._cell.append(" ")
@@ -69,7 +71,7 @@ class TableCells(html.parser.HTMLParser):
     def handle_endtag(self, tag):
         if tag == "svg":
             self._svg -= 1
-        elif tag in ("td", "th") and self._cell is not None:
+        elif tag in ("td", "th", "text") and self._cell is not None:
             self.cells.append("".join(self._cell))
             self._cell = None
 
@@ -140,7 +142,7 @@ def paper_problems(page, pdf, profile):
     if missing:
         shown = ", ".join(f"{w!r}" + (f" x{n}" if n > 1 else "") for w, n in missing.most_common(12))
         problems.append(
-            f"{page.name}: {sum(missing.values())} words of its tables are not on the printed A4 pages: {shown}"
+            f"{page.name}: {sum(missing.values())} words of its tables and charts are not on the printed A4 pages: {shown}"
         )
     return problems
 

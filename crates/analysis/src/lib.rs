@@ -8,12 +8,15 @@
 //!   re-run against them; [`target`] the requirement grammar it shares with the
 //!   allocation and the page;
 //! - [`allocation`]: the cheapest tolerances that meet a target;
+//! - [`assemblies`]: assemblies chosen for an output's value (the median, the tail), with
+//!   the model curves at them, for a page;
 //! - [`fit`]: a normal model of measured parts, as a scenario fragment;
 //! - [`shard`]: a shard's file and the assembly of a set of them for the merge;
 //! - [`request`]: the requests the command line and the Python module make (scenario
 //!   sources, settings with their defaults and limits, memory), one API for both.
 
 pub mod allocation;
+pub mod assemblies;
 pub mod fit;
 pub mod gate;
 pub mod request;

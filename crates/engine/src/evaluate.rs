@@ -34,6 +34,18 @@ pub struct SampleTable {
     pub outputs: Vec<f64>,
 }
 
+impl SampleTable {
+    /// Row `r`'s inputs.
+    pub fn input_row(&self, r: usize) -> &[f64] {
+        &self.inputs[r * self.n_inputs..(r + 1) * self.n_inputs]
+    }
+
+    /// Row `r`'s outputs.
+    pub fn output_row(&self, r: usize) -> &[f64] {
+        &self.outputs[r * self.n_outputs..(r + 1) * self.n_outputs]
+    }
+}
+
 /// Most values (rows × (inputs + outputs)) a [`SampleTable`] holds: 160 MB of numbers.
 pub const MAX_SAMPLE_TABLE_VALUES: u64 = 20_000_000;
 

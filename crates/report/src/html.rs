@@ -83,7 +83,7 @@ td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: now
 th.num { text-align: right; }
 td small { color: #555; }
 table.meta td:first-child { color: #555; white-space: nowrap; }
-.pair { display: grid; grid-template-columns: repeat(auto-fit, minmax(520px, 1fr)); gap: 12px; }
+.pair { display: grid; grid-template-columns: repeat(auto-fit, minmax(min(520px, 100%), 1fr)); gap: 12px; }
 figure { margin: 6px 0; }
 figcaption { font-size: 12.5px; color: #555; margin-top: 2px; }
 svg.chart { width: 100%; height: auto; border: 1px solid #eee; }
@@ -99,7 +99,7 @@ footer { margin-top: 48px; font-size: 12.5px; color: #777; }
   p.note, figcaption { font-size: 9.5px; }
   table { font-size: 9px; }
   th, td { padding: 1px 4px; }
-  .pair { grid-template-columns: 1fr 1fr; }
+  .pair { grid-template-columns: minmax(0, 1fr) minmax(0, 1fr); }
   nav { display: none; }
   h2, h3 { break-after: avoid; }
   figure, tr { break-inside: avoid; }

@@ -58,6 +58,26 @@ pub struct Report<'a> {
     /// Why a model's curves are not drawn (a point that is not finite at the nominal
     /// design), one sentence per model: the page says so where the curves would be.
     pub curves_left_out: &'a [String],
+    /// The curves of assemblies chosen for an output's value, drawn after their model's
+    /// nominal curves.
+    pub assemblies: &'a [AssemblyCurves],
+}
+
+/// A model's curves at one assembly chosen for its output's value (the median one, one in
+/// the tail).
+#[derive(Debug, Clone, PartialEq)]
+pub struct AssemblyCurves {
+    /// The model's name, as in [`Report::curves`].
+    pub model: String,
+    /// Which assembly, in a few words (`the P50 assembly of lost_motion_arcmin`).
+    pub heading: String,
+    /// How it was chosen, in a sentence: the percentile's value, the rows searched, the
+    /// row and its value.
+    pub note: String,
+    /// Its curves.
+    pub curves: Vec<Curve>,
+    /// The titles of the curves the model gives no finite value for at this assembly.
+    pub left_out: Vec<String>,
 }
 
 /// Why a page could not be made, in one line.
@@ -208,7 +228,11 @@ pub fn render(report: &Report) -> Result<String, ReportError> {
         nav.push(("stack".into(), "Worst case and RSS".into()));
     }
     if !report.curves.is_empty() || !report.curves_left_out.is_empty() {
-        sections.push_str(&curves_section(report.curves, report.curves_left_out)?);
+        sections.push_str(&curves_section(
+            report.curves,
+            report.curves_left_out,
+            report.assemblies,
+        )?);
         nav.push(("curves".into(), "Model curves".into()));
     }
     body.push_str(&format!(
@@ -1190,10 +1214,12 @@ fn lever_options_table(report: &Value, options: &[Value]) -> String {
 fn curves_section(
     curves: &[(String, Vec<Curve>)],
     left_out: &[String],
+    assemblies: &[AssemblyCurves],
 ) -> Result<String, ReportError> {
     let mut out = String::from(
         "<section id=\"curves\">\n<h2>Model curves</h2>\n<p class=\"note\">Every deviation at its mean \
-         (the nominal assembly of the scenario).</p>\n",
+         (the nominal assembly of the scenario); below, where the run's report is at hand, the \
+         same curves of drawn assemblies whose output lies nearest the run's percentiles.</p>\n",
     );
     for why in left_out {
         out.push_str(&format!(
@@ -1203,34 +1229,57 @@ fn curves_section(
     }
     for (model, list) in curves {
         out.push_str(&format!(
-            "<h3>{}</h3>\n<div class=\"pair\">\n",
+            "<h3>{}: the nominal assembly</h3>\n",
             escape(model)
         ));
-        for curve in list {
-            let svg = chart::curve(curve)?;
-            let dense = curve.style == CurveStyle::Lines
-                && curve.series.iter().any(|s| s.points.len() > chart::DENSE);
-            let mut caption = match curve.series.as_slice() {
-                [one] => {
-                    let mut label = one.label.clone();
-                    if let Some(first) = label.get(..1) {
-                        label.replace_range(..1, &first.to_uppercase());
-                    }
-                    format!("{label}.")
-                }
-                _ => String::new(),
-            };
-            if dense {
-                caption.push_str(
-                    " The whole curve. A trace too dense to draw point by point is drawn as its \
-                     band: the least and greatest value in each 1/360 of the axis.",
-                );
+        out.push_str(&curve_figures(list)?);
+        for assembly in assemblies.iter().filter(|a| &a.model == model) {
+            out.push_str(&format!(
+                "<h3>{}: {}</h3>\n<p class=\"note\">{}</p>\n",
+                escape(model),
+                escape(&assembly.heading),
+                escape(&assembly.note)
+            ));
+            if !assembly.left_out.is_empty() {
+                out.push_str(&format!(
+                    "<p class=\"note\">Not drawn, the model giving them no finite value for this \
+                     assembly: {}.</p>\n",
+                    escape(&assembly.left_out.join("; "))
+                ));
             }
-            out.push_str(&figure(&svg, caption.trim_start()));
+            out.push_str(&curve_figures(&assembly.curves)?);
         }
-        out.push_str("</div>\n");
     }
     out.push_str("</section>\n");
+    Ok(out)
+}
+
+/// A model's curves as figures, two abreast.
+fn curve_figures(list: &[Curve]) -> Result<String, ReportError> {
+    let mut out = String::from("<div class=\"pair\">\n");
+    for curve in list {
+        let svg = chart::curve(curve)?;
+        let dense = curve.style == CurveStyle::Lines
+            && curve.series.iter().any(|s| s.points.len() > chart::DENSE);
+        let mut caption = match curve.series.as_slice() {
+            [one] => {
+                let mut label = one.label.clone();
+                if let Some(first) = label.get(..1) {
+                    label.replace_range(..1, &first.to_uppercase());
+                }
+                format!("{label}.")
+            }
+            _ => String::new(),
+        };
+        if dense {
+            caption.push_str(
+                " The whole curve. A trace too dense to draw point by point is drawn as its \
+                 band: the least and greatest value in each 1/360 of the axis.",
+            );
+        }
+        out.push_str(&figure(&svg, caption.trim_start()));
+    }
+    out.push_str("</div>\n");
     Ok(out)
 }
 

@@ -359,6 +359,60 @@ fn page_curves(scenario: &Scenario) -> (Vec<(String, Vec<rvtol_models::Curve>)>,
     (curves, left_out)
 }
 
+/// The curves of the assemblies a page draws beside the nominal ones: for each model that
+/// draws curves, those nearest the run report's P50 and P99.865 of the model's output (of
+/// its values, flagged samples included, where the report gives them apart), among rows
+/// drawn with the run's seed (rvtol-analysis' `assemblies`).
+fn page_assemblies(
+    scenario: &Scenario,
+    run: &serde_json::Value,
+) -> Result<Vec<rvtol_report::AssemblyCurves>> {
+    use rvtol_engine::format::{format_sig, group_thousands};
+    let output_of =
+        |name: &str| (run["outputs"].as_array().into_iter().flatten()).find(|o| o["name"] == name);
+    let targets = |name: &str| -> Vec<(String, f64)> {
+        let Some(output) = output_of(name) else {
+            return Vec::new();
+        };
+        let percentiles = match output.get("value_percentiles") {
+            Some(values) if values.is_object() => values,
+            _ => &output["percentiles"],
+        };
+        [("P50", "50"), ("P99.865", "99.865")]
+            .into_iter()
+            .filter_map(|(label, key)| Some((label.to_string(), percentiles[key].as_f64()?)))
+            .collect()
+    };
+    let (Some(seed), Some(samples)) = (run["seed"].as_u64(), run["samples"].as_u64()) else {
+        return Ok(Vec::new());
+    };
+    let chosen = rvtol_analysis::assemblies::chosen_assemblies(scenario, seed, samples, &targets)
+        .map_err(|err| BadInput(format!("the assemblies a page draws: {err}")))?;
+    Ok(chosen
+        .into_iter()
+        .map(|a| {
+            let unit = (scenario.outputs.iter())
+                .find(|o| o.name == a.output)
+                .map_or("", |o| o.unit.as_str());
+            rvtol_report::AssemblyCurves {
+                model: a.model.to_string(),
+                heading: format!("the {} assembly of {}", a.label, a.output),
+                note: format!(
+                    "Of the first {} assemblies drawn with seed {seed}, the one whose {} lies nearest the run's {} of its values, {} {unit}: row {}, where it is {} {unit}.",
+                    group_thousands(a.rows),
+                    a.output,
+                    a.label,
+                    format_sig(a.target),
+                    group_thousands(a.sample),
+                    format_sig(a.value),
+                ),
+                curves: a.curves,
+                left_out: a.left_out,
+            }
+        })
+        .collect())
+}
+
 /// The HTML page of one command's JSON report (`kind` says which) for `path`, with the
 /// nominal curves of the scenario's models for a run.
 fn html_page(
@@ -375,6 +429,10 @@ fn html_page(
     } else {
         (Vec::new(), Vec::new())
     };
+    let assemblies = match kind {
+        Kind::Run if !curves.is_empty() => page_assemblies(scenario, &value)?,
+        _ => Vec::new(),
+    };
     let record = rvtol_report::Record {
         scenario: scenario.name.clone(),
         description: Some(scenario.description.clone()).filter(|d| !d.is_empty()),
@@ -390,6 +448,7 @@ fn html_page(
         stack: (kind == Kind::Stack).then_some(&value),
         curves: &curves,
         curves_left_out: &curves_left_out,
+        assemblies: &assemblies,
     })
     .map_err(|err| BadInput(format!("{}: {err}", path.display())).into())
 }

@@ -7,7 +7,10 @@ use std::path::{Path, PathBuf};
 use anyhow::Result;
 use clap::Args;
 
-use super::{command_line, load, outputs_ok, page_curves, read_text, scenario_inputs, target};
+use super::{
+    command_line, load, outputs_ok, page_assemblies, page_curves, read_text, scenario_inputs,
+    target,
+};
 use crate::output::{is_stdout, print, write_report, Format};
 use crate::BadInput;
 
@@ -105,6 +108,7 @@ pub fn report(args: ReportArgs) -> Result<()> {
     let mut description = None;
     let mut curves = Vec::new();
     let mut curves_left_out = Vec::new();
+    let mut assemblies = Vec::new();
     if let Some(path) = scenario_path {
         let scenario = load(path)?;
         if scenario.name != name {
@@ -127,6 +131,10 @@ pub fn report(args: ReportArgs) -> Result<()> {
         }
         description = Some(scenario.description.clone()).filter(|d| !d.is_empty());
         (curves, curves_left_out) = page_curves(&scenario);
+        let run = found.iter().find(|(k, _, _)| *k == Kind::Run);
+        if let (Some((_, run, _)), false) = (run, curves.is_empty()) {
+            assemblies = page_assemblies(&scenario, run)?;
+        }
     }
     let get = |kind: Kind| found.iter().find(|(k, _, _)| *k == kind).map(|(_, v, _)| v);
     let record = rvtol_report::Record {
@@ -144,6 +152,7 @@ pub fn report(args: ReportArgs) -> Result<()> {
         stack: get(Kind::Stack),
         curves: &curves,
         curves_left_out: &curves_left_out,
+        assemblies: &assemblies,
     })
     .map_err(|err| BadInput(format!("{}: {err}", output.display())))?;
     write_report(output, &page)?;

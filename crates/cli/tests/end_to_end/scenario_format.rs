@@ -54,11 +54,15 @@ fn stack(n: usize, as_array: bool) -> Value {
     })
 }
 
-/// A run's JSON report without the digest of its scenario text: the figures two texts
-/// that draw the same samples share.
+/// A run's JSON report without the digest of its scenario text and the sources of its
+/// inputs (an array's members share its name, separate variables have their own): the
+/// figures two texts that draw the same samples share.
 fn figures(scenario: &Scenario, result: rvtol_engine::RunResult) -> String {
     let mut report = RunReport::new(scenario, result);
     report.scenario_sha256.clear();
+    for input in &mut report.inputs {
+        input.source.clear();
+    }
     report.to_json()
 }
 
