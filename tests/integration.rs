@@ -7,6 +7,7 @@
 
 mod common;
 
+mod assemblies;
 mod capability_intervals;
 mod conformity;
 mod copula;

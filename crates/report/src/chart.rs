@@ -794,7 +794,7 @@ pub fn curve(curve: &Curve) -> Drawn {
     let title = curve.title.clone();
     let mut out = String::new();
     {
-        let root = canvas(&mut out, HEIGHT + 20)?;
+        let root = canvas(&mut out, HEIGHT)?;
         let mut builder = ChartBuilder::on(&root);
         builder
             .caption(title, text(15))

@@ -1,7 +1,8 @@
 //! The gate's requests (`rvtol baseline`, `rvtol check`, and `merge` of a run's shards
 //! into either): a baseline's run (at least 2 samples, drawn as its scenario says), a
 //! check's re-run (the baseline's samples and percentile limit, another seed if asked),
-//! and its requirements parsed against the scenario before any work.
+//! the baseline's scenario text against the one checked, and its requirements parsed
+//! against the scenario before any work.
 
 use rvtol_engine::{RunSettings, Scenario};
 
@@ -104,4 +105,26 @@ pub fn baseline_matches(recorded: &Baseline, settings: &RunSettings) -> Result<(
         ));
     }
     Ok(())
+}
+
+/// Whether `recorded` was recorded from the text of `scenario` (the same SHA-256; a
+/// baseline older than the digest has none and passes). A design change is a changed
+/// text: `changed` (`--scenario-changed`) accepts it, and the check then says where the
+/// text changed. The error says both digests and what to do.
+pub fn baseline_text_matches(
+    recorded: &Baseline,
+    scenario: &Scenario,
+    changed: bool,
+    caller: Caller,
+) -> Result<(), String> {
+    match &recorded.scenario_sha256 {
+        Some(digest) if !changed && *digest != scenario.digest => Err(format!(
+            "scenario_sha256: recorded from another text of scenario {:?} (sha256 {}…, this file's {}…): to check the changed design against it (the report says where the text changed) pass {}, or write a new baseline",
+            scenario.name,
+            &digest[..digest.len().min(12)],
+            &scenario.digest[..12],
+            caller.option("scenario_changed")
+        )),
+        _ => Ok(()),
+    }
 }

@@ -6,7 +6,9 @@ use std::path::PathBuf;
 use anyhow::Result;
 use clap::Args;
 use rvtol_analysis::gate;
-use rvtol_analysis::request::gate::{check_requirements, check_settings, RequirementError};
+use rvtol_analysis::request::gate::{
+    baseline_text_matches, check_requirements, check_settings, RequirementError,
+};
 use rvtol_analysis::request::memory;
 
 use super::{
@@ -41,6 +43,11 @@ pub struct CheckArgs {
     /// baseline file overrides; the others stay two-sided.
     #[arg(long)]
     pub one_sided: bool,
+    /// Check a scenario whose text differs from the one the baseline was recorded from (a
+    /// design change): the report says where the text changed. Without it such a baseline
+    /// is refused.
+    #[arg(long)]
+    pub scenario_changed: bool,
     /// An absolute requirement, "[OUTPUT] FIGURE OP VALUE" (e.g. "p99.865 <= 1.5",
     /// "cpk >= 1.33", "ppm_out <= 2700"); fails only when the re-run's whole interval
     /// misses it. Repeatable; the baseline's `requirements` apply too.
@@ -81,6 +88,8 @@ pub fn check(args: CheckArgs) -> Result<()> {
     recorded
         .matches(&scenario)
         .map_err(|err| problem_of_file(baseline_path, err))?;
+    baseline_text_matches(&recorded, &scenario, args.scenario_changed, CALLER)
+        .map_err(|message| BadInput(format!("{}: {message}", baseline_path.display())))?;
     check_requirements(&scenario, &recorded, options, CALLER).map_err(|err| match err {
         RequirementError::Baseline { index, message } => BadInput(format!(
             "{}: requirements[{index}]: {message}",

@@ -7,7 +7,9 @@ use std::path::{Path, PathBuf};
 use anyhow::Result;
 use clap::Args;
 use rvtol_analysis::gate;
-use rvtol_analysis::request::gate::{baseline_matches, check_baseline_samples};
+use rvtol_analysis::request::gate::{
+    baseline_matches, baseline_text_matches, check_baseline_samples,
+};
 use rvtol_analysis::request::memory;
 use rvtol_analysis::request::shard::{build_identity, read_shards, shards_limit};
 use rvtol_analysis::request::Refusal;
@@ -54,6 +56,10 @@ pub struct MergeArgs {
     /// With --check: fail a figure only when it gets worse (as `check --one-sided`).
     #[arg(long, requires = "check")]
     pub one_sided: bool,
+    /// With --check: check although the scenario text differs from the baseline's (as
+    /// `check --scenario-changed`).
+    #[arg(long, requires = "check")]
+    pub scenario_changed: bool,
     /// With --check: an absolute requirement (as `check --require`). Repeatable.
     #[arg(long = "require", value_name = "REQUIREMENT", requires = "check")]
     pub requirements: Vec<String>,
@@ -84,6 +90,9 @@ fn merge_check(
     let recorded = gate::Baseline::from_json(&baseline_text)
         .map_err(|err| problem_of_file(baseline_path, err))?;
     baseline_matches(&recorded, &merged.settings)
+        .and_then(|()| {
+            baseline_text_matches(&recorded, merged.scenario, args.scenario_changed, CALLER)
+        })
         .map_err(|message| BadInput(format!("{}: {message}", baseline_path.display())))?;
     let result = std::sync::Mutex::new(Some(merged.result));
     let report = pool

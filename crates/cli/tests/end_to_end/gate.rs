@@ -159,6 +159,9 @@ fn cli_exit_codes_and_junit() {
     let figures = rvtol_analysis::gate::gated_figure_count(&scenario(&rv20e_text()));
     assert_eq!(xml.matches("<testcase ").count(), figures);
 
+    // The widened text is another text than the baseline's: refused, one line, no JUnit
+    // written over the last one; with --scenario-changed it is checked.
+    let before = std::fs::read(&junit).unwrap();
     let out = run_rvtol(&[
         "check",
         &s(&wide),
@@ -166,6 +169,25 @@ fn cli_exit_codes_and_junit() {
         &s(&base),
         "--junit",
         &s(&junit),
+        "--quiet",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.contains("scenario_sha256: recorded from another text")
+            && stderr.contains("--scenario-changed"),
+        "{stderr}"
+    );
+    assert_eq!(std::fs::read(&junit).unwrap(), before);
+    let out = run_rvtol(&[
+        "check",
+        &s(&wide),
+        "--baseline",
+        &s(&base),
+        "--junit",
+        &s(&junit),
+        "--scenario-changed",
         "--quiet",
     ]);
     assert_eq!(out.status.code(), Some(1));

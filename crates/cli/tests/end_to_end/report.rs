@@ -192,7 +192,9 @@ fn run_html_of_every_shipped_scenario_has_its_plots() {
             let left_out = block
                 .split("Not drawn, the model giving them no finite value for this assembly: ")
                 .nth(1)
-                .map_or(0, |note| note[..note.find("</p>").unwrap()].split("; ").count());
+                .map_or(0, |note| {
+                    note[..note.find("</p>").unwrap()].split("; ").count()
+                });
             assert_eq!(
                 block.matches("<figure>").count() + left_out,
                 curves,

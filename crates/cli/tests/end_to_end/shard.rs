@@ -533,6 +533,53 @@ fn cli_merge_refuses_what_is_not_one_whole_run() {
     let foreign = dir.file("foreign.part");
     shard(&scenario("rv20e-torsion.json"), 1, 4, &foreign, &samples);
     refused(&["merge", &p[0], &foreign], "the scenario differs from");
+    // Another text of this scenario (its description edited, the data files written in
+    // so that it loads from the temporary folder): its shard is refused, and so is its
+    // baseline beside these shards' merge, unless --scenario-changed says the design
+    // changed on purpose.
+    let mut edited: serde_json::Value = serde_json::from_str(&rvtol_tests::shipped_text(
+        scenario_path("rv20e-hysteresis.json"),
+    ))
+    .unwrap();
+    edited["description"] = "edited after the shards ran".into();
+    let edited_file = dir.file("edited.json");
+    std::fs::write(&edited_file, edited.to_string()).unwrap();
+    let edited_part = dir.file("edited.part");
+    shard(&edited_file, 1, 4, &edited_part, &samples);
+    refused(&["merge", &p[0], &edited_part], "the scenario differs from");
+    let edited_baseline = dir.file("edited-baseline.json");
+    ok(&[
+        "baseline",
+        &edited_file,
+        "--samples",
+        "20000",
+        "-o",
+        &edited_baseline,
+        "-q",
+    ]);
+    refused(
+        &[
+            "merge",
+            &p[0],
+            &p[1],
+            &p[2],
+            &p[3],
+            "--check",
+            &edited_baseline,
+        ],
+        "scenario_sha256: recorded from another text",
+    );
+    let checked = ok(&[
+        "merge",
+        &p[0],
+        &p[1],
+        &p[2],
+        &p[3],
+        "--check",
+        &edited_baseline,
+        "--scenario-changed",
+    ]);
+    assert!(checked.contains("within their baseline bands"), "{checked}");
     let seed = dir.file("seed.part");
     shard(&file, 1, 4, &seed, &["--samples", "20000", "--seed", "99"]);
     refused(&["merge", &p[0], &seed], "the settings differ from");
