@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Writes the HTML report page of every shipped scenario, with every kind of analysis page
-# (run; sensitivity, allocation and stack where the scenario is made for them), into
+# (run; sensitivity, allocation, stack and sweep where the scenario is made for them), into
 # OUT_DIR/html: what scripts/report-screenshots.sh photographs and
 # scripts/check-page-print.py prints.
 #
@@ -46,6 +46,14 @@ for scenario in scenarios/*.json; do
     rv20e-hysteresis|linear-stack-correlated|motor-assembly-stack|pin-in-hole)
       "$rvtol" stack "$scenario" --samples 20000 --json "$dir/$name.stack.json" --quiet > /dev/null
       reports+=("$dir/$name.stack.json") ;;
+  esac
+  case "$name" in
+    rv20e-hysteresis)
+      "$rvtol" sweep "$scenario" --set reducer.params.shift_modification_mm=-0.016:-0.008:5 --set reducer.params.equidistant_modification_mm=-0.012,-0.010,-0.008 --output hysteresis_arcmin --samples 20000 --json "$dir/$name.sweep.json" --quiet > /dev/null
+      reports+=("$dir/$name.sweep.json") ;;
+    pin-in-hole)
+      "$rvtol" sweep "$scenario" --set "models[0].params.hole_oversize_mm=0:0.004:5" --samples 20000 --json "$dir/$name.sweep.json" --quiet > /dev/null
+      reports+=("$dir/$name.sweep.json") ;;
   esac
   "$rvtol" report "${reports[@]}" --scenario "$scenario" -o "$dir/$name.html" > /dev/null
 done

@@ -22,4 +22,5 @@ mod sensitivity;
 mod stack;
 mod stiffness;
 mod structure;
+mod sweep;
 mod transmission_error;

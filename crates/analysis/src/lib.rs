@@ -10,6 +10,7 @@
 //! - [`allocation`]: the cheapest tolerances that meet a target;
 //! - [`assemblies`]: assemblies chosen for an output's value (the median, the tail), with
 //!   the model curves at them, for a page;
+//! - [`sweep`]: one or two design values over a grid, a whole run at each point;
 //! - [`fit`]: a normal model of measured parts, as a scenario fragment;
 //! - [`shard`]: a shard's file and the assembly of a set of them for the merge;
 //! - [`request`]: the requests the command line and the Python module make (scenario
@@ -26,4 +27,5 @@ pub mod sensitivity_report;
 pub mod shapley;
 pub mod shard;
 pub mod stack;
+pub mod sweep;
 pub mod target;

@@ -19,7 +19,7 @@ use crate::command::{
     allocate::AllocateArgs, baseline::BaselineArgs, check::CheckArgs, curve::CurveArgs,
     evaluate::EvaluateArgs, fit::FitArgs, init::InitArgs, merge::MergeArgs, nominal::NominalArgs,
     report::ReportArgs, run::RunArgs, sensitivity::SensitivityArgs, stack::StackArgs,
-    validate::ValidateArgs,
+    sweep::SweepArgs, validate::ValidateArgs,
 };
 
 /// Monte Carlo tolerance and deviation statistics for RV reducers.
@@ -55,6 +55,9 @@ enum Command {
     /// box (each input between its tolerance limits), beside the Monte Carlo run's
     /// P0.135, P99.865 and out-of-spec share.
     Stack(StackArgs),
+    /// One or two design values over a grid (`--set PATH=VALUES`): a whole run at each
+    /// point with the same seed, and the outputs' figures with their intervals per point.
+    Sweep(SweepArgs),
     /// Record the distribution figures of every output, with the band a re-run may move
     /// within, for `rvtol check`.
     ///
@@ -90,7 +93,7 @@ enum Command {
     /// scenario fragment (`variables` and `correlations`, or one part) to paste.
     Fit(FitArgs),
     /// Write one self-contained HTML page (plots, tables, the record to reproduce it)
-    /// from JSON reports of `run`, `sensitivity`, `allocate` and `stack` of one scenario.
+    /// from JSON reports of `run`, `sensitivity`, `allocate`, `stack` and `sweep` of one scenario.
     Report(ReportArgs),
     /// List the models with their parameters, inputs and outputs.
     Models,
@@ -129,6 +132,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Command::Nominal(args) => nominal::nominal(args),
         Command::Sensitivity(args) => sensitivity::sensitivity(args),
         Command::Stack(args) => stack::stack(args),
+        Command::Sweep(args) => sweep::sweep(args),
         Command::Baseline(args) => baseline::baseline(args),
         Command::Check(args) => check::check(args),
         Command::Init(args) => init::init(args),

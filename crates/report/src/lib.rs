@@ -1,5 +1,5 @@
 //! rvtol-report: one self-contained HTML page (inline SVG, no script, nothing loaded from
-//! a network) from rvtol's JSON reports — `run`, `sensitivity`, `allocate`, `stack` — and the
+//! a network) from rvtol's JSON reports — `run`, `sensitivity`, `allocate`, `stack`, `sweep` — and the
 //! models' nominal curves, for a design review and as a reproducible record.
 //!
 //! The page reads the JSON reports, the stable contract of the engine, and nothing else
@@ -16,6 +16,7 @@ pub mod chart;
 pub mod html;
 mod inputs;
 mod stack;
+mod sweep;
 
 use rvtol_models::{Curve, CurveStyle};
 use serde_json::Value;
@@ -53,6 +54,8 @@ pub struct Report<'a> {
     pub allocation: Option<&'a Value>,
     /// The JSON report of `rvtol stack`.
     pub stack: Option<&'a Value>,
+    /// The JSON report of `rvtol sweep`.
+    pub sweep: Option<&'a Value>,
     /// Model name and its curves with every deviation at its mean.
     pub curves: &'a [(String, Vec<Curve>)],
     /// Why a model's curves are not drawn (a point that is not finite at the nominal
@@ -109,6 +112,8 @@ pub enum Kind {
     Allocation,
     /// `rvtol stack`.
     Stack,
+    /// `rvtol sweep`.
+    Sweep,
 }
 
 impl Kind {
@@ -119,6 +124,7 @@ impl Kind {
             Kind::Sensitivity => "sensitivity",
             Kind::Allocation => "allocate",
             Kind::Stack => "stack",
+            Kind::Sweep => "sweep",
         }
     }
 }
@@ -137,6 +143,8 @@ pub fn kind_of(report: &Value) -> Option<Kind> {
         Some(Kind::Allocation)
     } else if has("corners") && has("outputs") {
         Some(Kind::Stack)
+    } else if has("axes") && has("points") {
+        Some(Kind::Sweep)
     } else {
         None
     }
@@ -227,6 +235,10 @@ pub fn render(report: &Report) -> Result<String, ReportError> {
         sections.push_str(&stack::stack_section(stack)?);
         nav.push(("stack".into(), "Worst case and RSS".into()));
     }
+    if let Some(sweep) = report.sweep {
+        sections.push_str(&sweep::sweep_section(sweep)?);
+        nav.push(("sweep".into(), "Sweep".into()));
+    }
     if !report.curves.is_empty() || !report.curves_left_out.is_empty() {
         sections.push_str(&curves_section(
             report.curves,
@@ -271,6 +283,7 @@ fn record_section(report: &Report) -> String {
         report.sensitivity,
         report.allocation,
         report.stack,
+        report.sweep,
     ]
     .into_iter()
     .flatten()
@@ -343,6 +356,9 @@ fn record_section(report: &Report) -> String {
     }
     if let Some(stack) = report.stack {
         reproduce("stack report", stack, "monte_carlo_samples");
+    }
+    if let Some(sweep) = report.sweep {
+        reproduce("sweep report", sweep, "samples");
     }
     rows.push(vec![
         "page written by".into(),

@@ -360,7 +360,7 @@ pub fn allocate(
         .zip(&combination)
         .map(|(lever, &i)| LeverChoice {
             name: lever.name.clone(),
-            param: format!("models[{}].params.{}", lever.model, lever.key),
+            param: lever.target.path.clone(),
             value: lever.values[i],
             cost: lever.costs[i],
         })
@@ -414,25 +414,9 @@ fn set_lever_values(
     combination: &[usize],
 ) -> Result<(), ScenarioError> {
     for (lever, &i) in levers.iter().zip(combination) {
-        let params = document
-            .get_mut("models")
-            .and_then(|models| models.get_mut(lever.model))
-            .and_then(|model| {
-                let object = model.as_object_mut()?;
-                Some(
-                    object
-                        .entry("params")
-                        .or_insert_with(|| Value::Object(Default::default())),
-                )
-            })
-            .and_then(Value::as_object_mut)
-            .ok_or_else(|| {
-                ScenarioError::new(
-                    format!("allocation.levers.{}", lever.name),
-                    "its model has no params object",
-                )
-            })?;
-        params.insert(lever.key.clone(), Value::from(lever.values[i]));
+        (lever.target.set(document, lever.values[i])).map_err(|err| {
+            ScenarioError::new(format!("allocation.levers.{}", lever.name), err.message)
+        })?;
     }
     Ok(())
 }
@@ -1021,19 +1005,10 @@ pub fn proposal_document(
     let mut document: Value = serde_json::from_str(scenario_text)
         .map_err(|err| ScenarioError::new("JSON syntax", err.to_string()))?;
     for lever in &allocation.levers {
-        let (model, key) = lever
-            .param
-            .strip_prefix("models[")
-            .and_then(|rest| rest.split_once("].params."))
-            .and_then(|(index, key)| Some((index.parse::<usize>().ok()?, key)))
-            .ok_or_else(|| ScenarioError::new(&lever.param, "not a model parameter path"))?;
-        let params = document
-            .get_mut("models")
-            .and_then(|models| models.get_mut(model))
-            .and_then(|model| model.get_mut("params"))
-            .and_then(Value::as_object_mut)
-            .ok_or_else(|| ScenarioError::new(&lever.param, "changed since it was validated"))?;
-        params.insert(key.to_string(), Value::from(lever.value));
+        let target =
+            rvtol_engine::scenario::design::DesignValue::parse(scenario_text, &lever.param)
+                .map_err(|message| ScenarioError::new(&lever.param, message))?;
+        target.set(&mut document, lever.value)?;
     }
     let sources: Vec<AllocatableSource> = allocation
         .sources

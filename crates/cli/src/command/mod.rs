@@ -21,6 +21,7 @@ pub mod report;
 pub mod run;
 pub mod sensitivity;
 pub mod stack;
+pub mod sweep;
 pub mod validate;
 
 use std::path::{Path, PathBuf};
@@ -446,6 +447,7 @@ fn html_page(
         sensitivity: (kind == Kind::Sensitivity).then_some(&value),
         allocation: (kind == Kind::Allocation).then_some(&value),
         stack: (kind == Kind::Stack).then_some(&value),
+        sweep: (kind == Kind::Sweep).then_some(&value),
         curves: &curves,
         curves_left_out: &curves_left_out,
         assemblies: &assemblies,

@@ -1,5 +1,5 @@
 //! `rvtol report`: one self-contained HTML page from saved JSON reports of one scenario
-//! (run, sensitivity, allocate, stack), with its models' nominal curves when the scenario
+//! (run, sensitivity, allocate, stack, sweep), with its models' nominal curves when the scenario
 //! is given.
 
 use std::path::{Path, PathBuf};
@@ -17,7 +17,7 @@ use crate::BadInput;
 /// The arguments of `rvtol report`.
 #[derive(Debug, Args)]
 pub struct ReportArgs {
-    /// JSON reports (`--json` of run, sensitivity, allocate, stack), at most one of each.
+    /// JSON reports (`--json` of run, sensitivity, allocate, stack, sweep), at most one of each.
     #[arg(required = true)]
     pub reports: Vec<PathBuf>,
     /// The scenario file: adds its description and its models' nominal curves.
@@ -150,6 +150,7 @@ pub fn report(args: ReportArgs) -> Result<()> {
         sensitivity: get(Kind::Sensitivity),
         allocation: get(Kind::Allocation),
         stack: get(Kind::Stack),
+        sweep: get(Kind::Sweep),
         curves: &curves,
         curves_left_out: &curves_left_out,
         assemblies: &assemblies,

@@ -563,3 +563,92 @@ fn the_run_records_its_inputs_and_the_page_tabulates_them_with_their_contributio
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn a_sweep_writes_its_page_and_composes_with_the_run() {
+    let dir = temp_dir("sweep");
+    let path = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let file = scenario("rv20e-hysteresis.json");
+    let set = "--set=reducer.params.shift_modification_mm=-0.016:-0.010:3";
+    ok(&run_rvtol(&[
+        "sweep",
+        &file,
+        set,
+        "--output",
+        "hysteresis_arcmin",
+        "--samples",
+        "5000",
+        "--json",
+        &path("sweep.json"),
+        "--html",
+        &path("sweep.html"),
+        "--quiet",
+    ]));
+    let page = std::fs::read_to_string(path("sweep.html")).unwrap();
+    check_page(&page, "sweep");
+    assert!(page.contains("<section id=\"sweep\">"));
+    assert!(page.contains("hysteresis_arcmin over shift_modification_mm"));
+    assert!(page.contains("hysteresis_arcmin: out of spec over shift_modification_mm"));
+    let report: Value =
+        serde_json::from_str(&std::fs::read_to_string(path("sweep.json")).unwrap()).unwrap();
+    let values: Vec<f64> = (report["axes"][0]["values"].as_array().unwrap().iter())
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert_eq!(values, [-0.016, -0.013, -0.010]);
+    assert_eq!(report["axes"][0]["current"], -0.012);
+    // Composed with a run of the same text.
+    ok(&run_rvtol(&[
+        "run",
+        &file,
+        "--samples",
+        "5000",
+        "--json",
+        &path("run.json"),
+        "--quiet",
+    ]));
+    ok(&run_rvtol(&[
+        "report",
+        &path("run.json"),
+        &path("sweep.json"),
+        "-o",
+        &path("both.html"),
+    ]));
+    let both = std::fs::read_to_string(path("both.html")).unwrap();
+    check_page(&both, "run and sweep");
+    assert!(both.contains("<section id=\"sweep\">") && both.contains("<section id=\"run\">"));
+    // Mistakes: one line each, exit 2, nothing written.
+    for (args, says) in [
+        (
+            vec!["--set=reducer.params.shift_modification_mm=a,b"],
+            "\"a\" is not a finite number",
+        ),
+        (
+            vec!["--set=reducer.params.shift_modification_mm=0:1:1"],
+            "at least 2",
+        ),
+        (
+            vec!["--set=models[0].inputs.pin_radius_error_mm=0"],
+            "not a design value",
+        ),
+        (vec!["--set=shift=0"], "is not a design value path"),
+        (
+            vec![
+                "--set=reducer.params.shift_modification_mm=0",
+                "--output",
+                "preloaded",
+            ],
+            "no continuous output \"preloaded\"",
+        ),
+    ] {
+        let target = path("refused.json");
+        let mut all = vec!["sweep", file.as_str(), "--json", target.as_str()];
+        all.extend(args);
+        let out = run_rvtol(&all);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{all:?}: {stderr}");
+        assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+        assert!(stderr.contains(says), "{all:?}: {stderr}");
+        assert!(!std::path::Path::new(&target).exists());
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -345,8 +345,8 @@ pub(crate) struct AllocationFile {
     pub(crate) levers: BTreeMap<String, LeverFile>,
 }
 
-/// A discrete design choice as written: a model parameter and its candidate values with
-/// their costs.
+/// A discrete design choice as written: a design value's path (`param`) and its candidate
+/// values with their costs.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct LeverFile {
@@ -359,17 +359,15 @@ pub(crate) struct LeverFile {
     pub(crate) cost: Vec<f64>,
 }
 
-/// A discrete design choice `rvtol allocate` makes besides the tolerances: a model
-/// parameter (the number of pin classes of selective fitting) set to one of its candidate
-/// values, each with a cost added to the tolerances' cost.
+/// A discrete design choice `rvtol allocate` makes besides the tolerances: a design value
+/// (the number of pin classes of selective fitting, the profile modification) set to one
+/// of its candidate values, each with a cost added to the tolerances' cost.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Lever {
     /// The lever's name (its key in `allocation.levers`).
     pub name: String,
-    /// Index of the model whose parameter it sets.
-    pub model: usize,
-    /// The parameter's key.
-    pub key: String,
+    /// The design value it sets ([`super::design`]).
+    pub target: super::design::DesignValue,
     /// Candidate values.
     pub values: Vec<f64>,
     /// Cost of each value.

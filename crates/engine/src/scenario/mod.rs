@@ -12,6 +12,7 @@
 
 pub mod allocation;
 mod compile;
+pub mod design;
 mod file;
 pub mod skeleton;
 pub mod units;

@@ -1,6 +1,6 @@
 //! The `allocation` section: the sources `rvtol allocate` may change (each with its
 //! tolerance's bounds and cost models, checked against the source's current tolerance,
-//! [`ToleranceSource`]) and the levers (discrete choices of a model parameter with their
+//! [`ToleranceSource`]) and the levers (discrete choices of a design value with their
 //! costs). Compiled with the rest of the scenario, so `validate` reports its problems
 //! with the others'; the section's types are [`super::super::allocation`]'s.
 
@@ -10,7 +10,8 @@ use super::super::allocation::{
     AllocatableSource, AllocationFile, CostModel, Lever, ToleranceKind, ToleranceSource,
     MAX_LEVER_COMBINATIONS,
 };
-use super::super::file::{DistributionFile, PartFile, VariableFile};
+use super::super::design::design_value;
+use super::super::file::{DistributionFile, PartFile, ScenarioFile, VariableFile};
 use super::Compiler;
 use crate::error::ScenarioError;
 
@@ -20,7 +21,7 @@ pub(super) fn compile(compiler: &mut Compiler) {
     let Some(section) = &file.allocation else {
         return;
     };
-    match compile_levers(section, file.models.len()) {
+    match compile_levers(section, file) {
         Ok(levers) => compiler.allocation_levers = levers,
         Err(err) => compiler.report(Err(err)),
     }
@@ -96,33 +97,18 @@ fn variable_tolerance(path: &str, variable: &VariableFile) -> ToleranceSource {
     }
 }
 
-/// The `allocation.levers` of a scenario with `n_models` models.
-fn compile_levers(file: &AllocationFile, n_models: usize) -> Result<Vec<Lever>, ScenarioError> {
+/// The `allocation.levers` of the scenario `scenario`, each a design value
+/// ([`crate::scenario::design`]).
+fn compile_levers(
+    file: &AllocationFile,
+    scenario: &ScenarioFile,
+) -> Result<Vec<Lever>, ScenarioError> {
     let mut levers = Vec::new();
     let mut combinations = 1usize;
     for (name, lever) in &file.levers {
         let path = format!("allocation.levers.{name}");
-        let parsed = lever
-            .param
-            .strip_prefix("models[")
-            .and_then(|rest| rest.split_once("].params."))
-            .and_then(|(index, key)| Some((index.parse::<usize>().ok()?, key)))
-            .filter(|(_, key)| !key.is_empty() && !key.contains('.'));
-        let Some((model, key)) = parsed else {
-            return Err(ScenarioError::new(
-                format!("{path}.param"),
-                format!(
-                    "{:?} is not a model parameter path such as \"models[0].params.pin_classes\"",
-                    lever.param
-                ),
-            ));
-        };
-        if model >= n_models {
-            return Err(ScenarioError::new(
-                format!("{path}.param"),
-                format!("the scenario has {n_models} models, no models[{model}]"),
-            ));
-        }
+        let target = design_value(scenario, &lever.param)
+            .map_err(|message| ScenarioError::new(format!("{path}.param"), message))?;
         if lever.values.is_empty() {
             return Err(ScenarioError::new(
                 format!("{path}.values"),
@@ -158,8 +144,7 @@ fn compile_levers(file: &AllocationFile, n_models: usize) -> Result<Vec<Lever>, 
         }
         levers.push(Lever {
             name: name.clone(),
-            model,
-            key: key.to_string(),
+            target,
             values: lever.values.clone(),
             costs: lever.cost.clone(),
         });

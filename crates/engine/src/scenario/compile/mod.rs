@@ -24,6 +24,8 @@ mod parts;
 mod reducer;
 mod variables;
 
+pub(crate) use bindings::REDUCER_BINDING;
+
 use std::collections::{BTreeMap, BTreeSet};
 
 use rvtol_deviation::{InputSpace, InputSpaceBuilder, SamplingMethod};
