@@ -1047,9 +1047,10 @@ fn mark_provenance(document: &mut Value, allocation: &Allocation) {
         (true, true) => "met",
     };
     let provenance = format!(
-        "Tolerances proposed by rvtol {} allocate from scenario {:?}: {} {} (seed {}, verification seed {}, {} samples): {outcome}.",
+        "Tolerances proposed by rvtol {} allocate from scenario {:?} (text sha256 {}): {} {} (seed {}, verification seed {}, {} samples): {outcome}.",
         env!("CARGO_PKG_VERSION"),
         allocation.scenario,
+        allocation.scenario_sha256,
         allocation.output,
         allocation.target.expression(),
         allocation.settings.seed,

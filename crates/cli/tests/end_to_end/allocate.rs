@@ -215,7 +215,10 @@ fn written_proposal_reruns_to_the_verified_figures() {
     let description = written["description"].as_str().unwrap();
     assert!(
         description.starts_with("Tolerances proposed by rvtol ")
-            && description.contains("from scenario \"allocation-linear\": gap_mm sd <= 0.015")
+            && description.contains(&format!(
+                "from scenario \"allocation-linear\" (text sha256 {}): gap_mm sd <= 0.015",
+                report["scenario_sha256"].as_str().unwrap()
+            ))
             && description.contains(&format!(
                 "verification seed {}",
                 report["verification"]["seed"]
