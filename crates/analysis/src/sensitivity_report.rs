@@ -331,8 +331,8 @@ impl SensitivityReport {
             "rvtol {} | scenario {} | sensitivity: {} base samples ({} model evaluations) | seed {} | {intervals}, {:.0} % intervals",
             self.rvtol_version,
             self.scenario,
-            self.base_samples,
-            self.evaluations,
+            group_thousands(self.base_samples),
+            group_thousands(self.evaluations),
             self.seed,
             100.0 * self.confidence
         )];

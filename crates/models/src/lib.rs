@@ -10,6 +10,7 @@
 mod crank_elastic_error;
 mod cycloid;
 mod cycloid_pin_contact;
+pub mod declared;
 mod expression;
 mod geometric_hysteresis;
 mod linear_stack;

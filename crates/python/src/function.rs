@@ -31,9 +31,9 @@ use std::sync::{Arc, LazyLock, Mutex};
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyMapping};
+use rvtol_models::declared::declared_output;
 use rvtol_models::{
-    ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputKind, OutputSpec, ParamSpec,
-    ParamValue,
+    ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputSpec, ParamSpec, ParamValue,
 };
 
 /// A function a `Scenario` holds, and the first problem a call of it had.
@@ -172,40 +172,9 @@ impl PythonModel {
         let mut outputs = Vec::new();
         for (name, spec) in object(params, "outputs")? {
             let path = format!("outputs.{name}");
-            let ParamValue::Object(fields) = &spec else {
-                return Err(ModelError::new(
-                    path,
-                    format!("expected {{\"unit\": …}}, got {}", spec.kind()),
-                ));
-            };
-            let field = |k: &str| fields.iter().find(|(f, _)| f == k).map(|(_, v)| v);
-            if let Some((k, _)) = fields
-                .iter()
-                .find(|(k, _)| !["unit", "kind", "description"].contains(&k.as_str()))
-            {
-                return Err(ModelError::new(
-                    format!("{path}.{k}"),
-                    "unknown field; an output has unit, kind and description",
-                ));
-            }
-            let kind = match field("kind") {
-                None => OutputKind::Continuous,
-                Some(ParamValue::Text(k)) if k == "continuous" => OutputKind::Continuous,
-                Some(ParamValue::Text(k)) if k == "indicator" => OutputKind::Indicator,
-                Some(_) => {
-                    return Err(ModelError::new(
-                        format!("{path}.kind"),
-                        "\"continuous\" (the default) or \"indicator\"",
-                    ))
-                }
-            };
-            outputs.push(OutputSpec {
-                unit: text(&format!("{path}.unit"), field("unit"))?,
-                name,
-                description: "an output of the Python function",
-                kind,
-                condition: None,
-            });
+            let (output, _) =
+                declared_output(&name, &path, &spec, &[], "an output of the Python function")?;
+            outputs.push(output);
         }
         if outputs.is_empty() {
             return Err(ModelError::new("outputs", "needs at least one output"));

@@ -233,6 +233,16 @@ def test_a_python_function_that_fails_is_named():
     # Rows given as integers are converted.
     rows = np.array([[8, 7, 0, 0]])
     assert as_list.evaluate(rows).tolist() == [[0.0]]
+    # Its outputs are declared as an expression model's are, and refused with the same words.
+    for output, says in [
+        ({"unit": "mm", "colour": "red"}, r"outputs.gap_mm.colour: unknown field; an output has \"unit\", \"kind\", \"description\""),
+        ({"unit": ""}, r"outputs.gap_mm.unit: the unit is empty"),
+        ({"unit": "mm", "kind": "count"}, r"outputs.gap_mm.kind: \"count\" is no kind"),
+        ({}, r"outputs.gap_mm: needs a \"unit\""),
+    ]:
+        wrong = dict(model, params=dict(model["params"], outputs={"gap_mm": output}))
+        with pytest.raises(ValueError, match=says):
+            rvtol.Scenario(pin_in_hole_with(wrong), functions={"f": broken})
 
 
 def test_sensitivity_is_the_command_line_report(tmp_path):

@@ -12,17 +12,16 @@
 //!
 //! Setting one writes the number into the scenario's JSON document (with its data files
 //! written in); the text is then loaded as any scenario, so every check of a scenario
-//! holds for each value.
+//! holds for each value. The path is checked against the scenario (`DesignValue::parse`,
+//! with the reason when it names no design value) by `compile/design.rs`.
 
 use serde_json::Value;
 
-use super::compile::REDUCER_BINDING;
-use super::file::ScenarioFile;
 use crate::error::ScenarioError;
 
 /// Where a design value lives in the scenario's document.
 #[derive(Debug, Clone, PartialEq, Eq)]
-enum Target {
+pub(crate) enum Target {
     /// `reducer.params.KEY`.
     Reducer(String),
     /// `models[i].params.KEY`.
@@ -39,20 +38,13 @@ pub struct DesignValue {
     /// Its value in the scenario as written, when it gives one (a model parameter left at
     /// the model's default has none).
     pub current: Option<f64>,
-    target: Target,
+    pub(crate) target: Target,
 }
 
-const EXAMPLES: &str =
+pub(crate) const EXAMPLES: &str =
     "\"reducer.params.KEY\", \"models[0].params.KEY\" or \"models[0].inputs.NAME\"";
 
 impl DesignValue {
-    /// The design value at `path` of the scenario `text` (JSON, data files written in);
-    /// the error says why the path names none.
-    pub fn parse(text: &str, path: &str) -> Result<DesignValue, String> {
-        let (file, _) = super::file::parse(text).map_err(|err| err.to_string())?;
-        design_value(&file, path)
-    }
-
     /// Writes `value` into the scenario document `document` (the JSON the path was
     /// checked against).
     pub fn set(&self, document: &mut Value, value: f64) -> Result<(), ScenarioError> {
@@ -91,68 +83,8 @@ fn model_object<'d>(
         .as_object_mut()
 }
 
-/// The design value at `path` of the parsed scenario `file`.
-pub(super) fn design_value(file: &ScenarioFile, path: &str) -> Result<DesignValue, String> {
-    let target = parse_target(path)?;
-    let reducer_params = file.reducer.as_ref().map(|r| &r.params);
-    let model = |i: usize| {
-        (file.models.iter())
-            .find(|(k, _)| *k == i)
-            .map(|(_, m)| m)
-            .ok_or_else(|| format!("the scenario has no models[{i}]"))
-    };
-    let number = |value: &Value, what: &str| {
-        value
-            .as_f64()
-            .map(Some)
-            .ok_or_else(|| format!("{path}: {what} is {value}, not a number"))
-    };
-    let current = match &target {
-        Target::Reducer(key) => {
-            let value = reducer_params
-                .and_then(|p| p.get(key))
-                .ok_or_else(|| format!("the scenario's reducer has no parameter {key:?}"))?;
-            number(value, "the reducer's value")?
-        }
-        Target::Param(i, key) => {
-            if reducer_params.is_some_and(|p| p.contains_key(key)) {
-                return Err(format!(
-                    "the reducer gives {key:?} to every model that takes it: set reducer.params.{key}"
-                ));
-            }
-            match model(*i)?.params.get(key) {
-                Some(value) => number(value, "the parameter")?,
-                None => None,
-            }
-        }
-        Target::Input(i, name) => {
-            let binding = (model(*i)?.inputs.get(name))
-                .ok_or_else(|| format!("models[{i}] binds no input {name:?}"))?;
-            match binding {
-                Value::String(s) => match s.strip_prefix(REDUCER_BINDING) {
-                    Some(key) => match reducer_params.and_then(|p| p.get(key)) {
-                        Some(value) => number(value, "the reducer's value")?,
-                        None => None,
-                    },
-                    None => {
-                        return Err(format!(
-                            "models[{i}].inputs.{name} is bound to the random quantity {s:?}, not a design value: give the input a number (or bind it to reducer.KEY) to set it"
-                        ))
-                    }
-                },
-                other => number(other, "the input")?,
-            }
-        }
-    };
-    Ok(DesignValue {
-        path: path.to_string(),
-        current,
-        target,
-    })
-}
-
 /// The target a path names, by its form alone.
-fn parse_target(path: &str) -> Result<Target, String> {
+pub(crate) fn parse_target(path: &str) -> Result<Target, String> {
     let not = || format!("{path:?} is not a design value path such as {EXAMPLES}");
     let plain = |key: &str| !key.is_empty() && !key.contains(['.', '[', ']']);
     if let Some(key) = path.strip_prefix("reducer.params.") {

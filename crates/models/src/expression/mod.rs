@@ -43,6 +43,7 @@ mod program;
 
 use std::collections::{HashMap, HashSet};
 
+use crate::declared::{declared_output, unit_text};
 use crate::{
     ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputKind, OutputSpec, ParamSpec,
     ParamValue,
@@ -307,58 +308,26 @@ fn parameters(
     Ok(parameters)
 }
 
-/// An output's formula and spec from its object.
+/// An output's formula and spec from its object ([`crate::declared::declared_output`] with
+/// its `formula`).
 fn output(name: &str, path: &str, value: &ParamValue) -> Result<(Formula, OutputSpec), ModelError> {
-    let ParamValue::Object(fields) = value else {
-        return Err(ModelError::new(
-            path,
-            format!(
-                "expected {{\"formula\": …, \"unit\": …}}, got {}",
-                value.kind()
-            ),
-        ));
-    };
-    let field = |key: &str| fields.iter().find(|(k, _)| k == key).map(|(_, v)| v);
-    if let Some((key, _)) = fields
-        .iter()
-        .find(|(k, _)| !["formula", "unit", "description", "kind"].contains(&k.as_str()))
-    {
-        return Err(ModelError::new(
-            format!("{path}.{key}"),
-            "unknown field; an output has formula, unit, description and kind",
-        ));
-    }
-    let text = |key: &str| match field(key) {
-        Some(ParamValue::Text(text)) => Ok(Some(text.clone())),
-        Some(other) => Err(ModelError::new(
-            format!("{path}.{key}"),
-            format!("expected a string, got {}", other.kind()),
-        )),
-        None => Ok(None),
-    };
-    let formula = text("formula")?.ok_or_else(|| ModelError::new(path, "needs a \"formula\""))?;
-    let unit = match field("unit") {
-        Some(unit) => unit_text(&format!("{path}.unit"), unit)?,
-        None => {
-            return Err(ModelError::new(
-                path,
-                "needs a \"unit\" (\"1\" for a number without one)",
-            ))
-        }
-    };
-    let kind = match text("kind")?.as_deref() {
-        None | Some("continuous") => OutputKind::Continuous,
-        Some("indicator") => OutputKind::Indicator,
+    let (spec, fields) = declared_output(
+        name,
+        path,
+        value,
+        &["formula"],
+        "a formula of the expression model",
+    )?;
+    let formula = match fields.iter().find(|(k, _)| k == "formula").map(|(_, v)| v) {
+        Some(ParamValue::Text(text)) => text.clone(),
         Some(other) => {
             return Err(ModelError::new(
-                format!("{path}.kind"),
-                format!(
-                "{other:?} is no kind: \"continuous\" (the default) or \"indicator\" (a 0/1 event)"
-            ),
+                format!("{path}.formula"),
+                format!("expected a string, got {}", other.kind()),
             ))
         }
+        None => return Err(ModelError::new(path, "needs a \"formula\"")),
     };
-    text("description")?;
     Ok((
         Formula {
             name: name.to_string(),
@@ -366,29 +335,8 @@ fn output(name: &str, path: &str, value: &ParamValue) -> Result<(Formula, Output
             text: formula,
             output: true,
         },
-        OutputSpec {
-            name: name.to_string(),
-            unit,
-            description: "a formula of the expression model",
-            kind,
-            condition: None,
-        },
+        spec,
     ))
-}
-
-/// A unit as written: a non-empty string.
-fn unit_text(path: &str, value: &ParamValue) -> Result<String, ModelError> {
-    match value {
-        ParamValue::Text(unit) if !unit.trim().is_empty() => Ok(unit.clone()),
-        ParamValue::Text(_) => Err(ModelError::new(
-            path,
-            "the unit is empty (\"1\" for a number without one)",
-        )),
-        other => Err(ModelError::new(
-            path,
-            format!("expected a unit (a string), got {}", other.kind()),
-        )),
-    }
 }
 
 /// The names declared so far: each a valid, unreserved name, declared once.

@@ -10,8 +10,8 @@ use super::super::allocation::{
     AllocatableSource, AllocationFile, CostModel, Lever, ToleranceKind, ToleranceSource,
     MAX_LEVER_COMBINATIONS,
 };
-use super::super::design::design_value;
 use super::super::file::{DistributionFile, PartFile, ScenarioFile, VariableFile};
+use super::design::design_value;
 use super::Compiler;
 use crate::error::ScenarioError;
 

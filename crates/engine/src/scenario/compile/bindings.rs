@@ -221,7 +221,7 @@ fn unit_hint(model: &dyn ErrorModel, input: &InputSpec, unit: &str) -> String {
 
 /// How an input names a parameter of the `reducer` section (`"reducer.KEY"`): a design value
 /// a model takes as an input (a modification the torsion curve also draws errors about).
-pub(crate) const REDUCER_BINDING: &str = "reducer.";
+pub(super) const REDUCER_BINDING: &str = "reducer.";
 
 /// The value of the reducer parameter `name` (`reducer.KEY`) an input at `at` is bound to.
 fn reducer_binding(file: &ScenarioFile, name: &str, at: &str) -> Result<f64, ScenarioError> {

@@ -16,6 +16,7 @@
 mod allocation;
 mod bindings;
 mod correlations;
+mod design;
 mod distributions;
 mod groups;
 mod models;
@@ -24,7 +25,7 @@ mod parts;
 mod reducer;
 mod variables;
 
-pub(crate) use bindings::REDUCER_BINDING;
+use bindings::REDUCER_BINDING;
 
 use std::collections::{BTreeMap, BTreeSet};
 
