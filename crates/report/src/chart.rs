@@ -251,8 +251,10 @@ pub fn histogram(
             .x_label_formatter(&axis_ticks(x0, x1, 8))
             .y_label_formatter(&|v| tick(*v))
             .draw()?;
-        // Interval bands first, under the bars.
-        for marker in markers {
+        // Interval bands first, under the bars; a percentile beyond the limits (its value
+        // infinite, its interval unknown) has no band: shading its open interval would
+        // cover the whole axis.
+        for marker in markers.iter().filter(|m| m.value.is_finite()) {
             let (a, b) = (
                 marker.interval.0.unwrap_or(data.0).max(x0),
                 marker.interval.1.unwrap_or(data.1).min(x1),
@@ -969,5 +971,40 @@ mod tests {
         // one bar per bin that holds any, 3, and the corner note in it).
         assert_eq!(svg.matches("fill=\"#D9822B\"").count(), 3 + 1, "{svg}");
         assert!(svg.contains("out of spec 12 %"));
+    }
+
+    #[test]
+    fn a_percentile_beyond_the_limits_shades_nothing() {
+        // P99.865 read beyond the limits (flagged samples in the tail): value +inf, no
+        // interval. The page once shaded its open interval over the whole axis.
+        let draw = |markers: &[Marker]| {
+            let limits = Limits {
+                lower: None,
+                upper: Some(0.3),
+            };
+            histogram(
+                "t",
+                "x",
+                0.0,
+                0.1,
+                &[1, 5, 9, 5, 1],
+                None,
+                None,
+                limits,
+                markers,
+            )
+            .unwrap()
+        };
+        let median = Marker {
+            percent: 50.0,
+            value: 0.25,
+            interval: (Some(0.2), Some(0.3)),
+        };
+        let beyond = Marker {
+            percent: 99.865,
+            value: f64::INFINITY,
+            interval: (None, None),
+        };
+        assert_eq!(draw(&[median.clone(), beyond]), draw(&[median]));
     }
 }
