@@ -214,13 +214,14 @@ def main():
         if not shutil.which(tool):
             print(f"error: {tool} not found (apt-get install chromium poppler-utils)", file=sys.stderr)
             return 2
-    pages = sorted(pathlib.Path(sys.argv[1]).glob("*.html"))
+    # Chromium takes the pages by file URI, which needs an absolute path.
+    pages = sorted(pathlib.Path(sys.argv[1]).resolve().glob("*.html"))
     if not pages:
         print(f"error: no .html pages in {sys.argv[1]}", file=sys.stderr)
         return 2
     with tempfile.TemporaryDirectory() as tmp:
         tmp = pathlib.Path(tmp)
-        pdf_dir = pathlib.Path(sys.argv[2]) if len(sys.argv) == 3 else tmp / "pdf"
+        pdf_dir = pathlib.Path(sys.argv[2]).resolve() if len(sys.argv) == 3 else tmp / "pdf"
         pdf_dir.mkdir(parents=True, exist_ok=True)
         scratch = tmp / "measure"
         scratch.mkdir()
