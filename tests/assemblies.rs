@@ -5,7 +5,7 @@
 //! output with spec limits.
 
 use rvtol_analysis::assemblies::{chosen_assemblies, curve_output, ASSEMBLY_ROWS};
-use rvtol_engine::run::{model_inputs_of_row, nominal_model_inputs, sample_table};
+use rvtol_engine::run::{model_inputs_of_row, sample_table};
 use rvtol_engine::Scenario;
 use rvtol_tests::{run_settings, scenario_path, shipped_text};
 
@@ -30,7 +30,9 @@ fn the_chosen_row_is_the_nearest_of_the_run_rows_and_its_curves_are_its_own() {
     let chosen = chosen_assemblies(&scenario, seed, samples, &targets).unwrap();
     assert_eq!(chosen.len(), 2);
     let table = sample_table(&scenario, run_settings(samples, seed)).unwrap();
-    let nominal = nominal_model_inputs(&scenario);
+    // The nominal inputs: every deviation at its mean (model 0 reads no other model).
+    let mean_row = scenario.input_space.mean_row();
+    let nominal = model_inputs_of_row(&scenario, &mean_row, &vec![0.0; scenario.outputs.len()]);
     for (assembly, target) in chosen.iter().zip([0.6, 1.9]) {
         assert_eq!(assembly.rows, samples);
         assert_eq!(assembly.output, "lost_motion_arcmin");

@@ -13,7 +13,7 @@
 //! error where the profiles interfere at rest) is named, not drawn.
 
 use rvtol_engine::chunk::Sampling;
-use rvtol_engine::run::{model_inputs_of_row, nominal_model_inputs, sample_table};
+use rvtol_engine::run::{model_inputs_of_row, sample_table};
 use rvtol_engine::scenario::{Scenario, ScenarioError};
 use rvtol_engine::{RunSettings, DEFAULT_EXACT_PERCENTILE_LIMIT};
 use rvtol_models::{ConditionEffect, Curve, OutputKind};
@@ -68,15 +68,14 @@ pub fn chosen_assemblies(
     samples: u64,
     targets: &dyn Fn(&str) -> Vec<(String, f64)>,
 ) -> Result<Vec<ChosenAssembly>, ScenarioError> {
-    let nominal = nominal_model_inputs(scenario);
-    // (model, its output, the targets to choose by)
+    // (model, its output, the targets to choose by); a model that draws no curves has
+    // none at the chosen rows either and is left out there.
     type Drawing = (usize, usize, Vec<(String, f64)>);
     let drawing: Vec<Drawing> = (0..scenario.models.len())
         .filter_map(|m| {
             let o = curve_output(scenario, m)?;
             let wanted = targets(&scenario.outputs[o].name);
-            let draws = !scenario.models[m].model.curves(&nominal[m]).is_empty();
-            (draws && !wanted.is_empty()).then_some((m, o, wanted))
+            (!wanted.is_empty()).then_some((m, o, wanted))
         })
         .collect();
     if drawing.is_empty() {
@@ -101,10 +100,10 @@ pub fn chosen_assemblies(
             let (row, outputs) = (table.input_row(r), table.output_row(r));
             let inputs = model_inputs_of_row(scenario, row, outputs);
             let (curves, left_out) = (scenario.models[m].model.curves(&inputs[m]).into_iter())
-                .partition::<Vec<Curve>, _>(|curve| {
-                    (curve.series.iter())
-                        .all(|s| s.points.iter().all(|(x, y)| x.is_finite() && y.is_finite()))
-                });
+                .partition::<Vec<Curve>, _>(|curve| curve.first_non_finite().is_none());
+            if curves.is_empty() && left_out.is_empty() {
+                continue;
+            }
             chosen.push(ChosenAssembly {
                 model: scenario.models[m].model.name(),
                 output: scenario.outputs[o].name.clone(),

@@ -32,6 +32,9 @@ pub struct Axis {
     pub current: Option<f64>,
     /// The values it takes, in order.
     pub values: Vec<f64>,
+    /// The design value, checked against the scenario.
+    #[serde(skip)]
+    pub value: DesignValue,
 }
 
 /// One point of the grid and its run's figures.
@@ -82,6 +85,7 @@ pub fn axes(scenario_text: &str, grid: &[(String, Vec<f64>)]) -> Result<Vec<Axis
             path: path.clone(),
             current: value.current,
             values: values.clone(),
+            value,
         });
     }
     if points > MAX_POINTS {
@@ -118,9 +122,7 @@ pub fn sweep(
             .collect::<Vec<_>>()
             .join(", ");
         for (axis, &value) in axes.iter().zip(&values) {
-            DesignValue::parse(scenario_text, &axis.path)
-                .map_err(|message| ScenarioError::new(&axis.path, message))?
-                .set(&mut variant, value)?;
+            axis.value.set(&mut variant, value)?;
         }
         let point = Scenario::from_json(&variant.to_string(), &scenario.name)
             .map_err(|err| ScenarioError::new(err.path, format!("{} (at {at})", err.message)))?;

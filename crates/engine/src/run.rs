@@ -1488,11 +1488,33 @@ pub fn nominal_curves_per_model(
     scenario: &Scenario,
 ) -> Vec<(&'static str, Result<Vec<Curve>, ScenarioError>)> {
     let (model_inputs, _) = nominal_evaluation(scenario);
-    curves_per_model(
-        scenario,
-        &model_inputs,
-        "at the nominal point: the model cannot evaluate the scenario's nominal design",
-    )
+    let mut drawn = Vec::new();
+    for (i, (bound, inputs)) in scenario.models.iter().zip(&model_inputs).enumerate() {
+        let curves = bound.model.curves(inputs);
+        if curves.is_empty() {
+            continue;
+        }
+        let broken = curves.iter().find_map(|curve| {
+            let (label, (x, y)) = curve.first_non_finite()?;
+            Some(ScenarioError::new(
+                format!("models[{i}] ({})", bound.model.name()),
+                format!(
+                    "curve {} ({label}) has a point that is not finite ({}, {}) at the nominal point: the model cannot evaluate the scenario's nominal design",
+                    curve.name,
+                    rvtol_deviation::Shown(x),
+                    rvtol_deviation::Shown(y)
+                ),
+            ))
+        });
+        drawn.push((
+            bound.model.name(),
+            match broken {
+                Some(err) => Err(err),
+                None => Ok(curves),
+            },
+        ));
+    }
+    drawn
 }
 
 /// Each model's input row for one row of the input space and its outputs (as a
@@ -1501,59 +1523,4 @@ pub fn model_inputs_of_row(scenario: &Scenario, row: &[f64], outputs: &[f64]) ->
     (scenario.models.iter())
         .map(|bound| bound.inputs_of_row(row, outputs))
         .collect()
-}
-
-/// The curves of every model that draws any, at the models' input rows `model_inputs`
-/// (one per model, in scenario order), as [`nominal_curves_per_model`] gives them; `at`
-/// ends an error's sentence, saying where ("at the nominal point: ...").
-pub fn curves_per_model(
-    scenario: &Scenario,
-    model_inputs: &[Vec<f64>],
-    at: &str,
-) -> Vec<(&'static str, Result<Vec<Curve>, ScenarioError>)> {
-    (0..scenario.models.len())
-        .zip(model_inputs)
-        .map(|(i, inputs)| {
-            (
-                scenario.models[i].model.name(),
-                model_curves(scenario, i, inputs, at),
-            )
-        })
-        .filter(|(_, curves)| !matches!(curves, Ok(c) if c.is_empty()))
-        .collect()
-}
-
-/// The curves of model `i` at its input row `inputs` (none when it draws none), or the
-/// error naming its first point that is not finite; `at` ends the error's sentence.
-pub fn model_curves(
-    scenario: &Scenario,
-    i: usize,
-    inputs: &[f64],
-    at: &str,
-) -> Result<Vec<Curve>, ScenarioError> {
-    let bound = &scenario.models[i];
-    let curves = bound.model.curves(inputs);
-    for curve in &curves {
-        for series in &curve.series {
-            let broken = (series.points.iter()).find(|(x, y)| !(x.is_finite() && y.is_finite()));
-            if let Some(&(x, y)) = broken {
-                return Err(ScenarioError::new(
-                    format!("models[{i}] ({})", bound.model.name()),
-                    format!(
-                        "curve {} ({}) has a point that is not finite ({}, {}) {at}",
-                        curve.name,
-                        series.label,
-                        rvtol_deviation::Shown(x),
-                        rvtol_deviation::Shown(y)
-                    ),
-                ));
-            }
-        }
-    }
-    Ok(curves)
-}
-
-/// Each model's input row with every deviation at its mean (the nominal design).
-pub fn nominal_model_inputs(scenario: &Scenario) -> Vec<Vec<f64>> {
-    nominal_evaluation(scenario).0
 }

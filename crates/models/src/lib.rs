@@ -248,6 +248,17 @@ pub struct Curve {
     pub series: Vec<Series>,
 }
 
+impl Curve {
+    /// The first point of the curve that is not finite, with its series' label: where the
+    /// model cannot draw it.
+    pub fn first_non_finite(&self) -> Option<(&str, (f64, f64))> {
+        self.series.iter().find_map(|series| {
+            let &point = (series.points.iter()).find(|(x, y)| !(x.is_finite() && y.is_finite()))?;
+            Some((series.label.as_str(), point))
+        })
+    }
+}
+
 /// How a model is built from its scenario parameters, and how it is described.
 pub struct ModelEntry {
     /// Registry name.

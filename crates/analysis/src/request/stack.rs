@@ -65,32 +65,43 @@ impl StackRequest {
         scenario: &Scenario,
         caller: Caller,
     ) -> Result<StackSettings, Refusal> {
-        let continuous = scenario.continuous_outputs();
-        let outputs = if self.outputs.is_empty() {
-            continuous
-        } else {
-            let names: Vec<&str> = (continuous.iter())
-                .map(|&o| scenario.outputs[o].name.as_str())
-                .collect();
-            (self.outputs.iter())
-                .map(|name| match scenario.output_index(name) {
-                    Some(o) if scenario.outputs[o].kind == OutputKind::Continuous => Ok(o),
-                    Some(_) => Err(format!(
-                        "{name:?} is an indicator; the stack reads continuous outputs: {}",
-                        names.join(", ")
-                    )),
-                    None => Err(format!(
-                        "no output {name:?}; the scenario's continuous outputs: {}",
-                        names.join(", ")
-                    )),
-                })
-                .collect::<Result<Vec<usize>, String>>()
-                .map_err(|message| Refusal::option(caller, "output", message))?
-        };
+        let outputs = continuous_outputs(scenario, &self.outputs, "the stack", caller)?;
         Ok(StackSettings {
             seed: self.seed.unwrap_or(scenario.seed),
             outputs,
             max_non_finite: self.max_non_finite,
         })
     }
+}
+
+/// The continuous outputs `names` of `scenario` (every one when none is named), for an
+/// analysis (`reader`, "the stack") that reads continuous outputs only: an unknown or
+/// indicator output is refused, naming the `--output` option and the outputs there are.
+pub fn continuous_outputs(
+    scenario: &Scenario,
+    names: &[String],
+    reader: &str,
+    caller: Caller,
+) -> Result<Vec<usize>, Refusal> {
+    let continuous = scenario.continuous_outputs();
+    if names.is_empty() {
+        return Ok(continuous);
+    }
+    let known: Vec<&str> = (continuous.iter())
+        .map(|&o| scenario.outputs[o].name.as_str())
+        .collect();
+    (names.iter())
+        .map(|name| match scenario.output_index(name) {
+            Some(o) if scenario.outputs[o].kind == OutputKind::Continuous => Ok(o),
+            Some(_) => Err(format!(
+                "{name:?} is an indicator; {reader} reads continuous outputs: {}",
+                known.join(", ")
+            )),
+            None => Err(format!(
+                "no output {name:?}; the scenario's continuous outputs: {}",
+                known.join(", ")
+            )),
+        })
+        .collect::<Result<Vec<usize>, String>>()
+        .map_err(|message| Refusal::option(caller, "output", message))
 }

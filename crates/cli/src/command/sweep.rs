@@ -8,6 +8,7 @@ use anyhow::Result;
 use clap::Args;
 use rvtol_analysis::request::memory;
 use rvtol_analysis::request::run::RunRequest;
+use rvtol_analysis::request::stack::continuous_outputs;
 use rvtol_analysis::sweep::{axes, sweep as sweep_grid};
 
 use super::{
@@ -103,23 +104,8 @@ pub fn sweep(args: SweepArgs) -> Result<()> {
         .map_err(BadInput)?;
     let (scenario, text) = read(path)?;
     let axes = axes(&text.text, &grid).map_err(|message| BadInput(format!("--set: {message}")))?;
-    let outputs = if args.outputs.is_empty() {
-        scenario.continuous_outputs()
-    } else {
-        (args.outputs.iter())
-            .map(|name| {
-                scenario
-                    .continuous_outputs()
-                    .into_iter()
-                    .find(|&o| scenario.outputs[o].name == *name)
-                    .ok_or_else(|| {
-                        BadInput(format!(
-                            "--output: the scenario has no continuous output {name:?}"
-                        ))
-                    })
-            })
-            .collect::<Result<Vec<_>, _>>()?
-    };
+    let outputs = continuous_outputs(&scenario, &args.outputs, "a sweep", CALLER)
+        .map_err(|r| refused(path, r))?;
     let request = RunRequest {
         samples: args.samples,
         seed: args.seed,

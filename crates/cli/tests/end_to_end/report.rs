@@ -637,7 +637,7 @@ fn a_sweep_writes_its_page_and_composes_with_the_run() {
                 "--output",
                 "preloaded",
             ],
-            "no continuous output \"preloaded\"",
+            "--output: \"preloaded\" is an indicator; a sweep reads continuous outputs",
         ),
     ] {
         let target = path("refused.json");
