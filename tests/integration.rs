@@ -16,6 +16,7 @@ mod expression;
 mod lost_motion;
 mod msrv;
 mod percentile_intervals;
+mod rare;
 mod sampler;
 mod sampling;
 mod sensitivity;

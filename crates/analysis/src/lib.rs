@@ -8,6 +8,8 @@
 //!   re-run against them; [`target`] the requirement grammar it shares with the
 //!   allocation and the page;
 //! - [`allocation`]: the cheapest tolerances that meet a target;
+//! - [`rare`]: the probability of a rare event (1 ppm and below) by importance sampling
+//!   around FORM's design points and by subset simulation;
 //! - [`assemblies`]: assemblies chosen for an output's value (the median, the tail), with
 //!   the model curves at them, for a page;
 //! - [`sweep`]: one or two design values over a grid, a whole run at each point;
@@ -20,6 +22,7 @@ pub mod allocation;
 pub mod assemblies;
 pub mod fit;
 pub mod gate;
+pub mod rare;
 pub mod request;
 pub mod screening;
 pub mod sensitivity;

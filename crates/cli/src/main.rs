@@ -18,8 +18,8 @@ use clap::{Parser, Subcommand};
 use crate::command::{
     allocate::AllocateArgs, baseline::BaselineArgs, check::CheckArgs, curve::CurveArgs,
     evaluate::EvaluateArgs, fit::FitArgs, init::InitArgs, merge::MergeArgs, nominal::NominalArgs,
-    report::ReportArgs, run::RunArgs, sensitivity::SensitivityArgs, stack::StackArgs,
-    sweep::SweepArgs, validate::ValidateArgs,
+    rare::RareArgs, report::ReportArgs, run::RunArgs, sensitivity::SensitivityArgs,
+    stack::StackArgs, sweep::SweepArgs, validate::ValidateArgs,
 };
 
 /// Monte Carlo tolerance and deviation statistics for RV reducers.
@@ -55,6 +55,11 @@ enum Command {
     /// box (each input between its tolerance limits), beside the Monte Carlo run's
     /// P0.135, P99.865 and out-of-spec share.
     Stack(StackArgs),
+    /// The probability of a rare event of an output (out of its spec limits, or beyond a
+    /// threshold) down to 1 ppm and below: importance sampling around FORM's most
+    /// probable points and subset simulation, each with its 95 % interval, and the
+    /// sources' importance factors.
+    Rare(RareArgs),
     /// One or two design values over a grid (`--set PATH=VALUES`): a whole run at each
     /// point with the same seed, and the outputs' figures with their intervals per point.
     Sweep(SweepArgs),
@@ -132,6 +137,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Command::Nominal(args) => nominal::nominal(args),
         Command::Sensitivity(args) => sensitivity::sensitivity(args),
         Command::Stack(args) => stack::stack(args),
+        Command::Rare(args) => rare::rare(args),
         Command::Sweep(args) => sweep::sweep(args),
         Command::Baseline(args) => baseline::baseline(args),
         Command::Check(args) => check::check(args),

@@ -20,6 +20,10 @@ const ESTIMATE_THRESHOLD_VARIABLE: &str = "RVTOL_ESTIMATE_THRESHOLD_SECONDS";
 /// have not all finished.
 const ESTIMATE_SETTLE_SECONDS: f64 = 5.0;
 
+/// Seconds of work before a command with a budget says how long the whole budget would
+/// take.
+const BUDGET_NOTE_SECONDS: f64 = 30.0;
+
 /// A duration as a person says it: `45 s`, `12 min`, `10 h 12 min`, `3 days 4 h`.
 fn human_duration(seconds: f64) -> String {
     let seconds = seconds.max(0.0).round() as u64;
@@ -43,6 +47,9 @@ fn human_duration(seconds: f64) -> String {
 pub struct Progress {
     bar: ProgressBar,
     command: &'static str,
+    /// Whether the total is a budget that the command may stop well short of (a rare
+    /// event's model evaluations), not its work.
+    budget: bool,
     started: std::time::Instant,
     total: u64,
     done: AtomicU64,
@@ -72,6 +79,7 @@ impl Progress {
         Progress {
             bar,
             command,
+            budget: false,
             started: std::time::Instant::now(),
             total: samples,
             done: AtomicU64::new(0),
@@ -79,6 +87,30 @@ impl Progress {
             settled: threads.max(1) as u64 * rvtol_engine::chunk::CHUNK_SIZE as u64,
             threshold_seconds,
         }
+    }
+
+    /// The progress of a command that stops when its estimate is precise enough, within a
+    /// budget of `evaluations` model evaluations: a count on a terminal, and, after 30 s of
+    /// work, the one-line estimate of how long the whole budget would take when that
+    /// exceeds a minute.
+    pub fn counter(
+        command: &'static str,
+        evaluations: u64,
+        quiet: bool,
+        threads: usize,
+    ) -> Progress {
+        let mut progress = Progress::new(command, evaluations, true, threads);
+        progress.budget = true;
+        if !quiet && std::io::stderr().is_terminal() {
+            progress.bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
+            progress.bar.set_style(
+                ProgressStyle::with_template(
+                    "{spinner} [{elapsed_precise}] {human_pos} model evaluations",
+                )
+                .expect("valid template"),
+            );
+        }
+        progress
     }
 
     /// `samples` more are done.
@@ -92,11 +124,25 @@ impl Progress {
         if done < self.settled && elapsed < ESTIMATE_SETTLE_SECONDS {
             return;
         }
+        // A budget is an upper bound that most estimates stop far short of: said only when
+        // the command has been at it for a while.
+        if self.budget && elapsed < BUDGET_NOTE_SECONDS.min(self.threshold_seconds) {
+            return;
+        }
         if self.estimated.swap(true, Ordering::Relaxed) || done >= self.total {
             return;
         }
         let total_seconds = elapsed * self.total as f64 / done as f64;
-        if total_seconds > self.threshold_seconds {
+        if total_seconds > self.threshold_seconds && self.budget {
+            let line = format!(
+                "{}: the budget of {} model evaluations would take about {} at the pace of the first {}; the estimate stops sooner when precise enough (--precision, --max-evaluations)",
+                self.command,
+                rvtol_engine::format::group_thousands(self.total),
+                human_duration(total_seconds),
+                rvtol_engine::format::group_thousands(done)
+            );
+            self.bar.suspend(|| note(&line));
+        } else if total_seconds > self.threshold_seconds {
             let line = format!(
                 "{}: {} samples will take about {} at the pace of the first {}; fewer --samples take less",
                 self.command,

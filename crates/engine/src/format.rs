@@ -2,8 +2,8 @@
 //! report, the HTML page and the messages read alike: five significant digits
 //! ([`format_sig`]; [`format_rounded`] for a derivative's noisy last digits,
 //! [`format_tolerance`] for a tolerance as centre ± half width), a change as a signed percentage ([`format_change`]), ppm
-//! ([`format_ppm`]), counts with thousands separators ([`group_thousands`]), and text
-//! escaped for XML and HTML ([`escape_markup`]). (Numbers in error messages as a person
+//! ([`format_ppm`]), counts with thousands separators ([`group_thousands`]), aligned text
+//! tables ([`text_table`]), and text escaped for XML and HTML ([`escape_markup`]). (Numbers in error messages as a person
 //! writes them are rvtol-deviation's `Shown`.)
 
 /// A number with 5 significant digits, switching to exponent form when very large or
@@ -121,9 +121,48 @@ pub fn group_thousands(n: u64) -> String {
     out
 }
 
+/// A text table: the heading and the rows in columns two spaces apart, the first column
+/// left-aligned and the others right-aligned (numbers), each line newline-terminated.
+pub fn text_table(heading: &[&str], rows: &[Vec<String>]) -> String {
+    let mut widths: Vec<usize> = heading.iter().map(|h| h.chars().count()).collect();
+    for row in rows {
+        for (w, cell) in widths.iter_mut().zip(row) {
+            *w = (*w).max(cell.chars().count());
+        }
+    }
+    let line = |cells: Vec<&str>| {
+        let mut text = String::new();
+        for (i, (cell, &w)) in cells.iter().zip(&widths).enumerate() {
+            let pad = " ".repeat(w - cell.chars().count());
+            match i {
+                0 => text.push_str(&format!("{cell}{pad}")),
+                _ => text.push_str(&format!("  {pad}{cell}")),
+            }
+        }
+        text.trim_end().to_string() + "\n"
+    };
+    let mut text = line(heading.to_vec());
+    for row in rows {
+        text.push_str(&line(row.iter().map(String::as_str).collect()));
+    }
+    text
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_text_table_aligns_names_left_and_numbers_right() {
+        let rows = vec![
+            vec!["subset".to_string(), "1.25".to_string()],
+            vec!["importance".to_string(), "10.5".to_string()],
+        ];
+        assert_eq!(
+            text_table(&["method", "ppm"], &rows),
+            "method       ppm\nsubset      1.25\nimportance  10.5\n"
+        );
+    }
 
     #[test]
     fn a_derivative_loses_its_rounding_noise_and_a_tolerance_reads_as_centre_and_half() {

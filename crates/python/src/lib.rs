@@ -19,8 +19,11 @@ use pyo3::types::{PyDict, PyList};
 
 use rvtol_analysis::allocation::allocate as run_allocation;
 use rvtol_analysis::allocation::report::AllocationReport;
+use rvtol_analysis::rare::report::rare_report;
+use rvtol_analysis::rare::Method;
 use rvtol_analysis::request::allocation::AllocationRequest;
 use rvtol_analysis::request::input_file::ReadLimit;
+use rvtol_analysis::request::rare::RareRequest;
 use rvtol_analysis::request::run::{check_samples_out, sampling_method, RunRequest};
 use rvtol_analysis::request::scenario::{ScenarioSource, SourceError};
 use rvtol_analysis::request::sensitivity::{
@@ -516,6 +519,65 @@ fn stack<'py>(
     parsed(py, &json)
 }
 
+/// The probability of an output's rare event (as `rvtol rare`): out of its spec limits
+/// (flagged assemblies counted) unless `above` or `below` gives a threshold, by
+/// importance sampling and subset simulation (`methods`, a list of `"importance"`,
+/// `"subset"`; default both), each until its 95 % interval is within `precision` (0.1:
+/// ±10 %) or `max_evaluations` are spent: the JSON report as a dict. `output` defaults to
+/// the scenario's only continuous output.
+#[pyfunction]
+#[pyo3(signature = (scenario, output = None, *, above = None, below = None, methods = None,
+    precision = None, max_evaluations = None, level_samples = None, seed = None,
+    max_non_finite = 0.0, threads = None, max_memory = None))]
+#[allow(clippy::too_many_arguments)]
+fn rare<'py>(
+    py: Python<'py>,
+    scenario: &Scenario,
+    output: Option<String>,
+    above: Option<f64>,
+    below: Option<f64>,
+    methods: Option<Vec<String>>,
+    precision: Option<f64>,
+    max_evaluations: Option<u64>,
+    level_samples: Option<u64>,
+    seed: Option<u64>,
+    max_non_finite: f64,
+    threads: Option<usize>,
+    max_memory: Option<f64>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let s = &scenario.inner;
+    let methods = (methods.unwrap_or_default().iter())
+        .map(|m| match m.as_str() {
+            "importance" => Ok(Method::Importance),
+            "subset" => Ok(Method::Subset),
+            other => Err(PyValueError::new_err(format!(
+                "methods: unknown method {other:?}: importance or subset"
+            ))),
+        })
+        .collect::<PyResult<Vec<Method>>>()?;
+    let request = RareRequest {
+        output,
+        above,
+        below,
+        methods,
+        precision,
+        max_evaluations,
+        level_samples,
+        seed,
+        max_non_finite,
+    };
+    let settings = request.settings(s, CALLER).map_err(value_error)?;
+    let pool = pool("rare", threads, max_memory, |threads| {
+        memory::rare(s, settings.level_samples, threads)
+    })?;
+    let json = py.detach(|| {
+        pool.install(|| rare_report(s, &settings, &|_| {}).map(|report| report.to_json()))
+    });
+    scenario.raise_function_error()?;
+    let json = json.map_err(value_error)?;
+    parsed(py, &json)
+}
+
 /// The cheapest tolerances within the scenario's `allocation` bounds that meet `target` on
 /// `output` (as `rvtol allocate`), verified by an independent run: the JSON report as a
 /// dict (its `status` says met, not verified or infeasible).
@@ -606,6 +668,7 @@ fn rvtol(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(evaluate, module)?)?;
     module.add_function(wrap_pyfunction!(sensitivity, module)?)?;
     module.add_function(wrap_pyfunction!(stack, module)?)?;
+    module.add_function(wrap_pyfunction!(rare, module)?)?;
     module.add_function(wrap_pyfunction!(allocate, module)?)?;
     module.add_function(wrap_pyfunction!(models, module)?)?;
     module.add("__version__", env!("CARGO_PKG_VERSION"))?;

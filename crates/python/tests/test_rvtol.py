@@ -279,6 +279,22 @@ def test_stack_is_the_command_line_report(tmp_path):
         rvtol.stack(rvtol.Scenario(path), ["gap"])
 
 
+def test_rare_is_the_command_line_report(tmp_path):
+    # The motor-assembly gap is N(0.1, (0.17825/3)^2): above 0.1 + 4.753424 sd is 1 ppm.
+    path = scenario_path("motor-assembly-stack.json")
+    above = 0.1 + 4.7534243 * 0.17825 / 3.0
+    expected = cli_json(tmp_path, "rare", path, "--output", "gap_mm", "--above", repr(above))
+    report = rvtol.rare(rvtol.Scenario(path), "gap_mm", above=above)
+    assert report == expected
+    for estimate in report["estimates"]:
+        low, high = estimate["interval"]
+        assert low <= 1e-6 <= high
+    with pytest.raises(ValueError, match="methods: unknown method"):
+        rvtol.rare(rvtol.Scenario(path), "gap_mm", above=above, methods=["mc"])
+    with pytest.raises(ValueError, match="precision: 2"):
+        rvtol.rare(rvtol.Scenario(path), "gap_mm", above=above, precision=2.0)
+
+
 def test_allocate_is_the_command_line_report(tmp_path):
     path = scenario_path("allocation-linear.json")
     out = tmp_path / "allocation.json"

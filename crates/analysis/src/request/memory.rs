@@ -141,6 +141,24 @@ pub fn stack(
     }
 }
 
+/// `rvtol rare`: a level of subset simulation keeps its points and their candidates
+/// (2·N·dims values and N scores); every worker holds a task's rows.
+pub fn rare(scenario: &Scenario, level_samples: usize, threads: usize) -> MemoryNeed {
+    let dims = scenario.input_space.quasi_dimensions().unwrap_or(0).max(1) as f64;
+    let rows = level_samples as f64;
+    MemoryNeed {
+        bytes: BASE_BYTES
+            + VALUE * rows * (2.0 * dims + 1.0)
+            + threads as f64 * run_scratch_per_thread(scenario),
+        what: format!(
+            "{} points of {} normal scores per level",
+            group_thousands(level_samples as u64),
+            dims as u64
+        ),
+        way_out: fewer_workers(threads),
+    }
+}
+
 fn stack_rows(scenario: &Scenario, threads: usize) -> MemoryNeed {
     let rows = (crate::stack::MOST_VERTICES as f64).max(crate::stack::LINEARITY_ROWS as f64);
     let width = (scenario.input_space.n_columns() + scenario.outputs.len()) as f64;

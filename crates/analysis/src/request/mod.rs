@@ -2,7 +2,7 @@
 //! Python module cannot drift: where a scenario comes from and how its text is read
 //! ([`scenario`], with the data files it refers to, [`data`]); the settings of each command
 //! with their defaults resolved against the scenario's and their limits checked ([`run`],
-//! [`sensitivity`], [`allocation`], [`gate`], [`shard`], [`stack`]); the columns of the tables
+//! [`sensitivity`], [`allocation`], [`gate`], [`shard`], [`stack`], [`rare`]); the columns of the tables
 //! `evaluate` and `fit` read ([`evaluate`], [`fit`]); what a request needs in memory
 //! ([`memory`]) against what the machine gives ([`machine`]); every file read whole within
 //! a bound ([`input_file`], [`table`]) and the rows written out ([`samples`]). A refused
@@ -17,6 +17,7 @@ pub mod gate;
 pub mod input_file;
 pub mod machine;
 pub mod memory;
+pub mod rare;
 pub mod run;
 pub mod samples;
 pub mod scenario;

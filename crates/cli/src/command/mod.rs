@@ -17,6 +17,7 @@ pub mod init;
 pub mod merge;
 pub mod models;
 pub mod nominal;
+pub mod rare;
 pub mod report;
 pub mod run;
 pub mod sensitivity;

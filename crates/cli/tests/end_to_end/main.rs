@@ -25,6 +25,7 @@
 //! - `shard`: `--shard` and `merge`, bit for bit the unsharded command.
 //! - `kubernetes`: the Kubernetes recipe's commands (deploy/kubernetes/).
 //! - `stack`: `rvtol stack`, its JSON and its refusals.
+//! - `rare`: `rvtol rare`, its JSON and its refusals.
 
 mod common;
 
@@ -37,6 +38,7 @@ mod gate;
 mod hardening;
 mod kubernetes;
 mod mutation;
+mod rare;
 mod readme;
 mod report;
 mod scenario_format;

@@ -344,6 +344,22 @@ impl InputSpace {
         }
     }
 
+    /// Per dimension of [`InputSpace::quasi_dimensions`], the columns its value moves
+    /// (one for a single or a non-normal scalar, a correlated block's or a constrained
+    /// group's columns for each of its dimensions): what a result found per dimension
+    /// (a rare event's importance factors) is told by.
+    pub fn quasi_dimension_columns(&self) -> Vec<Vec<usize>> {
+        let mut dims: Vec<Vec<usize>> = self.singles.iter().map(|s| vec![s.0]).collect();
+        for block in &self.blocks {
+            dims.extend(std::iter::repeat_n(block.columns.clone(), block.rank));
+        }
+        dims.extend(self.independent.iter().map(|(c, _)| vec![*c]));
+        for group in &self.quasi.groups {
+            dims.extend(std::iter::repeat_n(group.columns.clone(), group.rank));
+        }
+        dims
+    }
+
     /// Fills a column-major block (as [`InputSpace::sample_columns_with`]) with points
     /// `first …` of replicate `replicate` of `points`, turned into rows: every value by
     /// an inverse CDF, the constraints by exact conditional inversion (no rejection, no
@@ -378,14 +394,64 @@ impl InputSpace {
             return Ok(());
         }
         let n_rows = columns.len() / self.n_columns;
-        let u = prefix(&mut scratch.candidates, dims * n_rows);
-        points.fill_dims(replicate, first, n_rows, first_dim..first_dim + dims, u);
-        let mut uniforms = u.chunks_exact_mut(n_rows.max(1));
-        let mut next = || uniforms.next().expect("a column of uniforms per dimension");
-        // A column of uniforms turned into standard normals in place (batched Φ⁻¹).
+        let mut u = std::mem::take(&mut scratch.candidates);
+        let uniforms = prefix(&mut u, dims * n_rows);
+        points.fill_dims(
+            replicate,
+            first,
+            n_rows,
+            first_dim..first_dim + dims,
+            uniforms,
+        );
+        self.columns_from_dims(uniforms, Scale::Uniform, columns, scratch);
+        scratch.candidates = u;
+        Ok(())
+    }
+
+    /// Rows from standard normal scores, one per dimension (the same dimensions, in the
+    /// same order, as [`InputSpace::sample_columns_from_points`]'s uniforms: a score z
+    /// stands for the uniform Φ(z)): the map of the standard normal space onto the
+    /// scenario's law that the rare-event methods search and sample in. `scores` is
+    /// column-major, [`InputSpace::quasi_dimensions`] columns of `columns.len() /
+    /// n_columns()` rows, and is overwritten. A normal column takes its score as it is,
+    /// a non-normal scalar its [`ScalarDistribution::from_normal_score`] (the far tails
+    /// kept), a truncated one Φ⁻¹(Φ(z)·Φ(τ)).
+    ///
+    /// [`ScalarDistribution::from_normal_score`]: crate::ScalarDistribution::from_normal_score
+    pub fn sample_columns_from_normals(
+        &self,
+        scores: &mut [f64],
+        columns: &mut [f64],
+        scratch: &mut SamplerScratch,
+    ) -> Result<(), DeviationError> {
+        let dims = self.quasi_dimensions()?;
+        if self.n_columns == 0 {
+            return Ok(());
+        }
+        assert_eq!(scores.len(), dims * (columns.len() / self.n_columns));
+        self.columns_from_dims(scores, Scale::Normal, columns, scratch);
+        Ok(())
+    }
+
+    /// The rows of `columns` from one column of `dims` values per dimension, uniforms or
+    /// normal scores (`scale`).
+    fn columns_from_dims(
+        &self,
+        dims: &mut [f64],
+        scale: Scale,
+        columns: &mut [f64],
+        scratch: &mut SamplerScratch,
+    ) {
+        let n_rows = columns.len() / self.n_columns;
+        let mut dimensions = dims.chunks_exact_mut(n_rows.max(1));
+        let mut next = || dimensions.next().expect("a column of values per dimension");
+        // The next dimension as standard normals (a column of uniforms turned in place,
+        // by batched Φ⁻¹).
         let mut normals = || {
             let column = next();
-            standard_normal_inverse_in_place(column);
+            if scale == Scale::Uniform {
+                standard_normal_inverse_in_place(column);
+            }
             column
         };
         for &(column, mean) in &self.fixed {
@@ -424,7 +490,10 @@ impl InputSpace {
                 .iter_mut()
                 .zip(next().iter())
             {
-                *x = distribution.from_uniform(u);
+                *x = match scale {
+                    Scale::Uniform => distribution.from_uniform(u),
+                    Scale::Normal => distribution.from_normal_score(u),
+                };
             }
         }
         for group in &self.quasi.groups {
@@ -432,6 +501,10 @@ impl InputSpace {
             let mut k = 0;
             if let Some(pair) = &group.coupled {
                 let (first, second) = (next(), next());
+                if scale == Scale::Normal {
+                    (first.iter_mut().chain(second.iter_mut()))
+                        .for_each(|z| *z = standard_normal_cdf(*z));
+                }
                 for (r, (&u1, &u2)) in first.iter().zip(second.iter()).enumerate() {
                     let t1 = pair.first(u1);
                     z[r * rank] = t1;
@@ -441,10 +514,20 @@ impl InputSpace {
             }
             for k in k..rank {
                 let column = next();
-                if let Some(&mass) = group.truncated.get(k) {
-                    column.iter_mut().for_each(|u| *u *= mass);
+                match (scale, group.truncated.get(k)) {
+                    (Scale::Uniform, mass) => {
+                        let mass = mass.copied().unwrap_or(1.0);
+                        column.iter_mut().for_each(|u| *u *= mass);
+                        standard_normal_inverse_in_place(column);
+                    }
+                    (Scale::Normal, Some(&mass)) => {
+                        column
+                            .iter_mut()
+                            .for_each(|z| *z = standard_normal_cdf(*z) * mass);
+                        standard_normal_inverse_in_place(column);
+                    }
+                    (Scale::Normal, None) => {}
                 }
-                standard_normal_inverse_in_place(column);
                 for (r, &normal) in column.iter().enumerate() {
                     z[r * rank + k] = normal;
                 }
@@ -459,8 +542,16 @@ impl InputSpace {
             }
         }
         self.copula_to_values(columns, n_rows);
-        Ok(())
     }
+}
+
+/// What the values of a dimension are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Scale {
+    /// Uniforms on (0, 1), from a point set.
+    Uniform,
+    /// Standard normal scores.
+    Normal,
 }
 
 #[cfg(test)]
@@ -638,6 +729,84 @@ mod tests {
                     (mean - expected[k]).abs() < 5.0 / (n as f64).sqrt(),
                     "{method:?} inequality {k}: {mean} against {}",
                     expected[k]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn normal_scores_give_the_rows_of_their_uniforms() {
+        // A row from scores z is the row from the uniforms Φ(z): the same map, entered in
+        // the normal space. Checked on a space with every kind of dimension (an uncoupled
+        // Eq. 11 part, a coupled one, a correlated block, a Rayleigh and a triangular
+        // scalar) at scores over ±4.5, to 1e-9 of each column's spread (Φ⁻¹(Φ(z)) is z to
+        // round-off; the coupled pair's Newton inversion to its tolerance). Farther out the
+        // uniform Φ(z) rounds near 1 and the scores' path is the more precise one.
+        let mut coupled = PartSpec::from_tolerance_band("parts[1]", 0.006, 120.0, true).unwrap();
+        let c = 0.5 * (coupled.covariance[0][0] * coupled.covariance[1][1]).sqrt();
+        coupled.covariance[0][1] = c;
+        coupled.covariance[1][0] = c;
+        let mut builder = InputSpaceBuilder::new();
+        let band = PartSpec::from_tolerance_band("parts[0]", 0.006, 120.0, true).unwrap();
+        builder.add_part("parts[0]", &band);
+        builder.add_part("parts[1]", &coupled);
+        let a = builder.add_scalar(
+            "variables[0]",
+            ScalarDistribution::Normal { mean: 1.0, sd: 0.1 },
+        );
+        let b = builder.add_scalar(
+            "variables[1]",
+            ScalarDistribution::Normal { mean: 0.0, sd: 2.0 },
+        );
+        builder.correlate("correlations[0]", a, b, -0.4).unwrap();
+        builder.add_scalar("variables[2]", ScalarDistribution::Rayleigh { sigma: 2.0 });
+        builder.add_scalar(
+            "variables[3]",
+            ScalarDistribution::Triangular {
+                lower: -1.0,
+                mode: 0.5,
+                upper: 2.0,
+            },
+        );
+        let space = builder.build("correlations").unwrap();
+        let dims = space.quasi_dimensions().unwrap();
+        let moved = space.quasi_dimension_columns();
+        assert_eq!(moved.len(), dims);
+        // Each column is moved by some dimension, except the parts' fixed Δw, Δγ.
+        let moving = (0..space.n_columns())
+            .filter(|c| moved.iter().any(|d| d.contains(c)))
+            .count();
+        assert_eq!(moving, space.n_columns() - 4);
+        let n = 25;
+        let scores: Vec<f64> = (0..dims * n)
+            .map(|i| -4.5 + 9.0 * ((i * 7919) % 1009) as f64 / 1008.0)
+            .collect();
+        let mut from_scores = vec![f64::NAN; n * space.n_columns()];
+        let mut scratch = SamplerScratch::default();
+        space
+            .sample_columns_from_normals(&mut scores.clone(), &mut from_scores, &mut scratch)
+            .unwrap();
+        // The same dimensions as uniforms, through a point set's layout: one column of
+        // uniforms per dimension, fed through the points path's body.
+        let mut uniforms: Vec<f64> = scores.iter().map(|&z| standard_normal_cdf(z)).collect();
+        let mut from_uniforms = vec![f64::NAN; n * space.n_columns()];
+        space.columns_from_dims(
+            &mut uniforms,
+            Scale::Uniform,
+            &mut from_uniforms,
+            &mut scratch,
+        );
+        for column in 0..space.n_columns() {
+            let spread = space.covariance(column, column).sqrt().max(1.0);
+            for row in 0..n {
+                let (x, y) = (
+                    from_scores[column * n + row],
+                    from_uniforms[column * n + row],
+                );
+                assert!(x.is_finite(), "column {column} row {row}");
+                assert!(
+                    (x - y).abs() <= 1e-9 * spread,
+                    "column {column} row {row}: {x} against {y}"
                 );
             }
         }

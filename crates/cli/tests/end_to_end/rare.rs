@@ -1,0 +1,74 @@
+//! `rvtol rare`: its JSON holds the figures the text prints, the same bytes for any thread
+//! count, a file it writes is the JSON, and a bad request is one line with exit 2 that
+//! writes nothing.
+
+use crate::common::{run_rvtol, scenario};
+
+fn json_of(args: &[&str]) -> serde_json::Value {
+    let out = run_rvtol(args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("rare JSON")
+}
+
+#[test]
+fn the_json_report_holds_both_estimates_and_the_same_bytes_on_two_threads() {
+    // The motor-assembly stack's gap is normal, N(0.1, (0.17825/3)²) (its RSS stack): the
+    // gap above 0.1 + 4.753424·0.0594167 mm has probability Q(4.753424) = 1e-6.
+    let path = scenario("motor-assembly-stack.json");
+    let threshold = format!("{}", 0.1 + 4.753_424_3 * 0.17825 / 3.0);
+    let args = [
+        "rare",
+        path.as_str(),
+        "--output",
+        "gap_mm",
+        "--above",
+        threshold.as_str(),
+        "--json",
+        "-",
+        "--threads",
+        "1",
+    ];
+    let report = json_of(&args);
+    assert_eq!(report["output"], "gap_mm");
+    assert_eq!(report["sides"][0]["centre"], "FORM");
+    let beta = report["sides"][0]["beta"].as_f64().unwrap();
+    assert!((beta - 4.753_424_3).abs() < 1e-4, "{beta}");
+    for (k, method) in ["importance", "subset"].iter().enumerate() {
+        let estimate = &report["estimates"][k];
+        assert_eq!(estimate["method"], *method);
+        let [low, high] = [0, 1].map(|i| estimate["interval"][i].as_f64().unwrap());
+        assert!(low <= 1e-6 && 1e-6 <= high, "{method}: [{low}, {high}]");
+        assert_eq!(estimate["reached"], true);
+    }
+    let mut two = args;
+    two[9] = "2";
+    assert_eq!(report, json_of(&two));
+}
+
+#[test]
+fn a_bad_request_is_one_line_with_exit_2() {
+    let path = scenario("motor-assembly-stack.json");
+    for (args, says) in [
+        (vec!["--output", "gap"], "--output: no output \"gap\""),
+        (vec!["--above", "1", "--below", "0"], "cannot be used with"),
+        (vec!["--precision", "2"], "--precision: 2 is not a share"),
+        (
+            vec!["--level-samples", "10"],
+            "--level-samples: 10 is outside",
+        ),
+        (vec!["--above", "inf"], "--above: not a finite number"),
+    ] {
+        let mut all = vec!["rare", path.as_str()];
+        all.extend(args.iter().copied());
+        let out = run_rvtol(&all);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        assert!(stderr.contains(says), "{args:?}: {stderr}");
+        assert!(out.stdout.is_empty());
+    }
+}
