@@ -53,8 +53,8 @@ pub struct LimitState<'a> {
 
 impl<'a> LimitState<'a> {
     /// The limit state of `event` on output `output`; an error when the scenario's law
-    /// cannot be reached from normal scores (three coupled Eq. 11 inequalities), or the
-    /// event is out of spec and the output has no spec limits.
+    /// cannot be reached from normal scores (three coupled Eq. 11 inequalities), has no
+    /// random input, or the event is out of spec and the output has no spec limits.
     /// `progress` is told the rows of each batch as it is done.
     pub fn new(
         scenario: &'a Scenario,
@@ -62,8 +62,13 @@ impl<'a> LimitState<'a> {
         event: Event,
         progress: &'a (dyn Fn(u64) + Sync),
     ) -> Result<LimitState<'a>, ScenarioError> {
-        let dims = (scenario.input_space.quasi_dimensions())
-            .map_err(|err| ScenarioError::new(err.path(), err.message()))?;
+        let dims = scenario.input_space.quasi_dimensions()?;
+        if dims == 0 {
+            return Err(ScenarioError::new(
+                "variables",
+                "the scenario has no random input: its outputs have no tail",
+            ));
+        }
         if event == Event::OutOfSpec && scenario.outputs[output].spec.is_none() {
             return Err(ScenarioError::new(
                 "spec_limits",
