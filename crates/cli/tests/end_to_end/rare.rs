@@ -2,17 +2,7 @@
 //! count, a file it writes is the JSON, and a bad request is one line with exit 2 that
 //! writes nothing.
 
-use crate::common::{run_rvtol, scenario};
-
-fn json_of(args: &[&str]) -> serde_json::Value {
-    let out = run_rvtol(args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("rare JSON")
-}
+use crate::common::{json_of, run_rvtol, scenario};
 
 #[test]
 fn the_json_report_holds_both_estimates_and_the_same_bytes_on_two_threads() {

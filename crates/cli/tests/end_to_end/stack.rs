@@ -2,17 +2,7 @@
 //! RSS, the Monte Carlo run's percentiles beside), the same bytes for any thread count, and
 //! a bad request is one line with exit 2 that writes nothing.
 
-use crate::common::{run_rvtol, scenario};
-
-fn json_of(args: &[&str]) -> serde_json::Value {
-    let out = run_rvtol(args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("stack JSON")
-}
+use crate::common::{json_of, run_rvtol, scenario};
 
 #[test]
 fn the_json_report_holds_the_stack_beside_the_monte_carlo_run() {

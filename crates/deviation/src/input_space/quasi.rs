@@ -663,6 +663,16 @@ mod tests {
         h / 3.0 * (f(a) + inner + f(tau1))
     }
 
+    /// A tolerance-band part whose covariance correlates Δu with Δv (ρ = 0.5), which
+    /// couples the two halves of its Eq. 11.
+    fn coupled_part(path: &str) -> PartSpec {
+        let mut part = PartSpec::from_tolerance_band(path, 0.006, 120.0, true).unwrap();
+        let c = 0.5 * (part.covariance[0][0] * part.covariance[1][1]).sqrt();
+        part.covariance[0][1] = c;
+        part.covariance[1][0] = c;
+        part
+    }
+
     #[test]
     fn coupled_inequalities_follow_the_truncated_bivariate_law() {
         // A covariance that correlates Δu with Δv (ρ_uv = 0.5) couples the two halves of
@@ -670,10 +680,8 @@ mod tests {
         // X₁, X₂ are Tallis's (1961) moments of the bivariate normal truncated to
         // X₁ ≤ τ₁, X₂ ≤ τ₂: E[X₁] = −(φ(τ₁)Φ((τ₂ − ρτ₁)/s) + ρφ(τ₂)Φ((τ₁ − ρτ₂)/s))/Φ₂,
         // within 5 Monte Carlo standard errors (the truncated sd is below 1).
-        let mut part = PartSpec::from_tolerance_band("parts[0]", 0.006, 120.0, true).unwrap();
-        let c = 0.5 * (part.covariance[0][0] * part.covariance[1][1]).sqrt();
-        part.covariance[0][1] = c;
-        part.covariance[1][0] = c;
+        let part = coupled_part("parts[0]");
+        let c = part.covariance[0][1];
         let mut builder = InputSpaceBuilder::new();
         builder.add_part("parts[0]", &part);
         let space = builder.build("correlations").unwrap();
@@ -742,10 +750,7 @@ mod tests {
         // scalar) at scores over ±4.5, to 1e-9 of each column's spread (Φ⁻¹(Φ(z)) is z to
         // round-off; the coupled pair's Newton inversion to its tolerance). Farther out the
         // uniform Φ(z) rounds near 1 and the scores' path is the more precise one.
-        let mut coupled = PartSpec::from_tolerance_band("parts[1]", 0.006, 120.0, true).unwrap();
-        let c = 0.5 * (coupled.covariance[0][0] * coupled.covariance[1][1]).sqrt();
-        coupled.covariance[0][1] = c;
-        coupled.covariance[1][0] = c;
+        let coupled = coupled_part("parts[1]");
         let mut builder = InputSpaceBuilder::new();
         let band = PartSpec::from_tolerance_band("parts[0]", 0.006, 120.0, true).unwrap();
         builder.add_part("parts[0]", &band);
@@ -817,10 +822,7 @@ mod tests {
         // parts[0]'s halves coupled (Δu with Δv), and parts[1]'s Δu correlated with
         // parts[0]'s Δu: three coupled inequalities in one group.
         let band = |path| PartSpec::from_tolerance_band(path, 0.006, 120.0, true).unwrap();
-        let mut part = band("parts[0]");
-        let c = 0.5 * (part.covariance[0][0] * part.covariance[1][1]).sqrt();
-        part.covariance[0][1] = c;
-        part.covariance[1][0] = c;
+        let part = coupled_part("parts[0]");
         let mut builder = InputSpaceBuilder::new();
         let p0 = builder.add_part("parts[0]", &part);
         let p1 = builder.add_part("parts[1]", &band("parts[1]"));
