@@ -125,6 +125,10 @@ pub struct RareReport {
     pub sides: Vec<SideReport>,
     /// Per method.
     pub estimates: Vec<EstimateReport>,
+    /// Whether the event lies below its values (a `below` threshold, a lower spec limit),
+    /// so that the tail's levels read downwards.
+    #[serde(skip)]
+    pub downwards: bool,
 }
 
 /// The analysis and its report (uses the current rayon pool; `progress` is told the
@@ -165,6 +169,14 @@ impl RareReport {
             max_evaluations: settings.budget.max_evaluations,
             level_samples: settings.level_samples,
             sides,
+            downwards: value_at_score(settings.event, scenario, settings.output, 1.0)
+                .zip(value_at_score(
+                    settings.event,
+                    scenario,
+                    settings.output,
+                    0.0,
+                ))
+                .is_some_and(|(one, zero)| one < zero),
             estimates: (rare.results.iter())
                 .map(|r| {
                     let mut report = estimate_report(r.method, &r.estimate);
@@ -227,7 +239,8 @@ impl RareReport {
                     "\n{}'s levels, the tail on the way (means over its runs):\n",
                     e.method
                 ));
-                text.push_str(&text_table(&["  above", "probability"], &rows));
+                let side = if self.downwards { "  below" } else { "  above" };
+                text.push_str(&text_table(&[side, "probability"], &rows));
             }
             if e.reached == Some(false) {
                 text.push_str(&format!(

@@ -62,3 +62,37 @@ fn a_bad_request_is_one_line_with_exit_2() {
         assert!(out.stdout.is_empty());
     }
 }
+
+#[test]
+fn a_lower_limit_reads_its_tail_downwards() {
+    // The pin-in-hole gap's spec is a lower limit (0): subset simulation's levels are
+    // values below which the gap falls, decreasing towards the limit.
+    let path = scenario("pin-in-hole.json");
+    let out = run_rvtol(&[
+        "rare",
+        path.as_str(),
+        "--output",
+        "gap_mm",
+        "--method",
+        "subset",
+        "-q",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    let heading = text
+        .lines()
+        .position(|l| l.starts_with("  below"))
+        .expect(&text);
+    let levels: Vec<f64> = (text.lines().skip(heading + 1))
+        .map_while(|l| l.split_whitespace().next().and_then(|v| v.parse().ok()))
+        .collect();
+    assert!(levels.len() >= 3, "{text}");
+    assert!(
+        levels.windows(2).all(|w| w[1] < w[0]) && levels[levels.len() - 1] > 0.0,
+        "{levels:?}"
+    );
+}
