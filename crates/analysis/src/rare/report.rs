@@ -61,7 +61,7 @@ pub struct EstimateReport {
     /// The same in ppm.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ppm: Option<f64>,
-    /// Its 95 % interval.
+    /// Its 95 % interval (none from a single subset-simulation run).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub interval: Option<[f64; 2]>,
     /// The interval's half width over the estimate.
@@ -308,7 +308,12 @@ fn estimate_report(method: Method, estimate: &Result<Estimate, String>) -> Estim
             let h = 0.5 * (e.interval[1] - e.interval[0]) / p;
             report.probability = Some(p);
             report.ppm = Some(1e6 * p);
-            report.interval = Some(e.interval);
+            // One subset run has no interval (its half width is ∞): none is written.
+            report.interval = e
+                .interval
+                .iter()
+                .all(|x| x.is_finite())
+                .then_some(e.interval);
             report.relative_half_width = (h.is_finite()).then_some(h);
             report.evaluations = Some(e.evaluations);
             report.reached = Some(e.reached);

@@ -27,7 +27,7 @@ pub struct RareRequest {
     pub above: Option<f64>,
     /// The event's threshold: the value below it.
     pub below: Option<f64>,
-    /// The estimators (both when empty).
+    /// The estimators (both when empty; one asked twice runs once).
     pub methods: Vec<Method>,
     /// The relative half width to stop at.
     pub precision: Option<f64>,
@@ -83,10 +83,15 @@ impl RareRequest {
                 format!("{level_samples} is outside 100 to 10,000,000"),
             ));
         }
-        let methods = match self.methods.is_empty() {
-            true => vec![Method::Importance, Method::Subset],
-            false => self.methods.clone(),
-        };
+        let mut methods: Vec<Method> = Vec::new();
+        for &m in &self.methods {
+            if !methods.contains(&m) {
+                methods.push(m);
+            }
+        }
+        if methods.is_empty() {
+            methods = vec![Method::Importance, Method::Subset];
+        }
         Ok(RareSettings {
             seed: self.seed.unwrap_or(scenario.seed),
             output,

@@ -53,7 +53,9 @@ pub struct RareArgs {
     /// Stop when the 95 % interval's half width is at most this share of the estimate.
     #[arg(long, value_name = "SHARE", allow_hyphen_values = true)]
     pub precision: Option<f64>,
-    /// Model evaluations each estimator may make (default 10,000,000).
+    /// Model evaluations each estimator may make (default 10,000,000); the search for
+    /// importance sampling's centre, its first batch and subset simulation's first run are
+    /// made whatever the budget.
     #[arg(long, value_parser = parse_count, allow_hyphen_values = true)]
     pub max_evaluations: Option<u64>,
     /// Points per level of subset simulation (default 2,000).

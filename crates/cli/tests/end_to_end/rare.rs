@@ -96,3 +96,29 @@ fn a_lower_limit_reads_its_tail_downwards() {
         "{levels:?}"
     );
 }
+
+#[test]
+fn one_subset_run_states_no_interval_and_a_method_asked_twice_runs_once() {
+    // A budget below one run's evaluations: one run, no interval (not [0, inf]).
+    let path = scenario("pin-in-hole.json");
+    let args = [
+        "rare",
+        path.as_str(),
+        "--output",
+        "gap_mm",
+        "--method",
+        "subset",
+        "--method",
+        "subset",
+        "--max-evaluations",
+        "1000",
+        "--json",
+        "-",
+    ];
+    let report = json_of(&args);
+    let estimates = report["estimates"].as_array().unwrap();
+    assert_eq!(estimates.len(), 1);
+    assert_eq!(estimates[0]["runs"], 1);
+    assert!(estimates[0].get("interval").is_none(), "{report}");
+    assert_eq!(estimates[0]["reached"], false);
+}
