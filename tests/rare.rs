@@ -96,7 +96,8 @@ fn form_finds_the_linear_design_point_and_its_importance_factors() {
     );
     for (i, a) in WEIGHTS.iter().enumerate() {
         let expected = a * a / (norm() * norm());
-        let found = rare.importance[0]
+        let found = rare.sides[0]
+            .importance
             .iter()
             .find(|f| f.source == format!("x{i}"))
             .unwrap()

@@ -9,8 +9,9 @@
 //! first (largest) with Armijo's decrease of the merit m(u) = ½|u|² + c·|g(u)|,
 //! c = 2|u|/|∇g| + 10 (> |u|/|∇g|, which makes d a descent direction of m), all eight
 //! candidates evaluated as one batch. Converged when |g| ≤ [`TOLERANCE`]·|g(0)| and
-//! |u − (α·u)α| ≤ [`TOLERANCE`]·max(1, |u|), α = −∇g/|∇g|. Then β = |u*| and the
-//! first-order probability Φ(−β); α² are the importance factors (they sum to 1).
+//! |u − (α·u)α| ≤ [`TOLERANCE`]·max(1, |u|), α = −∇g/|∇g|. Then β = |u*|, the
+//! first-order probability Φ(−β), and α = u*/β at convergence (the importance factors
+//! are α², summing to 1).
 //!
 //! FORM's probability is exact for a linear event in the normal space and an
 //! approximation otherwise; rvtol reports it as the importance sampling's starting point
@@ -36,8 +37,6 @@ pub struct DesignPoint {
     pub u: Vec<f64>,
     /// β = |u*|.
     pub beta: f64,
-    /// α = −∇g/|∇g| at u*: the direction of the event; α² are the importance factors.
-    pub alpha: Vec<f64>,
     /// Whether both convergence tests held.
     pub converged: bool,
     /// Iterations made.
@@ -102,14 +101,9 @@ fn iterate(limit: &mut LimitState, mut u: Vec<f64>, g0: f64) -> DesignPoint {
     if !converged && stopped.is_none() {
         stopped = Some(format!("not converged in {MAX_ITERATIONS} iterations"));
     }
-    let norm = length(&here.gradient);
-    let alpha = (here.gradient.iter())
-        .map(|x| if norm > 0.0 { -x / norm } else { 0.0 })
-        .collect();
     DesignPoint {
         beta: length(&u),
         u,
-        alpha,
         converged,
         iterations,
         stopped,

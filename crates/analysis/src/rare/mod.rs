@@ -126,6 +126,14 @@ impl Found {
             Found::ConditionalMean => "conditional mean",
         }
     }
+
+    /// What the centre is, as the text report says it.
+    pub fn phrase(self) -> &'static str {
+        match self {
+            Found::Form => "the design point",
+            Found::ConditionalMean => "the conditional mean",
+        }
+    }
 }
 
 /// One side of the event, searched.
@@ -137,6 +145,8 @@ pub struct Side {
     pub design: Result<form::DesignPoint, String>,
     /// The centre importance sampling uses, how it was found; or why there is none.
     pub centre: Result<(Vec<f64>, Found), String>,
+    /// The sources' importance factors at the centre, largest first (none without one).
+    pub importance: Vec<Importance>,
     /// Model evaluations of the search (FORM and, where it ran, the conditional mean's).
     pub evaluations: u64,
     /// Of them, those whose value is not finite.
@@ -161,8 +171,6 @@ pub struct Rare {
     pub dims: usize,
     /// Each side of the event, searched (when importance sampling is asked).
     pub sides: Vec<Side>,
-    /// Per side with a design point, the sources' importance factors, largest first.
-    pub importance: Vec<Vec<Importance>>,
     /// Per asked method.
     pub results: Vec<MethodResult>,
 }
@@ -176,16 +184,12 @@ pub fn rare(
 ) -> Result<Rare, ScenarioError> {
     let mut limit = limit::LimitState::new(scenario, settings.output, settings.event, progress)?;
     let dims = limit.dims();
-    let wants_importance = settings.methods.contains(&Method::Importance);
-    let sides: Vec<Side> = (side_events(scenario, settings))
-        .into_iter()
-        .filter(|_| wants_importance)
-        .map(|event| search(scenario, settings, event, progress))
-        .collect::<Result<_, ScenarioError>>()?;
-    let importance = (sides.iter())
-        .filter_map(|s| s.centre.as_ref().ok())
-        .map(|(u, _)| importance_factors(scenario, u))
-        .collect();
+    let sides: Vec<Side> = match settings.methods.contains(&Method::Importance) {
+        true => (side_events(scenario, settings).into_iter())
+            .map(|event| search(scenario, settings, event, progress))
+            .collect::<Result<_, ScenarioError>>()?,
+        false => Vec::new(),
+    };
     let mut results: Vec<MethodResult> = (settings.methods.iter())
         .map(|&method| MethodResult {
             method,
@@ -205,7 +209,6 @@ pub fn rare(
     Ok(Rare {
         dims,
         sides,
-        importance,
         results,
     })
 }
@@ -279,10 +282,14 @@ fn search(
     let row = centre
         .as_ref()
         .map_or_else(|_| Vec::new(), |(u, _)| side.row(u));
+    let importance = centre
+        .as_ref()
+        .map_or_else(|_| Vec::new(), |(u, _)| importance_factors(scenario, u));
     Ok(Side {
         event,
         design,
         centre,
+        importance,
         evaluations: side.evaluations,
         non_finite: side.non_finite,
         row,

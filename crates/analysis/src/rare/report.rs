@@ -11,9 +11,7 @@
 
 use serde::Serialize;
 
-use super::{
-    event_text, value_at_score, Estimate, Importance, Method, Rare, RareSettings, Side, Z_95,
-};
+use super::{event_text, value_at_score, Estimate, Method, Rare, RareSettings, Side, Z_95};
 use rvtol_engine::figures::OrderedNumbers;
 use rvtol_engine::format::{format_ppm, format_sig, group_thousands, text_table};
 use rvtol_engine::scenario::{Scenario, ScenarioError};
@@ -37,6 +35,9 @@ pub struct SideReport {
     /// How the importance sampling's centre was found (`FORM`, `conditional mean`), or
     /// null when there is none.
     pub centre: Option<&'static str>,
+    /// The same as the text says it.
+    #[serde(skip)]
+    pub centre_phrase: Option<&'static str>,
     /// The centre's distance from the nominal point in the normal space.
     pub centre_distance: Option<f64>,
     /// Why there is no centre.
@@ -146,15 +147,8 @@ impl RareReport {
     /// The report of `rare`.
     pub fn new(scenario: &Scenario, settings: &RareSettings, rare: &Rare) -> RareReport {
         let info = &scenario.outputs[settings.output];
-        let mut importance = rare.importance.iter();
         let sides = (rare.sides.iter())
-            .map(|side| {
-                let factors = match side.centre {
-                    Ok(_) => importance.next().map_or(&[][..], |v| v.as_slice()),
-                    Err(_) => &[][..],
-                };
-                side_report(scenario, side, factors)
-            })
+            .map(|side| side_report(scenario, side))
             .collect();
         RareReport {
             rvtol_version: env!("CARGO_PKG_VERSION"),
@@ -254,7 +248,7 @@ impl RareReport {
     }
 }
 
-fn side_report(scenario: &Scenario, side: &Side, factors: &[Importance]) -> SideReport {
+fn side_report(scenario: &Scenario, side: &Side) -> SideReport {
     let space = &scenario.input_space;
     let design = side.design.as_ref().ok().filter(|d| d.converged);
     let centre = side.centre.as_ref().ok();
@@ -269,11 +263,12 @@ fn side_report(scenario: &Scenario, side: &Side, factors: &[Importance]) -> Side
             Err(why) => Some(why.clone()),
         },
         centre: centre.map(|(_, by)| by.name()),
+        centre_phrase: centre.map(|(_, by)| by.phrase()),
         centre_distance: centre.map(|(u, _)| u.iter().map(|x| x * x).sum::<f64>().sqrt()),
         no_centre: side.centre.as_ref().err().cloned(),
         evaluations: side.evaluations,
         importance: OrderedNumbers(
-            (factors.iter())
+            (side.importance.iter())
                 .map(|f| (f.source.clone(), f.factor))
                 .collect(),
         ),
@@ -343,13 +338,9 @@ fn side_text(side: &SideReport) -> String {
             side.stopped.as_deref().unwrap_or("no design point")
         ),
     };
-    match (side.centre, side.centre_distance) {
-        (Some(by), Some(distance)) => text.push_str(&format!(
-            "; centre: the {}, {} sd from the nominal point; {} evaluations\n",
-            match by {
-                "FORM" => "design point",
-                other => other,
-            },
+    match (side.centre_phrase, side.centre_distance) {
+        (Some(phrase), Some(distance)) => text.push_str(&format!(
+            "; centre: {phrase}, {} sd from the nominal point; {} evaluations\n",
             format_sig(distance),
             group_thousands(side.evaluations)
         )),

@@ -39,16 +39,21 @@ pub fn run_rvtol<S: AsRef<OsStr>>(args: &[S]) -> Output {
         .expect("cannot start rvtol")
 }
 
-/// The JSON report `rvtol` prints with `args` (which send it to stdout), the command
-/// asserted to succeed.
-pub fn json_of(args: &[&str]) -> serde_json::Value {
+/// What `rvtol` prints on stdout with `args`, the command asserted to succeed.
+pub fn stdout_of(args: &[&str]) -> Vec<u8> {
     let out = run_rvtol(args);
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    serde_json::from_slice(&out.stdout).expect("a JSON report")
+    out.stdout
+}
+
+/// The JSON report `rvtol` prints with `args` (which send it to stdout), the command
+/// asserted to succeed.
+pub fn json_of(args: &[&str]) -> serde_json::Value {
+    serde_json::from_slice(&stdout_of(args)).expect("a JSON report")
 }
 
 /// A scenario file in the temporary directory, removed when dropped.

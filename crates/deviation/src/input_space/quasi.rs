@@ -516,8 +516,9 @@ impl InputSpace {
                 let column = next();
                 match (scale, group.truncated.get(k)) {
                     (Scale::Uniform, mass) => {
-                        let mass = mass.copied().unwrap_or(1.0);
-                        column.iter_mut().for_each(|u| *u *= mass);
+                        if let Some(&mass) = mass {
+                            column.iter_mut().for_each(|u| *u *= mass);
+                        }
                         standard_normal_inverse_in_place(column);
                     }
                     (Scale::Normal, Some(&mass)) => {
