@@ -17,6 +17,7 @@ mod lost_motion;
 mod msrv;
 mod percentile_intervals;
 mod rare;
+mod rare_allocation;
 mod sampler;
 mod sampling;
 mod sensitivity;

@@ -580,10 +580,12 @@ fn rare<'py>(
 
 /// The cheapest tolerances within the scenario's `allocation` bounds that meet `target` on
 /// `output` (as `rvtol allocate`), verified by an independent run: the JSON report as a
-/// dict (its `status` says met, not verified or infeasible).
+/// dict (its `status` says met, not verified or infeasible). `rare=True` estimates a ppm
+/// target by importance sampling (`--rare`, with `precision` and `max_evaluations`).
 #[pyfunction]
 #[pyo3(signature = (scenario, output, target, *, cost = None, samples = None, seed = None,
-    verify_seed = None, threads = None, max_memory = None))]
+    verify_seed = None, rare = false, precision = None, max_evaluations = None,
+    threads = None, max_memory = None))]
 #[allow(clippy::too_many_arguments)]
 fn allocate<'py>(
     py: Python<'py>,
@@ -594,6 +596,9 @@ fn allocate<'py>(
     samples: Option<u64>,
     seed: Option<u64>,
     verify_seed: Option<u64>,
+    rare: bool,
+    precision: Option<f64>,
+    max_evaluations: Option<u64>,
     threads: Option<usize>,
     max_memory: Option<f64>,
 ) -> PyResult<Bound<'py, PyAny>> {
@@ -604,10 +609,13 @@ fn allocate<'py>(
         samples,
         seed,
         verify_seed,
+        rare,
+        precision,
+        max_evaluations,
     };
     let (target, settings) = request.settings(s, CALLER).map_err(value_error)?;
     let pool = pool("allocate", threads, max_memory, |threads| {
-        memory::allocation(s, settings.samples, threads)
+        memory::allocation(s, &settings, threads)
     })?;
     let text = &scenario.text;
     let json = py.detach(|| {

@@ -304,6 +304,18 @@ def test_allocate_is_the_command_line_report(tmp_path):
     assert report["status"] == "met"
 
 
+def test_allocate_to_a_ppm_target_by_importance_sampling(tmp_path):
+    path = scenario_path("allocation-linear.json")
+    out = tmp_path / "allocation.json"
+    target = "ppm_out <= 1"
+    cli("allocate", path, "--output", "gap_mm", "--target", target, "--rare", "--json", str(out))
+    report = rvtol.allocate(rvtol.Scenario(path), "gap_mm", target, rare=True)
+    assert report == json.loads(out.read_text())
+    assert report["status"] == "met" and report["rare"]["verified_by"] == "importance"
+    with pytest.raises(ValueError, match="precision"):
+        rvtol.allocate(rvtol.Scenario(path), "gap_mm", target, precision=0.1)
+
+
 def test_errors_are_value_errors_with_the_command_line_message():
     with pytest.raises(ValueError, match=r"models\[0\]\.model: unknown model \"nope\""):
         rvtol.Scenario({"name": "x", "variables": [], "models": [{"model": "nope"}]})

@@ -24,6 +24,7 @@
 //!    else `not verified`. The common-scaling answer (every tolerance scaled by
 //!    one factor) is reported beside it for comparison.
 
+pub mod rare;
 pub mod report;
 pub mod scaling;
 
@@ -40,10 +41,16 @@ use rvtol_engine::stats::{
     proportion_standard_error, Moments, SpecLimits,
 };
 
+use crate::rare::Method;
 use crate::target::{Target, TargetFigure};
+use rare::{RareOptions, RareSample};
 
 /// Standard errors kept between the optimised figure and the target.
 pub const MARGIN_Z: f64 = 3.0 + Z95;
+
+/// Samples of importance sampling built at most, `--rare` (the first around the current
+/// tolerances, each next around the point the previous one led to).
+pub const MAX_STAGES: usize = 4;
 
 /// Sequential Lagrange iterations at most.
 pub const MAX_ITERATIONS: usize = 30;
@@ -67,6 +74,9 @@ pub struct AllocationSettings {
     pub verification_seed: u64,
     /// The cost model to use where a source gives several (`--cost`).
     pub cost: Option<CostKind>,
+    /// A ppm target estimated by importance sampling (`--rare`) instead of Monte Carlo
+    /// runs of `samples`.
+    pub rare: Option<RareOptions>,
 }
 
 /// The default sample count for a target: enough for about 100 samples beyond a tail
@@ -211,6 +221,27 @@ pub struct Allocation {
     pub levers: Vec<LeverChoice>,
     /// Every lever combination tried (empty without levers).
     pub lever_options: Vec<LeverOption>,
+    /// How importance sampling estimated the constraint (`--rare`).
+    pub rare: Option<RareUse>,
+}
+
+/// How `allocate --rare` estimated its constraint.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RareUse {
+    /// The options asked.
+    pub options: RareOptions,
+    /// Samples built (stages).
+    pub stages: usize,
+    /// Points of the last sample: every evaluation of the optimisation's last stage.
+    pub points: u64,
+    /// The tolerance factors the last sample's centres were found at, per source.
+    pub centred_at: Vec<f64>,
+    /// Model evaluations of the whole allocation (searches, samples, verification).
+    pub model_evaluations: u64,
+    /// The verification's estimator: importance sampling around the proposal's own
+    /// centres, or subset simulation where that did not reach its precision or one point
+    /// carried much of it.
+    pub verified_by: Method,
 }
 
 /// The optimisation problem, with everything an evaluation needs.
@@ -230,6 +261,25 @@ struct Problem<'a> {
     bounds: Vec<(f64, f64)>,
     progress: &'a (dyn Fn(usize) + Sync),
     evaluations: std::cell::Cell<usize>,
+    /// `--rare`: how the constraint is estimated, and the current sample.
+    rare: Option<RareOptions>,
+    sample: std::cell::RefCell<Option<RareSample>>,
+    /// Model evaluations (rows) so far.
+    model_evaluations: std::cell::Cell<u64>,
+    /// `--rare`: the estimator of the last verification.
+    verified_by: std::cell::Cell<Option<Method>>,
+}
+
+/// What one search of the sequential Lagrange allocation found.
+struct Search {
+    /// The cheapest feasible point seen.
+    best: Option<Point>,
+    /// The sources the constraint depends on, at the last iterate.
+    matters: Vec<bool>,
+    /// The common-scaling comparison.
+    common: Option<CommonScale>,
+    /// Iterations run.
+    iterations: usize,
 }
 
 /// A point of the search: factors, their evaluation, the constraint value and the cost.
@@ -354,7 +404,13 @@ pub fn allocate(
             ka.0.cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
         })
         .expect("at least one lever combination");
+    let model_evaluations: u64 = (tried.iter())
+        .filter_map(|(_, a)| a.rare.as_ref().map(|r| r.model_evaluations))
+        .sum();
     let (combination, mut allocation) = tried.swap_remove(best);
+    if let Some(rare) = allocation.rare.as_mut() {
+        rare.model_evaluations = model_evaluations;
+    }
     allocation.levers = levers
         .iter()
         .zip(&combination)
@@ -474,13 +530,23 @@ fn allocate_tolerances(
             ));
         }
     }
+    if settings.rare.is_some() && target.figure != TargetFigure::PpmOut {
+        return Err(ScenarioError::new(
+            "--rare",
+            format!(
+                "importance sampling estimates ppm_out targets; {} is a Monte Carlo figure",
+                target.expression()
+            ),
+        ));
+    }
     if settings.samples < 100 {
         return Err(ScenarioError::new(
             "--samples",
             "allocation needs at least 100 samples per evaluation",
         ));
     }
-    if let Some(tail) = tail_fraction(&target).map(|f| settings.samples as f64 * f) {
+    let tail = tail_fraction(&target).filter(|_| settings.rare.is_none());
+    if let Some(tail) = tail.map(|f| settings.samples as f64 * f) {
         if tail < 10.0 {
             let needed = (settings.samples as f64 * 10.0 / tail).ceil();
             return Err(ScenarioError::new(
@@ -525,6 +591,10 @@ fn allocate_tolerances(
             .collect(),
         progress,
         evaluations: std::cell::Cell::new(0),
+        rare: settings.rare,
+        sample: std::cell::RefCell::new(None),
+        model_evaluations: std::cell::Cell::new(0),
+        verified_by: std::cell::Cell::new(None),
     };
     problem.solve(settings, &info.unit)
 }
@@ -533,10 +603,121 @@ impl Problem<'_> {
     fn solve(&self, settings: AllocationSettings, unit: &str) -> Result<Allocation, ScenarioError> {
         let k = self.sources.len();
         let seed = settings.seed;
-        let current = self.point(&vec![1.0; k], seed, false)?;
-        let start = self.clamp(&vec![1.0; k]);
-        let mut x = if start == current.factors {
-            current.clone()
+        let today = vec![1.0; k];
+        if self.rare.is_some() {
+            self.recentre(&today, seed)?;
+        }
+        let current = self.point(&today, seed, false)?;
+        let mut search = self.search(&current, seed)?;
+        let mut iterations = search.iterations;
+        let mut stages = 1;
+        // --rare: a new sample around the point found while the last one does not
+        // estimate it as precisely as it was built to.
+        while self.rare.is_some() && stages < MAX_STAGES {
+            let found = match &search.best {
+                Some(point) => point.clone(),
+                None => self.point(&self.tightest(), seed, false)?,
+            };
+            if self.sample_fits(&found) {
+                break;
+            }
+            self.recentre(&found.factors, seed)?;
+            stages += 1;
+            let start = self.point(&found.factors, seed, false)?;
+            search = self.search(&start, seed)?;
+            iterations += search.iterations;
+        }
+        let Search {
+            best,
+            matters,
+            common,
+            ..
+        } = search;
+        let feasible = best.is_some();
+        // Infeasible: report the tightest point (every source at its lower bound).
+        let chosen = match best {
+            Some(point) => point,
+            None => self.point(&self.tightest(), seed, false)?,
+        };
+        // Rounded as described; if that breaks the constraint (a source rounded to
+        // nearest that mattered after all), every source rounded down; else unrounded.
+        let mut rounded = self.round(&chosen.factors, &matters);
+        let mut proposed = self.point(&rounded, seed, false)?;
+        if feasible && proposed.constraint > 0.0 {
+            rounded = self.round(&chosen.factors, &vec![true; k]);
+            proposed = self.point(&rounded, seed, false)?;
+            if proposed.constraint > 0.0 {
+                rounded = chosen.factors.clone();
+                proposed = chosen.clone();
+            }
+        }
+        let (_, variance_gradient) = self.constraint_gradient(&proposed, seed)?;
+        let variance = proposed.evaluation.sd.powi(2);
+        let verification = self.point(&rounded, settings.verification_seed, true)?;
+        let verified = verification.evaluation.verifies(&self.target);
+
+        let sources = self
+            .sources
+            .iter()
+            .enumerate()
+            .map(|(j, source)| SourceAllocation {
+                source: source.clone(),
+                optimum: chosen.factors[j] * source.source.current,
+                proposed: rounded[j] * source.source.current,
+                current_cost: source.cost.cost(source.source.current),
+                proposed_cost: self.source_cost(j, rounded[j]),
+                variance_share: if variance > 0.0 {
+                    rounded[j].powi(2) * variance_gradient[j] / variance
+                } else {
+                    0.0
+                },
+            })
+            .collect::<Vec<_>>();
+        let current_cost = sources.iter().map(|s| s.current_cost).sum::<Option<f64>>();
+        Ok(Allocation {
+            scenario: self.name.to_string(),
+            scenario_sha256: self.digest.to_string(),
+            spec: self.limits,
+            output: self.output_name.to_string(),
+            unit: unit.to_string(),
+            target: self.target,
+            settings,
+            proposed_cost: proposed.cost,
+            optimum_cost: chosen.cost,
+            sources,
+            current: current.evaluation,
+            proposed: proposed.evaluation,
+            verification: verification.evaluation,
+            feasible,
+            verified,
+            current_cost,
+            common_scale: common,
+            iterations,
+            evaluations: self.evaluations.get(),
+            levers: Vec::new(),
+            lever_options: Vec::new(),
+            rare: self.rare.map(|options| {
+                let sample = self.sample.borrow();
+                let sample = sample.as_ref().expect("built before the first point");
+                RareUse {
+                    options,
+                    stages,
+                    points: sample.points(),
+                    centred_at: sample.at.clone(),
+                    model_evaluations: self.model_evaluations.get(),
+                    verified_by: self.verified_by.get().expect("verified above"),
+                }
+            }),
+        })
+    }
+
+    /// The sequential Lagrange allocation from `x`, refined against the estimated
+    /// figure, and the common-scaling comparison.
+    fn search(&self, x: &Point, seed: u64) -> Result<Search, ScenarioError> {
+        let k = self.sources.len();
+        let start = self.clamp(&x.factors);
+        let mut x = if start == x.factors {
+            x.clone()
         } else {
             self.point(&start, seed, false)?
         };
@@ -607,74 +788,17 @@ impl Problem<'_> {
                 }
             });
 
-        let feasible = best.is_some();
-        // Infeasible: report the tightest point (every source at its lower bound).
-        let chosen = match best {
-            Some(point) => point,
-            None => self.point(
-                &self.bounds.iter().map(|b| b.0).collect::<Vec<_>>(),
-                seed,
-                false,
-            )?,
-        };
-        // Rounded as described; if that breaks the constraint (a source rounded to
-        // nearest that mattered after all), every source rounded down; else unrounded.
-        let mut rounded = self.round(&chosen.factors, &matters);
-        let mut proposed = self.point(&rounded, seed, false)?;
-        if feasible && proposed.constraint > 0.0 {
-            rounded = self.round(&chosen.factors, &vec![true; k]);
-            proposed = self.point(&rounded, seed, false)?;
-            if proposed.constraint > 0.0 {
-                rounded = chosen.factors.clone();
-                proposed = chosen.clone();
-            }
-        }
-        let (_, variance_gradient) = self.constraint_gradient(&proposed, seed)?;
-        let variance = proposed.evaluation.sd.powi(2);
-        let verification = self.point(&rounded, settings.verification_seed, true)?;
-        let verified = verification.evaluation.verifies(&self.target);
-
-        let sources = self
-            .sources
-            .iter()
-            .enumerate()
-            .map(|(j, source)| SourceAllocation {
-                source: source.clone(),
-                optimum: chosen.factors[j] * source.source.current,
-                proposed: rounded[j] * source.source.current,
-                current_cost: source.cost.cost(source.source.current),
-                proposed_cost: self.source_cost(j, rounded[j]),
-                variance_share: if variance > 0.0 {
-                    rounded[j].powi(2) * variance_gradient[j] / variance
-                } else {
-                    0.0
-                },
-            })
-            .collect::<Vec<_>>();
-        let current_cost = sources.iter().map(|s| s.current_cost).sum::<Option<f64>>();
-        Ok(Allocation {
-            scenario: self.name.to_string(),
-            scenario_sha256: self.digest.to_string(),
-            spec: self.limits,
-            output: self.output_name.to_string(),
-            unit: unit.to_string(),
-            target: self.target,
-            settings,
-            proposed_cost: proposed.cost,
-            optimum_cost: chosen.cost,
-            sources,
-            current: current.evaluation,
-            proposed: proposed.evaluation,
-            verification: verification.evaluation,
-            feasible,
-            verified,
-            current_cost,
-            common_scale: common,
+        Ok(Search {
+            best,
+            matters,
+            common,
             iterations,
-            evaluations: self.evaluations.get(),
-            levers: Vec::new(),
-            lever_options: Vec::new(),
         })
+    }
+
+    /// Every source at its lower bound.
+    fn tightest(&self) -> Vec<f64> {
+        self.bounds.iter().map(|b| b.0).collect()
     }
 
     fn clamp(&self, factors: &[f64]) -> Vec<f64> {
@@ -714,8 +838,37 @@ impl Problem<'_> {
         verification: bool,
     ) -> Result<Point, ScenarioError> {
         let scenario = self.scenario(factors)?;
+        let evaluation = match self.rare {
+            Some(options) => self.importance(&scenario, options, seed, verification)?,
+            None => self.monte_carlo(&scenario, seed, verification)?,
+        };
+        self.evaluations.set(self.evaluations.get() + 1);
+        (self.progress)(self.evaluations.get());
+        let constraint = self.target.excess(evaluation.figure)
+            + MARGIN_Z * self.margin_error(&evaluation, verification);
+        Ok(Point {
+            factors: factors.to_vec(),
+            // A figure without a finite margin (e.g. Cpk of a constant output) cannot be
+            // shown to meet the target.
+            constraint: if constraint.is_nan() {
+                f64::INFINITY
+            } else {
+                constraint
+            },
+            cost: self.total_cost(factors),
+            evaluation,
+        })
+    }
+
+    /// The target figure of one Monte Carlo run of `scenario`.
+    fn monte_carlo(
+        &self,
+        scenario: &Scenario,
+        seed: u64,
+        verification: bool,
+    ) -> Result<Evaluation, ScenarioError> {
         let mut result = run_for_output(
-            &scenario,
+            scenario,
             RunSettings {
                 samples: self.samples,
                 seed,
@@ -725,8 +878,8 @@ impl Problem<'_> {
             self.output,
             &|_| {},
         )?;
-        self.evaluations.set(self.evaluations.get() + 1);
-        (self.progress)(self.evaluations.get());
+        self.model_evaluations
+            .set(self.model_evaluations.get() + self.samples);
         let accumulator = result.outputs.swap_remove(self.output);
         let out = accumulator.out_of_spec(self.flagged_conform);
         // The kept values are the conforming ones; the others lie beyond the limits.
@@ -746,26 +899,87 @@ impl Problem<'_> {
                 counted: verification.then_some(out),
             },
         );
-        let evaluation = evaluation.ok_or_else(|| {
+        evaluation.ok_or_else(|| {
             ScenarioError::new(
                 "--output",
                 "fewer than 2 finite values: nothing to allocate against",
             )
-        })?;
-        let constraint =
-            self.target.excess(evaluation.figure) + MARGIN_Z * evaluation.standard_error;
-        Ok(Point {
-            factors: factors.to_vec(),
-            // A figure without a finite margin (e.g. Cpk of a constant output) cannot be
-            // shown to meet the target.
-            constraint: if constraint.is_nan() {
-                f64::INFINITY
-            } else {
-                constraint
-            },
-            cost: self.total_cost(factors),
-            evaluation,
         })
+    }
+
+    /// The out-of-spec ppm of `scenario` by importance sampling: on the current sample's
+    /// points in the optimisation; on a sample of its own, built with the verification
+    /// seed around the scenario's own centres, in the verification.
+    fn importance(
+        &self,
+        scenario: &Scenario,
+        options: RareOptions,
+        seed: u64,
+        verification: bool,
+    ) -> Result<Evaluation, ScenarioError> {
+        let fresh;
+        let sample = self.sample.borrow();
+        let sample = match verification {
+            true => {
+                fresh = RareSample::build(scenario, self.output, seed, options, Vec::new())?;
+                self.count(fresh.evaluations);
+                &fresh
+            }
+            false => sample.as_ref().expect("built before the first point"),
+        };
+        let (mut evaluation, evaluations) =
+            sample.evaluate(scenario, self.output, self.limits, verification)?;
+        self.count(evaluations);
+        if verification {
+            self.verified_by.set(Some(Method::Importance));
+            if !sample.trusted() {
+                let evaluations =
+                    rare::by_subset(scenario, self.output, seed, options, &mut evaluation)?;
+                self.count(evaluations);
+                self.verified_by.set(Some(Method::Subset));
+            }
+        }
+        Ok(evaluation)
+    }
+
+    /// The standard error the constraint's margin uses: the figure's own; with `--rare`
+    /// in the optimisation, the figure times the relative standard error of its sample
+    /// where the sample was built. An importance-sampling standard error is a sample
+    /// quantity that jumps as points cross the threshold; the relative one of the sample's
+    /// centre moves with the figure smoothly, and holds near the centre (the allocation
+    /// builds a new sample when the point it finds is estimated less precisely,
+    /// [`RareSample::fits`]).
+    fn margin_error(&self, evaluation: &Evaluation, verification: bool) -> f64 {
+        let sample = self.sample.borrow();
+        match sample.as_ref().filter(|_| !verification) {
+            Some(sample) => evaluation.figure * sample.relative_error,
+            None => evaluation.standard_error,
+        }
+    }
+
+    /// Counts model evaluations.
+    fn count(&self, evaluations: u64) {
+        self.model_evaluations
+            .set(self.model_evaluations.get() + evaluations);
+    }
+
+    /// `--rare`: a new sample of importance sampling around the event's centres at the
+    /// tolerance factors `at`.
+    fn recentre(&self, at: &[f64], seed: u64) -> Result<(), ScenarioError> {
+        let options = self.rare.expect("only with --rare");
+        let scenario = self.scenario(at)?;
+        let sample = RareSample::build(&scenario, self.output, seed, options, at.to_vec())?;
+        self.count(sample.evaluations);
+        *self.sample.borrow_mut() = Some(sample);
+        Ok(())
+    }
+
+    /// Whether the current sample estimates `point`'s figure as precisely as it was built
+    /// to (else the allocation builds a new one around it).
+    fn sample_fits(&self, point: &Point) -> bool {
+        let sample = self.sample.borrow();
+        let sample = sample.as_ref().expect("built before the first point");
+        sample.at == point.factors || sample.fits(&point.evaluation)
     }
 
     /// Forward differences of the constraint and of the output variance with respect to

@@ -144,7 +144,8 @@ pub struct AllocationReport {
     pub verification: FigureReport,
     /// Sequential Lagrange iterations.
     pub iterations: usize,
-    /// Monte Carlo runs made.
+    /// Evaluations of the target figure made (Monte Carlo runs, or importance-sampling
+    /// estimates with `--rare`).
     pub evaluations: usize,
     /// The lever values of the answer (absent without levers).
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -152,6 +153,31 @@ pub struct AllocationReport {
     /// Every combination of lever values tried (absent without levers).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub lever_options: Vec<LeverOptionReport>,
+    /// How importance sampling estimated the constraint (present with `--rare`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rare: Option<RareReport>,
+}
+
+/// How `allocate --rare` estimated its ppm constraint.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RareReport {
+    /// The 95 % interval's half width, as a share of the estimate, each sample was built
+    /// for.
+    pub precision: f64,
+    /// The points a sample could have.
+    pub max_evaluations: u64,
+    /// Samples built around the event's centres (the first at today's tolerances).
+    pub stages: usize,
+    /// Points of the last sample (every estimate of the last stage).
+    pub points: u64,
+    /// The tolerance factors, per source, whose centres the last sample was drawn around.
+    pub centred_at: Vec<f64>,
+    /// Model evaluations of the whole allocation (every lever combination's).
+    pub model_evaluations: u64,
+    /// The verification's estimator: `importance` (around the proposal's own centres,
+    /// with the verification seed), or `subset` where importance sampling did not reach
+    /// its precision within the budget or one point carried much of its estimate.
+    pub verified_by: &'static str,
 }
 
 /// A lever's value in the answer.
@@ -213,7 +239,7 @@ impl AllocationReport {
             unit: a.unit.clone(),
             target: a.target.expression(),
             status: a.status(),
-            samples: a.settings.samples,
+            samples: a.rare.as_ref().map_or(a.settings.samples, |r| r.points),
             seed: a.settings.seed,
             verification_seed: a.settings.verification_seed,
             margin_standard_errors: MARGIN_Z,
@@ -269,6 +295,15 @@ impl AllocationReport {
                     verification: o.verification,
                 })
                 .collect(),
+            rare: a.rare.as_ref().map(|r| RareReport {
+                precision: r.options.precision,
+                max_evaluations: r.options.max_evaluations,
+                stages: r.stages,
+                points: r.points,
+                centred_at: r.centred_at.clone(),
+                model_evaluations: r.model_evaluations,
+                verified_by: r.verified_by.name(),
+            }),
         }
     }
 
@@ -289,14 +324,19 @@ impl AllocationReport {
                 u.to_string()
             }
         };
+        let estimator = match &self.rare {
+            Some(r) => format!(
+                "importance sampling, {} points per estimate",
+                rvtol_engine::format::group_thousands(r.points)
+            ),
+            None => format!(
+                "{} samples per run",
+                rvtol_engine::format::group_thousands(self.samples)
+            ),
+        };
         out.push_str(&format!(
-            "rvtol {} | allocate {} | output {} | target {} | {} samples per run, seed {}\n\n",
-            self.rvtol_version,
-            self.scenario,
-            self.output,
-            self.target,
-            rvtol_engine::format::group_thousands(self.samples),
-            self.seed
+            "rvtol {} | allocate {} | output {} | target {} | {estimator}, seed {}\n\n",
+            self.rvtol_version, self.scenario, self.output, self.target, self.seed
         ));
         let header = [
             "source",
@@ -435,14 +475,35 @@ impl AllocationReport {
         ));
         out.push_str(&figure("proposed (optimisation):", &self.proposed));
         out.push_str(&figure("proposed (verification):", &self.verification));
+        let (runs, more) = match &self.rare {
+            Some(r) => (
+                format!(
+                    "{} importance-sampling estimates on {} sample(s), verified by {}; {} model \
+                     evaluations",
+                    self.evaluations,
+                    r.stages,
+                    match r.verified_by {
+                        "subset" => "subset simulation",
+                        _ => "importance sampling",
+                    },
+                    rvtol_engine::format::group_thousands(r.model_evaluations)
+                ),
+                "a smaller --precision (or, where the verification's estimate stopped at its \
+                 budget, a larger --max-evaluations)",
+            ),
+            None => (
+                format!("{} Monte Carlo runs", self.evaluations),
+                "more --samples",
+            ),
+        };
         out.push_str(&format!(
             "\n{}: {}\n",
             self.status,
             match self.status {
                 "met" => format!(
                     "the independent run meets {} with its whole 95 % interval (optimised with a \
-                     margin of {:.2} standard errors; {} iterations, {} Monte Carlo runs)",
-                    self.target, self.margin_standard_errors, self.iterations, self.evaluations
+                     margin of {:.2} standard errors; {} iterations, {runs})",
+                    self.target, self.margin_standard_errors, self.iterations
                 ),
                 "infeasible" => format!(
                     "no tolerances within the bounds meet {}; shown: every source at its lower \
@@ -451,7 +512,7 @@ impl AllocationReport {
                 ),
                 _ => format!(
                     "the independent run gives {} (95 % interval {} .. {}), which does not show {} \
-                     with confidence; rerun with more --samples",
+                     with confidence; rerun with {more}",
                     format_sig(self.verification.value),
                     format_sig(self.verification.ci[0]),
                     format_sig(self.verification.ci[1]),

@@ -28,9 +28,9 @@ use super::{Budget, Estimate, Z_95};
 /// The standard normal component's share of the mixture.
 pub const DEFENSIVE: f64 = 0.1;
 /// Points per batch.
-const BATCH: usize = 1024;
+pub const BATCH: usize = 1024;
 /// Event points needed before the interval may stop the sampling.
-const MIN_EVENTS: u64 = 30;
+pub const MIN_EVENTS: u64 = 30;
 /// The share of the sum one weight may carry before the estimate is flagged.
 const DOMINANT_SHARE: f64 = 0.1;
 /// The streams of the batches: 2⁶¹ + 2⁶⁰ + b (the run's are k, the screening's 2⁶⁰ + k,
@@ -60,6 +60,59 @@ impl Sums {
     }
 }
 
+/// The defensive mixture around a set of centres: how its points are drawn and weighted.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mixture {
+    centres: Vec<Vec<f64>>,
+    /// |u*ₖ|²/2 per centre.
+    shifts: Vec<f64>,
+    /// πₖ, the share of each centre.
+    share: f64,
+    dims: usize,
+}
+
+impl Mixture {
+    /// The mixture around `centres` (at least one) in `dims` dimensions.
+    pub fn new(centres: &[Vec<f64>], dims: usize) -> Mixture {
+        Mixture {
+            shifts: centres.iter().map(|c| 0.5 * dot(c, c)).collect(),
+            share: (1.0 - DEFENSIVE) / centres.len() as f64,
+            centres: centres.to_vec(),
+            dims,
+        }
+    }
+
+    /// The centres.
+    pub fn centres(&self) -> &[Vec<f64>] {
+        &self.centres
+    }
+
+    /// Batch `batch` of the seed's points ([`BATCH`] of them, row-major, in `points`):
+    /// the ChaCha8 stream `STREAM + batch` of `seed`, the same whoever draws it.
+    pub fn draw(&self, seed: u64, batch: u64, points: &mut [f64]) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        rng.set_stream(STREAM + batch);
+        for point in points.chunks_exact_mut(self.dims.max(1)) {
+            let pick: f64 = rng.random();
+            let centre = ((pick - DEFENSIVE) / self.share).floor();
+            let centre = (pick >= DEFENSIVE)
+                .then(|| &self.centres[(centre as usize).min(self.centres.len() - 1)]);
+            for (d, z) in point.iter_mut().enumerate() {
+                let xi: f64 = rng.sample(StandardNormal);
+                *z = xi + centre.map_or(0.0, |c| c[d]);
+            }
+        }
+    }
+
+    /// The weight φ(z)/q(z) of a point.
+    pub fn weight(&self, point: &[f64]) -> f64 {
+        let mixture: f64 = (self.centres.iter().zip(&self.shifts))
+            .map(|(c, h)| self.share * (dot(c, point) - h).exp())
+            .sum();
+        1.0 / (DEFENSIVE + mixture)
+    }
+}
+
 /// The importance-sampling estimate of `limit`'s event around `centres`.
 pub fn estimate(
     limit: &mut LimitState,
@@ -68,33 +121,18 @@ pub fn estimate(
     budget: &Budget,
 ) -> Estimate {
     let dims = limit.dims();
-    let share = (1.0 - DEFENSIVE) / centres.len() as f64;
-    let shifts: Vec<f64> = centres.iter().map(|c| 0.5 * dot(c, c)).collect();
+    let mixture = Mixture::new(centres, dims);
     let start = limit.evaluations;
     let mut sums = Sums::default();
     let mut batch = 0u64;
     let mut points = vec![0.0; BATCH * dims];
     loop {
-        let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        rng.set_stream(STREAM + batch);
-        for point in points.chunks_exact_mut(dims.max(1)) {
-            let pick: f64 = rng.random();
-            let centre = ((pick - DEFENSIVE) / share).floor();
-            let centre =
-                (pick >= DEFENSIVE).then(|| &centres[(centre as usize).min(centres.len() - 1)]);
-            for (d, z) in point.iter_mut().enumerate() {
-                let xi: f64 = rng.sample(StandardNormal);
-                *z = xi + centre.map_or(0.0, |c| c[d]);
-            }
-        }
+        mixture.draw(seed, batch, &mut points);
         let scores = limit.scores(&points);
         for (point, s) in points.chunks_exact(dims.max(1)).zip(scores) {
             sums.n += 1;
             if s > 0.0 {
-                let mixture: f64 = (centres.iter().zip(&shifts))
-                    .map(|(c, h)| share * (dot(c, point) - h).exp())
-                    .sum();
-                let w = 1.0 / (DEFENSIVE + mixture);
+                let w = mixture.weight(point);
                 sums.events += 1;
                 sums.sum += w;
                 sums.sum_squares += w * w;

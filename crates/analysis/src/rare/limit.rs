@@ -14,7 +14,11 @@
 //!   has no value: in the event out of spec, −∞ (never) above or below a threshold.
 //!
 //! Rows are evaluated in tasks of [`TASK_ROWS`] over the current rayon pool and gathered
-//! in row order: the scores of a batch do not depend on the thread count.
+//! in row order: the scores of a batch do not depend on the thread count. Each thread of
+//! the pool keeps one set of buffers (a model evaluator with its constant columns) for
+//! the limit state's life: building them per task cost more than a fast model's rows.
+
+use std::sync::Mutex;
 
 use rayon::prelude::*;
 use rvtol_deviation::SamplerScratch;
@@ -49,6 +53,9 @@ pub struct LimitState<'a> {
     pub evaluations: u64,
     /// Of them, those whose value is not finite.
     pub non_finite: u64,
+    /// One worker per thread of the pool it was made in (a thread takes the one of its
+    /// index; the lock is never contended within that pool).
+    workers: Vec<Mutex<Worker<'a>>>,
 }
 
 impl<'a> LimitState<'a> {
@@ -86,6 +93,9 @@ impl<'a> LimitState<'a> {
             dims,
             evaluations: 0,
             non_finite: 0,
+            workers: (0..rayon::current_num_threads())
+                .map(|_| Mutex::new(Worker::new(scenario)))
+                .collect(),
         })
     }
 
@@ -96,23 +106,30 @@ impl<'a> LimitState<'a> {
 
     /// The scores of row-major points `z` ([`LimitState::dims`] per point), in point order.
     pub fn scores(&mut self, z: &[f64]) -> Vec<f64> {
+        self.evaluate(z).into_iter().map(|(_, s)| s).collect()
+    }
+
+    /// The output's value and the score of row-major points `z`, in point order; the value
+    /// is NaN where the model gives none (not finite, or the sample excluded).
+    pub fn evaluate(&mut self, z: &[f64]) -> Vec<(f64, f64)> {
         let dims = self.dims.max(1);
         self.evaluations += (z.len() / dims) as u64;
-        let (scenario, output, event) = (self.scenario, self.output, self.event);
-        let blocks: Vec<Vec<f64>> = z
+        let (output, event, workers) = (self.output, self.event, &self.workers);
+        let blocks: Vec<Vec<(f64, f64)>> = z
             .par_chunks(TASK_ROWS * dims)
-            .map_init(
-                || Worker::new(scenario),
-                |worker, block| worker.scores(block, dims, output, event),
-            )
+            .map(|block| {
+                let index = rayon::current_thread_index().unwrap_or(0) % workers.len();
+                let mut worker = workers[index].lock().unwrap_or_else(|e| e.into_inner());
+                worker.evaluate(block, dims, output, event)
+            })
             .collect();
         (self.progress)((z.len() / dims) as u64);
-        let mut scores = blocks.concat();
-        for s in scores.iter_mut().filter(|s| s.is_nan()) {
+        let mut pairs = blocks.concat();
+        for (_, s) in pairs.iter_mut().filter(|(_, s)| s.is_nan()) {
             self.non_finite += 1;
             *s = f64::INFINITY;
         }
-        scores
+        pairs
     }
 
     /// The input row (the scenario's columns) of one point.
@@ -150,8 +167,14 @@ impl<'a> Worker<'a> {
         }
     }
 
-    /// The scores of a block of row-major points.
-    fn scores(&mut self, block: &[f64], dims: usize, output: usize, event: Event) -> Vec<f64> {
+    /// The values and scores of a block of row-major points.
+    fn evaluate(
+        &mut self,
+        block: &[f64],
+        dims: usize,
+        output: usize,
+        event: Event,
+    ) -> Vec<(f64, f64)> {
         let space = &self.scenario.input_space;
         let m = block.len() / dims;
         self.transposed.resize(dims * m, 0.0);
@@ -168,12 +191,15 @@ impl<'a> Worker<'a> {
         ))
         .expect("the dimensions were checked when the limit state was made");
         self.evaluator.evaluate_columns_at(&self.columns, m, 0);
-        (0..m).map(|r| self.score(r, output, event)).collect()
+        (0..m)
+            .map(|r| self.value_and_score(r, output, event))
+            .collect()
     }
 
-    /// The score of row `r` of the last block (NaN where the value is not finite and no
-    /// indicator excludes the sample).
-    fn score(&self, r: usize, output: usize, event: Event) -> f64 {
+    /// The value (NaN when excluded or not finite) and the score of row `r` of the last
+    /// block (the score NaN where the value is not finite and no indicator excludes the
+    /// sample).
+    fn value_and_score(&self, r: usize, output: usize, event: Event) -> (f64, f64) {
         let info = &self.scenario.outputs[output];
         let column = |k: usize| self.evaluator.output_columns[k][r];
         let y = column(output);
@@ -184,7 +210,12 @@ impl<'a> Worker<'a> {
             }
             None => (false, false),
         };
-        match event {
+        let value = if excluded || !y.is_finite() {
+            f64::NAN
+        } else {
+            y
+        };
+        let score = match event {
             _ if excluded => match event {
                 Event::OutOfSpec => f64::INFINITY,
                 _ => f64::NEG_INFINITY,
@@ -199,6 +230,7 @@ impl<'a> Worker<'a> {
                 let below = limits.lower.map_or(f64::NEG_INFINITY, |l| l - y);
                 above.max(below)
             }
-        }
+        };
+        (value, score)
     }
 }

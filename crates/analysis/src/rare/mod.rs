@@ -185,9 +185,7 @@ pub fn rare(
     let mut limit = limit::LimitState::new(scenario, settings.output, settings.event, progress)?;
     let dims = limit.dims();
     let sides: Vec<Side> = match settings.methods.contains(&Method::Importance) {
-        true => (side_events(scenario, settings).into_iter())
-            .map(|event| search(scenario, settings, event, progress))
-            .collect::<Result<_, ScenarioError>>()?,
+        true => search_sides(scenario, settings, progress)?,
         false => Vec::new(),
     };
     let mut results: Vec<MethodResult> = (settings.methods.iter())
@@ -262,6 +260,18 @@ fn flag_disagreement(results: &mut [MethodResult]) {
             None => note,
         });
     }
+}
+
+/// Each side of the event searched for its centre (FORM's design point, else the
+/// conditional mean): one per threshold, one per spec limit out of spec.
+pub fn search_sides(
+    scenario: &Scenario,
+    settings: &RareSettings,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<Vec<Side>, ScenarioError> {
+    (side_events(scenario, settings).into_iter())
+        .map(|event| search(scenario, settings, event, progress))
+        .collect()
 }
 
 /// One side searched: FORM, and the conditional mean where FORM does not converge.

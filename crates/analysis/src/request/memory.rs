@@ -232,9 +232,26 @@ pub fn sensitivity(
 }
 
 /// `rvtol allocate`: each Monte Carlo run keeps the targeted output's values (one run at a
-/// time) besides the run's per-thread buffers.
-pub fn allocation(scenario: &Scenario, samples: u64, threads: usize) -> MemoryNeed {
+/// time) besides the run's per-thread buffers; with `--rare`, each importance-sampling
+/// estimate keeps a value, a score and a weight per point of its sample.
+pub fn allocation(
+    scenario: &Scenario,
+    settings: &crate::allocation::AllocationSettings,
+    threads: usize,
+) -> MemoryNeed {
     let scratch = 4.0 * threads as f64 * run_scratch_per_thread(scenario);
+    if let Some(rare) = settings.rare {
+        let points = rare.max_evaluations;
+        return MemoryNeed {
+            bytes: BASE_BYTES + 3.0 * VALUE * points as f64 + scratch,
+            what: format!(
+                "up to {} weighted points per importance-sampling estimate",
+                group_thousands(points)
+            ),
+            way_out: "ask for fewer --max-evaluations",
+        };
+    }
+    let samples = settings.samples;
     let kept = 2.0 * VALUE * samples as f64;
     MemoryNeed {
         bytes: BASE_BYTES + kept + scratch,

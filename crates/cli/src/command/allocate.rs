@@ -46,6 +46,19 @@ pub struct AllocateArgs {
     /// Seed of the verification run (default: seed + 1).
     #[arg(long, value_parser = parse_seed, allow_hyphen_values = true)]
     pub verify_seed: Option<u64>,
+    /// Estimate a ppm_out target by importance sampling around the out-of-spec event's
+    /// most probable points instead of Monte Carlo runs (ppm targets down to 1 ppm and
+    /// below; the verification an independent estimate of its own).
+    #[arg(long)]
+    pub rare: bool,
+    /// With --rare: the 95 % interval's half width, as a share of the estimate, each
+    /// importance-sampling sample is built for (default 0.1: ±10 %).
+    #[arg(long, value_name = "SHARE", allow_hyphen_values = true)]
+    pub precision: Option<f64>,
+    /// With --rare: the points one importance-sampling sample may have (default
+    /// 500,000).
+    #[arg(long, value_name = "N", value_parser = parse_count, allow_hyphen_values = true)]
+    pub max_evaluations: Option<u64>,
     /// Write the JSON report to PATH ("-" for stdout instead of the table).
     #[arg(long, value_name = "PATH")]
     pub json: Option<PathBuf>,
@@ -82,20 +95,25 @@ pub fn allocate(args: AllocateArgs) -> Result<()> {
         samples: args.samples,
         seed: args.seed,
         verify_seed: args.verify_seed,
+        rare: args.rare,
+        precision: args.precision,
+        max_evaluations: args.max_evaluations,
     };
     let (target, settings) =
         (request.settings(&scenario, CALLER)).map_err(|refusal| refused(path, refusal))?;
     let pool = pool_for(execution, "allocate", |threads| {
-        memory::allocation(&scenario, settings.samples, threads)
+        memory::allocation(&scenario, &settings, threads)
     })?;
     let spinner = if execution.quiet || !std::io::stderr().is_terminal() {
         ProgressBar::hidden()
     } else {
         let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
         bar.set_style(
-            ProgressStyle::with_template(
-                "{spinner} [{elapsed_precise}] allocating: {pos} Monte Carlo runs",
-            )
+            ProgressStyle::with_template(if settings.rare.is_some() {
+                "{spinner} [{elapsed_precise}] allocating: {pos} importance-sampling estimates"
+            } else {
+                "{spinner} [{elapsed_precise}] allocating: {pos} Monte Carlo runs"
+            })
             .expect("valid template"),
         );
         bar

@@ -174,6 +174,70 @@ fn same_seed_same_bits_whatever_the_threads() {
 }
 
 #[test]
+fn a_ppm_target_by_importance_sampling_is_verified_and_thread_independent() {
+    // The closed-form checks of --rare are tests/rare_allocation.rs's; here the command:
+    // its report, its text, the same bits at 1 and 2 threads.
+    let args = ["--target", "ppm_out <= 1", "--rare"];
+    let (code1, a, stderr) = allocate(&[&args[..], &["--threads", "1"]].concat());
+    let (code2, b, _) = allocate(&[&args[..], &["--threads", "2"]].concat());
+    assert_eq!(code1, Some(0), "{stderr}");
+    assert_eq!(code2, Some(0));
+    assert_eq!(a.to_string(), b.to_string());
+    assert_eq!(a["status"], "met");
+    let rare = &a["rare"];
+    assert_eq!(rare["precision"], 0.1);
+    assert!(rare["stages"].as_u64().unwrap() >= 1);
+    assert_eq!(a["samples"], rare["points"]);
+    let verified = &a["verification"];
+    assert!(verified["ci"][1].as_f64().unwrap() <= 1.0, "{verified}");
+    let text = String::from_utf8(common::stdout_of(&[
+        "allocate",
+        workspace_dir()
+            .join("scenarios/allocation-linear.json")
+            .to_str()
+            .unwrap(),
+        "--output",
+        "gap_mm",
+        "--target",
+        "ppm_out <= 1",
+        "--rare",
+        "-q",
+    ]))
+    .unwrap();
+    assert!(text.contains("importance sampling, "), "{text}");
+    assert!(text.contains("importance-sampling estimates on"), "{text}");
+}
+
+#[test]
+fn options_of_the_other_estimator_are_refused() {
+    let scenario = workspace_dir().join("scenarios/allocation-linear.json");
+    let cases: [(&[&str], &str); 4] = [
+        (&["--target", "p99.865 <= 0.245", "--rare"], "--rare"),
+        (
+            &["--target", "ppm_out <= 1", "--rare", "--samples", "1000"],
+            "--samples",
+        ),
+        (
+            &["--target", "ppm_out <= 1", "--precision", "0.1"],
+            "--precision",
+        ),
+        (
+            &["--target", "ppm_out <= 1", "--rare", "--precision", "1.5"],
+            "--precision",
+        ),
+    ];
+    for (args, option) in cases {
+        let mut all = vec!["allocate", scenario.to_str().unwrap(), "--output", "gap_mm"];
+        all.extend_from_slice(args);
+        let out = run_rvtol(&all);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{args:?}: {stderr}");
+        assert!(stderr.contains(option), "{args:?}: {stderr}");
+    }
+}
+
+#[test]
 fn infeasible_target_exits_1_and_says_so() {
     // x4 alone has σ = 0.003: no allocation of x1..x3 reaches σ ≤ 0.002.
     let proposal = TempScenario::new("allocate-infeasible", "");
