@@ -15,6 +15,7 @@
 pub mod chart;
 pub mod html;
 mod inputs;
+mod rare;
 mod stack;
 mod sweep;
 
@@ -56,6 +57,8 @@ pub struct Report<'a> {
     pub stack: Option<&'a Value>,
     /// The JSON report of `rvtol sweep`.
     pub sweep: Option<&'a Value>,
+    /// The JSON report of `rvtol rare`.
+    pub rare: Option<&'a Value>,
     /// Model name and its curves with every deviation at its mean.
     pub curves: &'a [(String, Vec<Curve>)],
     /// Why a model's curves are not drawn (a point that is not finite at the nominal
@@ -114,6 +117,8 @@ pub enum Kind {
     Stack,
     /// `rvtol sweep`.
     Sweep,
+    /// `rvtol rare`.
+    Rare,
 }
 
 impl Kind {
@@ -125,6 +130,7 @@ impl Kind {
             Kind::Allocation => "allocate",
             Kind::Stack => "stack",
             Kind::Sweep => "sweep",
+            Kind::Rare => "rare",
         }
     }
 }
@@ -145,6 +151,8 @@ pub fn kind_of(report: &Value) -> Option<Kind> {
         Some(Kind::Stack)
     } else if has("axes") && has("points") {
         Some(Kind::Sweep)
+    } else if has("estimates") && has("sides") {
+        Some(Kind::Rare)
     } else {
         None
     }
@@ -239,6 +247,10 @@ pub fn render(report: &Report) -> Result<String, ReportError> {
         sections.push_str(&sweep::sweep_section(sweep)?);
         nav.push(("sweep".into(), "Sweep".into()));
     }
+    if let Some(rare) = report.rare {
+        sections.push_str(&rare::rare_section(rare)?);
+        nav.push(("rare".into(), "Rare event".into()));
+    }
     if !report.curves.is_empty() || !report.curves_left_out.is_empty() {
         sections.push_str(&curves_section(
             report.curves,
@@ -284,6 +296,7 @@ fn record_section(report: &Report) -> String {
         report.allocation,
         report.stack,
         report.sweep,
+        report.rare,
     ]
     .into_iter()
     .flatten()
@@ -320,8 +333,17 @@ fn record_section(report: &Report) -> String {
         if let Some(verify) = json.get("verification_seed").and_then(Value::as_u64) {
             parts.push(format!("verification seed {verify}"));
         }
-        if let Some(n) = json.get(samples_key).and_then(Value::as_u64) {
-            parts.push(format!("{} samples", thousands(n)));
+        match (
+            json.get("rare"),
+            json.get(samples_key).and_then(Value::as_u64),
+        ) {
+            // An allocation by importance sampling: its count is a sample's points.
+            (Some(_), Some(n)) => parts.push(format!(
+                "importance sampling (--rare), {} points per estimate",
+                thousands(n)
+            )),
+            (None, Some(n)) => parts.push(format!("{} samples", thousands(n))),
+            (_, None) => {}
         }
         if let Some(sampling) = json.get("sampling") {
             parts.push(format!(
@@ -359,6 +381,9 @@ fn record_section(report: &Report) -> String {
     }
     if let Some(sweep) = report.sweep {
         reproduce("sweep report", sweep, "samples");
+    }
+    if let Some(rare) = report.rare {
+        reproduce("rare-event report", rare, "samples");
     }
     rows.push(vec![
         "page written by".into(),
@@ -976,6 +1001,26 @@ fn allocation_section(report: &Value) -> Result<String, ReportError> {
         number(f(report, "current_cost")),
         number(f(report, "proposed_cost")),
     ));
+    let rare = report.get("rare");
+    if let Some(rare) = rare {
+        out.push_str(&format!(
+            "<p>The targeted ppm is estimated by importance sampling (<code>--rare</code>): \
+             weighted points drawn once around the out-of-spec event's centres and re-used for \
+             every set of tolerances tried, {} sample(s) built ({} points in the last), \
+             the verification by {}; {} model evaluations in all.</p>\n",
+            thousands(rare.get("stages").and_then(Value::as_u64).unwrap_or(0)),
+            thousands(rare.get("points").and_then(Value::as_u64).unwrap_or(0)),
+            match s(rare, "verified_by") {
+                Some("subset") => "subset simulation",
+                _ => "importance sampling around the proposal's own centres",
+            },
+            thousands(
+                rare.get("model_evaluations")
+                    .and_then(Value::as_u64)
+                    .unwrap_or(0)
+            ),
+        ));
+    }
     // Tolerance changes.
     let rows: Vec<BarRow> = sources
         .iter()
@@ -1065,7 +1110,7 @@ fn allocation_section(report: &Value) -> Result<String, ReportError> {
             "mean",
             "sd",
             "seed",
-            "samples",
+            if rare.is_some() { "points" } else { "samples" },
         ],
         &runs,
         &[1, 2, 3, 4, 5, 6],

@@ -608,30 +608,12 @@ impl Problem<'_> {
             self.recentre(&today, seed)?;
         }
         let current = self.point(&today, seed, false)?;
-        let mut search = self.search(&current, seed)?;
-        let mut iterations = search.iterations;
-        let mut stages = 1;
-        // --rare: a new sample around the point found while the last one does not
-        // estimate it as precisely as it was built to.
-        while self.rare.is_some() && stages < MAX_STAGES {
-            let found = match &search.best {
-                Some(point) => point.clone(),
-                None => self.point(&self.tightest(), seed, false)?,
-            };
-            if self.sample_fits(&found) {
-                break;
-            }
-            self.recentre(&found.factors, seed)?;
-            stages += 1;
-            let start = self.point(&found.factors, seed, false)?;
-            search = self.search(&start, seed)?;
-            iterations += search.iterations;
-        }
+        let (search, stages) = self.search_in_stages(&current, seed)?;
         let Search {
             best,
             matters,
             common,
-            ..
+            iterations,
         } = search;
         let feasible = best.is_some();
         // Infeasible: report the tightest point (every source at its lower bound).
@@ -709,6 +691,35 @@ impl Problem<'_> {
                 }
             }),
         })
+    }
+
+    /// The search from `current`; with `--rare`, repeated from the point found, on a new
+    /// sample around it, while the last sample does not estimate that point about as
+    /// precisely as where it was built (at most [`MAX_STAGES`] samples). Also returns the
+    /// samples built (1 without `--rare`); the iterations are summed over the stages.
+    fn search_in_stages(
+        &self,
+        current: &Point,
+        seed: u64,
+    ) -> Result<(Search, usize), ScenarioError> {
+        let mut search = self.search(current, seed)?;
+        let mut stages = 1;
+        while self.rare.is_some() && stages < MAX_STAGES {
+            let found = match &search.best {
+                Some(point) => point.clone(),
+                None => self.point(&self.tightest(), seed, false)?,
+            };
+            if self.sample_fits(&found) {
+                break;
+            }
+            self.recentre(&found.factors, seed)?;
+            stages += 1;
+            let start = self.point(&found.factors, seed, false)?;
+            let iterations = search.iterations;
+            search = self.search(&start, seed)?;
+            search.iterations += iterations;
+        }
+        Ok((search, stages))
     }
 
     /// The sequential Lagrange allocation from `x`, refined against the estimated

@@ -475,6 +475,12 @@ impl AllocationReport {
         ));
         out.push_str(&figure("proposed (optimisation):", &self.proposed));
         out.push_str(&figure("proposed (verification):", &self.verification));
+        out.push_str(&self.verdict());
+        out
+    }
+
+    /// The closing paragraph: the status and what it rests on, or what to do.
+    fn verdict(&self) -> String {
         let (runs, more) = match &self.rare {
             Some(r) => (
                 format!(
@@ -496,7 +502,7 @@ impl AllocationReport {
                 "more --samples",
             ),
         };
-        out.push_str(&format!(
+        format!(
             "\n{}: {}\n",
             self.status,
             match self.status {
@@ -519,8 +525,7 @@ impl AllocationReport {
                     self.target
                 ),
             }
-        ));
-        out
+        )
     }
 }
 

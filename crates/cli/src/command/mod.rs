@@ -449,6 +449,7 @@ fn html_page(
         allocation: (kind == Kind::Allocation).then_some(&value),
         stack: (kind == Kind::Stack).then_some(&value),
         sweep: (kind == Kind::Sweep).then_some(&value),
+        rare: (kind == Kind::Rare).then_some(&value),
         curves: &curves,
         curves_left_out: &curves_left_out,
         assemblies: &assemblies,

@@ -12,8 +12,8 @@ use rvtol_analysis::request::memory;
 use rvtol_analysis::request::rare::RareRequest;
 
 use super::{
-    load, outputs_ok, pool_for, problem_of_file, refused, scenario_inputs, staged_report,
-    Destinations, Execution, CALLER,
+    html_page, load, outputs_ok, pool_for, problem_of_file, refused, scenario_inputs,
+    staged_report, Destinations, Execution, CALLER,
 };
 use crate::limits::{parse_count, parse_seed};
 use crate::progress::Progress;
@@ -67,6 +67,10 @@ pub struct RareArgs {
     /// Write the JSON report to PATH ("-" for stdout instead of the text).
     #[arg(long, value_name = "PATH")]
     pub json: Option<PathBuf>,
+    /// Write an HTML report to PATH (.html, or "-" for stdout): one self-contained page
+    /// with the importance factors drawn.
+    #[arg(long, value_name = "PATH")]
+    pub html: Option<PathBuf>,
     #[command(flatten)]
     pub execution: Execution,
 }
@@ -76,7 +80,7 @@ pub fn rare(args: RareArgs) -> Result<()> {
     let (path, execution) = (args.scenario.as_path(), &args.execution);
     let to = Destinations {
         json: args.json.as_deref(),
-        html: None,
+        html: args.html.as_deref(),
         samples: None,
     };
     outputs_ok(&to.targets(&[]), &scenario_inputs(path))?;
@@ -109,6 +113,10 @@ pub fn rare(args: RareArgs) -> Result<()> {
         .map_err(|err| problem_of_file(path, err))?;
     bar.finish_and_clear();
     let json = report.to_json();
-    let staged = staged_report(&to, &json, || report.to_text())?;
+    let mut staged = staged_report(&to, &json, || report.to_text())?;
+    if let Some(html) = to.html {
+        let page = html_page(html, path, &scenario, rvtol_report::Kind::Rare, &json)?;
+        staged.add(html, &page)?;
+    }
     staged.commit()
 }

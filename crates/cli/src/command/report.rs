@@ -63,7 +63,7 @@ pub fn report(args: ReportArgs) -> Result<()> {
             .map_err(|err| BadInput(format!("{}: not JSON: {err}", file.display())))?;
         let kind = kind_of(&value).ok_or_else(|| {
             BadInput(format!(
-                "{}: not a JSON report of `rvtol run`, `sensitivity` or `allocate`",
+                "{}: not a JSON report of `rvtol run`, `sensitivity`, `allocate`, `stack`, `sweep` or `rare`",
                 file.display()
             ))
         })?;
@@ -151,6 +151,7 @@ pub fn report(args: ReportArgs) -> Result<()> {
         allocation: get(Kind::Allocation),
         stack: get(Kind::Stack),
         sweep: get(Kind::Sweep),
+        rare: get(Kind::Rare),
         curves: &curves,
         curves_left_out: &curves_left_out,
         assemblies: &assemblies,

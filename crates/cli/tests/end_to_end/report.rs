@@ -565,6 +565,61 @@ fn the_run_records_its_inputs_and_the_page_tabulates_them_with_their_contributio
 }
 
 #[test]
+fn a_rare_event_writes_its_page_and_composes_with_the_stack() {
+    let dir = temp_dir("rare");
+    let path = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let file = scenario("motor-assembly-stack.json");
+    ok(&run_rvtol(&[
+        "rare",
+        &file,
+        "--output",
+        "gap_mm",
+        "--above",
+        "0.38",
+        "--json",
+        &path("rare.json"),
+        "--html",
+        &path("rare.html"),
+        "--quiet",
+    ]));
+    let page = std::fs::read_to_string(path("rare.html")).unwrap();
+    check_page(&page, "rare");
+    assert!(page.contains("<section id=\"rare\">"));
+    assert!(page.contains("importance sampling") && page.contains("subset simulation"));
+    assert!(page.contains("What drives above 0.38000"));
+    // The largest importance factor is the case's (the README's stack: e_case 66 %).
+    let report: Value =
+        serde_json::from_str(&std::fs::read_to_string(path("rare.json")).unwrap()).unwrap();
+    let first = report["sides"][0]["importance"]
+        .as_object()
+        .unwrap()
+        .keys()
+        .next()
+        .unwrap();
+    assert_eq!(first, "e_case");
+    assert!(page.contains("The tail on the way to the event"));
+    ok(&run_rvtol(&[
+        "stack",
+        &file,
+        "--json",
+        &path("stack.json"),
+        "--quiet",
+    ]));
+    ok(&run_rvtol(&[
+        "report",
+        &path("stack.json"),
+        &path("rare.json"),
+        "--scenario",
+        &file,
+        "-o",
+        &path("both.html"),
+    ]));
+    let both = std::fs::read_to_string(path("both.html")).unwrap();
+    check_page(&both, "stack and rare");
+    assert!(both.contains("<section id=\"rare\">") && both.contains("<section id=\"stack\">"));
+}
+
+#[test]
 fn a_sweep_writes_its_page_and_composes_with_the_run() {
     let dir = temp_dir("sweep");
     let path = |name: &str| dir.join(name).to_str().unwrap().to_string();
