@@ -518,11 +518,19 @@ impl AllocationReport {
                 ),
                 _ => format!(
                     "the independent run gives {} (95 % interval {} .. {}), which does not show {} \
-                     with confidence; rerun with {more}",
+                     with confidence; {}",
                     format_sig(self.verification.value),
                     format_sig(self.verification.ci[0]),
                     format_sig(self.verification.ci[1]),
-                    self.target
+                    self.target,
+                    match self.rare.is_some() && self.proposed.ci[1] < self.verification.ci[0] {
+                        true => "the optimisation's importance-sampling estimate lies below the \
+                                 verification's interval: its sample misses part of the event, so \
+                                 its tolerances are too loose. Allocate with Monte Carlo runs (no \
+                                 --rare) or to a tighter target"
+                            .to_string(),
+                        false => format!("rerun with {more}"),
+                    }
                 ),
             }
         )
