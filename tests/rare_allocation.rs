@@ -62,9 +62,9 @@ fn sd_of(t: &[f64]) -> f64 {
     ((0..3).map(|k| (A[k] * t[k] / 3.0).powi(2)).sum::<f64>() + SD4 * SD4).sqrt()
 }
 
-fn allocation(target: &str, threads: usize) -> Allocation {
-    let scenario = Scenario::from_json(TEXT, "closed form").unwrap();
-    let settings = AllocationSettings {
+/// `--rare` at its defaults but for the points' budget, seeds 11 and 12.
+fn settings() -> AllocationSettings {
+    AllocationSettings {
         samples: 200_000,
         seed: 11,
         verification_seed: 12,
@@ -74,7 +74,12 @@ fn allocation(target: &str, threads: usize) -> Allocation {
             max_evaluations: 2_000_000,
             level_samples: 2000,
         }),
-    };
+    }
+}
+
+fn allocation(target: &str, threads: usize) -> Allocation {
+    let scenario = Scenario::from_json(TEXT, "closed form").unwrap();
+    let settings = settings();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -128,17 +133,7 @@ fn the_report_does_not_depend_on_the_thread_count() {
 #[test]
 fn another_figure_is_refused() {
     let scenario = Scenario::from_json(TEXT, "closed form").unwrap();
-    let settings = AllocationSettings {
-        samples: 200_000,
-        seed: 11,
-        verification_seed: 12,
-        cost: None,
-        rare: Some(RareOptions {
-            precision: 0.1,
-            max_evaluations: 2_000_000,
-            level_samples: 2000,
-        }),
-    };
+    let settings = settings();
     let target = Target::parse("p99.865 <= 0.24").unwrap();
     let err = allocate(&scenario, TEXT, "gap_mm", target, settings, &|_| {}).unwrap_err();
     assert_eq!(err.path, "--rare");

@@ -7,7 +7,7 @@
 use rvtol_engine::scenario::allocation::CostKind;
 use rvtol_engine::Scenario;
 
-use super::rare::{DEFAULT_LEVEL_SAMPLES, DEFAULT_PRECISION};
+use super::rare::{precision, DEFAULT_LEVEL_SAMPLES};
 use super::{Caller, Refusal};
 use crate::allocation::rare::RareOptions;
 use crate::allocation::{default_samples, AllocationSettings};
@@ -97,14 +97,7 @@ impl AllocationRequest<'_> {
                 "not with --rare: importance sampling draws as many points as --precision needs",
             ));
         }
-        let precision = self.precision.unwrap_or(DEFAULT_PRECISION);
-        if !(precision > 0.0 && precision < 1.0) {
-            return Err(Refusal::option(
-                caller,
-                "precision",
-                format!("{precision} is not a share between 0 and 1 (0.1: ±10 %)"),
-            ));
-        }
+        let precision = precision(self.precision, caller)?;
         let max_evaluations = self.max_evaluations.unwrap_or(DEFAULT_RARE_POINTS);
         if max_evaluations < 10_000 {
             return Err(Refusal::option(

@@ -67,14 +67,7 @@ impl RareRequest {
                 ))
             }
         };
-        let precision = self.precision.unwrap_or(DEFAULT_PRECISION);
-        if !(precision > 0.0 && precision < 1.0) {
-            return Err(Refusal::option(
-                caller,
-                "precision",
-                format!("{precision} is not a share between 0 and 1 (0.1: ±10 %)"),
-            ));
-        }
+        let precision = precision(self.precision, caller)?;
         let level_samples = self.level_samples.unwrap_or(DEFAULT_LEVEL_SAMPLES as u64);
         if level_samples < LEAST_LEVEL_SAMPLES as u64 || level_samples > 10_000_000 {
             return Err(Refusal::option(
@@ -125,6 +118,19 @@ impl RareRequest {
             )),
         }
     }
+}
+
+/// The asked relative half width (the default ±10 %), refused outside (0, 1).
+pub(crate) fn precision(asked: Option<f64>, caller: Caller) -> Result<f64, Refusal> {
+    let precision = asked.unwrap_or(DEFAULT_PRECISION);
+    if !(precision > 0.0 && precision < 1.0) {
+        return Err(Refusal::option(
+            caller,
+            "precision",
+            format!("{precision} is not a share between 0 and 1 (0.1: ±10 %)"),
+        ));
+    }
+    Ok(precision)
 }
 
 fn finite(t: f64, option: &str, caller: Caller) -> Result<f64, Refusal> {
