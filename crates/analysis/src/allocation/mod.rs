@@ -1271,8 +1271,15 @@ fn mark_provenance(document: &mut Value, allocation: &Allocation) {
         (true, false) => "not verified",
         (true, true) => "met",
     };
+    let estimator = match &allocation.rare {
+        Some(rare) => format!(
+            "importance sampling, --rare --precision {}",
+            rare.options.precision
+        ),
+        None => format!("{} samples", allocation.settings.samples),
+    };
     let provenance = format!(
-        "Tolerances proposed by rvtol {} allocate from scenario {:?} (text sha256 {}): {} {} (seed {}, verification seed {}, {} samples): {outcome}.",
+        "Tolerances proposed by rvtol {} allocate from scenario {:?} (text sha256 {}): {} {} (seed {}, verification seed {}, {estimator}): {outcome}.",
         env!("CARGO_PKG_VERSION"),
         allocation.scenario,
         allocation.scenario_sha256,
@@ -1280,7 +1287,6 @@ fn mark_provenance(document: &mut Value, allocation: &Allocation) {
         allocation.target.expression(),
         allocation.settings.seed,
         allocation.settings.verification_seed,
-        allocation.settings.samples,
     );
     let description = match original.is_empty() {
         true => provenance,

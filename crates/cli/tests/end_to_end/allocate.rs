@@ -206,6 +206,23 @@ fn a_ppm_target_by_importance_sampling_is_verified_and_thread_independent() {
     .unwrap();
     assert!(text.contains("importance sampling, "), "{text}");
     assert!(text.contains("importance-sampling estimates on"), "{text}");
+    // The written proposal says how it was verified.
+    let proposal = TempScenario::new("allocate-rare-proposal", "");
+    let (code, _, stderr) = allocate(
+        &[
+            &args[..],
+            &["--write-scenario", proposal.path().to_str().unwrap()],
+        ]
+        .concat(),
+    );
+    assert_eq!(code, Some(0), "{stderr}");
+    let written: Value =
+        serde_json::from_str(&std::fs::read_to_string(proposal.path()).unwrap()).unwrap();
+    let description = written["description"].as_str().unwrap();
+    assert!(
+        description.contains("importance sampling, --rare --precision 0.1): met."),
+        "{description}"
+    );
 }
 
 #[test]
