@@ -264,7 +264,7 @@ struct Problem<'a> {
     /// `--rare`: how the constraint is estimated, and the current sample.
     rare: Option<RareOptions>,
     sample: std::cell::RefCell<Option<RareSample>>,
-    /// Model evaluations (rows) so far.
+    /// `--rare`: model evaluations (rows) so far.
     model_evaluations: std::cell::Cell<u64>,
     /// `--rare`: the estimator of the last verification.
     verified_by: std::cell::Cell<Option<Method>>,
@@ -889,8 +889,6 @@ impl Problem<'_> {
             self.output,
             &|_| {},
         )?;
-        self.model_evaluations
-            .set(self.model_evaluations.get() + self.samples);
         let accumulator = result.outputs.swap_remove(self.output);
         let out = accumulator.out_of_spec(self.flagged_conform);
         // The kept values are the conforming ones; the others lie beyond the limits.
@@ -963,7 +961,7 @@ impl Problem<'_> {
     fn margin_error(&self, evaluation: &Evaluation, verification: bool) -> f64 {
         let sample = self.sample.borrow();
         match sample.as_ref().filter(|_| !verification) {
-            Some(sample) => evaluation.figure * sample.relative_error,
+            Some(sample) => evaluation.figure * sample.relative_error(),
             None => evaluation.standard_error,
         }
     }

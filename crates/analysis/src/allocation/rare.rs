@@ -28,7 +28,7 @@ use rvtol_engine::stats::conformity::Placement;
 use rvtol_engine::stats::SpecLimits;
 
 use super::{Evaluation, QUANTILE_LEVELS};
-use crate::rare::importance::{self, Mixture, BATCH};
+use crate::rare::importance::{self, Mixture, Sums, BATCH};
 use crate::rare::limit::LimitState;
 use crate::rare::{self as tail, subset, Budget, Estimate, Event, Method, RareSettings};
 
@@ -57,9 +57,6 @@ pub struct RareSample {
     mixture: Mixture,
     seed: u64,
     batches: u64,
-    /// The relative standard error of the estimate where the sample was built (1 when it
-    /// saw no event there).
-    pub relative_error: f64,
     /// The tolerance factors whose scenario the centres were found on.
     pub at: Vec<f64>,
     /// Model evaluations spent building it (the centres' search and the sizing run).
@@ -119,17 +116,24 @@ impl RareSample {
         }
         let mut limit = LimitState::new(scenario, output, Event::OutOfSpec, &quiet)?;
         let estimate = importance::estimate(&mut limit, &centres, seed, &budget);
-        let p = estimate.probability;
-        let half = estimate.interval[1] - p;
         Ok(RareSample {
             mixture: Mixture::new(&centres, limit.dims()),
             seed,
             batches: estimate.evaluations / BATCH as u64,
-            relative_error: if p > 0.0 { half / Z95 / p } else { 1.0 },
             at,
             evaluations: evaluations + estimate.evaluations,
             estimate,
         })
+    }
+
+    /// The relative standard error of the estimate where the sample was built (1 when it
+    /// saw no event there).
+    pub fn relative_error(&self) -> f64 {
+        let p = self.estimate.probability;
+        match p > 0.0 {
+            true => (self.estimate.interval[1] - p) / Z95 / p,
+            false => 1.0,
+        }
     }
 
     /// Whether importance sampling where the sample was built can be trusted: it reached
@@ -148,10 +152,11 @@ impl RareSample {
     /// margin of the optimisation uses the built one: a point estimated less precisely
     /// would get too small a margin, one estimated more precisely too large a margin.
     pub fn fits(&self, evaluation: &Evaluation) -> bool {
-        let relative = evaluation.standard_error / evaluation.figure;
-        evaluation.figure > 0.0
-            && relative <= FITS * self.relative_error
-            && relative >= self.relative_error / FITS
+        let (relative, built) = (
+            evaluation.standard_error / evaluation.figure,
+            self.relative_error(),
+        );
+        evaluation.figure > 0.0 && relative <= FITS * built && relative >= built / FITS
     }
 
     /// The out-of-spec ppm of `scenario` (the tolerances scaled) on the sample's points:
@@ -244,20 +249,14 @@ struct Weighted {
 
 /// The figures of a weighted sample (None with fewer than two finite values).
 fn evaluation(points: &[Weighted], counted: bool, placement: Placement) -> Option<Evaluation> {
-    let n = points.len() as f64;
-    let in_event = |p: &&Weighted| p.score > 0.0;
-    let sum: f64 = points.iter().filter(in_event).map(|p| p.weight).sum();
-    let squares: f64 = points
-        .iter()
-        .filter(in_event)
-        .map(|p| p.weight.powi(2))
-        .sum();
-    let mean_w = sum / n;
-    let variance = (squares / n - mean_w * mean_w).max(0.0) * n / (n - 1.0);
-    let standard_error = (variance / n).sqrt();
+    let mut sums = Sums::default();
+    for p in points {
+        sums.push((p.score > 0.0).then_some(p.weight));
+    }
+    let standard_error = sums.standard_error();
     let probability = match counted {
-        true => mean_w,
-        false => (sum - interpolated_share(points)) / n,
+        true => sums.mean(),
+        false => (sums.sum - interpolated_share(points)) / points.len() as f64,
     };
     let [low, high] = symmetric95(1e6 * probability, 1e6 * standard_error);
     let Body {

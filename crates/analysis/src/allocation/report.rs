@@ -178,6 +178,9 @@ pub struct RareReport {
     /// with the verification seed), or `subset` where importance sampling did not reach
     /// its precision within the budget or one point carried much of its estimate.
     pub verified_by: &'static str,
+    /// The same as the text says it.
+    #[serde(skip)]
+    pub verified_by_phrase: &'static str,
 }
 
 /// A lever's value in the answer.
@@ -303,6 +306,7 @@ impl AllocationReport {
                 centred_at: r.centred_at.clone(),
                 model_evaluations: r.model_evaluations,
                 verified_by: r.verified_by.name(),
+                verified_by_phrase: r.verified_by.phrase(),
             }),
         }
     }
@@ -488,10 +492,7 @@ impl AllocationReport {
                      evaluations",
                     self.evaluations,
                     r.stages,
-                    match r.verified_by {
-                        "subset" => "subset simulation",
-                        _ => "importance sampling",
-                    },
+                    r.verified_by_phrase,
                     rvtol_engine::format::group_thousands(r.model_evaluations)
                 ),
                 "a smaller --precision (or, where the verification's estimate stopped at its \

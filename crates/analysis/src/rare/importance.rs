@@ -30,30 +30,43 @@ pub const DEFENSIVE: f64 = 0.1;
 /// Points per batch.
 pub const BATCH: usize = 1024;
 /// Event points needed before the interval may stop the sampling.
-pub const MIN_EVENTS: u64 = 30;
+const MIN_EVENTS: u64 = 30;
 /// The share of the sum one weight may carry before the estimate is flagged.
 const DOMINANT_SHARE: f64 = 0.1;
 /// The streams of the batches: 2⁶¹ + 2⁶⁰ + b (the run's are k, the screening's 2⁶⁰ + k,
 /// the stack's linearity rows 2⁶¹ + k).
 const STREAM: u64 = (1 << 61) + (1 << 60);
 
-/// Running sums of the weighted indicator.
+/// Running sums of the weighted indicator w·1[s > 0].
 #[derive(Default)]
-struct Sums {
+pub(crate) struct Sums {
     n: u64,
     events: u64,
-    sum: f64,
+    /// Σ w over the event points.
+    pub sum: f64,
     sum_squares: f64,
     largest: f64,
 }
 
 impl Sums {
-    fn mean(&self) -> f64 {
+    /// Adds a point: its weight when it is in the event, None when not.
+    pub fn push(&mut self, event_weight: Option<f64>) {
+        self.n += 1;
+        if let Some(w) = event_weight {
+            self.events += 1;
+            self.sum += w;
+            self.sum_squares += w * w;
+            self.largest = self.largest.max(w);
+        }
+    }
+
+    /// The estimate P̂ = Σ w·1/n.
+    pub fn mean(&self) -> f64 {
         self.sum / self.n as f64
     }
 
-    /// The standard error of the mean.
-    fn standard_error(&self) -> f64 {
+    /// The standard error of the mean, from the sample variance of w·1.
+    pub fn standard_error(&self) -> f64 {
         let n = self.n as f64;
         let variance = (self.sum_squares / n - self.mean().powi(2)).max(0.0) * n / (n - 1.0);
         (variance / n).sqrt()
@@ -80,11 +93,6 @@ impl Mixture {
             centres: centres.to_vec(),
             dims,
         }
-    }
-
-    /// The centres.
-    pub fn centres(&self) -> &[Vec<f64>] {
-        &self.centres
     }
 
     /// Batch `batch` of the seed's points ([`BATCH`] of them, row-major, in `points`):
@@ -130,14 +138,7 @@ pub fn estimate(
         mixture.draw(seed, batch, &mut points);
         let scores = limit.scores(&points);
         for (point, s) in points.chunks_exact(dims.max(1)).zip(scores) {
-            sums.n += 1;
-            if s > 0.0 {
-                let w = mixture.weight(point);
-                sums.events += 1;
-                sums.sum += w;
-                sums.sum_squares += w * w;
-                sums.largest = sums.largest.max(w);
-            }
+            sums.push((s > 0.0).then(|| mixture.weight(point)));
         }
         batch += 1;
         let half = Z_95 * sums.standard_error();

@@ -48,6 +48,14 @@ impl Method {
             Method::Subset => "subset",
         }
     }
+
+    /// The estimator as a sentence names it.
+    pub fn phrase(self) -> &'static str {
+        match self {
+            Method::Importance => "importance sampling",
+            Method::Subset => "subset simulation",
+        }
+    }
 }
 
 /// When an estimator stops.

@@ -186,7 +186,9 @@ fn a_ppm_target_by_importance_sampling_is_verified_and_thread_independent() {
     assert_eq!(a["status"], "met");
     let rare = &a["rare"];
     assert_eq!(rare["precision"], 0.1);
-    assert!(rare["stages"].as_u64().unwrap() >= 1);
+    // Today's 38,444 ppm is far from 1 ppm: the sample centred on today's event cannot
+    // estimate the answer as precisely, and a second one is built around it.
+    assert!(rare["stages"].as_u64().unwrap() >= 2, "{rare}");
     assert_eq!(a["samples"], rare["points"]);
     let verified = &a["verification"];
     assert!(verified["ci"][1].as_f64().unwrap() <= 1.0, "{verified}");
