@@ -40,6 +40,8 @@ pub(crate) struct DiscPins {
     /// C_d and the slack s_d, rad (disc angles).
     pub offset: f64,
     pub slack: f64,
+    /// The instruction sets the moment sums may use (the processor's report).
+    arch: pulp::Arch,
 }
 
 impl DiscPins {
@@ -52,6 +54,7 @@ impl DiscPins {
             len: 0,
             offset,
             slack,
+            arch: pulp::Arch::new(),
         }
     }
 
@@ -88,23 +91,18 @@ impl DiscPins {
             (u_lo - self.offset) - self.slack,
             (u_hi - self.offset) + self.slack,
         );
+        // Without a branch on which pins stay (it changes from row to row): every pin is
+        // written at the next free place, which moves on only past a pin kept.
         let mut kept = 0;
         for i in 0..self.len {
-            let (g, l) = (self.gaps[i], self.levers[i]);
-            let reach = if l > 0.0 {
-                l * y_hi - g
-            } else if l < 0.0 {
-                l * y_lo - g
-            } else {
-                -g
-            };
+            let (g, l, h) = (self.gaps[i], self.levers[i], self.arms[i]);
+            let y = if l > 0.0 { y_hi } else { y_lo };
+            let reach = if l == 0.0 { -g } else { l * y - g };
+            self.gaps[kept] = g;
+            self.levers[kept] = l;
+            self.arms[kept] = h;
             // NaN bounds keep every pin (the balance then has no root either way).
-            if reach > 0.0 || reach.is_nan() {
-                self.gaps[kept] = g;
-                self.levers[kept] = l;
-                self.arms[kept] = self.arms[i];
-                kept += 1;
-            }
+            kept += usize::from(reach > 0.0 || reach.is_nan());
         }
         self.len = kept;
     }
@@ -114,9 +112,7 @@ impl DiscPins {
         let mut sum = 0.0;
         for (g, l) in self.gaps().iter().zip(self.levers()) {
             let d = l * y - g;
-            if d > 0.0 {
-                sum += d * l;
-            }
+            sum += carried(d, d * l);
         }
         sum
     }
@@ -156,17 +152,32 @@ impl DiscPins {
     /// the loaded pins.
     ///
     /// Summed in four lanes (pin i in lane i mod 4, the lanes added in a fixed order), with
-    /// a select instead of a branch (which pins carry changes from row to row): the same
-    /// bits on every machine, and loops the compiler turns into packed instructions.
+    /// a mask instead of a branch (which pins carry changes from row to row): the same
+    /// bits on every machine, and loops the compiler turns into packed instructions, built
+    /// for the widest instruction set the processor has (`pulp`, as the windows' folds).
     fn moment_and_slope(&self, y: f64) -> (f64, f64, f64) {
+        /// The sums as an operation `pulp` compiles once per instruction set.
+        struct Sums<'a>(&'a DiscPins, f64);
+        impl pulp::WithSimd for Sums<'_> {
+            type Output = (f64, f64, f64);
+            #[inline(always)]
+            fn with_simd<S: pulp::Simd>(self, _simd: S) -> Self::Output {
+                self.0.moment_and_slope_in_lanes(self.1)
+            }
+        }
+        self.arch.dispatch(Sums(self, y))
+    }
+
+    /// [`DiscPins::moment_and_slope`]'s sums, inlined into each instruction set's build.
+    #[inline(always)]
+    fn moment_and_slope_in_lanes(&self, y: f64) -> (f64, f64, f64) {
         const LANES: usize = 4;
         let (mut sum, mut slope, mut size) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
         let mut add = |lane: usize, g: f64, l: f64| {
             let d = l * y - g;
-            let on = d > 0.0;
-            sum[lane] += if on { d * l } else { 0.0 };
-            slope[lane] += if on { l * l } else { 0.0 };
-            size[lane] += if on { d * l.abs() } else { 0.0 };
+            sum[lane] += carried(d, d * l);
+            slope[lane] += carried(d, l * l);
+            size[lane] += carried(d, d * l.abs());
         };
         let (gaps, levers) = (self.gaps(), self.levers());
         let whole = gaps.len() / LANES * LANES;
@@ -187,23 +198,35 @@ impl DiscPins {
 
     /// The smallest g/l over the drive flank (its lag L_d), rad.
     fn lag(&self) -> f64 {
-        self.gaps()
-            .iter()
-            .zip(self.levers())
-            .filter(|(_, l)| **l > 0.0)
-            .map(|(g, l)| g / l)
-            .fold(f64::INFINITY, f64::min)
+        self.flanks().0
     }
 
     /// The smallest g/|l| over the coast flank (its lead K_d), rad.
     fn lead(&self) -> f64 {
-        self.gaps()
-            .iter()
-            .zip(self.levers())
-            .filter(|(_, l)| **l < 0.0)
-            .map(|(g, l)| -g / l)
-            .fold(f64::INFINITY, f64::min)
+        self.flanks().1
     }
+
+    /// (L_d, K_d) in one pass, each pin's g/l selected by its flank rather than branched
+    /// on (−g/l is −(g/l) exactly: a quotient's rounding does not depend on its sign).
+    fn flanks(&self) -> (f64, f64) {
+        let (mut lag, mut lead) = (f64::INFINITY, f64::INFINITY);
+        for (g, l) in self.gaps().iter().zip(self.levers()) {
+            let ratio = g / l;
+            lag = lag.min(if *l > 0.0 { ratio } else { f64::INFINITY });
+            lead = lead.min(if *l < 0.0 { -ratio } else { f64::INFINITY });
+        }
+        (lag, lead)
+    }
+}
+
+/// `term` where the pin's approach d is positive (it carries), else +0.0 (its bits masked
+/// to zero): added to a sum, the sum of the pins that carry, as a branch on d would give
+/// (a sum that starts at +0.0 is unchanged by +0.0), without a branch on which pins carry,
+/// which changes from row to row and which a processor mispredicts.
+#[inline(always)]
+fn carried(d: f64, term: f64) -> f64 {
+    let mask = if d > 0.0 { u64::MAX } else { 0 };
+    f64::from_bits(term.to_bits() & mask)
 }
 
 /// The zero-torque balance of the two discs. It drops from `discs` the pins that no
@@ -234,7 +257,7 @@ fn bracket(discs: &[DiscPins; 2]) -> ((f64, f64), f64) {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     let (mut lower, mut upper) = (f64::NEG_INFINITY, f64::INFINITY);
     for p in discs {
-        let (lag, lead) = (p.lag(), p.lead());
+        let (lag, lead) = p.flanks();
         lo = lo.min(p.offset - p.slack + lag.min(-lead));
         hi = hi.max(p.offset + p.slack + lag.max(-lead));
         lower = lower.max(p.offset - p.slack - lead);
@@ -264,9 +287,7 @@ fn preload_at(contact: &PinContact, discs: &[DiscPins; 2], u: f64) -> Preload {
     for (p, y) in discs.iter().zip(turns) {
         for ((g, l), h) in p.gaps().iter().zip(p.levers()).zip(&p.arms[..p.len]) {
             let d = l * y - g;
-            if d > 0.0 {
-                drag += stiffness * d * h;
-            }
+            drag += carried(d, stiffness * d * h);
         }
     }
     Preload {

@@ -62,22 +62,20 @@ impl pulp::WithSimd for Fold<'_, '_> {
 }
 
 /// Every entry of the flank (inlined into each kernel, which compiles it for its width):
-/// rotations in blocks of [`LANES`] held in registers while every entry passes, then the
-/// rotations left over one by one.
+/// rotations in blocks of [`WIDE`], then of [`LANES`], held in registers while every
+/// entry passes, then the rotations left over one by one. A block's comparisons form one
+/// chain per register, so that the wide block (two AVX-512 registers, four AVX2 ones)
+/// keeps the processor busy while each comparison waits for the one before it.
 #[inline(always)]
 fn fold_all(extreme: &mut [f64], flank: &Flank, turned: &Turned) {
     let pins = extreme.len();
-    let whole = pins / LANES * LANES;
-    for block in (0..whole).step_by(LANES) {
-        let lanes: &mut [f64; LANES] = (&mut extreme[block..block + LANES])
-            .try_into()
-            .expect("a block of LANES");
-        match (turned.placed, flank.largest) {
-            (None, true) => block_of::<true, false>(lanes, block, flank, turned),
-            (None, false) => block_of::<false, false>(lanes, block, flank, turned),
-            (Some(_), true) => block_of::<true, true>(lanes, block, flank, turned),
-            (Some(_), false) => block_of::<false, true>(lanes, block, flank, turned),
-        }
+    let wide = pins / WIDE * WIDE;
+    for block in (0..wide).step_by(WIDE) {
+        fold_block::<WIDE>(extreme, block, flank, turned);
+    }
+    let whole = wide + (pins - wide) / LANES * LANES;
+    for block in (wide..whole).step_by(LANES) {
+        fold_block::<LANES>(extreme, block, flank, turned);
     }
     for (s, e) in extreme.iter_mut().enumerate().skip(whole) {
         for m in flank.entries.clone() {
@@ -87,10 +85,24 @@ fn fold_all(extreme: &mut [f64], flank: &Flank, turned: &Turned) {
     }
 }
 
+/// One block of N rotations from `block` (the flank's kind chosen once for the block).
+#[inline(always)]
+fn fold_block<const N: usize>(extreme: &mut [f64], block: usize, flank: &Flank, turned: &Turned) {
+    let lanes: &mut [f64; N] = (&mut extreme[block..block + N])
+        .try_into()
+        .expect("a block of N");
+    match (turned.placed, flank.largest) {
+        (None, true) => block_of::<N, true, false>(lanes, block, flank, turned),
+        (None, false) => block_of::<N, false, false>(lanes, block, flank, turned),
+        (Some(_), true) => block_of::<N, true, true>(lanes, block, flank, turned),
+        (Some(_), false) => block_of::<N, false, true>(lanes, block, flank, turned),
+    }
+}
+
 /// The lanes of one block of rotations starting at `block`, every entry folded in.
 #[inline(always)]
-fn block_of<const LARGEST: bool, const PLACED: bool>(
-    lanes: &mut [f64; LANES],
+fn block_of<const N: usize, const LARGEST: bool, const PLACED: bool>(
+    lanes: &mut [f64; N],
     block: usize,
     flank: &Flank,
     turned: &Turned,
@@ -100,18 +112,18 @@ fn block_of<const LARGEST: bool, const PLACED: bool>(
     for m in flank.entries.clone() {
         let at = pins - 1 - m + block;
         let (t, v) = (flank.run[m], flank.inverse[m]);
-        let rho: &[f64; LANES] = turned.radius[at..at + LANES].try_into().expect("lanes");
+        let rho: &[f64; N] = turned.radius[at..at + N].try_into().expect("lanes");
         if PLACED {
             let (radial, tangential) = turned.placed.expect("placed pins");
-            let radial: &[f64; LANES] = radial[at..at + LANES].try_into().expect("lanes");
-            let tangential: &[f64; LANES] = tangential[at..at + LANES].try_into().expect("lanes");
+            let radial: &[f64; N] = radial[at..at + N].try_into().expect("lanes");
+            let tangential: &[f64; N] = tangential[at..at + N].try_into().expect("lanes");
             let (fr, ft) = (flank.radial[m], flank.tangential[m]);
-            for lane in 0..LANES {
+            for lane in 0..N {
                 let r = (t + radial[lane] * fr + tangential[lane] * ft - rho[lane]) * v;
                 acc[lane] = extreme_of::<LARGEST>(acc[lane], r);
             }
         } else {
-            for lane in 0..LANES {
+            for lane in 0..N {
                 acc[lane] = extreme_of::<LARGEST>(acc[lane], (t - rho[lane]) * v);
             }
         }
@@ -161,6 +173,10 @@ fn extreme_of<const LARGEST: bool>(e: f64, r: f64) -> f64 {
 
 /// Rotations per block: one AVX-512 register, two AVX2 or four SSE2 ones.
 const LANES: usize = 8;
+
+/// Rotations per wide block: two AVX-512 registers, four AVX2 ones (the widths tried on
+/// the RV-20E: 16 the fastest; 24, 32 and 40 spill registers and are slower).
+const WIDE: usize = 16;
 
 #[cfg(test)]
 mod tests {

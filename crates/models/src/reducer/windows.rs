@@ -385,16 +385,29 @@ impl RowTable {
                 let pitch = turned_pitch(terms, d, turn);
                 let (base, _) = grid.placement(kq, d);
                 let run = &mut self.runs[(2 * kq + d) * pins..(2 * kq + d + 1) * pins];
+                // The residue's columns as slices of the run's length (no index checks in
+                // the loop, which the compiler then vectorises).
+                let r = base..base + pins;
+                let (g0, fe, fs) = (
+                    &columns.design_gap[r.clone()],
+                    &columns.equidistant[r.clone()],
+                    &columns.shift[r.clone()],
+                );
+                let (fr, fx, lever) = (
+                    &columns.radial[r.clone()],
+                    &columns.eccentric[r.clone()],
+                    &columns.lever[r.clone()],
+                );
+                let (cp, sp) = (&columns.polar_cos[r.clone()], &columns.polar_sin[r]);
                 for (m, t) in run.iter_mut().enumerate() {
-                    let j = base + m;
-                    let gap = columns.design_gap[j]
-                        + terms.equidistant_error * columns.equidistant[j]
-                        + terms.shift_error * columns.shift[j]
-                        + terms.pin_circle_error * columns.radial[j]
-                        + along * columns.eccentric[j]
+                    let gap = g0[m]
+                        + terms.equidistant_error * fe[m]
+                        + terms.shift_error * fs[m]
+                        + terms.pin_circle_error * fr[m]
+                        + along * fx[m]
                         + terms.common[d];
-                    let epsilon = pitch.0 * columns.polar_cos[j] + pitch.1 * columns.polar_sin[j];
-                    *t = gap - columns.lever[j] * epsilon;
+                    let epsilon = pitch.0 * cp[m] + pitch.1 * sp[m];
+                    *t = gap - lever[m] * epsilon;
                 }
                 let slack = needle_slack_of(reducer, grid, terms, kq, d);
                 self.heads.push((base, offset, slack));
@@ -414,8 +427,10 @@ impl RowTable {
             // c = 0 the radii (the third block of pin inputs), 1 radial, 2 tangential.
             let block = [2, 0, 1][c];
             let pin = &x[layout.pins + block * pins..layout.pins + (block + 1) * pins];
+            // Entry u < z_p holds pin z_p − 1 − u, and so does entry z_p + u.
             turned.clear();
-            turned.extend((0..2 * pins).map(|u| pin[(2 * pins - 1 - u) % pins]));
+            turned.extend(pin.iter().rev());
+            turned.extend(pin.iter().rev());
         }
     }
 
