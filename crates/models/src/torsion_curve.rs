@@ -371,8 +371,33 @@ struct RowState {
     jammed: bool,
     /// Needle stiffness factor 1 + x_k.
     needle_factor: f64,
-    /// F_0, the pin forces at zero torque (a preload's; zero with free play), N.
-    preload_forces: [f64; crate::cycloid_pin_contact::MAX_PINS],
+    /// F_0, the pin forces at zero torque (a preload's; zero with free play), N: without
+    /// friction, and on the branch that moves forward and backward (`ZeroForces`).
+    preload_forces: ZeroForces,
+}
+
+/// The pin forces at zero torque of a preloaded stage, frictionless and with the friction
+/// of either direction of motion (N, pin order). The housing's angle is read from the
+/// change of the pin forces that the torque makes (λ·2·U_h(F − F_0)/T_c, Clapeyron), so
+/// F_0 is the zero-torque state of the same branch: with friction the zero-torque forces
+/// differ from the frictionless ones, and against those F − F_0 would stay finite as the
+/// torque vanishes and the term grow as 1/T_c (the loading branch of a preloaded RV-20E
+/// rose by 0.06 arcmin at 0.02 N·m and fell back by 0.3 N·m).
+#[derive(Debug, Clone, Copy)]
+struct ZeroForces([[f64; crate::cycloid_pin_contact::MAX_PINS]; 3]);
+
+impl ZeroForces {
+    /// None carry: a stage with free play.
+    const NONE: ZeroForces = ZeroForces([[0.0; crate::cycloid_pin_contact::MAX_PINS]; 3]);
+
+    /// F_0 under the pin friction `friction` (0, +λ·μ_p forward, −λ·μ_p backward).
+    fn under(&self, friction: f64) -> &[f64; crate::cycloid_pin_contact::MAX_PINS] {
+        match friction.partial_cmp(&0.0) {
+            Some(std::cmp::Ordering::Greater) => &self.0[1],
+            Some(std::cmp::Ordering::Less) => &self.0[2],
+            _ => &self.0[0],
+        }
+    }
 }
 
 /// The elastic angle of one load case split into its elements, arcmin at the output.
@@ -621,10 +646,17 @@ impl TorsionCurve {
             (stages[1].max(0.0) + stages[3].max(0.0)) / ARCMIN_PER_RAD + cycloid.max(0.0);
         let width = self.contact.face_width();
         let (reference, preload_forces) = if play >= 0.0 {
-            (forward, [0.0; crate::cycloid_pin_contact::MAX_PINS])
+            (forward, ZeroForces::NONE)
         } else {
-            let zero = self.contact.share_load(&clearances, width, 0.0, 0.0);
-            (zero.rotation, zero.forces)
+            let friction = self.contact.torque_factor() * self.pin_friction;
+            let zero = |f: f64| self.contact.share_load(&clearances, width, 0.0, f);
+            let frictionless = zero(0.0);
+            let forces = ZeroForces([
+                frictionless.forces,
+                zero(friction).forces,
+                zero(-friction).forces,
+            ]);
+            (frictionless.rotation, forces)
         };
         let preloaded = if self.consistent_clearance {
             play < 0.0
@@ -693,7 +725,7 @@ impl TorsionCurve {
             for ((d, f), f0) in change
                 .iter_mut()
                 .zip(&sharing.forces)
-                .zip(&state.preload_forces)
+                .zip(state.preload_forces.under(pin_friction))
             {
                 *d = f - f0;
             }
@@ -1112,7 +1144,7 @@ mod tests {
         );
         // The housing's term is the caller's: λ·2·U_h(F − F_0)/T_c (stiffness/housing.rs).
         let change: Vec<f64> = (0..40)
-            .map(|i| sharing.forces[i] - state.preload_forces[i])
+            .map(|i| sharing.forces[i] - state.preload_forces.under(0.0)[i])
             .collect();
         let energy = model.housing.as_ref().unwrap().energy(&change);
         let hand = lambda * 2.0 * energy / t_c * ARCMIN_PER_RAD;
@@ -1269,13 +1301,12 @@ mod tests {
                     let (t, theta) = loading[i];
                     assert_eq!((-t, -theta), unloading[i], "{i}");
                 }
-                // Monotone in T (the whole loop; within ±3 % the loading branch dips by
-                // about 1e-5 arcmin between −0.30 and −0.20 N·m on the RV-20E, a feature
-                // of the model near zero torque not yet explained, so only the torque is
-                // checked there), the unloading branch above the loading one for T > 0.
+                // Monotone in T, the whole loop and its ±3 % window alike (the housing's
+                // term of a preloaded stage read against the zero-torque forces of its own
+                // branch: `ZeroForces`), the unloading branch above the loading one for
+                // T > 0.
                 for w in loading.windows(2) {
-                    assert!(w[1].0 >= w[0].0, "{w:?}");
-                    assert!(reach < rated || w[1].1 >= w[0].1, "{w:?}");
+                    assert!(w[1].0 >= w[0].0 && w[1].1 >= w[0].1, "{w:?}");
                 }
                 for j in 52..102 {
                     assert!(unloading[101 - j].1 > loading[j].1, "{j}");
