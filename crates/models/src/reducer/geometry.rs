@@ -196,7 +196,38 @@ pub(crate) struct Columns {
     pub coast: Vec<std::ops::Range<usize>>,
 }
 
+/// The entries `range` of every column, each a slice of the range's length (a loop over
+/// them indexes without checks, which the compiler then vectorises).
+pub(crate) struct ColumnRun<'a> {
+    pub design_gap: &'a [f64],
+    pub equidistant: &'a [f64],
+    pub shift: &'a [f64],
+    pub radial: &'a [f64],
+    pub tangential: &'a [f64],
+    pub eccentric: &'a [f64],
+    pub lever: &'a [f64],
+    pub inverse_lever: &'a [f64],
+    pub polar_cos: &'a [f64],
+    pub polar_sin: &'a [f64],
+}
+
 impl Columns {
+    /// The entries `range` of every column.
+    pub fn run(&self, range: std::ops::Range<usize>) -> ColumnRun<'_> {
+        ColumnRun {
+            design_gap: &self.design_gap[range.clone()],
+            equidistant: &self.equidistant[range.clone()],
+            shift: &self.shift[range.clone()],
+            radial: &self.radial[range.clone()],
+            tangential: &self.tangential[range.clone()],
+            eccentric: &self.eccentric[range.clone()],
+            lever: &self.lever[range.clone()],
+            inverse_lever: &self.inverse_lever[range.clone()],
+            polar_cos: &self.polar_cos[range.clone()],
+            polar_sin: &self.polar_sin[range],
+        }
+    }
+
     fn new(slots: &[Slot], per_pin: usize, pins: usize, floor: f64) -> Columns {
         let mut columns = Columns::default();
         for r in 0..2 * per_pin {

@@ -263,21 +263,10 @@ fn scan(
     k: &Coefficients,
 ) -> (f64, f64) {
     let n = run.len();
-    let (g0, fe, fs) = (
-        &columns.design_gap[run.clone()],
-        &columns.equidistant[run.clone()],
-        &columns.shift[run.clone()],
-    );
-    let (fr, ft, fx) = (
-        &columns.radial[run.clone()],
-        &columns.tangential[run.clone()],
-        &columns.eccentric[run.clone()],
-    );
-    let (inverse, cp, sp) = (
-        &columns.inverse_lever[run.clone()],
-        &columns.polar_cos[run.clone()],
-        &columns.polar_sin[run],
-    );
+    let c = columns.run(run);
+    let (g0, fe, fs) = (c.design_gap, c.equidistant, c.shift);
+    let (fr, ft, fx) = (c.radial, c.tangential, c.eccentric);
+    let (inverse, cp, sp) = (c.inverse_lever, c.polar_cos, c.polar_sin);
     let (radial, tangential, radius) = (&radial[..n], &tangential[..n], &radius[..n]);
     // Every slice is n long: the checks below let the compiler drop the indexing checks.
     assert!(
@@ -385,20 +374,10 @@ impl RowTable {
                 let pitch = turned_pitch(terms, d, turn);
                 let (base, _) = grid.placement(kq, d);
                 let run = &mut self.runs[(2 * kq + d) * pins..(2 * kq + d + 1) * pins];
-                // The residue's columns as slices of the run's length (no index checks in
-                // the loop, which the compiler then vectorises).
-                let r = base..base + pins;
-                let (g0, fe, fs) = (
-                    &columns.design_gap[r.clone()],
-                    &columns.equidistant[r.clone()],
-                    &columns.shift[r.clone()],
-                );
-                let (fr, fx, lever) = (
-                    &columns.radial[r.clone()],
-                    &columns.eccentric[r.clone()],
-                    &columns.lever[r.clone()],
-                );
-                let (cp, sp) = (&columns.polar_cos[r.clone()], &columns.polar_sin[r]);
+                let c = columns.run(base..base + pins);
+                let (g0, fe, fs) = (c.design_gap, c.equidistant, c.shift);
+                let (fr, fx, lever) = (c.radial, c.eccentric, c.lever);
+                let (cp, sp) = (c.polar_cos, c.polar_sin);
                 for (m, t) in run.iter_mut().enumerate() {
                     let gap = g0[m]
                         + terms.equidistant_error * fe[m]
