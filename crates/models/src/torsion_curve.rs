@@ -37,7 +37,8 @@
 //!   E     = λ·(β − β_ref) + the crank side's terms (CrankSide: needle rows, disc bore and
 //!           web, shaft, supports, seats' paths, carrier, end plate's joints and bending,
 //!           involute) + housing λ·2·U_h(F − F_0)/T_c (stiffness/housing.rs, F_0 the
-//!           zero-torque forces); `body_compliance` = 0: rigid discs, plates and housing
+//!           zero-torque forces under the same s·λ·μ_p); `body_compliance` = 0: rigid
+//!           discs, plates and housing
 //!   β_ref = β_f when the stage has free play, else β_0, the zero-torque equilibrium of the
 //!           preloaded flanks (Σ F_i·l_i = 0)
 //!
@@ -651,11 +652,12 @@ impl TorsionCurve {
             let friction = self.contact.torque_factor() * self.pin_friction;
             let zero = |f: f64| self.contact.share_load(&clearances, width, 0.0, f);
             let frictionless = zero(0.0);
-            let forces = ZeroForces([
-                frictionless.forces,
-                zero(friction).forces,
-                zero(-friction).forces,
-            ]);
+            // Only the housing reads F_0; without friction every branch's is the same.
+            let branch = |f: f64| match self.housing.is_some() && f != 0.0 {
+                true => zero(f).forces,
+                false => frictionless.forces,
+            };
+            let forces = ZeroForces([frictionless.forces, branch(friction), branch(-friction)]);
             (frictionless.rotation, forces)
         };
         let preloaded = if self.consistent_clearance {

@@ -196,18 +196,10 @@ impl DiscPins {
         (total(sum), total(slope), total(size))
     }
 
-    /// The smallest g/l over the drive flank (its lag L_d), rad.
-    fn lag(&self) -> f64 {
-        self.flanks().0
-    }
-
-    /// The smallest g/|l| over the coast flank (its lead K_d), rad.
-    fn lead(&self) -> f64 {
-        self.flanks().1
-    }
-
-    /// (L_d, K_d) in one pass, each pin's g/l selected by its flank rather than branched
-    /// on (−g/l is −(g/l) exactly: a quotient's rounding does not depend on its sign).
+    /// (L_d, K_d): the smallest g/l over the drive flank (its lag) and the smallest g/|l|
+    /// over the coast flank (its lead), rad, in one pass, each pin's g/l selected by its
+    /// flank rather than branched on (−g/l is −(g/l) exactly: a quotient's rounding does
+    /// not depend on its sign).
     fn flanks(&self) -> (f64, f64) {
         let (mut lag, mut lead) = (f64::INFINITY, f64::INFINITY);
         for (g, l) in self.gaps().iter().zip(self.levers()) {
@@ -497,13 +489,15 @@ pub(crate) fn closed_pin_force(
     let play = |c: f64| {
         let mut moved = pins.clone();
         moved.gaps[..moved.len].iter_mut().for_each(|g| *g += c);
-        moved.lag() + moved.lead()
+        let (lag, lead) = moved.flanks();
+        lag + lead
     };
     let scale = pins.gaps().iter().fold(1e-6_f64, |a, g| a.max(g.abs()));
     let closing = root(play, -4.0 * scale, 4.0 * scale);
     let len = pins.len;
     pins.gaps[..len].iter_mut().for_each(|g| *g += closing);
-    let lo = pins.lag().min(-pins.lead());
+    let (lag, lead) = pins.flanks();
+    let lo = lag.min(-lead);
     let mut force = 4.0 * disc_torque / (pin_count as f64 * pitch_lever);
     for _ in 0..200 {
         let stiffness = force / contact.approach(force);
@@ -611,7 +605,7 @@ mod tests {
         // and the balance came out as no preload at all.
         let gap = |phi: f64| -0.003 + 0.004 * (1.0 - phi.cos()).powi(2);
         let one = disc(0.0, 0.0, gap);
-        let (lag, lead) = (one.lag(), one.lead());
+        let (lag, lead) = one.flanks();
         assert!(lag + lead < 0.0, "the flanks overlap: L {lag}, K {lead}");
         let reference = zero_torque(&contact(), &mut [one.clone(), one.clone()]);
         assert!(reference.pin_force > 0.0);
