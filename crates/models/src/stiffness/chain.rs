@@ -100,18 +100,28 @@ impl ChainTerms {
 
     /// Every term multiplied by `factor` (rad to arcmin).
     pub fn scaled(&self, factor: f64) -> ChainTerms {
+        self.combined(self, |a, _| a * factor)
+    }
+
+    /// Each term less `other`'s: what a change of load state adds, term by term.
+    pub fn minus(&self, other: &ChainTerms) -> ChainTerms {
+        self.combined(other, |a, b| a - b)
+    }
+
+    /// `f` of each term and `other`'s same term.
+    fn combined(&self, other: &ChainTerms, f: impl Fn(f64, f64) -> f64) -> ChainTerms {
         ChainTerms {
-            needle: self.needle * factor,
-            disc_bore: self.disc_bore * factor,
-            disc_web: self.disc_web * factor,
-            shaft: self.shaft * factor,
-            support: self.support * factor,
-            seat_path: self.seat_path * factor,
-            carrier: self.carrier * factor,
-            end_plate_joint: self.end_plate_joint * factor,
-            end_plate_bending: self.end_plate_bending * factor,
-            housing: self.housing * factor,
-            involute: self.involute * factor,
+            needle: f(self.needle, other.needle),
+            disc_bore: f(self.disc_bore, other.disc_bore),
+            disc_web: f(self.disc_web, other.disc_web),
+            shaft: f(self.shaft, other.shaft),
+            support: f(self.support, other.support),
+            seat_path: f(self.seat_path, other.seat_path),
+            carrier: f(self.carrier, other.carrier),
+            end_plate_joint: f(self.end_plate_joint, other.end_plate_joint),
+            end_plate_bending: f(self.end_plate_bending, other.end_plate_bending),
+            housing: f(self.housing, other.housing),
+            involute: f(self.involute, other.involute),
         }
     }
 }
@@ -137,7 +147,9 @@ impl CrankSide {
     /// every nonlinear row is taken at its secant stiffness at the load's rms over a crank
     /// turn, √(τ² + (|F|/m)²) (the cross term averages out). The disc turns against the
     /// carrier by ρ = T_c·c_S/(m·a_w²) and shifts across its eccentric by F_x·c_A/m, which
-    /// the pins see as a turn of F_x·c_A/(m·e·z_c) (docs/models.md §13).
+    /// the pins see as a turn of F_x·c_A/(m·e·z_c), with F_x's sign (docs/models.md §13).
+    /// A preload's resultant loads the crank side at T_c = 0: the terms of a load state
+    /// are measured from its zero-torque state by [`ChainTerms::minus`] (the caller's).
     pub fn terms(
         &self,
         disc_torque: f64,
@@ -146,7 +158,7 @@ impl CrankSide {
         output_torque: f64,
         reflection: f64,
     ) -> ChainTerms {
-        if disc_torque <= 0.0 {
+        if !(disc_torque > 0.0 || force.0 != 0.0 || force.1 != 0.0) {
             return ChainTerms::default();
         }
         let (m, a) = (self.cranks, self.crank_circle_radius);
@@ -154,7 +166,7 @@ impl CrankSide {
         let shared = force.0.hypot(force.1) / m;
         // Output angle per unit compliance in each mode.
         let symmetric = reflection * disc_torque / (m * a * a);
-        let antisymmetric = reflection * force.0.abs() / (m * self.pitch_radius);
+        let antisymmetric = reflection * force.0 / (m * self.pitch_radius);
         let needle = self.needle.secant_compliance(tangential.hypot(shared)) / needle_factor;
         let modes = self.shaft.modes();
         let supports = self.support_state(tangential, shared);
