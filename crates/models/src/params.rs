@@ -34,7 +34,9 @@ impl ParamValue {
     }
 }
 
-/// An invalid model parameter: `key` is relative to the model's `params` object.
+/// An invalid model parameter: `key` is relative to the model's `params` object. A model
+/// that checks several independent parts (the formulas of an `expression`) names the
+/// first problem and carries the others in `further`, so `rvtol validate` lists them all.
 #[derive(Debug, Clone, PartialEq, Error)]
 #[error("{key}: {reason}")]
 pub struct ModelError {
@@ -42,6 +44,8 @@ pub struct ModelError {
     pub key: String,
     /// What is wrong.
     pub reason: String,
+    /// Further problems found in the same build, in order.
+    pub further: Vec<ModelError>,
 }
 
 impl ModelError {
@@ -50,7 +54,21 @@ impl ModelError {
         ModelError {
             key: key.into(),
             reason: reason.into(),
+            further: Vec::new(),
         }
+    }
+
+    /// The first of `problems` carrying the rest; `None` when there are none.
+    pub fn of_all(problems: Vec<ModelError>) -> Option<ModelError> {
+        let mut problems = problems.into_iter();
+        let mut first = problems.next()?;
+        first.further.extend(problems);
+        Some(first)
+    }
+
+    /// This problem and the further ones, in order.
+    pub fn all(&self) -> impl Iterator<Item = &ModelError> {
+        std::iter::once(self).chain(&self.further)
     }
 }
 

@@ -851,6 +851,38 @@ fn validate_reports_every_problem_one_line_each() {
 }
 
 #[test]
+fn validate_names_every_mistaken_formula_and_run_the_first() {
+    // An expression model with three mistaken formulas (one of them read by another,
+    // which stays silent): validate lists the three, one line each; run refuses with the
+    // first, on one line.
+    let contents = with("pin-in-hole.json", |s| {
+        let params = &mut s["models"][0]["params"];
+        params["let"]["offset"] = Value::from("hypot(x, yy)");
+        params["outputs"]["gap_mm"]["formula"] = Value::from("half_clearance - ofset");
+        params["outputs"]["float_mm"]["formula"] = Value::from("half_clearance + sqr(offset)");
+    });
+    let scenario = TempScenario::new("hardening-formulas", &contents);
+    let out = run_rvtol(&["validate", path_arg(scenario.path())]);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = text(&out.stderr);
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(lines.len(), 3, "{stderr}");
+    for (line, needle) in lines.iter().zip([
+        "models[0].params.let.offset: character 10: unknown name \"yy\"",
+        "models[0].params.outputs.gap_mm.formula: character 18: unknown name \"ofset\"",
+        "models[0].params.outputs.float_mm.formula: character 18: unknown function \"sqr\"",
+    ]) {
+        assert!(line.contains(needle), "{needle:?} in {stderr}");
+    }
+    assert!(lines[2].ends_with("(3 problems)"), "{stderr}");
+    let line = one_line(
+        &run_rvtol(&["run", path_arg(scenario.path()), "--samples", "100"]),
+        2,
+    );
+    assert!(line.contains("let.offset: character 10"), "{line}");
+}
+
+#[test]
 fn schema_errors_carry_their_json_path() {
     for (label, distribution, needle) in [
         (

@@ -205,6 +205,9 @@ impl Expression {
             .collect();
         let input_names: Vec<String> = inputs.iter().map(|i| i.name.clone()).collect();
         let mut compiler = Compiler::new(&input_names, &parameters, below);
+        // Every formula is checked, each mistake named: a formula that fails stands as a
+        // NaN for those that read it, so they report their own mistakes only.
+        let mut problems = Vec::new();
         for formula in &formulas {
             let at_path = |err: CompileError| {
                 ModelError::new(
@@ -212,15 +215,26 @@ impl Expression {
                     format!("character {}: {}", err.at, err.message),
                 )
             };
-            let tree = parse::parse(&formula.text).map_err(|err| {
-                ModelError::new(
-                    formula_path(formula),
-                    format!("character {}: {}", err.at, err.message),
-                )
-            })?;
-            compiler
-                .define(&formula.name, &tree, formula.output)
-                .map_err(at_path)?;
+            let defined = parse::parse(&formula.text)
+                .map_err(|err| {
+                    at_path(CompileError {
+                        at: err.at,
+                        message: err.message,
+                    })
+                })
+                .and_then(|tree| {
+                    (compiler.define(&formula.name, &tree, formula.output)).map_err(at_path)
+                });
+            if let Err(problem) = defined {
+                problems.push(problem);
+                let stand_in = parse::parse("0/0").expect("a NaN parses");
+                compiler
+                    .define(&formula.name, &stand_in, formula.output)
+                    .expect("a NaN compiles");
+            }
+        }
+        if let Some(first) = ModelError::of_all(problems) {
+            return Err(first);
         }
         for (name, _) in &parameters {
             if !compiler.was_read(name) {

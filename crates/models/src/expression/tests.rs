@@ -289,6 +289,53 @@ fn parameters_lets_and_outputs_read_by_later_formulas() {
 }
 
 #[test]
+fn every_formula_is_checked_and_a_broken_one_stands_in_for_its_readers() {
+    // Four formulas with a mistake each (a syntax error among them), and one that reads
+    // a broken one (`v` reads `r`, as `z` does): four problems, in the formulas' order,
+    // none of them a consequence of another.
+    let p = params(
+        &["x", "y"],
+        "mm",
+        &[("r", "hypot(x, yy)")],
+        &[
+            ("z", "r + ofset"),
+            ("w", "sqr(x)"),
+            ("v", "r * 2"),
+            ("u", "x +* 2"),
+        ],
+    );
+    let err = Expression::from_params(&p).unwrap_err();
+    let found: Vec<(&str, &str)> = err
+        .all()
+        .map(|e| (e.key.as_str(), e.reason.as_str()))
+        .collect();
+    assert_eq!(
+        found,
+        [
+            (
+                "let.r",
+                "character 10: unknown name \"yy\" (did you mean y?)"
+            ),
+            ("outputs.z.formula", "character 5: unknown name \"ofset\""),
+            (
+                "outputs.w.formula",
+                "character 1: unknown function \"sqr\" (did you mean sqrt?)"
+            ),
+            (
+                "outputs.u.formula",
+                "character 4: expected a number, a name or '(', got '*'"
+            ),
+        ]
+    );
+    // One mistake is one problem.
+    let one = params(&["x"], "mm", &[], &[("y", "sin(xx)")]);
+    assert!(Expression::from_params(&one)
+        .unwrap_err()
+        .further
+        .is_empty());
+}
+
+#[test]
 fn mistakes_are_named_by_path_and_character() {
     let cases: Vec<(ModelParams, &str, &str)> = vec![
         (

@@ -15,10 +15,10 @@ use super::bindings::{indexed_summary, input_binding, pattern, InputBinding};
 use super::Compiler;
 use crate::error::ScenarioError;
 
-/// A model of the file built from its parameters, or the problem (with its JSON path) that
-/// kept it from building. Built once: the units of its inputs serve the variables' unit
+/// A model of the file built from its parameters, or the problems (each with its JSON
+/// path) that kept it from building. Built once: the units of its inputs serve the variables' unit
 /// conversion, before the model's bindings are checked.
-pub(super) type BuiltModel = Result<(&'static ModelEntry, Box<dyn ErrorModel>), ScenarioError>;
+pub(super) type BuiltModel = Result<(&'static ModelEntry, Box<dyn ErrorModel>), Vec<ScenarioError>>;
 
 /// Binds every model that built; reports those that did not.
 pub(super) fn compile(compiler: &mut Compiler) {
@@ -45,8 +45,10 @@ pub(super) fn compile(compiler: &mut Compiler) {
         compiler.models_bound = *i;
         let (entry, model) = match built {
             Ok(built) => built,
-            Err(err) => {
-                compiler.report(Err(err));
+            Err(problems) => {
+                for problem in problems {
+                    compiler.report(Err(problem));
+                }
                 continue;
             }
         };

@@ -35,42 +35,48 @@ pub(super) fn compile(compiler: &mut Compiler) {
 fn build_model(path: &str, model_file: &ModelFile, reducer: Option<&ReducerFile>) -> BuiltModel {
     let Some(entry) = rvtol_models::find(&model_file.model) else {
         let known: Vec<&str> = rvtol_models::all().iter().map(|e| e.name).collect();
-        return Err(ScenarioError::new(
+        return Err(vec![ScenarioError::new(
             format!("{path}.model"),
             format!(
                 "unknown model {:?}; known models: {}",
                 model_file.model,
                 known.join(", ")
             ),
-        ));
+        )]);
     };
-    let mut params = model_params(&format!("{path}.params"), &model_file.params)?;
+    let mut params =
+        model_params(&format!("{path}.params"), &model_file.params).map_err(|e| vec![e])?;
     // The reducer's parameters this model knows, unless it gives them itself (an error:
     // a reducer is defined once).
     let mut shared = BTreeSet::new();
     if let Some(reducer) = reducer {
-        let given = model_params("reducer.params", &reducer.params)?;
+        let given = model_params("reducer.params", &reducer.params).map_err(|e| vec![e])?;
         for (key, value) in given.entries() {
             if !entry.params.iter().any(|spec| spec.name == key) {
                 continue;
             }
             if model_file.params.contains_key(key) {
-                return Err(ScenarioError::new(
+                return Err(vec![ScenarioError::new(
                     format!("{path}.params.{key}"),
                     "also given in reducer.params: a reducer is defined once, leave it out here",
-                ));
+                )]);
             }
             params.insert(key.to_string(), value.clone());
             shared.insert(key.to_string());
         }
     }
+    // Every problem the build found (an expression names each formula's).
     let model = (entry.build)(&params).map_err(|err| {
-        let section = if shared.contains(&err.key) {
-            "reducer".to_string()
-        } else {
-            path.to_string()
-        };
-        ScenarioError::new(format!("{section}.params.{}", err.key), err.reason)
+        (err.all())
+            .map(|err| {
+                let section = if shared.contains(&err.key) {
+                    "reducer"
+                } else {
+                    path
+                };
+                ScenarioError::new(format!("{section}.params.{}", err.key), &err.reason)
+            })
+            .collect::<Vec<_>>()
     })?;
     Ok((entry, model))
 }
