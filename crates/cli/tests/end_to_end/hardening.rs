@@ -809,12 +809,8 @@ fn validate_reports_every_problem_one_line_each() {
         // though a variable they bind is broken.
         s["spec_limits"]["nope"] = serde_json::json!({ "upper": 1 });
     });
-    let scenario = TempScenario::new("hardening-many-problems", &contents);
-    let out = run_rvtol(&["validate", path_arg(scenario.path())]);
-    assert_eq!(out.status.code(), Some(2));
-    let stderr = text(&out.stderr);
+    let stderr = validate_problems("hardening-many-problems", &contents, 4);
     let lines: Vec<&str> = stderr.lines().collect();
-    assert_eq!(lines.len(), 4, "{stderr}");
     assert!(
         stderr.contains("spec_limits.nope: no output named \"nope\""),
         "{stderr}"
@@ -829,7 +825,6 @@ fn validate_reports_every_problem_one_line_each() {
         stderr.contains("correlations[0].between: invalid length 3, expected fewer elements"),
         "{stderr}"
     );
-    assert!(lines[3].ends_with("(4 problems)"), "{stderr}");
     // A unit rvtol does not know is the variable's mistake, said at its `unit`.
     let contents = with("rv20e-hysteresis.json", |s| {
         s["variables"][1]["unit"] = Value::from("micron");
@@ -861,12 +856,8 @@ fn validate_names_every_mistaken_formula_and_run_the_first() {
         params["outputs"]["gap_mm"]["formula"] = Value::from("half_clearance - ofset");
         params["outputs"]["float_mm"]["formula"] = Value::from("half_clearance + sqr(offset)");
     });
-    let scenario = TempScenario::new("hardening-formulas", &contents);
-    let out = run_rvtol(&["validate", path_arg(scenario.path())]);
-    assert_eq!(out.status.code(), Some(2));
-    let stderr = text(&out.stderr);
+    let stderr = validate_problems("hardening-formulas", &contents, 3);
     let lines: Vec<&str> = stderr.lines().collect();
-    assert_eq!(lines.len(), 3, "{stderr}");
     for (line, needle) in lines.iter().zip([
         "models[0].params.let.offset: character 10: unknown name \"yy\"",
         "models[0].params.outputs.gap_mm.formula: character 18: unknown name \"ofset\"",
@@ -874,12 +865,28 @@ fn validate_names_every_mistaken_formula_and_run_the_first() {
     ]) {
         assert!(line.contains(needle), "{needle:?} in {stderr}");
     }
-    assert!(lines[2].ends_with("(3 problems)"), "{stderr}");
+    let scenario = TempScenario::new("hardening-formulas-run", &contents);
     let line = one_line(
         &run_rvtol(&["run", path_arg(scenario.path()), "--samples", "100"]),
         2,
     );
     assert!(line.contains("let.offset: character 10"), "{line}");
+}
+
+/// `rvtol validate` of `contents`: exit 2 and `count` lines on standard error, the last
+/// one counting them; the lines.
+fn validate_problems(label: &str, contents: &str, count: usize) -> String {
+    let scenario = TempScenario::new(label, contents);
+    let out = run_rvtol(&["validate", path_arg(scenario.path())]);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = text(&out.stderr);
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(lines.len(), count, "{stderr}");
+    assert!(
+        lines[count - 1].ends_with(&format!("({count} problems)")),
+        "{stderr}"
+    );
+    stderr
 }
 
 #[test]

@@ -16,8 +16,8 @@ use super::Compiler;
 use crate::error::ScenarioError;
 
 /// A model of the file built from its parameters, or the problems (each with its JSON
-/// path) that kept it from building. Built once: the units of its inputs serve the variables' unit
-/// conversion, before the model's bindings are checked.
+/// path) that kept it from building. Built once: the units of its inputs serve the
+/// variables' unit conversion, before the model's bindings are checked.
 pub(super) type BuiltModel = Result<(&'static ModelEntry, Box<dyn ErrorModel>), Vec<ScenarioError>>;
 
 /// Binds every model that built; reports those that did not.
