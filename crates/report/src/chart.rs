@@ -7,6 +7,8 @@
 //! Every function checks its ranges before drawing, so a chart never carries a NaN or an
 //! infinite coordinate: non-finite points are left out, and a degenerate range is widened.
 
+use std::ops::Range;
+
 use plotters::chart::MeshStyle;
 use plotters::coord::ranged1d::ValueFormatter;
 use plotters::coord::Shift;
@@ -795,6 +797,7 @@ pub fn curve(curve: &Curve) -> Drawn {
     let y_tick = move |v: &f64| tick(if v.abs() < zero { 0.0 } else { *v });
     let title = curve.title.clone();
     let mut out = String::new();
+    let mut sub_pixel = SubPixelLines::default();
     {
         let root = canvas(&mut out, HEIGHT)?;
         let mut builder = ChartBuilder::on(&root);
@@ -898,15 +901,20 @@ pub fn curve(curve: &Curve) -> Drawn {
                         ))?;
                     }
                 } else {
+                    // Drawn in a marker colour and given its sub-pixel points afterwards
+                    // (`SubPixelLines`): the SVG backend rounds every point to a whole
+                    // pixel, which makes a shallow line a staircase.
                     chart
                         .draw_series(LineSeries::new(
                             points.iter().copied(),
-                            colour.stroke_width(width),
+                            sub_pixel.marker(i).stroke_width(width),
                         ))?
                         .label(curve.series[i].label.clone())
                         .legend(move |(x, y)| {
                             PathElement::new(vec![(x, y), (x + 14, y)], colour.stroke_width(2))
                         });
+                    let pixels = chart.plotting_area().get_pixel_range();
+                    sub_pixel.add(i, colour, points, pixels, (x0..x1, y0..y1));
                 }
             }
             if with_legend {
@@ -915,7 +923,72 @@ pub fn curve(curve: &Curve) -> Drawn {
         }
         root.present()?;
     }
-    Ok(out)
+    Ok(sub_pixel.apply(out))
+}
+
+/// The model curves' lines at sub-pixel precision. The SVG backend writes whole-pixel
+/// points, so a line of small slope is drawn as a staircase one pixel high; each such
+/// line is drawn in a marker colour of its own (never a series colour) and its
+/// `<polyline>` then gets the points at a tenth of a pixel and its true colour. The
+/// points are mapped as the chart maps them (its plotting area's pixel range, the y axis
+/// reversed), without the rounding.
+#[derive(Default)]
+struct SubPixelLines {
+    /// (marker colour, true colour, points) per line.
+    lines: Vec<(String, String, String)>,
+}
+
+impl SubPixelLines {
+    /// The marker colour of line `i`.
+    fn marker(&self, i: usize) -> RGBColor {
+        RGBColor(1, 2, 3 + (i % 250) as u8)
+    }
+
+    /// Line `i` of `colour` through `points` on a plotting area of the pixels `(px, py)`
+    /// showing the values `(x, y)`.
+    fn add(
+        &mut self,
+        i: usize,
+        colour: RGBColor,
+        points: &[(f64, f64)],
+        (px, py): (Range<i32>, Range<i32>),
+        (x, y): (Range<f64>, Range<f64>),
+    ) {
+        // The chart's own pixel ends: x from left to right − 1, y from bottom − 1 up to top.
+        let (left, right) = (px.start as f64, (px.end - 1) as f64);
+        let (bottom, top) = ((py.end - 1) as f64, py.start as f64);
+        let at = |v: f64, r: &Range<f64>, a: f64, b: f64| {
+            a + (b - a) * (v - r.start) / (r.end - r.start)
+        };
+        let mut text = String::new();
+        for &(u, v) in points {
+            let (sx, sy) = (at(u, &x, left, right), at(v, &y, bottom, top));
+            if sx.is_finite() && sy.is_finite() {
+                text.push_str(&format!("{sx:.1},{sy:.1} "));
+            }
+        }
+        let hex = |c: RGBColor| format!("#{:02X}{:02X}{:02X}", c.0, c.1, c.2);
+        self.lines.push((hex(self.marker(i)), hex(colour), text));
+    }
+
+    /// The drawing `svg` with each marked line's points and colour put right.
+    fn apply(&self, mut svg: String) -> String {
+        for (marker, colour, points) in &self.lines {
+            let Some(at) = svg.find(&format!("stroke=\"{marker}\"")) else {
+                continue;
+            };
+            let start = svg[..at].rfind('<').unwrap_or(at);
+            let end = at + svg[at..].find("/>").unwrap_or(svg.len() - at);
+            let element = svg[start..end]
+                .replace(marker.as_str(), colour)
+                .split(" points=\"")
+                .next()
+                .unwrap_or_default()
+                .to_string();
+            svg.replace_range(start..end, &format!("{element} points=\"{points}\""));
+        }
+        svg
+    }
 }
 
 #[cfg(test)]
@@ -1006,5 +1079,60 @@ mod tests {
             interval: (None, None),
         };
         assert_eq!(draw(&[median.clone(), beyond]), draw(&[median]));
+    }
+
+    #[test]
+    fn a_shallow_line_is_drawn_at_sub_pixel_points_in_its_own_colour() {
+        // 0.2 arcmin over 10 N·m on a 360 px chart: whole-pixel points made it a staircase.
+        let points: Vec<(f64, f64)> = (0..=50)
+            .map(|k| (-5.0 + 0.2 * k as f64, -0.1 + 0.004 * k as f64))
+            .collect();
+        let mut shifted = points.clone();
+        shifted.iter_mut().for_each(|p| p.1 += 0.05);
+        let drawn = curve(&Curve {
+            name: "line".into(),
+            title: "a line".into(),
+            x_label: "x".into(),
+            y_label: "y".into(),
+            style: CurveStyle::Lines,
+            series: vec![
+                rvtol_models::Series {
+                    label: "one".into(),
+                    points,
+                },
+                rvtol_models::Series {
+                    label: "two".into(),
+                    points: shifted,
+                },
+            ],
+        })
+        .unwrap();
+        assert!(!drawn.contains("#010203") && !drawn.contains("#010204"));
+        for colour in ["#1F4E79", "#C0504D"] {
+            let at = drawn.find(&format!("stroke=\"{colour}\"")).unwrap();
+            let points = &drawn[at..];
+            let points = &points[points.find("points=\"").unwrap() + 8..];
+            let points: Vec<(f64, f64)> = points[..points.find('"').unwrap()]
+                .split_whitespace()
+                .map(|p| {
+                    let (x, y) = p.split_once(',').unwrap();
+                    (x.parse().unwrap(), y.parse().unwrap())
+                })
+                .collect();
+            assert_eq!(points.len(), 51, "{colour}");
+            assert!(points.iter().any(|p| p.1.fract() != 0.0), "{colour}");
+            // On one straight line, to the tenth of a pixel they are written with.
+            let (a, b) = (points[0], points[50]);
+            for p in &points {
+                let on = a.1 + (b.1 - a.1) * (p.0 - a.0) / (b.0 - a.0);
+                assert!(
+                    (p.1 - on).abs() <= 0.1,
+                    "{colour}: {p:?} off the line by {}",
+                    p.1 - on
+                );
+            }
+            // The line ends at the plotting area's ends (x from its first to last pixel).
+            assert!(a.0 < b.0 && b.1 < a.1, "{colour}: rises to the right");
+        }
     }
 }
