@@ -461,3 +461,66 @@ fn disc_windows_move_as_the_exact_profile_windows_do() {
     }
     assert_eq!((first_order, exact), (330, 330));
 }
+
+#[test]
+fn assemblies_get_their_detail_and_spectrum_under_load() {
+    // The shipped TE scenario reads under load: most drawn assemblies are preloaded or
+    // interfere, and have no rigid first contact, so their detail and spectrum (at 2^16
+    // points) come from the loaded solution too. Every curve of twelve drawn rows is
+    // finite, and the detail's loaded total at every 16th point (2^16 against the curve's
+    // 4096) is the curve's own at that point (two solutions of the same point, each
+    // settled to 1e-13 rad: 1e-6 arcsec).
+    use rand::SeedableRng;
+    let scenario =
+        rvtol_analysis::request::scenario::load(&scenario_path("rv40e-transmission.json")).unwrap();
+    let n = scenario.input_space.n_columns();
+    let rows = 12;
+    let mut drawn = vec![0.0; rows * n];
+    let mut counts = scenario.input_space.new_constraint_counts();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    scenario
+        .input_space
+        .sample_rows(&mut rng, &mut drawn, &mut counts)
+        .unwrap();
+    let model = &scenario.models[0];
+    let mut interfering = 0;
+    for row in drawn.chunks_exact(n) {
+        let x = model.inputs_of_row(row, &[]);
+        let curves = model.model.curves(&x);
+        for curve in &curves {
+            assert_eq!(curve.first_non_finite(), None, "{}", curve.name);
+        }
+        let (whole, detail) = (&curves[0], &curves[1]);
+        assert!(detail.series[0].label.starts_with("total under load"));
+        assert!(curves[2].series[0].label.starts_with("under load"));
+        let (coarse, fine) = (&whole.series[0].points, &detail.series[0].points);
+        for (j, point) in coarse
+            .iter()
+            .enumerate()
+            .take_while(|(j, _)| 16 * j < fine.len())
+        {
+            let fine_point = fine[16 * j];
+            assert!((point.0 - fine_point.0).abs() < 1e-9);
+            assert!(
+                (point.1 - fine_point.1).abs() < 1e-6,
+                "point {j}: {} against {}",
+                point.1,
+                fine_point.1
+            );
+        }
+        // The rows whose rigid first contact interferes: their rigid detail and spectrum
+        // were NaN, and not drawn.
+        let outputs = model.model.outputs();
+        let flag = outputs
+            .iter()
+            .position(|o| o.name == "profile_interference")
+            .unwrap();
+        let mut out = vec![0.0; outputs.len()];
+        model.model.evaluate(&x, &mut out);
+        interfering += usize::from(out[flag] == 1.0);
+    }
+    assert!(
+        interfering > 0,
+        "no drawn row interferes: the test shows nothing"
+    );
+}

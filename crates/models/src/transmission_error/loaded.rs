@@ -92,6 +92,7 @@ pub(super) fn build(
         solver: TwoDiscs::new(rule.contact(), side.disc_compliance(disc_torque)),
         nominal: 0.0,
         table: PinPhases::new(stage, points),
+        stage: *stage,
     })
 }
 
@@ -110,6 +111,8 @@ pub(super) struct Loaded {
     nominal: f64,
     /// The pins' factors at every place the curve's points put them.
     table: PinPhases,
+    /// The stage the table is built for (a table at another point count: `at_points`).
+    stage: CycloidStage,
 }
 
 /// The pins' place at every fractional pin pitch the curve's points and the two discs put
@@ -133,6 +136,8 @@ pub(super) struct Loaded {
 /// point, in 32 bytes a slot, so that the table stays in a core's cache.
 #[derive(Debug, Clone, Default)]
 pub(super) struct PinPhases {
+    /// N, the curve's points per revolution.
+    points: usize,
     /// G, the half-steps of 1/(2N) pitch from one phase to the next.
     step: usize,
     /// K1 and √(1 − K1²).
@@ -152,6 +157,7 @@ impl PinPhases {
         let phases = 2 * points / step;
         let (r_p, e, k1) = (stage.pin_circle_radius, stage.eccentricity, stage.k1());
         let mut table = PinPhases {
+            points,
             step,
             k1,
             k1_root: (1.0 - k1 * k1).sqrt(),
@@ -366,7 +372,7 @@ impl Loaded {
         scratch: &mut LoadedScratch,
     ) -> [f64; 2] {
         let table = &self.table;
-        let (n, zp, zc) = (common.points, common.pins, common.cycloid_teeth);
+        let (n, zp, zc) = (table.points, common.pins, common.cycloid_teeth);
         let (k1, root) = (table.k1, table.k1_root);
         let lever_scale = common.eccentricity * zc as f64;
         let theta = 2.0 * PI * j as f64 / n as f64;
@@ -464,8 +470,18 @@ impl Loaded {
         }
     }
 
-    /// The loaded transmission error of a row at the N points, arcsec (None where a point
-    /// has no solution).
+    /// The same reading at `points` points per revolution: its own table of the pins'
+    /// places, the same torque, solver and nominal (for `rvtol curve`'s detail and spectrum,
+    /// which need more points than the curve's N).
+    pub(super) fn at_points(&self, points: usize) -> Loaded {
+        Loaded {
+            table: PinPhases::new(&self.stage, points),
+            ..self.clone()
+        }
+    }
+
+    /// The loaded transmission error of a row at the table's points, arcsec (None where a
+    /// point has no solution).
     pub(super) fn curve_arcsec(
         &self,
         common: &Common,
@@ -473,7 +489,7 @@ impl Loaded {
         inputs: &[f64],
     ) -> Option<Vec<f64>> {
         let terms = physical.row_terms(common, inputs);
-        let mut curve = vec![0.0; common.points];
+        let mut curve = vec![0.0; self.table.points];
         let mut scratch = LoadedScratch::default();
         self.curve(common, physical, inputs, &terms, &mut scratch, &mut curve)
             .ok()?;

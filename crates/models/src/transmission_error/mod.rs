@@ -48,7 +48,7 @@ use common::{gcd, Common, MAX_CRANKS};
 use literal::{Literal, LiteralScratch, StageErrors};
 use loaded::{Loaded, LoadedScratch};
 use setup::Reading;
-use two_discs::{Physical, TwoDiscScratch};
+use two_discs::{Physical, TwoDiscScratch, UnderLoad};
 
 /// The model's own keys (`PARAMS` adds the preload rule's and the crank side's).
 const OWN_PARAMS: &[ParamSpec] = &[
@@ -628,9 +628,20 @@ impl ErrorModel for TransmissionError {
             }
             ReadingModel::Rigid(physical) => physical.curves(common, inputs, None),
             ReadingModel::Loaded(physical, loaded) => {
-                let under_load = loaded
-                    .curve_arcsec(common, physical, inputs)
-                    .map(|curve| (loaded.torque(), curve));
+                // The detail and the spectrum under load too, from the loaded solution at
+                // their own 2^16 points (the rigid first contact of a preloaded or
+                // interfering assembly has none).
+                let fine = loaded
+                    .at_points(two_discs::SPECTRUM_POINTS)
+                    .curve_arcsec(common, physical, inputs);
+                let under_load =
+                    loaded
+                        .curve_arcsec(common, physical, inputs)
+                        .map(|curve| UnderLoad {
+                            torque: loaded.torque(),
+                            curve,
+                            fine,
+                        });
                 physical.curves(common, inputs, under_load)
             }
         }

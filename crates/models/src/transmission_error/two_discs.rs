@@ -2113,15 +2113,28 @@ pub(super) const SPECTRUM_POINTS: usize = 1 << 16;
 /// RV40E's cycloid–pin mesh, order z_c·z_p = 1560; 819 points).
 const DETAIL_FRACTION: usize = 80;
 
+/// The loaded reading's curves of a row, for [`Physical::curves`].
+pub(super) struct UnderLoad {
+    /// T, N·m.
+    pub torque: f64,
+    /// The loaded transmission error at the curve's N points, arcsec.
+    pub curve: Vec<f64>,
+    /// The same at [`SPECTRUM_POINTS`], arcsec (None where a point has no solution).
+    pub fine: Option<Vec<f64>>,
+}
+
 impl Physical {
     /// The curves of the physical reading: the tabulated curve with its stage parts, and
-    /// the order spectrum (orders 1..N/2) of the exact curve at [`SPECTRUM_POINTS`]; with
-    /// `under_load`, the loaded reading's torque (N·m) and curve (arcsec) first.
+    /// the detail and the order spectrum (orders 1..N/2) of the exact curve at
+    /// [`SPECTRUM_POINTS`]; with `under_load`, the loaded reading's curve first, and its
+    /// detail and spectrum from its own curve at [`SPECTRUM_POINTS`] (where that has a
+    /// solution at every point) in place of the rigid first contact's, which a preloaded or
+    /// interfering assembly does not have.
     pub(super) fn curves(
         &self,
         common: &Common,
         inputs: &[f64],
-        under_load: Option<(f64, Vec<f64>)>,
+        under_load: Option<UnderLoad>,
     ) -> Vec<crate::Curve> {
         use crate::{Curve, CurveStyle, Series, ARCSEC_PER_RAD};
         let n = common.points;
@@ -2146,21 +2159,31 @@ impl Physical {
         };
         // The loaded reading's curve first (its torque in the label), the rigid first
         // contact and its stages after it.
-        let (loaded_series, total_label) = match under_load {
-            Some((torque, loaded)) => (
+        let torque_label = |torque: f64| format!("{} N·m", rvtol_deviation::Shown(torque));
+        let (loaded_series, total_label) = match &under_load {
+            Some(load) => (
                 Some(Series {
-                    label: format!("total under load ({} N·m)", rvtol_deviation::Shown(torque)),
-                    points: (0..n).map(|j| (degrees(j), loaded[j])).collect(),
+                    label: format!("total under load ({})", torque_label(load.torque)),
+                    points: (0..n).map(|j| (degrees(j), load.curve[j])).collect(),
                 }),
                 "rigid first contact",
             ),
             None => (None, "total"),
         };
         let exact_stages = self.exact_curve_stages(common, inputs, SPECTRUM_POINTS);
-        let exact: Vec<f64> = exact_stages
-            .iter()
-            .map(|(te, _)| te * ARCSEC_PER_RAD)
-            .collect();
+        // The loaded curve at the detail's and the spectrum's points where there is one.
+        let fine = under_load.and_then(|load| Some((load.torque, load.fine?)));
+        let rigid: Vec<f64>;
+        let exact: &[f64] = match &fine {
+            Some((_, fine)) => fine,
+            None => {
+                rigid = exact_stages
+                    .iter()
+                    .map(|(te, _)| te * ARCSEC_PER_RAD)
+                    .collect();
+                &rigid
+            }
+        };
         // The first 1/DETAIL_FRACTION of the revolution on the exact geometry, fine enough
         // to resolve the cycloid–pin mesh (order z_c·z_p, 1560 for the RV40E), which the
         // tabulated curve's N points alias.
@@ -2178,9 +2201,37 @@ impl Physical {
                 })
                 .collect(),
         };
+        // Under load: the loaded total, and the involute and crank parts, which the load
+        // leaves as they are (the rigid first contact's total and contact part are not
+        // drawn: a preloaded or interfering assembly has none).
+        let detail_series = match &fine {
+            Some((torque, fine)) => vec![
+                Series {
+                    label: format!("total under load ({})", torque_label(*torque)),
+                    points: (0..=detail_points)
+                        .map(|j| (detail_degrees(j), fine[j]))
+                        .collect(),
+                },
+                detail("involute stage", 1),
+                detail("cranks", 2),
+            ],
+            None => vec![
+                detail("total", 0),
+                detail("involute stage", 1),
+                detail("cranks", 2),
+                detail("cycloid–pin contact", 3),
+            ],
+        };
+        let spectrum_label = match &fine {
+            Some((torque, _)) => format!(
+                "under load ({}), {SPECTRUM_POINTS} points",
+                torque_label(*torque)
+            ),
+            None => format!("exact curve, {SPECTRUM_POINTS} points"),
+        };
         let fft = crate::RealFft::new(SPECTRUM_POINTS);
         let mut work = vec![(0.0, 0.0); SPECTRUM_POINTS / 2];
-        fft.transform(&exact, &mut work);
+        fft.transform(exact, &mut work);
         vec![
             Curve {
                 name: "transmission_error".into(),
@@ -2213,12 +2264,7 @@ impl Physical {
                 x_label: "output angle (deg)".into(),
                 y_label: "transmission error (arcsec)".into(),
                 style: CurveStyle::Lines,
-                series: vec![
-                    detail("total", 0),
-                    detail("involute stage", 1),
-                    detail("cranks", 2),
-                    detail("cycloid–pin contact", 3),
-                ],
+                series: detail_series,
             },
             Curve {
                 name: "transmission_error_spectrum".into(),
@@ -2227,7 +2273,7 @@ impl Physical {
                 y_label: "semi-amplitude (arcsec)".into(),
                 style: CurveStyle::LogStems,
                 series: vec![Series {
-                    label: format!("exact curve, {SPECTRUM_POINTS} points"),
+                    label: spectrum_label,
                     points: (1..=n / 2)
                         .map(|k| (k as f64, fft.amplitude(&work, k)))
                         .collect(),
