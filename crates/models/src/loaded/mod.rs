@@ -67,8 +67,16 @@ pub(crate) struct LoadedDisc<'a> {
     pub gaps: &'a [f64],
     /// l_i, the levers about the disc centre, mm (l < 0: the drive flank).
     pub levers: &'a [f64],
+    /// a_i, each pin's arm in the torque balance, mm: l_i, or with the pins' Coulomb
+    /// friction l_i + f·h_i (`cycloid_pin_contact`'s arms; zero where the friction would
+    /// reverse the pin's moment). The approach is l_i·y − g_i either way.
+    pub arms: &'a [f64],
     /// C_d, the disc's crank offset, rad (disc frame).
     pub offset: f64,
+    /// s_d, the needle rows' slack, rad (disc frame; 0: none): the disc turns against the
+    /// carrier by up to ±s_d without a moment (docs/models.md §14.3), so that
+    /// x = C_d + y_d + c·M_d + s_d·sign(M_d), and anywhere within ±s_d while M_d = 0.
+    pub slack: f64,
 }
 
 impl LoadedDisc<'_> {
@@ -76,11 +84,11 @@ impl LoadedDisc<'_> {
     pub fn moment(&self, law: &SecantLaw, y: f64) -> (f64, f64) {
         let (mut sum, mut slope) = (0.0, 0.0);
         let (mut largest, mut lever_of_largest) = (0.0_f64, 0.0);
-        for (g, l) in self.gaps.iter().zip(self.levers) {
+        for ((g, l), a) in self.gaps.iter().zip(self.levers).zip(self.arms) {
             let d = l * y - g;
             if d > 0.0 {
-                sum += d * l;
-                slope += l * l;
+                sum += d * a;
+                slope += l * a;
                 if d > largest {
                     (largest, lever_of_largest) = (d, *l);
                 }
@@ -89,7 +97,7 @@ impl LoadedDisc<'_> {
         if largest <= 0.0 {
             return (0.0, 0.0);
         }
-        // M = K(d_max)·Σ d_i·l_i, dM/dy = K·Σ l_i² + K'(d_max)·l_max·Σ d_i·l_i.
+        // M = K(d_max)·Σ d_i·a_i, dM/dy = K·Σ l_i·a_i + K'(d_max)·l_max·Σ d_i·a_i.
         let (stiffness, derivative) = law.stiffness(largest);
         (
             stiffness * sum,
@@ -110,8 +118,8 @@ impl LoadedDisc<'_> {
     /// the drive flank, the largest g/l over l < 0; sign > 0: the smallest over l > 0).
     fn first_touch(&self, sign: f64) -> f64 {
         let mut touch = sign * f64::INFINITY;
-        for (g, l) in self.gaps.iter().zip(self.levers) {
-            if l * sign > 0.0 {
+        for ((g, l), a) in self.gaps.iter().zip(self.levers).zip(self.arms) {
+            if l * sign > 0.0 && *a != 0.0 {
                 let ratio = g / l;
                 touch = if sign < 0.0 {
                     touch.max(ratio)
@@ -121,6 +129,23 @@ impl LoadedDisc<'_> {
             }
         }
         touch
+    }
+
+    /// The turns at which the pins' moment vanishes, [y_lo, y_hi]: between the two flanks'
+    /// first touches where the disc has play, the one root of M where its own flanks
+    /// overlap (M rises through it; a bracketed safeguarded Newton iteration).
+    fn zero_set(&self, law: &SecantLaw) -> Result<(f64, f64), Unconverged> {
+        let (lo, hi) = (self.first_touch(-1.0), self.first_touch(1.0));
+        if !(lo.is_finite() && hi.is_finite()) {
+            return Err(Unconverged::NoBracket);
+        }
+        if lo <= hi {
+            return Ok((lo, hi));
+        }
+        // M(hi) < 0 < M(lo): the drive flank carries at hi, the coast flank at lo.
+        let mut f = |y: f64| Ok(self.moment(law, y));
+        let root = bracketed_root(&mut f, (hi, lo), TURN_TOLERANCE)?;
+        Ok((root, root))
     }
 }
 
@@ -223,11 +248,17 @@ impl TwoDiscs {
             }
         }
         let sign = if target < 0.0 { -1.0 } else { 1.0 };
+        let zeros = if discs.iter().any(|d| d.slack > 0.0) {
+            [self.zero_set(&discs[0])?, self.zero_set(&discs[1])?]
+        } else {
+            [(f64::NAN, f64::NAN); 2]
+        };
         let start = if warm.carrier.is_finite() {
             warm.carrier
         } else {
-            // The rigid first contact on the loaded flank: the disc that touches first.
-            let touch = discs.map(|d| d.offset + d.first_touch(sign));
+            // The rigid first contact on the loaded flank: the disc that touches first
+            // (its slack taken up toward the load).
+            let touch = discs.map(|d| d.offset + d.first_touch(sign) + sign * d.slack);
             let first = if sign < 0.0 {
                 touch[0].max(touch[1])
             } else {
@@ -254,7 +285,7 @@ impl TwoDiscs {
             let (mut total, mut slope) = (-target, 0.0);
             for d in 0..2 {
                 let (y, moment, stiffness) =
-                    self.settle(&discs[d], x - discs[d].offset, turns[d])?;
+                    self.settle(&discs[d], x - discs[d].offset, turns[d], zeros[d])?;
                 turns[d] = y;
                 moments[d] = moment;
                 total += moment;
@@ -273,6 +304,24 @@ impl TwoDiscs {
         })
     }
 
+    /// A start at rest: each disc at the middle of the turns where its pins' moment
+    /// vanishes (its own balance where its flanks overlap), the carrier at their mean
+    /// place. A warm start for [`Self::solve`] that does not rest on the rigid first
+    /// contact, which a pin of small lever overlapping its disc puts far away.
+    pub fn at_rest(&self, discs: &[LoadedDisc; 2]) -> Result<Solution, Unconverged> {
+        let mut turns = [0.0; 2];
+        for (turn, disc) in turns.iter_mut().zip(discs) {
+            let (lo, hi) = disc.zero_set(&self.law)?;
+            *turn = 0.5 * (lo + hi);
+        }
+        Ok(Solution {
+            carrier: 0.5 * (discs[0].offset + turns[0] + discs[1].offset + turns[1]),
+            turns,
+            moments: [0.0; 2],
+            iterations: 0,
+        })
+    }
+
     /// The fast path from a warm start: Newton's iteration on both discs' turns at once,
     /// R_1 = M_1(y_1) + M_2(y_2) − M* and R_2 = (C_1 + y_1 + c·M_1) − (C_2 + y_2 + c·M_2),
     /// a few steps where the loaded pins stay the same from one point to the next. None
@@ -288,9 +337,16 @@ impl TwoDiscs {
         let mut turns = warm.turns;
         for step in 0..FAST_STEPS {
             let [(m1, a1), (m2, a2)] = [0, 1].map(|d| discs[d].moment(&self.law, turns[d]));
+            // The slack, taken up toward each disc's moment: smooth where neither vanishes.
+            let taken = |disc: &LoadedDisc, m: f64| match disc.slack > 0.0 {
+                true if m == 0.0 => None,
+                true => Some(disc.slack.copysign(m)),
+                false => Some(0.0),
+            };
+            let (s1, s2) = (taken(&discs[0], m1)?, taken(&discs[1], m2)?);
             let r1 = m1 + m2 - target;
-            let x1 = discs[0].offset + turns[0] + c * m1;
-            let x2 = discs[1].offset + turns[1] + c * m2;
+            let x1 = discs[0].offset + turns[0] + c * m1 + s1;
+            let x2 = discs[1].offset + turns[1] + c * m2 + s2;
             let r2 = x1 - x2;
             if r1.abs() <= MOMENT_TOLERANCE * target.abs().max(1.0) && r2.abs() <= ANGLE_TOLERANCE {
                 return Some(Solution {
@@ -316,9 +372,37 @@ impl TwoDiscs {
         None
     }
 
-    /// Disc d's turn y with y + c·M(y) = `reach` (= x − C_d), from the guess `guess`:
-    /// (y, M(y), M'(y)).
+    /// The zero set of disc d's moment (`LoadedDisc::zero_set`) under this solver's law.
+    fn zero_set(&self, disc: &LoadedDisc) -> Result<(f64, f64), Unconverged> {
+        disc.zero_set(&self.law)
+    }
+
+    /// Disc d's turn y with y + c·M(y) + s·sign(M(y)) = `reach` (= x − C_d), from the
+    /// guess `guess`: (y, M(y), M'(y)). With slack, `zero` is the zero set of M: a reach
+    /// within s of it leaves the disc without moment, on its nearest point; beyond, the
+    /// slack is taken up and the smooth relation solved for reach ∓ s.
     fn settle(
+        &self,
+        disc: &LoadedDisc,
+        reach: f64,
+        guess: f64,
+        (zero_lo, zero_hi): (f64, f64),
+    ) -> Result<(f64, f64, f64), Unconverged> {
+        let s = disc.slack;
+        if s > 0.0 {
+            if reach > zero_hi + s {
+                return self.settle_taken(disc, reach - s, guess.max(zero_hi));
+            }
+            if reach < zero_lo - s {
+                return self.settle_taken(disc, reach + s, guess.min(zero_lo));
+            }
+            return Ok((reach.clamp(zero_lo, zero_hi), 0.0, 0.0));
+        }
+        self.settle_taken(disc, reach, guess)
+    }
+
+    /// Disc d's turn y with y + c·M(y) = `reach`, from the guess `guess`: (y, M(y), M'(y)).
+    fn settle_taken(
         &self,
         disc: &LoadedDisc,
         reach: f64,
@@ -416,12 +500,22 @@ fn outer_root(
     if far_value == 0.0 {
         return Ok(far);
     }
-    let (mut lo, mut hi) = if direction > 0.0 {
+    let bracket = if direction > 0.0 {
         (near, far)
     } else {
         (far, near)
     };
-    // Start from the bracket end nearer the root by the chord.
+    bracketed_root(f, bracket, ANGLE_TOLERANCE)
+}
+
+/// The root of the rising function `f` (value, slope) within `(lo, hi)`, where f(lo) ≤ 0
+/// ≤ f(hi): Newton's step inside the bracket, bisection where it would leave it, until the
+/// bracket or the step is below `tolerance`.
+fn bracketed_root(
+    f: &mut impl FnMut(f64) -> Result<(f64, f64), Unconverged>,
+    (mut lo, mut hi): (f64, f64),
+    tolerance: f64,
+) -> Result<f64, Unconverged> {
     let mut x = 0.5 * (lo + hi);
     let (mut value, mut slope) = f(x)?;
     for _ in 0..MAX_ITERATIONS {
@@ -433,7 +527,7 @@ fn outer_root(
         } else {
             hi = x;
         }
-        if hi - lo <= ANGLE_TOLERANCE {
+        if hi - lo <= tolerance {
             return Ok(0.5 * (lo + hi));
         }
         let newton = if slope > 0.0 {
@@ -446,7 +540,7 @@ fn outer_root(
         } else {
             0.5 * (lo + hi)
         };
-        let settled = (next - x).abs() <= ANGLE_TOLERANCE;
+        let settled = (next - x).abs() <= tolerance;
         x = next;
         (value, slope) = f(x)?;
         if settled {

@@ -52,7 +52,9 @@ fn one_disc_without_cranks_is_the_load_sharing_of_003() {
     let disc = LoadedDisc {
         gaps: &gaps,
         levers: &sharing.levers,
+        arms: &sharing.levers,
         offset: 0.0,
+        slack: 0.0,
     };
     let y = one_disc(&law, &disc, 400_000.0).unwrap();
     assert!(
@@ -72,7 +74,9 @@ fn one_disc_without_cranks_is_the_load_sharing_of_003() {
     let disc = LoadedDisc {
         gaps: &sharing.clearances,
         levers: &sharing.levers,
+        arms: &sharing.levers,
         offset: 0.0,
+        slack: 0.0,
     };
     let y = one_disc(&law, &disc, 440_000.0).unwrap();
     assert!((y / sharing.rotation - 1.0).abs() < 1e-12);
@@ -84,7 +88,9 @@ fn one_disc_without_cranks_is_the_load_sharing_of_003() {
     let disc = LoadedDisc {
         gaps: &sharing.clearances,
         levers: &mirrored,
+        arms: &mirrored,
         offset: 0.0,
+        slack: 0.0,
     };
     let y_mirror = one_disc(&law, &disc, -440_000.0).unwrap();
     assert!((y_mirror + y).abs() < 1e-12 * y.abs());
@@ -139,12 +145,16 @@ fn two_discs_balance_the_torque_and_share_one_carrier_angle() {
         LoadedDisc {
             gaps: &gaps_1,
             levers: &levers,
+            arms: &levers,
             offset: 1e-5,
+            slack: 0.0,
         },
         LoadedDisc {
             gaps: &gaps_2,
             levers: &levers,
+            arms: &levers,
             offset: -2e-5,
+            slack: 0.0,
         },
     ];
     let solver = TwoDiscs::new(&law(), 2e-9);
@@ -191,7 +201,9 @@ fn alike_discs_carry_half_each() {
     let disc = LoadedDisc {
         gaps: &gaps,
         levers: &levers,
+        arms: &levers,
         offset: 3e-5,
+        slack: 0.0,
     };
     let solver = TwoDiscs::new(&law(), 5e-9);
     let target = -20_000.0;
@@ -219,14 +231,18 @@ fn a_light_load_tends_to_the_first_contact() {
         LoadedDisc {
             gaps: &gaps,
             levers: &levers,
+            arms: &levers,
             offset: 0.0,
+            slack: 0.0,
         },
         LoadedDisc {
             gaps: &gaps,
             levers: &levers,
+            arms: &levers,
             // Its play is about ±(0.002/58.5 + 1e-5) = ±4.4e-5 rad: 3e-5 apart the windows
             // overlap, disc 1's drive end 3e-5 ahead of disc 2's.
             offset: -3e-5,
+            slack: 0.0,
         },
     ];
     let first = discs
@@ -255,10 +271,13 @@ fn an_overlapping_pair_is_solved_on_both_flanks() {
     let disc = LoadedDisc {
         gaps: &gaps,
         levers: &levers,
+        arms: &levers,
         offset: 0.0,
+        slack: 0.0,
     };
     let twisted = LoadedDisc {
         offset: 2e-4,
+        slack: 0.0,
         ..disc
     };
     let solver = TwoDiscs::new(&law(), 2e-9);
@@ -292,7 +311,9 @@ fn a_point_without_a_solution_fails_with_its_cause() {
     let disc = LoadedDisc {
         gaps: &gaps,
         levers: &levers,
+        arms: &levers,
         offset: 0.0,
+        slack: 0.0,
     };
     let solver = TwoDiscs::new(&law(), 1e-9);
     let failed = solver.solve(&[disc, disc], -100.0, &Solution::COLD);
@@ -306,7 +327,9 @@ fn a_point_without_a_solution_fails_with_its_cause() {
     let nan = LoadedDisc {
         gaps: &bad,
         levers: &levers,
+        arms: &levers,
         offset: 0.0,
+        slack: 0.0,
     };
     assert_eq!(
         solver.solve(&[disc, nan], 100.0, &Solution::COLD),
@@ -322,7 +345,9 @@ fn a_point_without_a_solution_fails_with_its_cause() {
     let far_disc = LoadedDisc {
         gaps: &far,
         levers: &levers,
+        arms: &levers,
         offset: 0.0,
+        slack: 0.0,
     };
     assert_eq!(
         solver.solve(&[far_disc, far_disc], 100.0, &Solution::COLD),
@@ -332,7 +357,9 @@ fn a_point_without_a_solution_fails_with_its_cause() {
     let near_disc = LoadedDisc {
         gaps: &near,
         levers: &levers,
+        arms: &levers,
         offset: 0.0,
+        slack: 0.0,
     };
     let warm = solver
         .solve(&[near_disc, near_disc], 100.0, &Solution::COLD)
@@ -381,4 +408,48 @@ fn the_ninth_root_is_the_two_cube_roots_within_a_few_ulps() {
     for x in [0.0, 1e-310, f64::INFINITY] {
         assert_eq!(ninth_root(x).to_bits(), x.cbrt().cbrt().to_bits());
     }
+}
+
+#[test]
+fn the_slack_is_taken_up_toward_each_disc_s_moment() {
+    // A disc with needle slack s turns against the carrier by ±s without moment: under a
+    // moment of one sign the solution is the slack-free one with the carrier s further
+    // that way, each disc at the same turn; and a self-overlapping pair of discs (both
+    // flanks carrying at rest, 2 µm of overlap) holds its own balance at zero torque
+    // wherever the carrier stands within ±s of it (zero moment on each disc).
+    let levers = levers(0.05);
+    let gaps: Vec<f64> = levers.iter().map(|l| 0.003 + 0.00003 * l.abs()).collect();
+    let tight = LoadedDisc {
+        gaps: &gaps,
+        levers: &levers,
+        arms: &levers,
+        offset: 3e-5,
+        slack: 0.0,
+    };
+    let slack = 4e-5;
+    let loose = LoadedDisc { slack, ..tight };
+    let solver = TwoDiscs::new(&law(), 5e-9);
+    for target in [-20_000.0, 15_000.0] {
+        let a = solver
+            .solve(&[tight, tight], target, &Solution::COLD)
+            .unwrap();
+        let warm = solver.at_rest(&[loose, loose]).unwrap();
+        let b = solver.solve(&[loose, loose], target, &warm).unwrap();
+        let shift = slack.copysign(target);
+        assert!((b.carrier - a.carrier - shift).abs() < 1e-12, "{target}");
+        for d in 0..2 {
+            assert!((b.turns[d] - a.turns[d]).abs() < 1e-12);
+            assert!((b.moments[d] / a.moments[d] - 1.0).abs() < 1e-9);
+        }
+    }
+    let pressed: Vec<f64> = levers.iter().map(|_| -0.002).collect();
+    let held = LoadedDisc {
+        gaps: &pressed,
+        slack,
+        ..tight
+    };
+    let rest = solver.at_rest(&[held, held]).unwrap();
+    let s = solver.solve(&[held, held], 0.0, &rest).unwrap();
+    assert_eq!(s.moments, [0.0, 0.0]);
+    assert!((s.turns[0] - rest.turns[0]).abs() < 1e-15);
 }

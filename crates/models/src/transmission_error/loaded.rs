@@ -269,7 +269,9 @@ impl LoadedScratch {
         LoadedDisc {
             gaps: &self.gaps[d][..self.kept[d]],
             levers: &self.levers[d][..self.kept[d]],
+            arms: &self.levers[d][..self.kept[d]],
             offset,
+            slack: 0.0,
         }
     }
 }
