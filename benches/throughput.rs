@@ -207,6 +207,7 @@ fn models(c: &mut Criterion) {
     for (file, rows, label) in [
         ("rv20e-hysteresis.json", 4096, "geometric_hysteresis"),
         ("rv20e-lost-motion.json", 256, "rv_lost_motion"),
+        ("rv20e-catalogue.json", 64, "rv_lost_motion_loaded"),
         ("rv80e-contact.json", 256, "cycloid_pin_contact"),
         ("rv40e-elastic.json", 256, "crank_elastic_error"),
         ("rv40e-transmission.json", 16, "transmission_error"),

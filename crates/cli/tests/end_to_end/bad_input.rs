@@ -814,14 +814,15 @@ fn a_reducer_parameter_given_twice_or_taken_by_no_model_is_refused() {
         &["no model of rvtol takes it", "reducers/rv20e.json"],
     );
     // A section of the scenario's own holds what its models take: the torsion curve's
-    // journal diameter is refused there.
+    // crank circle radius (rv_lost_motion's crank circle is the centre distance) is
+    // refused there.
     let inline = rv20e_lost_motion_with(|s| {
         let reducer = s["reducer"].as_object_mut().unwrap();
         reducer.remove("file");
         let params = reducer["params"].as_object_mut().unwrap();
         let entry = rvtol_models::find("rv_lost_motion").unwrap();
         params.retain(|key, _| entry.params.iter().any(|spec| spec.name == key));
-        params.insert("crank_journal_diameter_mm".into(), json!(15.0));
+        params.insert("crank_circle_radius_mm".into(), json!(27.5));
         reducer["sources"]
             .as_object_mut()
             .unwrap()
@@ -830,7 +831,7 @@ fn a_reducer_parameter_given_twice_or_taken_by_no_model_is_refused() {
     assert_bad_scenario(
         "inline reducer key no model of the scenario takes",
         &inline,
-        Some("reducer.params.crank_journal_diameter_mm"),
+        Some("reducer.params.crank_circle_radius_mm"),
         &["no model of this scenario takes it", "rv_lost_motion"],
     );
     let source = rv20e_lost_motion_with(|s| {

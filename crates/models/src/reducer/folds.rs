@@ -134,14 +134,20 @@ fn block_of<const N: usize, const LARGEST: bool, const PLACED: bool>(
 /// r(m, s) of entry m with the pins' columns read at `at` (= z_p − 1 − m + s).
 #[inline(always)]
 fn ratio(flank: &Flank, turned: &Turned, m: usize, at: usize) -> f64 {
-    let (t, v) = (flank.run[m], flank.inverse[m]);
+    gap_at(flank, turned, m, at) * flank.inverse[m]
+}
+
+/// g(m, s), the gap of entry m's pin with the pins' columns read at `at` (= z_p − 1 − m
+/// + s): t_m + δr_i·f_r,m + δt_i·f_t,m − ρ_i.
+#[inline(always)]
+fn gap_at(flank: &Flank, turned: &Turned, m: usize, at: usize) -> f64 {
+    let t = flank.run[m];
     match turned.placed {
         Some((radial, tangential)) => {
-            (t + radial[at] * flank.radial[m] + tangential[at] * flank.tangential[m]
-                - turned.radius[at])
-                * v
+            t + radial[at] * flank.radial[m] + tangential[at] * flank.tangential[m]
+                - turned.radius[at]
         }
-        None => (t - turned.radius[at]) * v,
+        None => t - turned.radius[at],
     }
 }
 

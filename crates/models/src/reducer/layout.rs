@@ -172,7 +172,7 @@ pub(crate) fn inputs(cranks: usize, pins: usize) -> Vec<InputSpec> {
 }
 
 /// The outputs, in order.
-pub(crate) fn outputs() -> Vec<OutputSpec> {
+pub(crate) fn outputs(loaded: bool) -> Vec<OutputSpec> {
     let condition = Some(OutputCondition {
         indicator: preload::OVER_PRELOADED,
         effect: ConditionEffect::NonConforming,
@@ -192,5 +192,14 @@ pub(crate) fn outputs() -> Vec<OutputSpec> {
         output("involute_stage_arcmin", "arcmin", "involute stage backlash at the output, signed (000 Eq. 5, 12)", Continuous, None),
     ];
     outputs.extend(preload::outputs());
+    if loaded {
+        outputs.extend([
+            output("lost_motion_loaded_arcmin", "arcmin", "the catalogue's lost motion: the torsion curve's midline at +3 % less −3 % of rated torque, from the loaded contact solution at the widest window's output angle (docs/models.md §14.9)", Continuous, condition),
+            output("hysteresis_loss_arcmin", "arcmin", "the torsion curve's width at zero torque, at the same angle", Continuous, None),
+            output("torsional_rigidity_nm_per_arcmin", "N·m/arcmin", "(T_r − T_r/2)/(φ(T_r) − φ(T_r/2)) on the loading branch, at the same angle", Continuous, None),
+            output("angle_at_rated_arcmin", "arcmin", "half the torsion curve's span between −T_r and +T_r, at the same angle", Continuous, None),
+            output("pin_force_at_rated_n", "N", "the largest pin force at ±T_r, at the same angle", Continuous, None),
+        ]);
+    }
     outputs
 }

@@ -33,20 +33,24 @@
 mod folds;
 mod geometry;
 mod layout;
+mod torsion;
 mod windows;
 
 use rvtol_deviation::point_displacement;
 
 use crate::preload::{self, DiscPins, Preload, PreloadRule};
+use crate::stiffness::build;
 use crate::{
-    ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputSpec, ParamSpec,
-    ARCMIN_PER_RAD,
+    concat_params, ErrorModel, InputSpec, ModelEntry, ModelError, ModelParams, OutputSpec,
+    ParamSpec, ARCMIN_PER_RAD,
 };
 use geometry::{Grid, Reducer};
 use layout::Layout;
-use windows::{disc_window, row_terms, RowTable};
+use torsion::{Figures, Pins, Torsion};
+use windows::{direct_pins, disc_window, row_terms, RowTable};
 
-const PARAMS: &[ParamSpec] = &[
+/// The model's own keys (`PARAMS` adds the crank side's).
+const OWN_PARAMS: &[ParamSpec] = &[
     ParamSpec { name: "sun_teeth", unit: "1", description: "z1, sun teeth", default: None },
     ParamSpec { name: "planet_teeth", unit: "1", description: "z2, planet teeth", default: None },
     ParamSpec { name: "cycloid_teeth", unit: "1", description: "z_c, disc teeth (z_p − 1)", default: None },
@@ -70,7 +74,16 @@ const PARAMS: &[ParamSpec] = &[
     preload::PARAMS[1],
     preload::PARAMS[2],
     preload::PARAMS[3],
+    ParamSpec { name: "loaded_figures", unit: "1", description: "1: also the catalogue's figures from the loaded contact solution at the widest window's output angle (lost motion at ±3 % of rated torque, hysteresis loss, torsional rigidity, angle at rated torque, largest pin force at rated; docs/models.md §14.9), which read the crank side's keys; 0: free play and preload only", default: Some(0.0) },
+    ParamSpec { name: "crank_bearing_friction_coefficient", unit: "1", description: "μ_b, friction coefficient of a needle row on its journal radius, in [0, 0.5) (loaded figures)", default: None },
 ];
+
+/// The crank side's keys (`stiffness::build`) but the eccentrics' spacing, which is the
+/// model's own.
+const CRANK_SIDE: (&[ParamSpec], &[ParamSpec]) = build::PARAMS.as_slice().split_at(7);
+
+const PARAMS: [ParamSpec; OWN_PARAMS.len() + build::PARAMS.len() - 1] =
+    concat_params(&[OWN_PARAMS, CRANK_SIDE.0, CRANK_SIDE.1.split_at(1).1]);
 
 /// Most points per pin pitch.
 const MAX_PER_PIN: u32 = 64;
@@ -79,7 +92,7 @@ const MAX_PER_PIN: u32 = 64;
 pub const ENTRY: ModelEntry = ModelEntry {
     name: "rv_lost_motion",
     summary: "lost motion and preload of an RV reducer from its geometry: two discs, pin by pin, over one output revolution, with the preload's pin forces and no-load torque (000 Eq. 5, 12; 003; docs/models.md §14)",
-    params: PARAMS,
+    params: &PARAMS,
     build: |params| Ok(Box::new(RvLostMotion::from_params(params)?)),
     example_params: RvLostMotion::rv20e_params,
     example_inputs: &[
@@ -94,6 +107,22 @@ thread_local! {
     /// Each thread's pins of the two discs for the zero-torque balance.
     static PINS: std::cell::RefCell<[DiscPins; 2]> =
         std::cell::RefCell::new([DiscPins::new(0.0, 0.0), DiscPins::new(0.0, 0.0)]);
+    /// Each thread's pins of the two discs for the loaded figures.
+    static LOADED: std::cell::RefCell<[Pins; 2]> =
+        const { std::cell::RefCell::new([Pins::new(), Pins::new()]) };
+}
+
+/// One revolution of a row's windows.
+struct Revolution {
+    /// The widest common window W and its grid point, rad at the output.
+    widest: (f64, usize),
+    /// The mean of max(0, W) over the M points.
+    mean: f64,
+    /// The narrowest W.
+    narrowest: f64,
+    /// The narrowest rigid W (every overlap, the discs' own included) and its grid point,
+    /// where the preload is judged.
+    deepest: (f64, usize),
 }
 
 /// The model with its reducer and grid.
@@ -103,6 +132,8 @@ pub struct RvLostMotion {
     grid: Grid,
     layout: Layout,
     rule: PreloadRule,
+    /// The loaded figures (`loaded_figures`), when asked for.
+    torsion: Option<Torsion>,
     /// 10800/π / (2·r1·i·a0·cos α).
     involute_scale: f64,
     inputs: Vec<InputSpec>,
@@ -149,6 +180,22 @@ impl RvLostMotion {
             reducer.face_width,
             (reducer.ratio, reducer.lambda),
         )?;
+        let torsion = match params.flag("loaded_figures", false)? {
+            true => Some(Torsion::from_params(
+                params,
+                &reducer,
+                rule.contact(),
+                &grid,
+            )?),
+            false => {
+                // Not read without the loaded figures, but the model's numbers all the same.
+                for spec in CRANK_SIDE.0.iter().chain(&CRANK_SIDE.1[1..]) {
+                    params.number(spec.name, Some(0.0))?;
+                }
+                params.number("crank_bearing_friction_coefficient", Some(0.0))?;
+                None
+            }
+        };
         params.reject_unknown(&PARAMS.iter().map(|p| p.name).collect::<Vec<_>>())?;
         let involute_scale = ARCMIN_PER_RAD
             / (2.0
@@ -159,10 +206,11 @@ impl RvLostMotion {
         let layout = Layout::new(reducer.cranks);
         Ok(RvLostMotion {
             inputs: layout::inputs(reducer.cranks, reducer.stage.pins),
-            outputs: layout::outputs(),
+            outputs: layout::outputs(torsion.is_some()),
             layout,
             grid,
             rule,
+            torsion,
             involute_scale,
             reducer,
         })
@@ -189,12 +237,25 @@ impl RvLostMotion {
         self.reducer.lambda
     }
 
-    /// Both discs' windows at grid point k, output angles (rad): [(lower, upper); 2].
+    /// Both discs' rigid windows at grid point k, output angles (rad): [(lower, upper); 2]
+    /// (negative width where a disc's own flanks overlap).
     pub fn disc_windows(&self, x: &[f64], k: usize) -> [(f64, f64); 2] {
         let terms = row_terms(&self.reducer, &self.grid, &self.layout, x);
         [0, 1].map(|d| {
             disc_window(&self.reducer, &self.grid, &self.layout, &terms, x, k, d)
                 .ends(self.reducer.lambda)
+        })
+    }
+
+    /// Both discs' windows at rest at grid point k, computed pin by pin in full
+    /// (`DiscWindow::at_rest`: a disc whose own flanks overlap rests at its own balance,
+    /// its slack about it), output angles (rad).
+    pub fn disc_windows_at_rest(&self, x: &[f64], k: usize) -> [(f64, f64); 2] {
+        let (reducer, grid, layout) = (&self.reducer, &self.grid, &self.layout);
+        let terms = row_terms(reducer, grid, layout, x);
+        [0, 1].map(|d| {
+            let pins = direct_pins(reducer, grid, layout, &terms, x, (k, d));
+            disc_window(reducer, grid, layout, &terms, x, k, d).at_rest(reducer.lambda, &pins)
         })
     }
 
@@ -216,24 +277,36 @@ impl RvLostMotion {
         up0.min(up1) - lo0.max(lo1)
     }
 
-    /// The revolution: the widest common window, the mean of max(0, W) and the least W
-    /// over the M points, the narrowest W and where it is.
-    fn scan_revolution(&self, table: &RowTable) -> (f64, f64, f64, (f64, usize)) {
-        let (mut widest, mut sum, mut narrowest) = (f64::NEG_INFINITY, 0.0, (f64::INFINITY, 0));
+    /// The rigid W_k (`RowTable::rigid_ends`): every overlap, the discs' own included.
+    #[inline(always)]
+    fn rigid_width(&self, table: &RowTable, k: usize) -> f64 {
+        let ends = |d| table.rigid(&self.grid, k, d);
+        let ((lo0, up0), (lo1, up1)) = (ends(0), ends(1));
+        up0.min(up1) - lo0.max(lo1)
+    }
+
+    /// The revolution (`Revolution`).
+    fn scan_revolution(&self, table: &RowTable) -> Revolution {
+        let mut scan = Revolution {
+            widest: (f64::NEG_INFINITY, 0),
+            mean: 0.0,
+            narrowest: f64::INFINITY,
+            deepest: (f64::INFINITY, 0),
+        };
         for k in 0..self.grid.points {
             let w = self.width(table, k);
-            widest = widest.max(w);
-            sum += w.max(0.0);
-            if w < narrowest.0 {
-                narrowest = (w, k);
+            if w > scan.widest.0 {
+                scan.widest = (w, k);
+            }
+            scan.mean += w.max(0.0);
+            scan.narrowest = scan.narrowest.min(w);
+            let rigid = self.rigid_width(table, k);
+            if rigid < scan.deepest.0 {
+                scan.deepest = (rigid, k);
             }
         }
-        (
-            widest,
-            sum / self.grid.points as f64,
-            narrowest.0,
-            narrowest,
-        )
+        scan.mean /= self.grid.points as f64;
+        scan
     }
 
     /// Δφ12', arcmin (000 Eq. 5, 12).
@@ -251,27 +324,79 @@ impl RvLostMotion {
     /// (the pitch's turn folded in) the row table's run value plus the pin's own terms,
     /// t_m + δr_i·f_r + δt_i·f_t − ρ_i, as the windows read it.
     fn pins_at(&self, table: &RowTable, x: &[f64], k: usize, discs: &mut [DiscPins; 2]) {
+        let columns = &self.grid.columns;
+        for (d, disc) in discs.iter_mut().enumerate() {
+            let (_, offset, slack) = table.heads[2 * (k % self.grid.per_pin) + d];
+            disc.reset(offset, slack);
+            self.each_pin(table, x, (k, d), |gap, j, _| {
+                disc.push(gap, columns.lever[j], columns.slip_arm[j])
+            });
+        }
+    }
+
+    /// Disc d's pins at grid point k, in pin order: `visit(gap, j, m)` with the pin's gap
+    /// (the pitch's turn folded in: the row table's run value plus the pin's own terms,
+    /// t_m + δr_i·f_r + δt_i·f_t − ρ_i, as the windows read it), its column entry j and
+    /// its entry m in the run. Returns the disc's crank offset C_d and slack s_d.
+    fn each_pin(
+        &self,
+        table: &RowTable,
+        x: &[f64],
+        (k, d): (usize, usize),
+        mut visit: impl FnMut(f64, usize, usize),
+    ) -> (f64, f64) {
         let (grid, pins) = (&self.grid, self.reducer.stage.pins);
         let columns = &grid.columns;
         let kq = k % grid.per_pin;
         let (radial, rest) = x[self.layout.pins..].split_at(pins);
         let (tangential, rest) = rest.split_at(pins);
         let radius = &rest[..pins];
-        for (d, disc) in discs.iter_mut().enumerate() {
-            let (base, offset, slack) = table.heads[2 * kq + d];
-            let run = &table.runs[(2 * kq + d) * pins..(2 * kq + d + 1) * pins];
-            disc.reset(offset, slack);
-            let (_, start) = grid.placement(k, d);
-            // Pin i meets entry start + i, less z_p past the end of the run.
-            let entries = (start..pins).chain(0..start);
-            for (i, m) in entries.enumerate() {
-                let j = base + m;
-                let gap =
-                    run[m] + radial[i] * columns.radial[j] + tangential[i] * columns.tangential[j]
-                        - radius[i];
-                disc.push(gap, columns.lever[j], columns.slip_arm[j]);
-            }
+        let (base, offset, slack) = table.heads[2 * kq + d];
+        let run = &table.runs[(2 * kq + d) * pins..(2 * kq + d + 1) * pins];
+        let (_, start) = grid.placement(k, d);
+        // Pin i meets entry start + i, less z_p past the end of the run.
+        let entries = (start..pins).chain(0..start);
+        for (i, m) in entries.enumerate() {
+            let j = base + m;
+            let gap =
+                run[m] + radial[i] * columns.radial[j] + tangential[i] * columns.tangential[j]
+                    - radius[i];
+            visit(gap, j, m);
         }
+        (offset, slack)
+    }
+
+    /// The loaded figures of a row at the grid point of its widest window `(W, k)` (rad
+    /// at the output), the involute stage's free play `involute` in arcmin.
+    fn loaded_figures(
+        &self,
+        torsion: &Torsion,
+        table: &RowTable,
+        x: &[f64],
+        (window, k): (f64, usize),
+        involute: f64,
+    ) -> Figures {
+        let columns = &self.grid.columns;
+        let pins = self.reducer.stage.pins;
+        LOADED.with(|discs| {
+            let mut discs = discs.borrow_mut();
+            for (d, disc) in discs.iter_mut().enumerate() {
+                let (base, offset, slack) = table.heads[2 * (k % self.grid.per_pin) + d];
+                disc.reset(offset, slack);
+                self.each_pin(table, x, (k, d), |gap, j, m| {
+                    // A pin at φ = 0 or π holds no turn (the windows leave it out too).
+                    if columns.inverse_lever[j] == 0.0 {
+                        return;
+                    }
+                    disc.gaps.push(gap);
+                    disc.levers.push(columns.lever[j]);
+                    disc.slip.push(columns.slip_arm[j]);
+                    disc.along.push(columns.eccentric[j]);
+                    disc.place.push(torsion.place(base / pins, m));
+                });
+            }
+            torsion.figures(&mut discs, window, involute / ARCMIN_PER_RAD)
+        })
     }
 
     /// The preload of a row whose narrowest window (at grid point `at`) is negative.
@@ -303,22 +428,30 @@ impl ErrorModel for RvLostMotion {
             return;
         }
         let terms = row_terms(&self.reducer, &self.grid, &self.layout, x);
-        let (widest, sum, least, narrowest, preload) = TABLE.with(|table| {
+        let involute = self.involute(x) + 0.0;
+        let free_involute = involute.max(0.0);
+        let (scan, overlapping, preload, figures) = TABLE.with(|table| {
             let mut table = table.borrow_mut();
             table.fill(&self.reducer, &self.grid, &self.layout, &terms, x);
-            let (widest, sum, least, (narrowest, at)) = self.scan_revolution(&table);
-            let preload = if narrowest < 0.0 {
-                self.preload(&table, x, at)
+            let scan = self.scan_revolution(&table);
+            // Pins carry at rest where the pair's windows miss each other or a disc's own
+            // flanks overlap; the balance is taken where the overlap is deepest.
+            let overlapping = scan.narrowest < 0.0 || table.own_overlap;
+            let preload = if overlapping {
+                self.preload(&table, x, scan.deepest.1)
             } else {
                 Preload::NONE
             };
-            (widest, sum, least, narrowest, preload)
+            let figures = self
+                .torsion
+                .as_ref()
+                .map(|torsion| self.loaded_figures(torsion, &table, x, scan.widest, free_involute));
+            (scan, overlapping, preload, figures)
         });
-        let involute = self.involute(x) + 0.0;
-        let free_involute = involute.max(0.0);
+        let (widest, sum, least) = (scan.widest.0, scan.mean, scan.narrowest);
         let class = self.rule.classify(
             &preload,
-            (narrowest < 0.0, involute < 0.0),
+            (overlapping, involute < 0.0),
             (self.reducer.equidistant, self.reducer.shift),
         );
         out[0] = widest.max(0.0) * ARCMIN_PER_RAD + free_involute;
@@ -330,6 +463,13 @@ impl ErrorModel for RvLostMotion {
         out[6] = preload.no_load_torque;
         out[7] = class.preloaded();
         out[8] = class.over();
+        if let Some(figures) = figures {
+            out[9] = figures.lost_motion;
+            out[10] = figures.hysteresis_loss;
+            out[11] = figures.rigidity;
+            out[12] = figures.angle_at_rated;
+            out[13] = figures.pin_force;
+        }
     }
 }
 

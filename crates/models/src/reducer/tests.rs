@@ -569,17 +569,31 @@ fn the_row_table_gives_the_pin_by_pin_windows() {
             x
         })
         .collect();
-    for x in rows.iter().chain(&unplaced) {
+    // And Table 9's design, whose discs overlap their own flanks by 1.34 µm, with the
+    // needle rows' clearance: a disc rests at its own balance, its slack about it.
+    let design = model(&[]);
+    let design_rows = random_rows(&design, 10);
+    let mut own = 0;
+    for (m, x) in rows
+        .iter()
+        .chain(&unplaced)
+        .map(|x| (&m, x))
+        .chain(design_rows.iter().map(|x| (&design, x)))
+    {
         let widths = m.window_widths(x);
         for (k, width) in widths.iter().enumerate() {
-            let [one, two] = m.disc_windows(x, k);
+            let [one, two] = m.disc_windows_at_rest(x, k);
             let direct = one.1.min(two.1) - one.0.max(two.0);
+            // Bisection to the last bit against Newton's step to 1e-16 rad.
             assert!(
                 (width - direct).abs() < 1e-15,
                 "k {k}: {width} against {direct}"
             );
+            let rigid = m.disc_windows(x, k);
+            own += usize::from(rigid.iter().zip([one, two]).any(|(r, a)| r != &a));
         }
     }
+    assert!(own > 100, "{own} points with a disc overlapping itself");
 }
 
 #[test]
@@ -700,4 +714,299 @@ fn a_crank_s_own_needle_clearance_widens_the_window_between_its_neighbours() {
         assert!(w1[k] >= w0[k] - 1e-15 && w1[k] <= wb[k] + 1e-15, "k {k}");
     }
     assert!(w1.iter().zip(&w0).any(|(a, b)| a > b));
+}
+
+/// The RV-20E with the torsion curve's crank side (`TorsionCurve::rv20e_params`, the same
+/// estimates as scenarios/reducers/rv20e.json) and the loaded figures on.
+fn loaded_model(set: &[(&str, f64)]) -> RvLostMotion {
+    let mut p = params(&[
+        ("loaded_figures", 1.0),
+        ("crank_journal_diameter_mm", 15.0),
+        ("needle_roller_count", 15.0),
+        ("needle_roller_diameter_mm", 3.0),
+        ("needle_roller_length_mm", 6.0),
+        ("crank_support_span_mm", 30.75),
+        ("support_roller_count", 13.0),
+        ("support_roller_length_mm", 8.225),
+        ("support_contact_angle_deg", 13.0),
+        ("support_bearing_width_mm", 11.75),
+        ("support_bearing_outer_diameter_mm", 35.0),
+        ("carrier_pillar_width_mm", 11.0),
+        ("carrier_pillar_depth_mm", 11.0),
+        ("carrier_pillar_length_mm", 19.0),
+        ("planet_face_width_mm", 8.0),
+        ("planet_gear_overhang_mm", 10.875),
+        ("crank_bearing_friction_coefficient", 0.002),
+    ]);
+    for &(key, value) in set {
+        p = p.with_number(key, value);
+    }
+    RvLostMotion::from_params(&p).expect("valid parameters")
+}
+
+/// The loaded figures of a row: [lost motion, hysteresis loss, rigidity, angle at rated,
+/// pin force at rated].
+fn figures(model: &RvLostMotion, x: &[f64]) -> [f64; 5] {
+    let out = outputs(model, x);
+    [out[9], out[10], out[11], out[12], out[13]]
+}
+
+/// The torsion curve's [lost motion, hysteresis loss, rigidity, angle at rated] for the
+/// RV-20E with the modification (Δr_rp, Δr_p) and no deviation, the friction coefficients
+/// (μ_p, μ_b).
+fn torsion_curve_figures(modification: (f64, f64), friction: (f64, f64)) -> [f64; 4] {
+    let params = crate::TorsionCurve::rv20e_params()
+        .with_number("curtate_ratio", 0.9 * 40.0 / 52.0)
+        .with_number("pin_friction_coefficient", friction.0)
+        .with_number("crank_bearing_friction_coefficient", friction.1);
+    let curve = crate::TorsionCurve::from_params(&params).unwrap();
+    let mut x = vec![0.0; curve.inputs().len()];
+    let index = |name: &str| curve.inputs().iter().position(|i| i.name == name).unwrap();
+    x[index("equidistant_modification_mm")] = modification.0;
+    x[index("shift_modification_mm")] = modification.1;
+    let mut out = vec![0.0; curve.outputs().len()];
+    curve.evaluate(&x, &mut out);
+    let at = |name: &str| out[curve.outputs().iter().position(|o| o.name == name).unwrap()];
+    [
+        at("lost_motion_arcmin"),
+        at("hysteresis_loss_arcmin"),
+        at("torsional_rigidity_nm_per_arcmin"),
+        at("angle_at_rated_arcmin"),
+    ]
+}
+
+#[test]
+fn two_alike_discs_under_load_give_the_torsion_curve() {
+    // No deviation: both discs alike, so the pair's loaded solution is the torsion curve's
+    // one-disc load sharing at half the torque each (crate::loaded), with the same crank
+    // side, housing and friction. One point per pin pitch puts the pins at whole places,
+    // where the torsion curve has them. Three profiles: none (zero play), 10 µm of
+    // equidistant clearance (free: 0.93 arcmin) and Table 9's design (preloaded, 1.34 µm
+    // per flank), with and without friction. The two solvers settle the angle to 1e-13 rad
+    // (the carrier) and F_max to 1e-12 of itself (the load sharing): 1e-8 of the smallest
+    // figure, the lost motion's elastic part at ±3 %, bounds both.
+    for modification in [(0.0, 0.0), (0.010, 0.0), (-0.010, -0.012)] {
+        for friction in [(0.02, 0.002), (0.0, 0.0)] {
+            let m = loaded_model(&[
+                ("positions_per_pin", 1.0),
+                ("equidistant_modification_mm", modification.0),
+                ("shift_modification_mm", modification.1),
+                ("pin_friction_coefficient", friction.0),
+                ("crank_bearing_friction_coefficient", friction.1),
+            ]);
+            let ours = figures(&m, &row(&m, &[]));
+            let theirs = torsion_curve_figures(modification, friction);
+            for (name, (a, b)) in [
+                "lost motion",
+                "hysteresis loss",
+                "rigidity",
+                "angle at rated",
+            ]
+            .iter()
+            .zip(ours.iter().zip(theirs))
+            {
+                assert!(
+                    (a - b).abs() <= 1e-8 * b.abs().max(0.01),
+                    "{name} {modification:?} {friction:?}: {a} against the torsion curve's {b}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn without_friction_the_loaded_lost_motion_is_the_free_play_and_the_elastic_angles() {
+    // The catalogue's lost motion of a stage with play, frictionless: the free play (the
+    // window, crossed at zero torque) plus the elastic angle from first contact to 3 % of
+    // rated torque on each side (torsion_curve's E(3 %; ±), the same chain).
+    let frictionless = [
+        ("pin_friction_coefficient", 0.0),
+        ("crank_bearing_friction_coefficient", 0.0),
+    ];
+    let m = loaded_model(&[&CLEAR[..], &frictionless[..], &[("positions_per_pin", 1.0)]].concat());
+    let x = row(&m, &[]);
+    let out = outputs(&m, &x);
+    let params = crate::TorsionCurve::rv20e_params()
+        .with_number("curtate_ratio", 0.9 * 40.0 / 52.0)
+        .with_number("pin_friction_coefficient", 0.0)
+        .with_number("crank_bearing_friction_coefficient", 0.0);
+    let curve = crate::TorsionCurve::from_params(&params).unwrap();
+    let mut y = vec![0.0; curve.inputs().len()];
+    y[2] = 0.010; // equidistant_modification_mm (000's order)
+    let elastic = |loading| curve.elastic_angle(&y, 0.03 * 167.0, loading).unwrap();
+    let expected = out[0] + elastic(true) + elastic(false);
+    assert!(out[0] > 0.9, "free play {}", out[0]);
+    assert!(
+        (out[9] - expected).abs() < 1e-9,
+        "{} against {} + {} + {}",
+        out[9],
+        out[0],
+        elastic(true),
+        elastic(false)
+    );
+}
+
+#[test]
+fn the_needle_slack_under_load_is_free_play() {
+    // The needle rows' clearance u lets each disc turn by ±s without moment (§14.3): the
+    // discs take it up toward the load, so the curve moves out by λ·s on each side and the
+    // lost motion at ±3 % grows by 2λ·s, the window's own growth, with play or preloaded
+    // (both discs carry the load's sign at ±3 %). One point per pin pitch: every point has
+    // the same crank angle, so the same s.
+    let u = [("crank_bearing_clearance_mm", 0.004)];
+    // So does the loop's width at zero torque: with play it is the window; the design's
+    // discs, which overlap their own flanks, rest pressed by their pins at zero torque and
+    // their loop (the pins' friction) opens by the slack's 2λ·s.
+    let growth = |set: &[(&str, f64)]| {
+        let m = loaded_model(&[set, &[("positions_per_pin", 1.0)]].concat());
+        let (tight, loose) = (outputs(&m, &row(&m, &[])), outputs(&m, &row(&m, &u)));
+        (
+            loose[9] - tight[9],
+            loose[0] - tight[0],
+            loose[10] - tight[10],
+        )
+    };
+    let (free_loaded, free_window, free_loop) = growth(&CLEAR);
+    let (preloaded_loaded, preloaded_window, preloaded_loop) = growth(&[]);
+    assert!(
+        (free_loop - free_window).abs() < 1e-9,
+        "{free_loop} against {free_window}"
+    );
+    assert!(
+        (preloaded_loop - free_window).abs() < 1e-9,
+        "{preloaded_loop} against {free_window}"
+    );
+    // The design's discs are held by their own pins: the whole slack is free play at rest
+    // (the window of each disc is its slack about its own balance, §14.2), as with play.
+    assert!(
+        (preloaded_window - free_window).abs() < 1e-12,
+        "{preloaded_window} against {free_window}"
+    );
+    // 2λ·s with s = (u/2)·h, h between 1/a_w and √(1/a_w² + 1/(e·z_c)²) (§14.3).
+    let lambda = 39.0 / 40.0 * (1.0 - 1.0 / 141.0);
+    let bound = |h: f64| 2.0 * lambda * 0.002 * h * crate::ARCMIN_PER_RAD;
+    assert!(free_window > bound(1.0 / 27.5) * (1.0 - 1e-9));
+    assert!(free_window < bound((1.0 / 27.5_f64).hypot(1.0 / PITCH_LEVER)));
+    assert!(
+        (free_loaded - free_window).abs() < 1e-9,
+        "{free_loaded} against {free_window}"
+    );
+    assert!(
+        (preloaded_loaded - free_window).abs() < 1e-9,
+        "{preloaded_loaded} against {free_window}"
+    );
+}
+
+#[test]
+fn an_over_preloaded_assembly_has_finite_loaded_figures() {
+    // Pins 6 µm oversize: every flank overlaps by about 7 µm, far over the pin-force limit.
+    // The loaded solution still stands: both flanks carry at zero torque, the reverse flank
+    // unloads as the torque rises, so the lost motion at ±3 % is less than the design's and
+    // the largest pin force at rated more.
+    let m = loaded_model(&[]);
+    let design = outputs(&m, &row(&m, &[]));
+    let over = outputs(&m, &row(&m, &[("pin_radius_error_mm", 0.006)]));
+    assert_eq!(over[8], 1.0, "over-preloaded");
+    assert!(
+        over[9..14].iter().all(|v| v.is_finite()),
+        "{:?}",
+        &over[9..14]
+    );
+    assert!(over[9] < design[9], "{} against {}", over[9], design[9]);
+    assert!(over[13] > design[13], "{} against {}", over[13], design[13]);
+    assert!(
+        over[10] > design[10],
+        "hysteresis loss {} against {}",
+        over[10],
+        design[10]
+    );
+}
+
+#[test]
+fn the_loaded_figures_are_asked_for() {
+    // Off by default: the nine outputs of the free play and the preload, no crank side.
+    assert_eq!(model(&[]).outputs().len(), 9);
+    let m = loaded_model(&[]);
+    let names: Vec<&str> = m.outputs()[9..].iter().map(|o| o.name.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "lost_motion_loaded_arcmin",
+            "hysteresis_loss_arcmin",
+            "torsional_rigidity_nm_per_arcmin",
+            "angle_at_rated_arcmin",
+            "pin_force_at_rated_n"
+        ]
+    );
+    // On, the crank side's keys are needed: the missing one is named.
+    let error = RvLostMotion::from_params(&params(&[("loaded_figures", 1.0)])).unwrap_err();
+    assert!(
+        error.to_string().contains("crank_journal_diameter_mm"),
+        "{error}"
+    );
+}
+
+#[test]
+fn a_disc_held_by_its_own_pins_is_preloaded_whatever_its_slack() {
+    // Table 9's design overlaps each disc's own flanks by 1.34 µm: its pins press it at
+    // rest whether or not the needle rows' clearance leaves the pair free to turn. With
+    // 4 µm of clearance (slack 0.48 arcmin, above the 0.25 arcmin of the overlap) the
+    // preload is the same as without (each disc rests at its own balance: the same
+    // overlap, pin forces and drag), and the free play is the slack's.
+    let m = model(&[("positions_per_pin", 16.0)]);
+    let tight = outputs(&m, &row(&m, &[]));
+    let loose = outputs(&m, &row(&m, &[("crank_bearing_clearance_mm", 0.004)]));
+    assert_eq!(
+        (loose[7], loose[8]),
+        (1.0, 0.0),
+        "preloaded within the limit"
+    );
+    for i in 4..7 {
+        assert!(
+            (loose[i] - tight[i]).abs() <= 1e-9 * tight[i],
+            "output {i}: {} against {}",
+            loose[i],
+            tight[i]
+        );
+    }
+    assert!(loose[0] > 0.4, "free play {}", loose[0]);
+}
+#[test]
+fn random_assemblies_get_bounded_loaded_figures() {
+    // Deviations of ±4 µm on every input (pins, discs, eccentrics, cranks), 1–3 µm of needle
+    // clearance: discs pressed by their own pins, pins of small lever overlapping, pairs
+    // free or pressing each other. Every figure is finite; the catalogue's lost motion
+    // holds the free play at its angle (the window crossed at zero torque, the elastic
+    // angles and the friction's loop added); the loop is at least the involute stage's
+    // play; the rigidity stays within half of the nominal 60 N·m/arcmin (the crank side is
+    // the same; the pins carry on one flank at 50–100 % of rated, fewer of them where the
+    // gaps spread: 39–68 N·m/arcmin over these rows).
+    let m = loaded_model(&[]);
+    let mut next = uniform();
+    let len = m.inputs().len();
+    for _ in 0..2000 {
+        let mut x: Vec<f64> = (0..len).map(|_| 0.004 * next()).collect();
+        for (name, value) in [
+            ("common_normal_upper_deviation_mm", 0.0035),
+            ("common_normal_lower_deviation_mm", -0.0309),
+            ("crank_bearing_clearance_mm", 0.002 + 0.001 * next()),
+        ] {
+            x[m.input_index(name).expect("input")] = value;
+        }
+        for d in 1..=2 {
+            for phase in ["disc_runout_phase_rad", "cumulative_pitch_phase_rad"] {
+                x[m.input_index(&format!("{phase}_{d}")).expect("input")] = PI * (1.0 + next());
+            }
+        }
+        let out = outputs(&m, &x);
+        assert!(out[9..14].iter().all(|v| v.is_finite()), "{out:?}");
+        assert!(
+            out[9] >= out[0] - 1e-9,
+            "lost motion {} below the free play {}",
+            out[9],
+            out[0]
+        );
+        assert!(out[10] >= out[3] - 1e-9, "{out:?}");
+        assert!(out[11] > 30.0 && out[11] < 90.0, "rigidity {}", out[11]);
+    }
 }

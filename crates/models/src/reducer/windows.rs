@@ -78,11 +78,37 @@ pub(crate) struct DiscWindow {
 
 impl DiscWindow {
     /// Lower and upper end at the output, rad: the l < 0 pins bound the lower end, the
-    /// l > 0 pins the upper.
+    /// l > 0 pins the upper (rigid: negative width where the disc's own flanks overlap).
     pub fn ends(&self, lambda: f64) -> (f64, f64) {
         (
             lambda * (self.offset - self.lead - self.slack),
             lambda * (self.offset + self.lag + self.slack),
+        )
+    }
+
+    /// The window at rest, rad at the output: the rigid one where the disc has play; where
+    /// its own flanks overlap, its slack about its own balance y0, the root of
+    /// Σ max(0, l·y − g)·l over its pins `pins` (g − l·ε, l), found here by plain
+    /// bisection (the row table's fast path finds it by Newton's step on the pins that
+    /// can carry: this is its independent check).
+    pub fn at_rest(&self, lambda: f64, pins: &[(f64, f64)]) -> (f64, f64) {
+        if self.lag + self.lead >= 0.0 {
+            return self.ends(lambda);
+        }
+        let moment = |y: f64| -> f64 { pins.iter().map(|(g, l)| (l * y - g).max(0.0) * l).sum() };
+        let (mut lo, mut hi) = (self.lag, -self.lead);
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if moment(mid) < 0.0 {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        let rest = 0.5 * (lo + hi);
+        (
+            lambda * (self.offset + rest - self.slack),
+            lambda * (self.offset + rest + self.slack),
         )
     }
 }
@@ -242,6 +268,41 @@ pub(crate) fn disc_window(
     }
 }
 
+/// Every pin of disc d at grid point k computed in full, in pin order: (g − l·ε, l), the
+/// gap with the pitch's turn folded in and the lever, the pins at φ = 0 or π (no lever)
+/// left out; for [`DiscWindow::at_rest`].
+pub(crate) fn direct_pins(
+    reducer: &Reducer,
+    grid: &Grid,
+    layout: &Layout,
+    terms: &RowTerms,
+    x: &[f64],
+    (k, d): (usize, usize),
+) -> Vec<(f64, f64)> {
+    let turn = grid.turn[k % grid.per_pin];
+    let (_, along) = offset_and_shift(reducer, terms, d, turn);
+    let (pa, pb) = turned_pitch(terms, d, turn);
+    let pins = reducer.stage.pins;
+    let (base, start) = grid.placement(k, d);
+    let columns = &grid.columns;
+    let pin = |block: usize, i: usize| x[layout.pins + block * pins + i];
+    (0..pins)
+        .filter_map(|i| {
+            let j = base + (start + i) % pins;
+            let lever = columns.lever[j];
+            let gap = columns.design_gap[j]
+                + terms.equidistant_error * columns.equidistant[j]
+                + terms.shift_error * columns.shift[j]
+                + (terms.pin_circle_error + pin(0, i)) * columns.radial[j]
+                + pin(1, i) * columns.tangential[j]
+                + along * columns.eccentric[j]
+                + (terms.common[d] - pin(2, i));
+            let pitch = pa * columns.polar_cos[j] + pb * columns.polar_sin[j];
+            (columns.inverse_lever[j] != 0.0).then_some((gap - lever * pitch, lever))
+        })
+        .collect()
+}
+
 /// What a point and disc add to every pin's gap.
 struct Coefficients {
     equidistant: f64,
@@ -346,6 +407,14 @@ pub(crate) struct RowTable {
     /// Per (kq, d) and rotation at (2·kq + d)·z_p + start: the window's ends (lower,
     /// upper) at the output, rad.
     pub window_ends: Vec<(f64, f64)>,
+    /// The same, rigid: [C − K − s, C + L + s] also where the disc's own flanks overlap
+    /// (L + K < 0), so that the width measures every overlap, the disc's own and the
+    /// pair's (where the preload is judged).
+    pub rigid_ends: Vec<(f64, f64)>,
+    /// Whether some disc's own flanks overlap at some point of the row.
+    pub own_overlap: bool,
+    /// Room for a disc's own balance.
+    own: OwnScratch,
     /// Per rotation: the drive flank's least and the coast flank's largest ratio.
     lag: Vec<f64>,
     coast: Vec<f64>,
@@ -394,6 +463,8 @@ impl RowTable {
         }
         self.turn_pins(layout, x, pins);
         self.window_ends.clear();
+        self.rigid_ends.clear();
+        self.own_overlap = false;
         for run in 0..2 * q {
             self.ends_of_run(reducer, grid, run);
         }
@@ -410,6 +481,11 @@ impl RowTable {
             turned.clear();
             turned.extend(pin.iter().rev());
             turned.extend(pin.iter().rev());
+            // And forward: entry u holds pin u mod z_p (one rotation's pins contiguous).
+            let forward = &mut self.own.forward[c];
+            forward.clear();
+            forward.extend(pin);
+            forward.extend(pin);
         }
     }
 
@@ -425,41 +501,79 @@ impl RowTable {
         self.lag.resize(pins, f64::INFINITY);
         self.coast.clear();
         self.coast.resize(pins, f64::NEG_INFINITY);
-        let flanks = [
-            (columns.drive[residue].clone(), &mut self.lag, false),
-            (columns.coast[residue].clone(), &mut self.coast, true),
-        ];
         let turned = Turned {
             radius: &self.turned[0],
             placed: self
                 .placed_pins
                 .then(|| (&self.turned[1][..], &self.turned[2][..])),
         };
-        for (entries, extreme, largest) in flanks {
-            let flank = Flank {
-                entries,
-                run,
-                inverse,
-                radial: &columns.radial[base..base + pins],
-                tangential: &columns.tangential[base..base + pins],
-                largest,
-            };
-            fold_flank(grid.arch, extreme, &flank, &turned);
-        }
+        let flank = |(entries, largest): (std::ops::Range<usize>, bool)| Flank {
+            entries,
+            run,
+            inverse,
+            radial: &columns.radial[base..base + pins],
+            tangential: &columns.tangential[base..base + pins],
+            largest,
+        };
+        let both = [
+            flank((columns.drive[residue].clone(), false)),
+            flank((columns.coast[residue].clone(), true)),
+        ];
+        fold_flank(grid.arch, &mut self.lag, &both[0], &turned);
+        fold_flank(grid.arch, &mut self.coast, &both[1], &turned);
         let lambda = reducer.lambda;
-        self.window_ends
-            .extend(self.lag.iter().zip(&self.coast).map(|(lag, coast)| {
+        let own = &mut self.own;
+        own.levers.clear();
+        own.levers.extend(
+            columns.lever[base..base + pins]
+                .iter()
+                .zip(inverse)
+                .map(|(l, v)| if *v != 0.0 { *l } else { 0.0 }),
+        );
+        own.gaps.resize(pins, 0.0);
+        own.rests.clear();
+        own.rests.resize(pins, f64::NAN);
+        grid.arch.dispatch(OwnBalances {
+            own,
+            run,
+            factors: (
+                &columns.radial[base..base + pins],
+                &columns.tangential[base..base + pins],
+            ),
+            placed: self.placed_pins,
+            brackets: (&self.lag, &self.coast),
+        });
+        for (s, (&lag, &coast)) in self.lag.iter().zip(&self.coast).enumerate() {
+            // A disc whose own flanks overlap (coast > lag) fits nowhere rigidly: its
+            // pins hold it at its own balance y0 and its slack alone is free (§14.2).
+            let ends = |(lower, upper): (f64, f64)| {
                 (
-                    lambda * (offset + coast - slack),
-                    lambda * (offset + lag + slack),
+                    lambda * (offset + lower - slack),
+                    lambda * (offset + upper + slack),
                 )
-            }));
+            };
+            let rigid = ends((coast, lag));
+            self.rigid_ends.push(rigid);
+            self.window_ends.push(if coast > lag {
+                self.own_overlap = true;
+                let rest = self.own.rests[s];
+                ends((rest, rest))
+            } else {
+                rigid
+            });
+        }
     }
 
     /// The window ends of disc d at grid point k, output angles (rad).
     #[inline(always)]
     pub fn ends(&self, grid: &Grid, k: usize, d: usize) -> (f64, f64) {
         self.window_ends[grid.ends_at[k][d] as usize]
+    }
+
+    /// The rigid window ends of disc d at grid point k (`rigid_ends`), rad.
+    #[inline(always)]
+    pub fn rigid(&self, grid: &Grid, k: usize, d: usize) -> (f64, f64) {
+        self.rigid_ends[grid.ends_at[k][d] as usize]
     }
 }
 
@@ -471,3 +585,156 @@ pub(crate) fn turned_pitch(terms: &RowTerms, d: usize, (s, c): (f64, f64)) -> (f
     let (pc, ps) = (a * c - b * s, a * s + b * c);
     (sigma * pc, sigma * ps)
 }
+
+/// The rests of one run's rotations whose discs overlap their own flanks
+/// ([`own_balance`] at each), as the operation `pulp` compiles once per instruction set
+/// (so that the sums over the pins vectorise for it; every width gives the same bits:
+/// the lanes of the sums are fixed, no product is fused).
+struct OwnBalances<'a> {
+    own: &'a mut OwnScratch,
+    /// t_m of the run.
+    run: &'a [f64],
+    /// f_r,m and f_t,m of the run.
+    factors: (&'a [f64], &'a [f64]),
+    /// Whether any pin has a radial or tangential error.
+    placed: bool,
+    /// lag[s] and coast[s] of the run.
+    brackets: (&'a [f64], &'a [f64]),
+}
+
+impl pulp::WithSimd for OwnBalances<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) {
+        let own = self.own;
+        let pins = self.run.len();
+        let (lags, coasts) = self.brackets;
+        let mut previous = f64::NAN;
+        for s in 0..pins {
+            let (lag, coast) = (lags[s], coasts[s]);
+            if coast <= lag {
+                continue;
+            }
+            // Pin (m − s) mod z_p meets entry m: the forward columns from z_p − s on.
+            let at = pins - s..2 * pins - s;
+            let radius = &own.forward[0][at.clone()];
+            let gaps = &mut own.gaps[..pins];
+            if self.placed {
+                let (radial, tangential) = (&own.forward[1][at.clone()], &own.forward[2][at]);
+                let (fr, ft) = self.factors;
+                for (m, gap) in gaps.iter_mut().enumerate() {
+                    *gap = self.run[m] + radial[m] * fr[m] + tangential[m] * ft[m] - radius[m];
+                }
+            } else {
+                for ((gap, t), r) in gaps.iter_mut().zip(self.run).zip(radius) {
+                    *gap = t - r;
+                }
+            }
+            let rest = own_balance(
+                &own.gaps[..pins],
+                &own.levers[..pins],
+                previous,
+                (lag, coast),
+            );
+            own.rests[s] = rest;
+            previous = rest;
+        }
+    }
+}
+
+/// The turn y0 at which a disc whose own flanks overlap rests: where its pins' moment
+/// Σ max(0, l·y − g)·l vanishes (docs/models.md §14.2; the common secant stiffness of the
+/// pins drops out), between the drive flank's least ratio `lag` and the coast flank's
+/// largest `coast`, where it changes sign (`gaps`, `levers`: every pin, a pin without
+/// lever at lever 0, which carries no moment). The moment is piecewise linear in y:
+/// Newton's step lands on the root once it stands on the root's piece; it starts from
+/// `guess` (the neighbouring rotation's root) where that lies in the bracket, and is kept
+/// within the bracket (bisection where it would leave it).
+#[inline(always)]
+fn own_balance(gaps: &[f64], levers: &[f64], guess: f64, (lag, coast): (f64, f64)) -> f64 {
+    let (mut lo, mut hi) = (lag, coast);
+    let mut y = if guess > lo && guess < hi {
+        guess
+    } else {
+        0.5 * (lo + hi)
+    };
+    for _ in 0..OWN_BALANCE_STEPS {
+        let (moment, slope) = own_moment(gaps, levers, y);
+        if moment == 0.0 {
+            break;
+        }
+        // Newton's step below the tolerance: on the root (to the sum's rounding).
+        let step = moment / slope;
+        if step.abs() <= OWN_BALANCE_TOLERANCE {
+            break;
+        }
+        if moment < 0.0 {
+            lo = y;
+        } else {
+            hi = y;
+        }
+        let newton = y - step;
+        y = if newton > lo && newton < hi {
+            newton
+        } else {
+            0.5 * (lo + hi)
+        };
+        if hi - lo <= OWN_BALANCE_TOLERANCE {
+            break;
+        }
+    }
+    y
+}
+
+/// Σ max(0, l·y − g)·l and its slope Σ l² over the pins that carry, in [`OWN_LANES`]
+/// lanes (a fixed order of additions, which the compiler vectorises) added at the end.
+#[inline(always)]
+fn own_moment(gaps: &[f64], levers: &[f64], y: f64) -> (f64, f64) {
+    let (mut moment, mut slope) = ([0.0; OWN_LANES], [0.0; OWN_LANES]);
+    let whole = gaps.len() / OWN_LANES * OWN_LANES;
+    for (g, l) in gaps[..whole]
+        .chunks_exact(OWN_LANES)
+        .zip(levers[..whole].chunks_exact(OWN_LANES))
+    {
+        for lane in 0..OWN_LANES {
+            let d = (l[lane] * y - g[lane]).max(0.0);
+            moment[lane] += d * l[lane];
+            slope[lane] += if d > 0.0 { l[lane] * l[lane] } else { 0.0 };
+        }
+    }
+    for (g, l) in gaps[whole..].iter().zip(&levers[whole..]) {
+        let d = (l * y - g).max(0.0);
+        moment[0] += d * l;
+        slope[0] += if d > 0.0 { l * l } else { 0.0 };
+    }
+    (pairwise(moment), pairwise(slope))
+}
+
+/// The lanes' sum as a tree (three additions deep, not seven in a chain).
+#[inline(always)]
+fn pairwise(l: [f64; OWN_LANES]) -> f64 {
+    ((l[0] + l[1]) + (l[2] + l[3])) + ((l[4] + l[5]) + (l[6] + l[7]))
+}
+
+/// Lanes of [`own_moment`]'s sums.
+const OWN_LANES: usize = 8;
+
+/// A row table's room for the discs' own balances ([`OwnBalances`]).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct OwnScratch {
+    /// One rotation's gaps, and the run's levers (0 where a pin has none).
+    gaps: Vec<f64>,
+    levers: Vec<f64>,
+    /// The pins' radii, radial and tangential errors doubled (entry u: pin u mod z_p).
+    forward: [Vec<f64>; 3],
+    /// Per rotation of the run: y0 where the disc overlaps its own flanks, else NaN.
+    rests: Vec<f64>,
+}
+
+/// Most steps of a disc's own balance (each one Newton's or a bisection's).
+const OWN_BALANCE_STEPS: usize = 100;
+
+/// A disc's own balance is settled to this Newton step or width of its bracket, rad
+/// (3·10⁻¹³ arcmin).
+const OWN_BALANCE_TOLERANCE: f64 = 1e-16;
