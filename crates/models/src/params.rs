@@ -146,6 +146,19 @@ impl ModelParams {
         }
     }
 
+    /// A Coulomb friction coefficient, in [0, 0.5) (required).
+    pub fn friction_coefficient(&self, key: &str) -> Result<f64, ModelError> {
+        let value = self.number(key, None)?;
+        if (0.0..0.5).contains(&value) {
+            Ok(value)
+        } else {
+            Err(ModelError::new(
+                key,
+                format!("must lie in [0, 0.5), got {}", Shown(value)),
+            ))
+        }
+    }
+
     /// A switch given as 0 or 1 (the default when absent).
     pub fn flag(&self, key: &str, default: bool) -> Result<bool, ModelError> {
         let value = self.number(key, Some(if default { 1.0 } else { 0.0 }))?;

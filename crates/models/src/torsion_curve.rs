@@ -99,7 +99,6 @@ use crate::{
     ModelError, ModelParams, OutputCondition, OutputKind, OutputSpec, ParamSpec, Series,
     ARCMIN_PER_RAD,
 };
-use rvtol_deviation::Shown;
 
 /// Inputs of 000 (`geometric_hysteresis`), in its order, come first: its eighteen, without
 /// the fitter's measuring error (the torsion curve takes the pins as drawn, one class, where
@@ -495,17 +494,6 @@ impl TorsionCurve {
             ));
         }
         let contact = CycloidPinContact::of_disc(params, cranks, crank_circle_radius)?;
-        let friction = |key: &str| -> Result<f64, ModelError> {
-            let value = params.number(key, None)?;
-            if (0.0..0.5).contains(&value) {
-                Ok(value)
-            } else {
-                Err(ModelError::new(
-                    key,
-                    format!("must lie in [0, 0.5), got {}", Shown(value)),
-                ))
-            }
-        };
         let consistent_clearance = params.flag("clearance_reading", true)?;
         let elastic_bodies = params.flag("body_compliance", true)?;
         let rated_torque = params.positive("rated_torque_nm", None)?;
@@ -524,8 +512,8 @@ impl TorsionCurve {
             elastic_bodies,
         };
         let built = build::crank_side(params, &reducer)?;
-        let pin_friction = friction("pin_friction_coefficient")?;
-        let bearing_friction = friction("crank_bearing_friction_coefficient")?;
+        let pin_friction = params.friction_coefficient("pin_friction_coefficient")?;
+        let bearing_friction = params.friction_coefficient("crank_bearing_friction_coefficient")?;
         params.reject_unknown(&PARAMS.iter().map(|p| p.name).collect::<Vec<_>>())?;
         let inputs = hysteresis.inputs()[..HYSTERESIS_INPUTS]
             .iter()

@@ -42,7 +42,6 @@ use crate::loaded::{LoadedDisc, Solution, TwoDiscs, Unconverged};
 use crate::preload::PinContact;
 use crate::stiffness::{build, CrankSide, Housing};
 use crate::{ModelError, ModelParams, ARCMIN_PER_RAD};
-use rvtol_deviation::Shown;
 
 /// The catalogue's lost motion is read at ±3 % of rated torque.
 pub(super) const LOST_MOTION_SHARE: f64 = 0.03;
@@ -200,17 +199,6 @@ impl Torsion {
         grid: &Grid,
     ) -> Result<Torsion, ModelError> {
         let rated = params.positive("rated_torque_nm", None)?;
-        let friction = |key: &str| -> Result<f64, ModelError> {
-            let value = params.number(key, None)?;
-            if (0.0..0.5).contains(&value) {
-                Ok(value)
-            } else {
-                Err(ModelError::new(
-                    key,
-                    format!("must lie in [0, 0.5), got {}", Shown(value)),
-                ))
-            }
-        };
         let stage = &reducer.stage;
         let built = build::crank_side(
             params,
@@ -238,9 +226,10 @@ impl Torsion {
             housing: built.housing,
             rated,
             lambda: reducer.lambda,
-            pin_friction: reducer.lambda * friction("pin_friction_coefficient")?,
+            pin_friction: reducer.lambda
+                * params.friction_coefficient("pin_friction_coefficient")?,
             bearing: BearingFriction {
-                coefficient: friction("crank_bearing_friction_coefficient")?,
+                coefficient: params.friction_coefficient("crank_bearing_friction_coefficient")?,
                 journal_diameter: built.journal_diameter,
                 crank_turn: built.crank_turn,
             },

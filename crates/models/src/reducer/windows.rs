@@ -89,8 +89,8 @@ impl DiscWindow {
     /// The window at rest, rad at the output: the rigid one where the disc has play; where
     /// its own flanks overlap, its slack about its own balance y0, the root of
     /// Σ max(0, l·y − g)·l over its pins `pins` (g − l·ε, l), found here by plain
-    /// bisection (the row table's fast path finds it by Newton's step on the pins that
-    /// can carry: this is its independent check).
+    /// bisection (the row table's fast path finds it by a bracketed Newton iteration from
+    /// its neighbouring rotation's root, `own_balance`: this is its independent check).
     pub fn at_rest(&self, lambda: f64, pins: &[(f64, f64)]) -> (f64, f64) {
         if self.lag + self.lead >= 0.0 {
             return self.ends(lambda);
