@@ -169,6 +169,9 @@ pub(crate) struct Grid {
     /// (2·kq + d)·z_p + start (`placement`), so that a point reads its ends without a
     /// division.
     pub ends_at: Vec<[u32; 2]>,
+    /// Per window index (`ends_at`'s): the index of the same disc's window at the grid's
+    /// previous point (k − 1, cyclic), where a search may start (windows.rs).
+    pub previous: Vec<u32>,
     /// The instruction sets the row tables' folds may use (folds.rs).
     pub arch: pulp::Arch,
 }
@@ -309,6 +312,7 @@ impl Grid {
             crank_angles,
             columns: Columns::new(&slots, per_pin, zp, LEVER_FLOOR * stage.eccentricity),
             ends_at: Vec::new(),
+            previous: Vec::new(),
             arch: pulp::Arch::new(),
         };
         grid.ends_at = (0..points)
@@ -320,6 +324,13 @@ impl Grid {
                 })
             })
             .collect();
+        grid.previous = vec![0; 2 * points];
+        for k in 0..points {
+            let before = grid.ends_at[(k + points - 1) % points];
+            for (d, &at) in grid.ends_at[k].iter().enumerate() {
+                grid.previous[at as usize] = before[d];
+            }
+        }
         grid
     }
 

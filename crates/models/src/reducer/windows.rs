@@ -89,8 +89,8 @@ impl DiscWindow {
     /// The window at rest, rad at the output: the rigid one where the disc has play; where
     /// its own flanks overlap, its slack about its own balance y0, the root of
     /// Σ max(0, l·y − g)·l over its pins `pins` (g − l·ε, l), found here by plain
-    /// bisection (the row table's fast path finds it by a bracketed Newton iteration from
-    /// its neighbouring rotation's root, `own_balance`: this is its independent check).
+    /// bisection (the row table's fast path finds it by bracketed Newton steps on every
+    /// rotation of a run at once, `OwnBalances`: this is its independent check).
     pub fn at_rest(&self, lambda: f64, pins: &[(f64, f64)]) -> (f64, f64) {
         if self.lag + self.lead >= 0.0 {
             return self.ends(lambda);
@@ -481,11 +481,6 @@ impl RowTable {
             turned.clear();
             turned.extend(pin.iter().rev());
             turned.extend(pin.iter().rev());
-            // And forward: entry u holds pin u mod z_p (one rotation's pins contiguous).
-            let forward = &mut self.own.forward[c];
-            forward.clear();
-            forward.extend(pin);
-            forward.extend(pin);
         }
     }
 
@@ -530,9 +525,20 @@ impl RowTable {
                 .zip(inverse)
                 .map(|(l, v)| if *v != 0.0 { *l } else { 0.0 }),
         );
-        own.gaps.resize(pins, 0.0);
-        own.rests.clear();
-        own.rests.resize(pins, f64::NAN);
+        // Each search starts from the same disc's rest at the previous grid point where
+        // this row has it (the runs of the crank angle before: it moves little from
+        // point to point); the root does not depend on the start, only its steps do.
+        let first = run_index * pins;
+        own.guesses.clear();
+        own.guesses
+            .extend(grid.previous[first..first + pins].iter().map(|&at| {
+                let at = at as usize;
+                if at < first {
+                    own.all_rests[at]
+                } else {
+                    f64::NAN
+                }
+            }));
         grid.arch.dispatch(OwnBalances {
             own,
             run,
@@ -540,9 +546,11 @@ impl RowTable {
                 &columns.radial[base..base + pins],
                 &columns.tangential[base..base + pins],
             ),
-            placed: self.placed_pins,
+            turned: &turned,
             brackets: (&self.lag, &self.coast),
         });
+        self.own.all_rests.resize(first + pins, f64::NAN);
+        self.own.all_rests[first..first + pins].copy_from_slice(&self.own.rests);
         for (s, (&lag, &coast)) in self.lag.iter().zip(&self.coast).enumerate() {
             // A disc whose own flanks overlap (coast > lag) fits nowhere rigidly: its
             // pins hold it at its own balance y0 and its slack alone is free (§14.2).
@@ -586,18 +594,19 @@ pub(crate) fn turned_pitch(terms: &RowTerms, d: usize, (s, c): (f64, f64)) -> (f
     (sigma * pc, sigma * ps)
 }
 
-/// The rests of one run's rotations whose discs overlap their own flanks
-/// ([`own_balance`] at each), as the operation `pulp` compiles once per instruction set
-/// (so that the sums over the pins vectorise for it; every width gives the same bits:
-/// the lanes of the sums are fixed, no product is fused).
+/// The rests of one run's rotations whose discs overlap their own flanks: the search of
+/// [`OwnSearch`] for every rotation at once, a rotation to a lane, as the operation `pulp`
+/// compiles once per instruction set. Each lane's sums run in a fixed order
+/// (`OwnScratch::sums`) and every operation is one IEEE operation per lane (no product
+/// fused): the same bits at every width.
 struct OwnBalances<'a> {
     own: &'a mut OwnScratch,
     /// t_m of the run.
     run: &'a [f64],
     /// f_r,m and f_t,m of the run.
     factors: (&'a [f64], &'a [f64]),
-    /// Whether any pin has a radial or tangential error.
-    placed: bool,
+    /// The pins' columns reversed and doubled.
+    turned: &'a Turned<'a>,
     /// lag[s] and coast[s] of the run.
     brackets: (&'a [f64], &'a [f64]),
 }
@@ -606,135 +615,464 @@ impl pulp::WithSimd for OwnBalances<'_> {
     type Output = ();
 
     #[inline(always)]
-    fn with_simd<S: pulp::Simd>(self, _simd: S) {
-        let own = self.own;
+    fn with_simd<S: pulp::Simd>(mut self, simd: S) {
         let pins = self.run.len();
-        let (lags, coasts) = self.brackets;
-        let mut previous = f64::NAN;
-        for s in 0..pins {
-            let (lag, coast) = (lags[s], coasts[s]);
-            if coast <= lag {
-                continue;
+        let lanes = pins.div_ceil(OWN_LANES) * OWN_LANES;
+        self.own.start(self.brackets, lanes);
+        // Every vector of lanes searches at first.
+        self.own.open.clear();
+        self.own.open.resize(lanes / S::F64_LANES, true);
+        self.fill_gaps(lanes);
+        let own = self.own;
+        for _ in 0..OWN_BALANCE_STEPS {
+            own.sums(simd, lanes);
+            if own.step(simd) {
+                break;
             }
-            // Pin (m − s) mod z_p meets entry m: the forward columns from z_p − s on.
-            let at = pins - s..2 * pins - s;
-            let radius = &own.forward[0][at.clone()];
-            let gaps = &mut own.gaps[..pins];
-            if self.placed {
-                let (radial, tangential) = (&own.forward[1][at.clone()], &own.forward[2][at]);
-                let (fr, ft) = self.factors;
-                for (m, gap) in gaps.iter_mut().enumerate() {
-                    *gap = self.run[m] + radial[m] * fr[m] + tangential[m] * ft[m] - radius[m];
+        }
+        own.rests.clear();
+        own.rests.extend_from_slice(&own.search.y[..pins]);
+    }
+}
+
+impl OwnBalances<'_> {
+    /// Every rotation's gaps (`OwnScratch::gaps`) of the entries that may carry: the pin
+    /// that meets entry m at rotation s is (m − s) mod z_p, entry z_p − 1 − m + s of the
+    /// turned columns, so each entry's rotations are one contiguous run of them. An entry
+    /// whose pin carries in no lane anywhere in its bracket (l·y − g ≤ 0 at the end of
+    /// the bracket where l·y is largest: rounding keeps l·y monotone in y) adds nothing
+    /// to any sum and is left out; the searches never leave their brackets.
+    #[inline(always)]
+    fn fill_gaps(&mut self, lanes: usize) {
+        let pins = self.run.len();
+        let own = &mut *self.own;
+        own.gaps.resize(pins * lanes, 0.0);
+        own.kept.clear();
+        let (fr, ft) = self.factors;
+        let (lows, highs) = (&own.search.lo[..lanes], &own.search.hi[..lanes]);
+        for (m, &lever) in own.levers[..pins].iter().enumerate() {
+            let at = pins - 1 - m..2 * pins - 1 - m;
+            let (t, radius) = (self.run[m], &self.turned.radius[at.clone()]);
+            let j = own.kept.len();
+            let (row, past) = own.gaps[j * lanes..(j + 1) * lanes].split_at_mut(pins);
+            past.fill(0.0);
+            match self.turned.placed {
+                Some((radial, tangential)) => {
+                    let (radial, tangential) = (&radial[at.clone()], &tangential[at]);
+                    for (s, gap) in row.iter_mut().enumerate() {
+                        *gap = t + radial[s] * fr[m] + tangential[s] * ft[m] - radius[s];
+                    }
                 }
-            } else {
-                for ((gap, t), r) in gaps.iter_mut().zip(self.run).zip(radius) {
-                    *gap = t - r;
+                None => {
+                    for (gap, r) in row.iter_mut().zip(radius) {
+                        *gap = t - r;
+                    }
                 }
             }
-            let rest = own_balance(
-                &own.gaps[..pins],
-                &own.levers[..pins],
-                previous,
-                (lag, coast),
-            );
-            own.rests[s] = rest;
-            previous = rest;
+            let ends = if lever > 0.0 { highs } else { lows };
+            let carries = row
+                .iter()
+                .zip(ends)
+                .fold(false, |any, (g, y)| any | (lever * y - g > 0.0));
+            if carries {
+                own.kept.push((lever, lever * lever));
+            }
         }
     }
 }
 
-/// The turn y0 at which a disc whose own flanks overlap rests: where its pins' moment
-/// Σ max(0, l·y − g)·l vanishes (docs/models.md §14.2; the common secant stiffness of the
-/// pins drops out), between the drive flank's least ratio `lag` and the coast flank's
-/// largest `coast`, where it changes sign (`gaps`, `levers`: every pin, a pin without
-/// lever at lever 0, which carries no moment). The moment is piecewise linear in y:
-/// Newton's step lands on the root once it stands on the root's piece; it starts from
-/// `guess` (the neighbouring rotation's root) where that lies in the bracket, and is kept
-/// within the bracket (bisection where it would leave it).
-#[inline(always)]
-fn own_balance(gaps: &[f64], levers: &[f64], guess: f64, (lag, coast): (f64, f64)) -> f64 {
-    let (mut lo, mut hi) = (lag, coast);
-    let mut y = if guess > lo && guess < hi {
-        guess
-    } else {
-        0.5 * (lo + hi)
-    };
-    for _ in 0..OWN_BALANCE_STEPS {
-        let (moment, slope) = own_moment(gaps, levers, y);
-        if moment == 0.0 {
-            break;
-        }
-        // Newton's step below the tolerance: on the root (to the sum's rounding).
-        let step = moment / slope;
-        if step.abs() <= OWN_BALANCE_TOLERANCE {
-            break;
-        }
-        if moment < 0.0 {
-            lo = y;
-        } else {
-            hi = y;
-        }
-        let newton = y - step;
-        y = if newton > lo && newton < hi {
-            newton
-        } else {
-            0.5 * (lo + hi)
-        };
-        if hi - lo <= OWN_BALANCE_TOLERANCE {
-            break;
-        }
-    }
-    y
+/// The search for the turn y0 at which a disc whose own flanks overlap rests, one lane
+/// per rotation: where its pins' moment M(y) = Σ max(0, l·y − g)·l vanishes
+/// (docs/models.md §14.2; the common secant stiffness of the pins drops out), between the
+/// drive flank's least ratio `lag` and the coast flank's largest `coast`, where M changes
+/// sign. M is piecewise linear in y: on the piece of the pins A that carry at y,
+/// M(y) = y·S_A − P_A with P_A = Σ_A g·l, S_A = Σ_A l², whose root is P_A/S_A. Each step
+/// takes the sums at y and moves to that root (Newton's step; a bisection of the bracket
+/// where it would leave it); where y is the root of the pins that carry at y (P_A/S_A = y,
+/// bit for bit), it is M's root. So the root depends on the pins alone, not on the path to
+/// it (the start, the bracket's steps), but where rounding alone decides whether a pin
+/// carries at the root: there the bracket closes within the tolerance. A rotation whose
+/// disc does not overlap itself stands at NaN, where no pin carries: settled at once.
+#[derive(Debug, Clone, Default)]
+struct OwnSearch {
+    /// Per lane: the turn (rad), the bracket, whether settled (1) or not (0).
+    y: Vec<f64>,
+    lo: Vec<f64>,
+    hi: Vec<f64>,
+    done: Vec<f64>,
 }
-
-/// Σ max(0, l·y − g)·l and its slope Σ l² over the pins that carry, in [`OWN_LANES`]
-/// lanes (a fixed order of additions, which the compiler vectorises) added at the end.
-#[inline(always)]
-fn own_moment(gaps: &[f64], levers: &[f64], y: f64) -> (f64, f64) {
-    let (mut moment, mut slope) = ([0.0; OWN_LANES], [0.0; OWN_LANES]);
-    let whole = gaps.len() / OWN_LANES * OWN_LANES;
-    for (g, l) in gaps[..whole]
-        .chunks_exact(OWN_LANES)
-        .zip(levers[..whole].chunks_exact(OWN_LANES))
-    {
-        for lane in 0..OWN_LANES {
-            let d = (l[lane] * y - g[lane]).max(0.0);
-            moment[lane] += d * l[lane];
-            slope[lane] += if d > 0.0 { l[lane] * l[lane] } else { 0.0 };
-        }
-    }
-    for (g, l) in gaps[whole..].iter().zip(&levers[whole..]) {
-        let d = (l * y - g).max(0.0);
-        moment[0] += d * l;
-        slope[0] += if d > 0.0 { l * l } else { 0.0 };
-    }
-    (pairwise(moment), pairwise(slope))
-}
-
-/// The lanes' sum as a tree (three additions deep, not seven in a chain).
-#[inline(always)]
-fn pairwise(l: [f64; OWN_LANES]) -> f64 {
-    ((l[0] + l[1]) + (l[2] + l[3])) + ((l[4] + l[5]) + (l[6] + l[7]))
-}
-
-/// Lanes of [`own_moment`]'s sums.
-const OWN_LANES: usize = 8;
 
 /// A row table's room for the discs' own balances ([`OwnBalances`]).
 #[derive(Debug, Clone, Default)]
 pub(crate) struct OwnScratch {
-    /// One rotation's gaps, and the run's levers (0 where a pin has none).
+    /// The gaps of every rotation of the entries that may carry, entry j's at j·lanes + s
+    /// (the lanes past z_p at 0); the run's levers (0 where a pin has none) and those of
+    /// the entries kept, with their squares.
     gaps: Vec<f64>,
     levers: Vec<f64>,
-    /// The pins' radii, radial and tangential errors doubled (entry u: pin u mod z_p).
-    forward: [Vec<f64>; 3],
-    /// Per rotation of the run: y0 where the disc overlaps its own flanks, else NaN.
+    kept: Vec<(f64, f64)>,
+    search: OwnSearch,
+    /// The sums at the current turns, per lane; per vector of lanes, whether any lane in
+    /// it is still searching.
+    sums: (Vec<f64>, Vec<f64>),
+    open: Vec<bool>,
+    /// Per rotation of the run: y0 where the disc overlaps its own flanks, else NaN; where
+    /// its search starts (NaN: the bracket's middle).
     rests: Vec<f64>,
+    guesses: Vec<f64>,
+    /// The rests of the row's runs so far, at their window index.
+    all_rests: Vec<f64>,
 }
+
+impl OwnScratch {
+    /// Every lane at its start (`guesses`, else its bracket's middle; NaN and settled, with
+    /// a NaN bracket, where the disc does not overlap itself, and past the rotations).
+    fn start(&mut self, (lags, coasts): (&[f64], &[f64]), lanes: usize) {
+        let search = &mut self.search;
+        let columns = [
+            &mut search.y,
+            &mut search.lo,
+            &mut search.hi,
+            &mut search.done,
+            &mut self.sums.0,
+            &mut self.sums.1,
+        ];
+        for column in columns {
+            column.resize(lanes, 0.0);
+        }
+        let rotations = lags.len();
+        for (rotation, (&lag, &coast)) in lags.iter().zip(coasts).enumerate() {
+            let overlaps = coast > lag;
+            let guess = self.guesses[rotation];
+            search.y[rotation] = if !overlaps {
+                f64::NAN
+            } else if guess > lag && guess < coast {
+                guess
+            } else {
+                0.5 * (lag + coast)
+            };
+            let (lo, hi) = if overlaps {
+                (lag, coast)
+            } else {
+                (f64::NAN, f64::NAN)
+            };
+            search.lo[rotation] = lo;
+            search.hi[rotation] = hi;
+            search.done[rotation] = if overlaps { 0.0 } else { 1.0 };
+        }
+        for column in [&mut search.y, &mut search.lo, &mut search.hi] {
+            column[rotations..].fill(f64::NAN);
+        }
+        search.done[rotations..].fill(1.0);
+    }
+
+    /// (P, S) = (Σ g·l, Σ l²) over the pins that carry at each lane's y (l·y − g > 0): the
+    /// kept entries' j-th in chain j mod 4 in their order, the chains added as
+    /// (c0 + c1) + (c2 + c3) (four chains of additions, not one four times as long).
+    #[inline(always)]
+    fn sums<S: pulp::Simd>(&mut self, simd: S, lanes: usize) {
+        let zero = simd.splat_f64s(0.0);
+        let (p, s) = (&mut self.sums.0, &mut self.sums.1);
+        let (p, s) = (S::as_mut_simd_f64s(p).0, S::as_mut_simd_f64s(s).0);
+        let y = S::as_simd_f64s(&self.search.y).0;
+        let vectors = p.len();
+        let kept = &self.kept[..];
+        let n = kept.len();
+        let gaps = S::as_simd_f64s(&self.gaps[..n * lanes]).0;
+        assert_eq!(gaps.len(), n * vectors);
+        let whole = n / CHAINS * CHAINS;
+        for (v, ((p, s), &y)) in p.iter_mut().zip(s.iter_mut()).zip(y).enumerate() {
+            if !self.open[v] {
+                // Every lane settled: its sums are not read again.
+                continue;
+            }
+            let (mut cp, mut cs) = ([zero; CHAINS], [zero; CHAINS]);
+            // Entry j's terms into chain c (a macro: a closure would be compiled without
+            // the instruction set's features, out of line).
+            macro_rules! add {
+                ($c:expr, $j:expr) => {{
+                    let (c, j) = ($c, $j);
+                    let (g, (l, ll)) = (gaps[j * vectors + v], kept[j]);
+                    let (l, ll) = (simd.splat_f64s(l), simd.splat_f64s(ll));
+                    // l·y − g > 0 exactly where l·y > g (a difference of two doubles is
+                    // 0 only where they are equal).
+                    let carries = simd.greater_than_f64s(simd.mul_f64s(l, y), g);
+                    let gl = simd.select_f64s(carries, simd.mul_f64s(g, l), zero);
+                    let ll = simd.select_f64s(carries, ll, zero);
+                    cp[c] = simd.add_f64s(cp[c], gl);
+                    cs[c] = simd.add_f64s(cs[c], ll);
+                }};
+            }
+            for j in (0..whole).step_by(CHAINS) {
+                add!(0, j);
+                add!(1, j + 1);
+                add!(2, j + 2);
+                add!(3, j + 3);
+            }
+            for j in whole..n {
+                add!(j - whole, j);
+            }
+            *p = simd.add_f64s(simd.add_f64s(cp[0], cp[1]), simd.add_f64s(cp[2], cp[3]));
+            *s = simd.add_f64s(simd.add_f64s(cs[0], cs[1]), simd.add_f64s(cs[2], cs[3]));
+        }
+    }
+
+    /// One step of every lane not yet settled (`OwnSearch`); whether all are.
+    #[inline(always)]
+    fn step<S: pulp::Simd>(&mut self, simd: S) -> bool {
+        let search = &mut self.search;
+        let (zero, one, half) = (
+            simd.splat_f64s(0.0),
+            simd.splat_f64s(1.0),
+            simd.splat_f64s(0.5),
+        );
+        let tolerance = simd.splat_f64s(OWN_BALANCE_TOLERANCE);
+        let (ys, los, his, dones) = (
+            S::as_mut_simd_f64s(&mut search.y).0,
+            S::as_mut_simd_f64s(&mut search.lo).0,
+            S::as_mut_simd_f64s(&mut search.hi).0,
+            S::as_mut_simd_f64s(&mut search.done).0,
+        );
+        let (p_now, s_now) = (
+            S::as_simd_f64s(&self.sums.0).0,
+            S::as_simd_f64s(&self.sums.1).0,
+        );
+        let mut open = false;
+        for v in 0..ys.len() {
+            let (y, p, s) = (ys[v], p_now[v], s_now[v]);
+            // y is the root of the pins that carry at y (P/S = y: a fixed point, reached by
+            // the Newton step before), or no pin carries (M = 0): settled where it stands.
+            let root = simd.div_f64s(p, s);
+            let settled = simd.or_m64s(
+                simd.or_m64s(simd.equal_f64s(root, y), simd.equal_f64s(s, zero)),
+                simd.equal_f64s(dones[v], one),
+            );
+            let above =
+                simd.greater_than_or_equal_f64s(simd.sub_f64s(simd.mul_f64s(y, s), p), zero);
+            let lo = simd.select_f64s(above, los[v], y);
+            let hi = simd.select_f64s(above, y, his[v]);
+            let inside = simd.and_m64s(
+                simd.greater_than_f64s(root, lo),
+                simd.less_than_f64s(root, hi),
+            );
+            let middle = simd.mul_f64s(half, simd.add_f64s(lo, hi));
+            let next = simd.select_f64s(inside, root, middle);
+            let narrow = simd.less_than_or_equal_f64s(simd.sub_f64s(hi, lo), tolerance);
+            ys[v] = simd.select_f64s(settled, y, next);
+            los[v] = simd.select_f64s(settled, los[v], lo);
+            his[v] = simd.select_f64s(settled, his[v], hi);
+            dones[v] = simd.select_f64s(simd.or_m64s(settled, narrow), one, zero);
+            self.open[v] = simd.reduce_sum_f64s(simd.sub_f64s(one, dones[v])) > 0.0;
+            open |= self.open[v];
+        }
+        !open
+    }
+}
+
+/// Lanes are padded to a multiple of this.
+const OWN_LANES: usize = 8;
+
+/// Chains of additions in each lane's sums.
+const CHAINS: usize = 4;
 
 /// Most steps of a disc's own balance (each one Newton's or a bisection's).
 const OWN_BALANCE_STEPS: usize = 100;
 
-/// A disc's own balance is settled to this Newton step or width of its bracket, rad
-/// (3·10⁻¹³ arcmin).
+/// A disc's own balance is settled to this width of its bracket, rad (3·10⁻¹³ arcmin).
 const OWN_BALANCE_TOLERANCE: f64 = 1e-16;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pulp::Simd;
+
+    /// A small deterministic stream in [−1, 1) (a linear congruential generator).
+    fn stream(seed: u64) -> impl FnMut() -> f64 {
+        let mut state = seed;
+        move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+        }
+    }
+
+    /// One run's rests by every kernel this processor runs, with the searches started at
+    /// `guesses`: (name, rests).
+    fn rests_in_every_width(
+        (run, levers, inverse): (&[f64], &[f64], &[f64]),
+        factors: (&[f64], &[f64]),
+        turned: &Turned,
+        brackets: (&[f64], &[f64]),
+        guesses: &[f64],
+    ) -> Vec<(&'static str, Vec<f64>)> {
+        let mut widths = Vec::new();
+        let mut run_in = |name, f: &dyn Fn(OwnBalances)| {
+            let mut own = OwnScratch::default();
+            own.levers.extend(
+                levers
+                    .iter()
+                    .zip(inverse)
+                    .map(|(l, v)| if *v != 0.0 { *l } else { 0.0 }),
+            );
+            own.guesses.extend_from_slice(guesses);
+            f(OwnBalances {
+                own: &mut own,
+                run,
+                factors,
+                turned,
+                brackets,
+            });
+            widths.push((name, own.rests.clone()));
+        };
+        run_in("scalar", &|op| Simd::vectorize(pulp::Scalar::new(), op));
+        #[cfg(target_arch = "x86_64")]
+        {
+            if let Some(simd) = pulp::x86::V3::try_new() {
+                run_in("AVX2", &|op| Simd::vectorize(simd, op));
+            }
+            if let Some(simd) = pulp::x86::V4::try_new() {
+                run_in("AVX-512", &|op| Simd::vectorize(simd, op));
+            }
+        }
+        run_in("dispatched", &|op| pulp::Arch::new().dispatch(op));
+        widths
+    }
+
+    #[test]
+    fn own_balances_agree_to_the_bit_in_every_width_and_from_any_start() {
+        // Runs of 40, 37 and 8 entries (padded lanes, remainders of the chains), pins in
+        // and out of place, gaps of either sign so that most rotations overlap their own
+        // flanks. Each rest against plain bisection of Σ max(0, l·y − g)·l on the gaps
+        // computed in full; every width, and every start (the bracket's middle, the
+        // neighbouring rotation's rest, a point near either end), to the bit.
+        let mut next = stream(11);
+        let (mut overlapping, mut free) = (0, 0);
+        for pins in [40, 37, 8] {
+            let column = |next: &mut dyn FnMut() -> f64, scale: f64| -> Vec<f64> {
+                (0..pins).map(|_| scale * next()).collect()
+            };
+            // The 37-entry runs with more clearance: some rotations do not overlap.
+            let clearance = if pins == 37 { 5e-3 } else { 0.0 };
+            let run: Vec<f64> = column(&mut next, 2e-3)
+                .iter()
+                .map(|t| t + clearance)
+                .collect();
+            let levers: Vec<f64> = (0..pins)
+                .map(|m| match m % 7 {
+                    0 => 0.0,
+                    _ if m < pins / 2 => 10.0 + m as f64,
+                    _ => -12.0 - m as f64,
+                })
+                .collect();
+            let inverse: Vec<f64> = levers
+                .iter()
+                .map(|l| if *l != 0.0 { 1.0 / l } else { 0.0 })
+                .collect();
+            let (fr, ft) = (column(&mut next, 1.0), column(&mut next, 1.0));
+            let doubled = |v: Vec<f64>| -> Vec<f64> {
+                (0..2 * pins)
+                    .map(|u| v[(2 * pins - 1 - u) % pins])
+                    .collect()
+            };
+            let (radius, radial, tangential) = (
+                doubled(column(&mut next, 4e-3)),
+                doubled(column(&mut next, 3e-3)),
+                doubled(column(&mut next, 3e-3)),
+            );
+            for placed in [None, Some((&radial[..], &tangential[..]))] {
+                let turned = Turned {
+                    radius: &radius,
+                    placed,
+                };
+                // Rotation s's gaps in full, and its bracket as the folds find it.
+                let gaps = |s: usize| -> Vec<f64> {
+                    (0..pins)
+                        .map(|m| {
+                            let at = pins - 1 - m + s;
+                            match placed {
+                                Some((a, b)) => run[m] + a[at] * fr[m] + b[at] * ft[m] - radius[at],
+                                None => run[m] - radius[at],
+                            }
+                        })
+                        .collect()
+                };
+                let (mut lags, mut coasts) =
+                    (vec![f64::INFINITY; pins], vec![f64::NEG_INFINITY; pins]);
+                for s in 0..pins {
+                    for (g, v) in gaps(s).iter().zip(&inverse) {
+                        if *v > 0.0 {
+                            lags[s] = lags[s].min(g * v);
+                        } else if *v < 0.0 {
+                            coasts[s] = coasts[s].max(g * v);
+                        }
+                    }
+                }
+                let data = (&run[..], &levers[..], &inverse[..]);
+                let brackets = (&lags[..], &coasts[..]);
+                let middle = rests_in_every_width(
+                    data,
+                    (&fr, &ft),
+                    &turned,
+                    brackets,
+                    &vec![f64::NAN; pins],
+                );
+                let reference = &middle[0].1;
+                for s in 0..pins {
+                    if coasts[s] <= lags[s] {
+                        assert!(reference[s].is_nan(), "rotation {s} has no rest");
+                        free += 1;
+                        continue;
+                    }
+                    overlapping += 1;
+                    let pins_of = gaps(s);
+                    let moment = |y: f64| -> f64 {
+                        pins_of
+                            .iter()
+                            .zip(&levers)
+                            .map(|(g, l)| (l * y - g).max(0.0) * l)
+                            .sum()
+                    };
+                    let (mut lo, mut hi) = (lags[s], coasts[s]);
+                    for _ in 0..200 {
+                        let mid = 0.5 * (lo + hi);
+                        if moment(mid) < 0.0 {
+                            lo = mid;
+                        } else {
+                            hi = mid;
+                        }
+                    }
+                    let scale = lags[s].abs().max(coasts[s].abs());
+                    assert!(
+                        (reference[s] - 0.5 * (lo + hi)).abs() <= 1e-13 * scale,
+                        "{pins} pins, rotation {s}: {} against {}",
+                        reference[s],
+                        0.5 * (lo + hi)
+                    );
+                }
+                let near = |f: f64| -> Vec<f64> {
+                    (0..pins)
+                        .map(|s| lags[s] + f * (coasts[s] - lags[s]))
+                        .collect()
+                };
+                let neighbour: Vec<f64> = (0..pins).map(|s| reference[(s + 1) % pins]).collect();
+                for guesses in [neighbour, near(1e-3), near(0.999)] {
+                    let started =
+                        rests_in_every_width(data, (&fr, &ft), &turned, brackets, &guesses);
+                    for (name, rests) in middle.iter().chain(&started) {
+                        let same = rests
+                            .iter()
+                            .zip(reference)
+                            .all(|(a, b)| a.to_bits() == b.to_bits());
+                        assert!(same, "{name}, {pins} pins, placed {}", placed.is_some());
+                    }
+                }
+            }
+        }
+        // The test reaches both: rotations that search and rotations that do not.
+        assert!(
+            overlapping > 100 && free > 10,
+            "{overlapping} overlap, {free} do not"
+        );
+    }
+}
