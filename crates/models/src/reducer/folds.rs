@@ -186,19 +186,9 @@ const WIDE: usize = 16;
 
 #[cfg(test)]
 mod tests {
+    use super::super::test_streams::{doubled, stream};
     use super::*;
     use pulp::Simd;
-
-    /// A small deterministic stream in [−1, 1) (a linear congruential generator).
-    fn stream(seed: u64) -> impl FnMut() -> f64 {
-        let mut state = seed;
-        move || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 52) as f64 - 1.0
-        }
-    }
 
     #[test]
     fn folds_agree_to_the_bit_in_every_width() {
@@ -221,17 +211,12 @@ mod tests {
                 })
                 .collect();
             let (fr, ft) = (column(&mut next, 1.0), column(&mut next, 1.0));
-            let doubled = |v: Vec<f64>| -> Vec<f64> {
-                (0..2 * pins)
-                    .map(|u| v[(2 * pins - 1 - u) % pins])
-                    .collect()
-            };
             let mut radius = column(&mut next, 4e-3);
             radius[3] = radius[5];
             let (radius, radial, tangential) = (
-                doubled(radius),
-                doubled(column(&mut next, 5e-3)),
-                doubled(column(&mut next, 5e-3)),
+                doubled(&radius),
+                doubled(&column(&mut next, 5e-3)),
+                doubled(&column(&mut next, 5e-3)),
             );
             for placed in [None, Some((&radial[..], &tangential[..]))] {
                 let turned = Turned {

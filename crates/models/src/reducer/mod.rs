@@ -33,6 +33,8 @@
 mod folds;
 mod geometry;
 mod layout;
+#[cfg(test)]
+mod test_streams;
 mod torsion;
 mod windows;
 

@@ -883,19 +883,9 @@ const OWN_BALANCE_TOLERANCE: f64 = 1e-16;
 
 #[cfg(test)]
 mod tests {
+    use super::super::test_streams::{doubled, stream};
     use super::*;
     use pulp::Simd;
-
-    /// A small deterministic stream in [−1, 1) (a linear congruential generator).
-    fn stream(seed: u64) -> impl FnMut() -> f64 {
-        let mut state = seed;
-        move || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 52) as f64 - 1.0
-        }
-    }
 
     /// One run's rests by every kernel this processor runs, with the searches started at
     /// `guesses`: (name, rests).
@@ -970,15 +960,10 @@ mod tests {
                 .map(|l| if *l != 0.0 { 1.0 / l } else { 0.0 })
                 .collect();
             let (fr, ft) = (column(&mut next, 1.0), column(&mut next, 1.0));
-            let doubled = |v: Vec<f64>| -> Vec<f64> {
-                (0..2 * pins)
-                    .map(|u| v[(2 * pins - 1 - u) % pins])
-                    .collect()
-            };
             let (radius, radial, tangential) = (
-                doubled(column(&mut next, 4e-3)),
-                doubled(column(&mut next, 3e-3)),
-                doubled(column(&mut next, 3e-3)),
+                doubled(&column(&mut next, 4e-3)),
+                doubled(&column(&mut next, 3e-3)),
+                doubled(&column(&mut next, 3e-3)),
             );
             for placed in [None, Some((&radial[..], &tangential[..]))] {
                 let turned = Turned {
@@ -1025,29 +1010,26 @@ mod tests {
                         continue;
                     }
                     overlapping += 1;
-                    let pins_of = gaps(s);
-                    let moment = |y: f64| -> f64 {
-                        pins_of
-                            .iter()
-                            .zip(&levers)
-                            .map(|(g, l)| (l * y - g).max(0.0) * l)
-                            .sum()
+                    // The independent check: `DiscWindow::at_rest`'s plain bisection on
+                    // the pins with a lever, at no offset and no slack.
+                    let pins_of: Vec<(f64, f64)> = gaps(s)
+                        .into_iter()
+                        .zip(&levers)
+                        .filter(|(_, l)| **l != 0.0)
+                        .map(|(g, l)| (g, *l))
+                        .collect();
+                    let window = DiscWindow {
+                        offset: 0.0,
+                        lag: lags[s],
+                        lead: -coasts[s],
+                        slack: 0.0,
                     };
-                    let (mut lo, mut hi) = (lags[s], coasts[s]);
-                    for _ in 0..200 {
-                        let mid = 0.5 * (lo + hi);
-                        if moment(mid) < 0.0 {
-                            lo = mid;
-                        } else {
-                            hi = mid;
-                        }
-                    }
+                    let (bisected, _) = window.at_rest(1.0, &pins_of);
                     let scale = lags[s].abs().max(coasts[s].abs());
                     assert!(
-                        (reference[s] - 0.5 * (lo + hi)).abs() <= 1e-13 * scale,
-                        "{pins} pins, rotation {s}: {} against {}",
-                        reference[s],
-                        0.5 * (lo + hi)
+                        (reference[s] - bisected).abs() <= 1e-13 * scale,
+                        "{pins} pins, rotation {s}: {} against {bisected}",
+                        reference[s]
                     );
                 }
                 let near = |f: f64| -> Vec<f64> {
