@@ -127,6 +127,11 @@ struct Revolution {
     deepest: (f64, usize),
 }
 
+/// Windows this close to the widest (rad at the output, 3·10⁻⁹ arcmin) count as as wide
+/// where the loaded figures choose their point: far above the rounding of the windows'
+/// ends (some 10⁻¹⁹ rad), far below any width a deviation makes.
+const WIDEST_TIE: f64 = 1e-12;
+
 /// The model with its reducer and grid.
 #[derive(Debug, Clone)]
 pub struct RvLostMotion {
@@ -401,6 +406,17 @@ impl RvLostMotion {
         })
     }
 
+    /// The first grid point (in output angle) whose window is as wide as the widest to
+    /// [`WIDEST_TIE`], and its width: where the loaded figures are read. Several points
+    /// are often equally wide (a window that is one disc's slack about its own balance),
+    /// and the strict widest among them would be chosen by rounding alone.
+    fn first_widest(&self, table: &RowTable, widest: f64) -> (f64, usize) {
+        (0..self.grid.points)
+            .map(|k| (self.width(table, k), k))
+            .find(|(w, _)| *w >= widest - WIDEST_TIE)
+            .unwrap_or((widest, 0))
+    }
+
     /// The preload of a row whose narrowest window (at grid point `at`) is negative.
     fn preload(&self, table: &RowTable, x: &[f64], at: usize) -> Preload {
         PINS.with(|discs| {
@@ -444,10 +460,10 @@ impl ErrorModel for RvLostMotion {
             } else {
                 Preload::NONE
             };
-            let figures = self
-                .torsion
-                .as_ref()
-                .map(|torsion| self.loaded_figures(torsion, &table, x, scan.widest, free_involute));
+            let figures = self.torsion.as_ref().map(|torsion| {
+                let at = self.first_widest(&table, scan.widest.0);
+                self.loaded_figures(torsion, &table, x, at, free_involute)
+            });
             (scan, overlapping, preload, figures)
         });
         let (widest, sum, least) = (scan.widest.0, scan.mean, scan.narrowest);
