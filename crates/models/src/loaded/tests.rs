@@ -16,11 +16,7 @@ fn rv80e(share: f64) -> CycloidPinContact {
 }
 
 fn contact(model: &CycloidPinContact) -> PinContact {
-    PinContact {
-        face_width: model.face_width(),
-        friction: 0.0,
-        ratio: 121.0,
-    }
+    PinContact::new(model.face_width(), 0.0, 121.0)
 }
 
 /// One disc without crank compliance: its pins' forces at the turn y.
@@ -109,11 +105,7 @@ fn levers(phase: f64) -> Vec<f64> {
 }
 
 fn law() -> PinContact {
-    PinContact {
-        face_width: 12.0,
-        friction: 0.0,
-        ratio: 121.0,
-    }
+    PinContact::new(12.0, 0.0, 121.0)
 }
 
 #[test]

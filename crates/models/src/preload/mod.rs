@@ -89,17 +89,30 @@ pub(crate) struct PinContact {
     pub friction: f64,
     /// i, the reducer's ratio (the input turns i times per output turn).
     pub ratio: f64,
+    /// L^0.8, taken once (a preloaded row asks for a force per row).
+    face_power: f64,
 }
 
 impl PinContact {
+    /// The contact law of pins on a face width L (mm) with friction μ, in a reducer of
+    /// ratio i.
+    pub fn new(face_width: f64, friction: f64, ratio: f64) -> PinContact {
+        PinContact {
+            face_width,
+            friction,
+            ratio,
+            face_power: face_width.powf(0.8),
+        }
+    }
+
     /// The pin contact's approach δ(F) = 2·3.84·10⁻⁵·F^0.9/L^0.8, mm.
     pub fn approach(&self, force: f64) -> f64 {
-        CONTACTS_PER_PIN * PALMGREN * force.powf(0.9) / self.face_width.powf(0.8)
+        CONTACTS_PER_PIN * PALMGREN * force.powf(0.9) / self.face_power
     }
 
     /// The force F with δ(F) = `approach`, N.
     pub fn force_at(&self, approach: f64) -> f64 {
-        (approach * self.face_width.powf(0.8) / (CONTACTS_PER_PIN * PALMGREN)).powf(1.0 / 0.9)
+        (approach * self.face_power / (CONTACTS_PER_PIN * PALMGREN)).powf(1.0 / 0.9)
     }
 
     /// The secant law of a pin: K(δ) = F(δ)/δ = C·δ^(1/9) (F ∝ δ^(1/0.9)), Li Lixing's
@@ -349,11 +362,7 @@ impl PreloadRule {
         positions.dedup();
         let columns = PinColumns::new(stage, pin_radius);
         Ok(PreloadRule {
-            contact: PinContact {
-                face_width,
-                friction,
-                ratio,
-            },
+            contact: PinContact::new(face_width, friction, ratio),
             stage: *stage,
             pin_radius,
             disc_torque: 0.5 * lambda * rated_torque * 1000.0,
