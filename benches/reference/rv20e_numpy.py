@@ -32,11 +32,20 @@ cycloid stage Eq. 16 with every term in arcmin, in the physical reading the modi
 backlash 2(dr_rp - s dr_p)/(e zc) (s = sqrt(1 - K1^2)) and every term times
 lambda = (zc/zp)(1 - 1/i16), Kn of Eq. 17; crank term du cos b/(a0 + a1).
 Outputs: hysteresis_arcmin (Eq. 21, stages clipped at zero), involute_stage_arcmin,
-cycloid_stage_arcmin, crank_bearing_arcmin, interference (indicator: a stage < 0),
-preload_arcmin (sum of max(0, -stage)) and cycloid_preload_um (max(0, -cycloid stage)
-per flank along the contact normal). A preloaded assembly (interference = 1) counts out
-of the lost-motion spec, as rvtol counts it (no Cpk is given while any preloaded sample
-lies within the limits, as in rvtol's report).
+cycloid_stage_arcmin, crank_bearing_arcmin, preload_arcmin (sum of max(0, -stage)) and the
+one preload rule's five (crates/models/src/preload, docs/models.md §14.5): the cycloid
+stage judged on its profile (the clearances at the pins' places 2πi/z_p of the modification
+with its errors, the pin circle, pin radius and eccentricity errors, δJ, ΔF_r, δt and ΔF_p as
+an equivalent equidistant amount), both discs alike, by the zero-torque balance of the pins
+(safeguarded Newton steps on Σ max(0, l·y − g)·l, vectorised over the rows); its largest
+approach (preload_overlap_um), pin force by two Palmgren line contacts
+(preload_pin_force_n), no-load torque at the input (no_load_torque_nm), and the indicators
+preloaded and over_preloaded (a pin force above the design's largest at rated torque,
+computed once as rvtol does, or a jammed involute or crank stage). An over-preloaded
+assembly counts out of the lost-motion spec; a preload within the limit conforms (no Cpk
+is given while any over-preloaded sample lies within the limits, as in rvtol's report).
+The reducer's parameters come from the scenario's reducer file; an input bound to
+"reducer.KEY" takes its value.
 
 Rows go in chunks of 1,000,000. Per output: mean, sd (n-1), skewness g1, excess kurtosis
 g2 (merged chunk by chunk), min, max, the percentiles 0.135 / 2.275 / 15.866 / 50 /
@@ -67,6 +76,13 @@ RAYLEIGH_QUANTILE = 3.635_285_597_179_897
 # cos beta and 1/cos beta come from their series below beta^2 = 1e-6 (beta = 1e-3 rad).
 TILT_SERIES_LIMIT = 1e-6
 MIN_ACCEPTANCE_RATE = 0.01
+# The preload rule (crates/models/src/preload/mod.rs): Palmgren's line contact, two per pin.
+PALMGREN = 3.84e-5
+CONTACTS_PER_PIN = 2.0
+LEVER_FLOOR = 1e-12
+RATED_POSITIONS = 4
+# Rows of the rule's pin matrices at a time (rows × pins doubles per array).
+RULE_BLOCK = 65536
 DEFAULT_SCENARIO = os.path.join(
     os.path.dirname(os.path.abspath(__file__)), "..", "..", "scenarios", "rv20e-hysteresis.json"
 )
@@ -83,10 +99,12 @@ INPUTS = [
     "shift_modification_error_mm", "eccentricity_error_mm", "crank_bearing_clearance_mm",
     "input_shaft_du_mm", "input_shaft_dv_mm", "input_shaft_dalpha_rad", "input_shaft_dbeta_rad",
 ]
-# Continuous outputs, in the model's order (the indicator `interference` sits after the
-# crank term in rvtol's report); `pin_class` exists only with selective fitting.
+# Continuous outputs, in the model's order, then the preload rule's two indicators;
+# `pin_class` exists only with selective fitting.
 OUTPUTS = ["hysteresis_arcmin", "involute_stage_arcmin", "cycloid_stage_arcmin",
-           "crank_bearing_arcmin", "preload_arcmin", "cycloid_preload_um"]
+           "crank_bearing_arcmin", "preload_arcmin", "preload_overlap_um",
+           "preload_pin_force_n", "no_load_torque_nm"]
+INDICATORS = ["preloaded", "over_preloaded"]
 SIX_DOF = ["du", "dv", "dw", "dalpha", "dbeta", "dgamma"]
 
 
@@ -130,8 +148,12 @@ class Hysteresis:
         # Eq. 17: Kn = kn_eq·Δr_rp + kn_sh·Δr_p (× λ); the term is −2·(10800/π)·Kn·δe.
         self.kn_equidistant = lam / (e * e * zc)
         self.kn_shift = -lam * (zc / (e * rp * rp * s) + s / (e * zc))
-        # cycloid overlap per flank along the contact normal, µm per arcmin
-        self.um_per_arcmin = 1000.0 * e * zc / 2.0 / ARCMIN_PER_RAD
+        # The preload rule, with λ of the physical reading whatever the reading; δJ, ΔF_r,
+        # δt and ΔF_p enter its profile as an equidistant amount of backlash 2δ/(e·zc) at
+        # the disc (geometric_hysteresis.rs `judge`).
+        self.rule = PreloadRule(p, zc / zp * (1.0 - 1.0 / self.ratio), self.ratio)
+        self.disc_per_arcmin = 1.0 / (ARCMIN_PER_RAD * lam)
+        self.pitch_lever = e * zc
 
     def bind(self, binding, n_rows):
         """Prepares the column form for `binding`: input name -> float (a constant) or int
@@ -161,14 +183,14 @@ class Hysteresis:
         self.cycloid_rows = slice(used[0], used[-1] + 1) if used.size else slice(0, 0)
         self.cycloid_weights = w[self.cycloid_rows]
 
-    def evaluate(self, X, out, tmp):
-        """X: (n_rows, m) block of drawn columns; out: (6, m) rows of OUTPUTS, written in
-        place; tmp: (3, m) scratch. Returns the interference indicator (bool, m)."""
+    def evaluate(self, X, out, indicators, tmp):
+        """X: (n_rows, m) block of drawn columns; out: (8, m) rows of OUTPUTS and
+        indicators: (2, m) rows of INDICATORS, written in place; tmp: (3, m) scratch."""
         def x(name):
             b = self.binding[name]
             return X[b] if isinstance(b, int) else b
 
-        hyst, invol, cyc, crank, preload, flank = out
+        hyst, invol, cyc, crank, preload = out[:5]
         t0, t1, t2 = tmp
         # Input shaft at the sun mesh, point_displacement at (0, 0, z) with dw = dgamma = 0.
         du, dv = x("input_shaft_du_mm"), x("input_shaft_dv_mm")
@@ -219,15 +241,221 @@ class Hysteresis:
         hyst += np.maximum(crank, 0.0, out=t0)
         np.negative(cyc, out=t0)
         np.maximum(t0, 0.0, out=t0)                               # max(0, −Δφ34)
-        np.multiply(t0, self.um_per_arcmin, out=flank)
         np.negative(invol, out=preload)
         np.maximum(preload, 0.0, out=preload)
         preload += t0
         np.negative(crank, out=t0)
         np.maximum(t0, 0.0, out=t0)
         preload += t0
-        # A sum of terms ≥ 0 is > 0 exactly when one is: interference = some stage < 0.
-        return preload > 0.0
+        self.judge(x, out, indicators)
+
+    def judge(self, x, out, indicators):
+        """The preload rule's outputs (geometric_hysteresis.rs `judge`), block by block."""
+        m = out.shape[1]
+        invol, cyc, crank = out[1], out[2], out[3]
+        full = lambda v: np.broadcast_to(v, (m,))
+        others = sum(c * x(name) for c, name in zip(self.cycloid_coefficients[4:8], INPUTS[6:10]))
+        equivalent = full(0.5 * others * self.disc_per_arcmin * self.pitch_lever)
+        equidistant = full(x(INPUTS[2]) + x(INPUTS[10])) + equivalent
+        shift = full(x(INPUTS[3]) + x(INPUTS[11]))
+        errors = [full(x(INPUTS[4])), full(x(INPUTS[5])), full(x(INPUTS[12]))]
+        design = (x(INPUTS[2]), x(INPUTS[3]))
+        if not all(isinstance(v, float) for v in design):
+            raise NotImplementedError("a drawn design modification (the rated force per row)")
+        judged = np.empty((5, min(m, RULE_BLOCK)))
+        for a in range(0, m, RULE_BLOCK):
+            b = min(m, a + RULE_BLOCK)
+            jammed = (invol[a:b] < 0.0) | (crank[a:b] < 0.0)
+            j = judged[:, :b - a]
+            self.rule.judge(equidistant[a:b], shift[a:b], [v[a:b] for v in errors], jammed, design, j)
+            nan = 0.0 * (invol[a:b] + cyc[a:b] + crank[a:b])
+            out[5:8, a:b] = j[:3] + nan
+            indicators[:, a:b] = j[3:] + nan
+
+
+def illinois_root(f, lo, hi):
+    """A root of f on [lo, hi] by the Illinois regula falsi (balance.rs `root`)."""
+    f_lo, f_hi = f(lo), f(hi)
+    if f_lo == 0.0:
+        return lo
+    if f_hi == 0.0:
+        return hi
+    if math.copysign(1.0, f_lo) == math.copysign(1.0, f_hi):
+        return math.nan
+    tolerance = 1e-15 * max(abs(hi - lo), abs(lo), abs(hi))
+    side = 0
+    for _ in range(200):
+        mid = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
+        if not min(lo, hi) < mid < max(lo, hi):
+            mid = 0.5 * (lo + hi)
+        f_mid = f(mid)
+        if f_mid == 0.0 or abs(hi - lo) <= tolerance:
+            return mid
+        if math.copysign(1.0, f_mid) == math.copysign(1.0, f_hi):
+            hi, f_hi = mid, f_mid
+            if side == -1:
+                f_lo *= 0.5
+            side = -1
+        else:
+            lo, f_lo = mid, f_mid
+            if side == 1:
+                f_hi *= 0.5
+            side = 1
+    return 0.5 * (lo + hi)
+
+
+class PreloadRule:
+    """The one preload rule (crates/models/src/preload/mod.rs, balance.rs `alike`)."""
+
+    def __init__(self, p, lam, ratio):
+        zp, zc = p["pin_count"], p["cycloid_teeth"]
+        e, rp, rrp = p["eccentricity_mm"], p["pin_circle_radius_mm"], p["pin_radius_mm"]
+        self.zp, self.zc, self.e = zp, zc, e
+        self.k1 = e * zp / rp
+        self.face_power = p["disc_face_width_mm"] ** 0.8
+        self.friction = p.get("pin_friction_coefficient", 0.0)
+        self.ratio = ratio
+        self.disc_torque = 0.5 * lam * p["rated_torque_nm"] * 1000.0
+        self.limit_force = p.get("preload_limit_pin_force_n")
+        self.limit_overlap = p.get("preload_limit_overlap_um", math.inf)
+        self.limit_torque = p.get("preload_limit_no_load_torque_nm", math.inf)
+        f = self.factors(np.arange(zp) * 2.0 * math.pi / zp)
+        keep = np.abs(f["lever"]) > LEVER_FLOOR * e
+        self.columns = {k: v[keep] for k, v in f.items()}
+        lever, cos = self.columns["lever"], self.columns["cos"]
+        self.inverse = 1.0 / lever
+        self.drive = lever > 0.0
+        s = np.sqrt(1.0 + self.k1 ** 2 - 2.0 * self.k1 * cos)
+        self.arm = np.abs((rp * (self.k1 * cos - 1.0) - e * (self.k1 - cos)) / s + rrp)
+        self.rated = {}
+
+    def factors(self, phi):
+        """The pin factors at the pins' places phi (cycloid.rs `pin_factors_at`)."""
+        sin, cos, k1 = np.sin(phi), np.cos(phi), self.k1
+        s = np.sqrt(1.0 + k1 * k1 - 2.0 * k1 * cos)
+        return {
+            "lever": self.e * self.zc * sin / s,
+            "equidistant": 1.0 - sin / s,
+            "shift": -(1.0 - k1 * cos - math.sqrt(1.0 - k1 * k1) * sin) / s,
+            "radial": (1.0 - k1 * cos) / s,
+            "eccentric": (k1 - cos) / s,
+            "cos": cos,
+        }
+
+    def approach(self, force):
+        return CONTACTS_PER_PIN * PALMGREN * force ** 0.9 / self.face_power
+
+    def force_at(self, approach):
+        return (approach * self.face_power / (CONTACTS_PER_PIN * PALMGREN)) ** (1.0 / 0.9)
+
+    def rated_pin_force(self, equidistant, shift):
+        """F_r of the modification: the design's profile brought to zero play, one disc
+        carrying λ·T_r/2, the largest over the pins' places per pitch (mod.rs)."""
+        if self.limit_force is not None:
+            return self.limit_force
+        key = (equidistant, shift)
+        if key not in self.rated:
+            places = sorted({(self.zc * k % RATED_POSITIONS) / RATED_POSITIONS
+                             for k in range(RATED_POSITIONS)})
+            forces = []
+            for f in places:
+                pins = self.factors((np.arange(self.zp) + f) * 2.0 * math.pi / self.zp)
+                keep = np.abs(pins["lever"]) > LEVER_FLOOR * self.e
+                gaps = equidistant * pins["equidistant"][keep] + shift * pins["shift"][keep]
+                forces.append(self.closed_pin_force(gaps, pins["lever"][keep]))
+            self.rated[key] = max(forces)
+        return self.rated[key]
+
+    def closed_pin_force(self, gaps, levers):
+        """balance.rs `closed_pin_force`: the secant stiffness iterated to its fixed point."""
+        def flanks(g):
+            ratio = g / levers
+            return ratio[levers > 0.0].min(), (-ratio[levers < 0.0]).min()
+
+        def play(c):
+            lag, lead = flanks(gaps + c)
+            return lag + lead
+
+        def moment(y):
+            d = levers * y - gaps
+            return float(np.sum(np.where(d > 0.0, d * levers, 0.0)))
+
+        scale = max(1e-6, float(np.abs(gaps).max()))
+        gaps = gaps + illinois_root(play, -4.0 * scale, 4.0 * scale)
+        lag, lead = flanks(gaps)
+        lo = min(lag, -lead)
+        force = 4.0 * self.disc_torque / (self.zp * self.e * self.zc)
+        for _ in range(200):
+            stiffness = force / self.approach(force)
+            target = self.disc_torque / stiffness
+            y = illinois_root(lambda y: target - moment(y), lo - 1.0, abs(lo) + 1.0)
+            following = stiffness * float((levers * y - gaps).max())
+            settled = abs(following - force) <= 1e-12 * following
+            force = following
+            if settled:
+                break
+        return force
+
+    def judge(self, equidistant, shift, errors, jammed, design, out):
+        """The rule's five outputs into out (5, m) for rows with the modification
+        (equidistant, shift) and errors (pin circle, pin radius, eccentricity), each (m,)."""
+        c = self.columns
+        pin_circle, pin_radius, eccentric = errors
+        gaps = (equidistant[:, None] * c["equidistant"] + shift[:, None] * c["shift"]
+                + pin_circle[:, None] * c["radial"] - pin_radius[:, None]
+                + eccentric[:, None] * c["eccentric"])
+        ratio = gaps * self.inverse
+        lag = np.where(self.drive, ratio, np.inf).min(axis=1)
+        lead = np.where(self.drive, np.inf, -ratio).min(axis=1)
+        overlapping = (lag + lead) < 0.0            # False for NaN: no overlap to balance
+        overlap, force, torque = np.zeros_like(lag), np.zeros_like(lag), np.zeros_like(lag)
+        rows = np.flatnonzero(overlapping)
+        if rows.size:
+            g = gaps[rows]
+            y = self.balance(g, lag[rows], -lead[rows])
+            d = self.columns["lever"] * y[:, None] - g
+            largest = np.maximum(d.max(axis=1), 0.0)
+            loaded = largest > 0.0
+            f = np.where(loaded, self.force_at(largest), 0.0)
+            stiffness = np.where(loaded, f / np.where(loaded, largest, 1.0), 0.0)
+            drag = stiffness * np.where(d > 0.0, d * self.arm, 0.0).sum(axis=1)
+            overlap[rows] = 1000.0 * largest
+            force[rows] = f
+            torque[rows] = self.friction * 2.0 * drag / self.ratio / 1000.0
+        over = jammed | (overlapping & ((overlap > self.limit_overlap) | (torque > self.limit_torque)
+                                        | (force > self.rated_pin_force(*design))))
+        out[0], out[1], out[2] = overlap, force, torque
+        out[3] = jammed | overlapping
+        out[4] = over
+
+    def balance(self, gaps, lo, hi):
+        """The zero-torque balance y of each row (balance.rs `alike`): safeguarded Newton
+        steps on the piecewise linear T(y) = Σ max(0, l·y − g)·l from the bracket's middle."""
+        levers = self.columns["lever"]
+        y = 0.5 * (lo + hi)
+        active = np.arange(y.size)
+        for _ in range(100):
+            if active.size == 0:
+                break
+            ya, la, ha = y[active], lo[active], hi[active]
+            d = levers * ya[:, None] - gaps[active]
+            carried = d > 0.0
+            dl = np.where(carried, d * levers, 0.0)
+            moment = dl.sum(axis=1)
+            size = np.abs(dl).sum(axis=1)
+            slope = np.where(carried, levers * levers, 0.0).sum(axis=1)
+            root = np.abs(moment) <= 1e-13 * size
+            below = moment < 0.0
+            la = np.where(below, ya, la)
+            ha = np.where(below, ha, ya)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                newton = ya - moment / slope
+            following = np.where((newton > la) & (newton < ha), newton, 0.5 * (la + ha))
+            settled = np.abs(following - ya) <= 1e-15 * np.maximum(np.abs(ha - la), np.abs(ya))
+            y[active] = np.where(root, ya, following)
+            lo[active], hi[active] = la, ha
+            active = active[~(root | settled)]
+        return y
 
 
 def variable_sampler(dist):
@@ -372,12 +600,24 @@ def summarise(v, mom):
     }
 
 
-def run(scenario, n, seed):
+def reducer_params(scenario, path):
+    """The scenario's reducer: its file's parameters, then those given inline."""
+    reducer = scenario.get("reducer", {})
+    params = {}
+    if "file" in reducer:
+        with open(os.path.join(os.path.dirname(os.path.abspath(path)), reducer["file"])) as f:
+            params.update(json.load(f)["params"])
+    params.update(reducer.get("params", {}))
+    return params
+
+
+def run(scenario, n, seed, path):
     if scenario.get("correlations"):
         raise NotImplementedError("correlations")
     model_spec, = scenario["models"]
     assert model_spec["model"] == "geometric_hysteresis"
-    model = Hysteresis(model_spec["params"])
+    reducer = reducer_params(scenario, path)
+    model = Hysteresis({**reducer, **model_spec["params"]})
 
     # The block of drawn columns: the variables in scenario order, then each part's
     # drawn components; dw and dgamma of a tolerance band are exactly 0.
@@ -409,7 +649,10 @@ def run(scenario, n, seed):
         parts.append((rows, pairs, mean, sd))
     binding = {}
     for k, b in model_spec["inputs"].items():
-        binding[k] = row_of[b] if isinstance(b, str) else float(b)
+        if isinstance(b, str) and b.startswith("reducer."):
+            binding[k] = float(reducer[b[len("reducer."):]])
+        else:
+            binding[k] = row_of[b] if isinstance(b, str) else float(b)
     n_rows = len(names) + 4 * len(parts)
     model.bind(binding, n_rows)
 
@@ -420,8 +663,8 @@ def run(scenario, n, seed):
             raise NotImplementedError(f"spec limits on {name}")
         lower = lim.get("lower")
         upper = lim.get("upper")
-        # preloaded samples are non-conforming for hysteresis_arcmin unless flagged_conform
-        flagged = name == "hysteresis_arcmin" and not lim.get("flagged_conform", False)
+        # over-preloaded samples are non-conforming for hysteresis_arcmin (its condition)
+        flagged = name == "hysteresis_arcmin"
         spec[OUTPUTS.index(name)] = (lower, upper, flagged)
 
     # SFC64, numpy's fastest bit generator (its normals cost 20 % less than PCG64's).
@@ -429,9 +672,10 @@ def run(scenario, n, seed):
     values = np.empty((len(OUTPUTS), n))       # every output value, for the percentiles
     X = np.empty((n_rows, min(CHUNK, n)))
     tmp = np.empty((3, min(CHUNK, n)))
+    flags = np.empty((len(INDICATORS), min(CHUNK, n)))
     moments = [Moments() for _ in OUTPUTS]
     counts = {j: [0, 0] for j in spec}          # out of spec, flagged within the limits
-    n_interf = 0
+    events = [0] * len(INDICATORS)
     candidates = [0] * (2 * len(parts))
     for start in range(0, n, CHUNK):
         m = min(CHUNK, n - start)
@@ -448,8 +692,11 @@ def run(scenario, n, seed):
                 for g, ((cx, cy), pair) in enumerate(pairs):
                     candidates[2 * p + g] += pair.fill(rng, Xm[rows[cx]], Xm[rows[cy]], tm[0], tm[1])
         out = values[:, start:start + m]
-        interf = model.evaluate(Xm, out, tm)
-        n_interf += int(np.count_nonzero(interf))
+        fm = flags[:, :m]
+        model.evaluate(Xm, out, fm, tm)
+        for k in range(len(INDICATORS)):
+            events[k] += int(np.count_nonzero(fm[k] == 1.0))
+        over = fm[1] == 1.0
         for j, mom in enumerate(moments):
             mom.add(out[j], tm)
         for j, (lower, upper, flagged) in spec.items():
@@ -458,7 +705,7 @@ def run(scenario, n, seed):
             if lower is not None:
                 within &= v >= lower
             n_within = int(np.count_nonzero(within))
-            flagged_within = int(np.count_nonzero(within & interf)) if flagged else 0
+            flagged_within = int(np.count_nonzero(within & over)) if flagged else 0
             counts[j][0] += m - n_within + flagged_within
             counts[j][1] += flagged_within
 
@@ -475,7 +722,8 @@ def run(scenario, n, seed):
                      (st["mean"] - lower) if lower is not None else math.inf]
             st["cpk"] = min(sides) / (3.0 * st["sd"]) if counts[j][1] == 0 else None
         stats[name] = st
-    stats["interference_fraction"] = n_interf / n
+    for name, k in zip(INDICATORS, events):
+        stats[name] = k / n
     draws = sum(candidates)
     stats["constraint"] = {
         "candidate_draws": draws,
@@ -501,18 +749,19 @@ def report(stats, n, seed):
             limit = " and ".join(s for s in (lower is not None and f"x >= {lower:g}",
                                              upper is not None and f"x <= {upper:g}") if s)
             cpk = (f"Cpk {st['cpk']:.5g}" if st["cpk"] is not None else
-                   f"Cpk n/a ({st['flagged_within_spec']:,} preloaded samples within the limits)")
+                   f"Cpk n/a ({st['flagged_within_spec']:,} over-preloaded samples within the limits)")
             print(f"  ({limit}) {cpk}  out of spec {st['out_of_spec_fraction'] * 1e6:.0f} ppm "
-                  f"(preloaded counted out of spec)")
+                  f"(over-preloaded counted out of spec)")
         counts, edges = st["histogram"]
         print(f"  histogram {BINS} bins over [{edges[0]:.6g}, {edges[-1]:.6g}]: "
               + " ".join(str(c) for c in counts))
-    print(f"\ninterference {stats['interference_fraction'] * 100:.4f} % of samples")
+    for name in INDICATORS:
+        print(f"\n{name} {stats[name] * 100:.4f} % of samples")
 
 
 def to_json(stats, n, seed):
     doc = {"samples": n, "seed": seed, "numpy": np.__version__,
-           "interference_fraction": stats["interference_fraction"],
+           **{name: stats[name] for name in INDICATORS},
            "constraint": stats["constraint"], "outputs": {}}
     for name in OUTPUTS:
         st = dict(stats[name])
@@ -534,7 +783,7 @@ def main():
     t0 = time.perf_counter()
     with open(args.scenario) as f:
         scenario = json.load(f)
-    stats = run(scenario, args.samples, args.seed)
+    stats = run(scenario, args.samples, args.seed, args.scenario)
     report(stats, args.samples, args.seed)
     sys.stdout.flush()
     elapsed = time.perf_counter() - t0
