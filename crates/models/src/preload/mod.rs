@@ -83,8 +83,8 @@ pub(crate) const FRICTION: ParamSpec = ParamSpec {
 /// The pin contact law and what turns its forces into a drag at the input.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct PinContact {
-    /// L, the contact length, mm.
-    pub face_width: f64,
+    /// L, the contact length, mm (private: L^0.8 is kept with it).
+    face_width: f64,
     /// μ at the pins.
     pub friction: f64,
     /// i, the reducer's ratio (the input turns i times per output turn).
@@ -103,6 +103,11 @@ impl PinContact {
             ratio,
             face_power: face_width.powf(0.8),
         }
+    }
+
+    /// L, the contact length, mm.
+    pub fn face_width(&self) -> f64 {
+        self.face_width
     }
 
     /// The pin contact's approach δ(F) = 2·3.84·10⁻⁵·F^0.9/L^0.8, mm.

@@ -186,9 +186,8 @@ const WIDE: usize = 16;
 
 #[cfg(test)]
 mod tests {
-    use super::super::test_streams::{doubled, stream};
+    use super::super::test_streams::{doubled, every_width, stream};
     use super::*;
-    use pulp::Simd;
 
     #[test]
     fn folds_agree_to_the_bit_in_every_width() {
@@ -257,31 +256,21 @@ mod tests {
                             .fold(start, |a, v| if largest { a.max(v) } else { a.min(v) });
                         assert_eq!(r.to_bits(), direct.to_bits(), "rotation {s}");
                     }
-                    // The baseline, AVX2 and AVX-512 builds of the fold, where the
-                    // processor runs them.
+                    // The baseline, AVX2 and AVX-512 builds of the fold where the
+                    // processor runs them, the dispatch, and the model's entry point.
                     let mut widths: Vec<(&str, Vec<f64>)> = Vec::new();
-                    let mut run_in = |name, f: &dyn Fn(Fold)| {
+                    for (name, width) in every_width() {
                         let mut folded = vec![start; pins];
-                        f(Fold {
+                        width.apply(Fold {
                             extreme: &mut folded,
                             flank: &flank,
                             turned: &turned,
                         });
                         widths.push((name, folded));
-                    };
-                    run_in("scalar", &|op| Simd::vectorize(pulp::Scalar::new(), op));
-                    #[cfg(target_arch = "x86_64")]
-                    {
-                        if let Some(simd) = pulp::x86::V3::try_new() {
-                            run_in("AVX2", &|op| Simd::vectorize(simd, op));
-                        }
-                        if let Some(simd) = pulp::x86::V4::try_new() {
-                            run_in("AVX-512", &|op| Simd::vectorize(simd, op));
-                        }
                     }
                     let mut folded = vec![start; pins];
                     fold_flank(pulp::Arch::new(), &mut folded, &flank, &turned);
-                    widths.push(("dispatched", folded));
+                    widths.push(("fold_flank", folded));
                     for (name, folded) in widths {
                         let same = folded
                             .iter()

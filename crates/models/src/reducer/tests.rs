@@ -718,6 +718,21 @@ fn a_crank_s_own_needle_clearance_widens_the_window_between_its_neighbours() {
 
 /// The RV-20E with the torsion curve's crank side (`TorsionCurve::rv20e_params`, the same
 /// estimates as scenarios/reducers/rv20e.json) and the loaded figures on.
+/// A row of the loaded figures' tests: every input a small deviation (±4 µm, phases as
+/// small), 000's common normal deviations and a crank bearing clearance in its band
+/// (2–3 µm), drawn from `next`.
+fn loaded_row(m: &RvLostMotion, next: &mut impl FnMut() -> f64) -> Vec<f64> {
+    let mut x: Vec<f64> = (0..m.inputs().len()).map(|_| 0.004 * next()).collect();
+    for (name, value) in [
+        ("common_normal_upper_deviation_mm", 0.0035),
+        ("common_normal_lower_deviation_mm", -0.0309),
+        ("crank_bearing_clearance_mm", 0.002 + 0.001 * next()),
+    ] {
+        x[m.input_index(name).expect("input")] = value;
+    }
+    x
+}
+
 fn loaded_model(set: &[(&str, f64)]) -> RvLostMotion {
     let mut p = params(&[
         ("loaded_figures", 1.0),
@@ -983,16 +998,8 @@ fn random_assemblies_get_bounded_loaded_figures() {
     // gaps spread: 39–68 N·m/arcmin over these rows).
     let m = loaded_model(&[]);
     let mut next = uniform();
-    let len = m.inputs().len();
     for _ in 0..2000 {
-        let mut x: Vec<f64> = (0..len).map(|_| 0.004 * next()).collect();
-        for (name, value) in [
-            ("common_normal_upper_deviation_mm", 0.0035),
-            ("common_normal_lower_deviation_mm", -0.0309),
-            ("crank_bearing_clearance_mm", 0.002 + 0.001 * next()),
-        ] {
-            x[m.input_index(name).expect("input")] = value;
-        }
+        let mut x = loaded_row(&m, &mut next);
         for d in 1..=2 {
             for phase in ["disc_runout_phase_rad", "cumulative_pitch_phase_rad"] {
                 x[m.input_index(&format!("{phase}_{d}")).expect("input")] = PI * (1.0 + next());
@@ -1023,18 +1030,10 @@ fn the_loaded_figures_do_not_hang_on_rounding() {
     // have such ties (counted).
     let m = loaded_model(&[]);
     let mut next = uniform();
-    let len = m.inputs().len();
     let nudged = m.input_index("profile_normal_error_mm_1").expect("input");
     let mut ties = 0;
     for _ in 0..300 {
-        let mut x: Vec<f64> = (0..len).map(|_| 0.004 * next()).collect();
-        for (name, value) in [
-            ("common_normal_upper_deviation_mm", 0.0035),
-            ("common_normal_lower_deviation_mm", -0.0309),
-            ("crank_bearing_clearance_mm", 0.002 + 0.001 * next()),
-        ] {
-            x[m.input_index(name).expect("input")] = value;
-        }
+        let mut x = loaded_row(&m, &mut next);
         let out = outputs(&m, &x);
         x[nudged] += 1e-15;
         let again = outputs(&m, &x);

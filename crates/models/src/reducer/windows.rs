@@ -883,9 +883,8 @@ const OWN_BALANCE_TOLERANCE: f64 = 1e-16;
 
 #[cfg(test)]
 mod tests {
-    use super::super::test_streams::{doubled, stream};
+    use super::super::test_streams::{doubled, every_width, stream};
     use super::*;
-    use pulp::Simd;
 
     /// One run's rests by every kernel this processor runs, with the searches started at
     /// `guesses`: (name, rests).
@@ -897,7 +896,7 @@ mod tests {
         guesses: &[f64],
     ) -> Vec<(&'static str, Vec<f64>)> {
         let mut widths = Vec::new();
-        let mut run_in = |name, f: &dyn Fn(OwnBalances)| {
+        for (name, width) in every_width() {
             let mut own = OwnScratch::default();
             own.levers.extend(
                 levers
@@ -906,26 +905,15 @@ mod tests {
                     .map(|(l, v)| if *v != 0.0 { *l } else { 0.0 }),
             );
             own.guesses.extend_from_slice(guesses);
-            f(OwnBalances {
+            width.apply(OwnBalances {
                 own: &mut own,
                 run,
                 factors,
                 turned,
                 brackets,
             });
-            widths.push((name, own.rests.clone()));
-        };
-        run_in("scalar", &|op| Simd::vectorize(pulp::Scalar::new(), op));
-        #[cfg(target_arch = "x86_64")]
-        {
-            if let Some(simd) = pulp::x86::V3::try_new() {
-                run_in("AVX2", &|op| Simd::vectorize(simd, op));
-            }
-            if let Some(simd) = pulp::x86::V4::try_new() {
-                run_in("AVX-512", &|op| Simd::vectorize(simd, op));
-            }
+            widths.push((name, own.rests));
         }
-        run_in("dispatched", &|op| pulp::Arch::new().dispatch(op));
         widths
     }
 

@@ -79,7 +79,7 @@ pub(super) fn build(
         pin_circle_radius: stage.pin_circle_radius,
         eccentricity: stage.eccentricity,
         curtate: stage.k1(),
-        face_width: rule.contact().face_width,
+        face_width: rule.contact().face_width(),
         ratio,
         reference_disc_torque: 0.5 * lambda * DEFAULT_LOAD_FRACTION * rated * 1000.0,
         elastic_bodies: params.flag("body_compliance", true)?,
