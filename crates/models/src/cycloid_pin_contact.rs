@@ -107,7 +107,7 @@ const DISC_KEYS: [&str; 12] = [
     "planet_teeth",
     "disc_torque_balance",
 ];
-use crate::preload::{self, PreloadRule, CONTACTS_PER_PIN, PALMGREN};
+use crate::preload::{self, PreloadRule, CONTACTS_PER_PIN, LEVER_FLOOR, PALMGREN};
 
 /// The fixed inputs, in order.
 const FIXED_INPUTS: [(&str, &str, &str); 7] = [
@@ -556,13 +556,17 @@ impl CycloidPinContact {
     /// clearance is not finite.
     pub(crate) fn flank_contacts(&self, clearances: &[f64]) -> (f64, f64) {
         let (mut forward, mut reverse) = (f64::INFINITY, f64::NEG_INFINITY);
+        // A pin on the line of centres (φ = 0 or π) holds no turn of the disc: its lever is
+        // sin φ's rounding (2.5e-15 mm at φ = π), and Δ_i/l_i would make an overlap there a
+        // flank contact at ±5e10 rad. The preload rule leaves it out by the same floor.
+        let floor = LEVER_FLOOR * self.stage.eccentricity;
         for (&lever, &clearance) in self.levers.iter().zip(clearances) {
             if !clearance.is_finite() {
                 return (f64::NAN, f64::NAN);
             }
-            if lever > 0.0 {
+            if lever > floor {
                 forward = forward.min(clearance / lever);
-            } else if lever < 0.0 {
+            } else if lever < -floor {
                 reverse = reverse.max(clearance / lever);
             }
         }
@@ -1299,6 +1303,22 @@ mod tests {
         let play = model.profile(&row(0.0, 0.004, -0.008));
         let none = model.share_load(&play, 12.0, 0.0, 0.0);
         assert!(none.forces.iter().all(|f| *f == 0.0));
+    }
+
+    #[test]
+    fn an_overlap_on_the_line_of_centres_holds_no_turn() {
+        // Pin 20 of 40 sits at φ = π: its lever e·z_c·sin φ/S is sin π's rounding, and an
+        // overlap there (Δ < 0) must not become a flank contact at Δ/l ≈ ∓5e10 rad. The
+        // flanks' play is the one of the same profile without that overlap, as the preload
+        // rule (which leaves levers under LEVER_FLOOR·e out) has it.
+        let model = rv80e_balanced(0.5);
+        assert!(model.levers[20].abs() <= LEVER_FLOOR * 1.5 && model.levers[20] != 0.0);
+        let play = model.profile(&row(0.0, 0.004, -0.008));
+        let (forward, reverse) = model.flank_contacts(&play);
+        assert!(forward > reverse && forward.is_finite() && reverse.is_finite());
+        let mut overlapped = play;
+        overlapped[20] = -0.001;
+        assert_eq!(model.flank_contacts(&overlapped), (forward, reverse));
     }
 
     #[test]
