@@ -814,6 +814,8 @@ impl ErrorModel for GeometricHysteresis {
     }
 }
 
+/// Rows the preload rule judges at once (a block of the engine's, on the stack).
+const JUDGED_ROWS: usize = 64;
 /// Inputs and outputs of the model.
 const N_INPUTS: usize = INPUT_COUNT;
 const N_OUTPUTS: usize = OUTPUT_COUNT;
@@ -889,13 +891,38 @@ impl GeometricHysteresis {
             }
             any_exact |= needs_cosine(tilt_squared(&x));
         }
-        // The preload rule on the rows that need it (most rows of a free design do not).
-        for r in 0..n {
-            let stage = [involute[r], cycloid[r], crank[r]];
-            let x: [f64; N_INPUTS] = std::array::from_fn(|i| columns[i][r]);
-            let values = self.judge(stage, &x, judged[0][r]);
-            for (column, value) in judged.iter_mut().zip(values) {
-                column[r] = value;
+        // The preload rule on the block's profiles, a vector's lanes of rows at once.
+        for first in (0..n).step_by(JUDGED_ROWS) {
+            let rows = first..(first + JUDGED_ROWS).min(n);
+            let mut profiles = [[0.0; JUDGED_ROWS]; 5];
+            for (k, r) in rows.clone().enumerate() {
+                let x: [f64; N_INPUTS] = std::array::from_fn(|i| columns[i][r]);
+                let ((equidistant, shift), errors) = self.profile(&x, judged[0][r]);
+                for (column, value) in profiles.iter_mut().zip([equidistant, shift]) {
+                    column[k] = value;
+                }
+                for (column, value) in profiles[2..].iter_mut().zip(errors) {
+                    column[k] = value;
+                }
+            }
+            let m = rows.len();
+            let [equidistant, shift, pin_circle, pin_radius, eccentric] = &profiles;
+            let profiles = preload::Profiles {
+                equidistant: &equidistant[..m],
+                shift: &shift[..m],
+                pin_circle: &pin_circle[..m],
+                pin_radius: &pin_radius[..m],
+                eccentric: &eccentric[..m],
+            };
+            let mut verdicts = [(false, preload::Preload::NONE); JUDGED_ROWS];
+            self.rule.of_profiles(&profiles, &mut verdicts[..m]);
+            for (r, verdict) in rows.zip(verdicts) {
+                let stage = [involute[r], cycloid[r], crank[r]];
+                let x: [f64; N_INPUTS] = std::array::from_fn(|i| columns[i][r]);
+                let values = self.verdict(stage, &x, verdict);
+                for (column, value) in judged.iter_mut().zip(values) {
+                    column[r] = value;
+                }
             }
         }
         any_exact
@@ -925,23 +952,39 @@ impl GeometricHysteresis {
     /// and ΔF_p as an equivalent equidistant amount, as the torsion curve's one profile),
     /// the limit from the design modification.
     #[inline]
-    fn judge(
-        &self,
-        [involute, cycloid, crank]: [f64; 3],
-        x: &[f64; N_INPUTS],
-        pin_radius: f64,
-    ) -> [f64; 5] {
-        let jammed = involute < 0.0 || crank < 0.0;
+    fn judge(&self, stages: [f64; 3], x: &[f64; N_INPUTS], pin_radius: f64) -> [f64; 5] {
+        let (modification, errors) = self.profile(x, pin_radius);
+        self.verdict(stages, x, self.rule.of_profile(modification, errors))
+    }
+
+    /// The profile the rule judges for the row `x` whose pins have the radius error
+    /// `pin_radius` ([`Self::judge`]): the modification (Δr_rp, Δr_p) and the errors
+    /// [δr_p, δr_rp, δe], mm.
+    #[inline(always)]
+    fn profile(&self, x: &[f64; N_INPUTS], pin_radius: f64) -> ((f64, f64), [f64; 3]) {
         let mut others = 0.0;
         for (c, value) in self.cycloid_coefficients[4..8].iter().zip(&x[6..10]) {
             others += c * value;
         }
         // Backlash 2δ/(e·zc) at the disc for an equidistant amount δ.
         let equivalent = 0.5 * others * self.disc_per_arcmin * self.pitch_lever;
-        let (overlapping, load) = self.rule.of_profile(
+        (
             (x[2] + x[10] + equivalent, x[3] + x[11]),
             [x[4], pin_radius, x[12]],
-        );
+        )
+    }
+
+    /// The rule's five outputs for the row `x` with the stage clearances [involute,
+    /// cycloid, crank] whose profile the rule found overlapping or not, with its preload
+    /// ([`Self::judge`]).
+    #[inline]
+    fn verdict(
+        &self,
+        [involute, cycloid, crank]: [f64; 3],
+        x: &[f64; N_INPUTS],
+        (overlapping, load): (bool, preload::Preload),
+    ) -> [f64; 5] {
+        let jammed = involute < 0.0 || crank < 0.0;
         let class = self
             .rule
             .classify(&load, (overlapping, jammed), (x[2], x[3]));

@@ -415,7 +415,7 @@ fn alike_in_lanes(contact: &PinContact, gaps: &[f64], pins: &AlikePins) -> Optio
     let (levers, arms) = (&pins.lever[..], &pins.arm[..]);
     let (mut lo, mut hi) = (lag, -lead);
     let mut y = 0.5 * (lo + hi);
-    for _ in 0..100 {
+    for _ in 0..ALIKE_STEPS {
         // Branch-free over the pins (the loaded set changes from row to row).
         let (moment, slope, size) = sums_in_lanes(gaps, levers, y);
         // The two flanks' moments cancel to rounding: y is the root.
@@ -440,17 +440,29 @@ fn alike_in_lanes(contact: &PinContact, gaps: &[f64], pins: &AlikePins) -> Optio
         }
     }
     let largest = largest_approach(gaps, levers, y);
+    let drag = drag_in_lanes(gaps, levers, arms, y);
+    Some(preload_of(contact, largest, drag))
+}
+
+/// Most Newton steps of [`alike`]'s balance.
+pub(super) const ALIKE_STEPS: usize = 100;
+
+/// The preload of two discs alike whose balance stands at the largest approach `largest`
+/// (mm) with the loaded pins' Σ d_i·h_i `drag` (mm², one disc); none where no pin is
+/// loaded.
+#[inline]
+pub(super) fn preload_of(contact: &PinContact, largest: f64, drag: f64) -> Preload {
     if largest.is_nan() || largest <= 0.0 {
-        return Some(Preload::NONE);
+        return Preload::NONE;
     }
     let pin_force = contact.force_at(largest);
     let stiffness = pin_force / largest;
-    let drag = stiffness * drag_in_lanes(gaps, levers, arms, y);
-    Some(Preload {
+    let drag = stiffness * drag;
+    Preload {
         overlap_um: 1000.0 * largest,
         pin_force,
         no_load_torque: contact.friction * 2.0 * drag / contact.ratio / 1000.0,
-    })
+    }
 }
 
 /// max(0, max_i (l_i·y − g_i)), in four lanes (a maximum does not depend on the order it is
@@ -513,7 +525,7 @@ pub(crate) struct AlikePins {
     pub inverse: Vec<f64>,
     pub arm: Vec<f64>,
     /// The instruction sets the balance may use (the processor's report).
-    arch: pulp::Arch,
+    pub(super) arch: pulp::Arch,
 }
 
 impl Default for AlikePins {

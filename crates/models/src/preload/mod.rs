@@ -30,6 +30,7 @@
 //! modification seen (a pure function of it: the same bits whatever the thread).
 
 mod balance;
+mod rows;
 
 use std::cell::RefCell;
 use std::f64::consts::PI;
@@ -40,6 +41,7 @@ use rvtol_deviation::Shown;
 use crate::cycloid::CycloidStage;
 use crate::{ModelError, ModelParams, OutputKind, OutputSpec, ParamSpec};
 pub(crate) use balance::{zero_torque, AlikePins, DiscPins, MAX_PINS};
+pub(crate) use rows::Profiles;
 
 /// Palmgren's line-contact constant (mm, N): δ = 3.84·10⁻⁵·F^0.9/L^0.8, two contacts in
 /// series per pin (disc–pin, pin–housing).

@@ -333,3 +333,65 @@ fn every_model_gives_the_same_preload_class_for_the_same_deviations() {
     // The grid reaches every class.
     assert!(kinds.iter().all(|&k| k > 0), "{kinds:?} of {compared}");
 }
+
+#[test]
+fn the_rows_in_lanes_are_the_row_form_bit_for_bit() {
+    // of_profiles (one row per vector lane) against of_profile row by row, at every
+    // instruction set this processor has: overlapping and free profiles around the RV-20E's
+    // design (Table 9's modification ± 10 µm, pin circle ± 10 µm, pins and eccentricity
+    // ± 5 µm), a zero row, and rows whose gaps are not finite (left to the row form).
+    use crate::reducer::test_streams::{every_width, stream};
+    let rule = rule(&[]);
+    let mut next = stream(34);
+    let mut rows: Vec<[f64; 5]> = (0..203)
+        .map(|_| {
+            [
+                -0.010 + 0.010 * next(),
+                -0.012 + 0.010 * next(),
+                0.010 * next(),
+                0.005 * next(),
+                0.005 * next(),
+            ]
+        })
+        .collect();
+    rows[5] = [0.0; 5];
+    rows[17][2] = f64::NAN;
+    rows[40][4] = f64::INFINITY;
+    rows[41][0] = 1e308;
+    let expected: Vec<(bool, Preload)> = rows
+        .iter()
+        .map(|r| rule.of_profile((r[0], r[1]), [r[2], r[3], r[4]]))
+        .collect();
+    let overlapping = expected.iter().filter(|e| e.0).count();
+    let loaded = expected.iter().filter(|e| e.1.pin_force > 0.0).count();
+    assert!(overlapping > 40 && overlapping < 180, "{overlapping}");
+    assert!(loaded > 40, "{loaded}");
+    let bits = |(o, p): &(bool, Preload)| {
+        (
+            *o,
+            [p.overlap_um, p.pin_force, p.no_load_torque].map(f64::to_bits),
+        )
+    };
+    let column = |k: usize| rows.iter().map(|r| r[k]).collect::<Vec<f64>>();
+    let columns: Vec<Vec<f64>> = (0..5).map(column).collect();
+    for (name, width) in every_width() {
+        // Blocks of every length the lanes split unevenly, and the whole at once.
+        for block in [1, 3, 8, 64, 203] {
+            let mut out = vec![(false, Preload::NONE); rows.len()];
+            for first in (0..rows.len()).step_by(block) {
+                let r = first..(first + block).min(rows.len());
+                let profiles = Profiles {
+                    equidistant: &columns[0][r.clone()],
+                    shift: &columns[1][r.clone()],
+                    pin_circle: &columns[2][r.clone()],
+                    pin_radius: &columns[3][r.clone()],
+                    eccentric: &columns[4][r.clone()],
+                };
+                rows::of_profiles_in(width, &rule, &profiles, &mut out[r]);
+            }
+            for (i, (got, want)) in out.iter().zip(&expected).enumerate() {
+                assert_eq!(bits(got), bits(want), "{name}, blocks of {block}, row {i}");
+            }
+        }
+    }
+}

@@ -34,7 +34,7 @@ mod folds;
 mod geometry;
 mod layout;
 #[cfg(test)]
-mod test_streams;
+pub(crate) mod test_streams;
 mod torsion;
 mod windows;
 

@@ -1,6 +1,7 @@
-//! Test inputs shared by the row table's kernel tests (folds.rs, windows.rs): a small
-//! deterministic stream, the pins' columns reversed and doubled as the kernels read them,
-//! and every instruction set a kernel is built for.
+//! Test inputs shared by the kernels' tests (the row table's folds.rs and windows.rs, the
+//! preload rule's rows.rs): a small deterministic stream, the pins' columns reversed and
+//! doubled as the row table's kernels read them, and every instruction set a kernel is
+//! built for.
 
 /// A small deterministic stream in [−1, 1) (a linear congruential generator).
 pub(crate) fn stream(seed: u64) -> impl FnMut() -> f64 {
