@@ -7,6 +7,7 @@
 //!
 //! Adding a model touches three places: its file here, one line in [`all`], one scenario.
 
+mod chains;
 mod crank_elastic_error;
 mod cycloid;
 mod cycloid_pin_contact;

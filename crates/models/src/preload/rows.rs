@@ -14,6 +14,7 @@
 use pulp::Simd;
 
 use super::{balance, Preload, PreloadRule, MAX_PINS};
+use crate::chains::{in_chains, CHAINS};
 
 /// The profiles of a block of rows, one column per parameter (every column as long as the
 /// block): the modification (Δr_rp, Δr_p) and the pin circle, pin radius and eccentricity
@@ -25,9 +26,6 @@ pub(crate) struct Profiles<'a> {
     pub pin_radius: &'a [f64],
     pub eccentric: &'a [f64],
 }
-
-/// Chains of additions in each lane's sums (as `balance::sums_in_lanes`).
-const CHAINS: usize = 4;
 
 /// Lanes of the widest instruction set (AVX-512: eight doubles).
 const MOST_LANES: usize = 8;
@@ -247,17 +245,7 @@ impl<'a, S: Simd> Group<'a, S> {
                 size[c] = simd.add_f64s(size[c], simd.select_f64s(carries, term, zero));
             }};
         }
-        let pins = self.gaps.len();
-        let whole = pins / CHAINS * CHAINS;
-        for j in (0..whole).step_by(CHAINS) {
-            add!(0, j);
-            add!(1, j + 1);
-            add!(2, j + 2);
-            add!(3, j + 3);
-        }
-        for j in whole..pins {
-            add!(j - whole, j);
-        }
+        in_chains!(self.gaps.len(), add);
         let total = |v: [S::f64s; CHAINS]| {
             simd.add_f64s(simd.add_f64s(v[0], v[1]), simd.add_f64s(v[2], v[3]))
         };
@@ -284,17 +272,7 @@ impl<'a, S: Simd> Group<'a, S> {
                 drag[c] = simd.add_f64s(drag[c], simd.select_f64s(carries, term, zero));
             }};
         }
-        let n = self.gaps.len();
-        let whole = n / CHAINS * CHAINS;
-        for j in (0..whole).step_by(CHAINS) {
-            add!(0, j);
-            add!(1, j + 1);
-            add!(2, j + 2);
-            add!(3, j + 3);
-        }
-        for j in whole..n {
-            add!(j - whole, j);
-        }
+        in_chains!(self.gaps.len(), add);
         let drag = simd.add_f64s(
             simd.add_f64s(drag[0], drag[1]),
             simd.add_f64s(drag[2], drag[3]),

@@ -36,6 +36,7 @@
 use super::folds::{fold_flank, Flank, Turned};
 use super::geometry::{needle_slack, Grid, Reducer, MAX_CRANKS};
 use super::layout::{Layout, ECCENTRICS};
+use crate::chains::{in_chains, CHAINS};
 
 /// What a row contributes, reduced once per row.
 #[derive(Debug, Clone, Default)]
@@ -780,7 +781,6 @@ impl OwnScratch {
         let n = kept.len();
         let gaps = S::as_simd_f64s(&self.gaps[..n * lanes]).0;
         assert_eq!(gaps.len(), n * vectors);
-        let whole = n / CHAINS * CHAINS;
         for (v, ((p, s), &y)) in p.iter_mut().zip(s.iter_mut()).zip(y).enumerate() {
             if !self.open[v] {
                 // Every lane settled: its sums are not read again.
@@ -803,15 +803,7 @@ impl OwnScratch {
                     cs[c] = simd.add_f64s(cs[c], ll);
                 }};
             }
-            for j in (0..whole).step_by(CHAINS) {
-                add!(0, j);
-                add!(1, j + 1);
-                add!(2, j + 2);
-                add!(3, j + 3);
-            }
-            for j in whole..n {
-                add!(j - whole, j);
-            }
+            in_chains!(n, add);
             *p = simd.add_f64s(simd.add_f64s(cp[0], cp[1]), simd.add_f64s(cp[2], cp[3]));
             *s = simd.add_f64s(simd.add_f64s(cs[0], cs[1]), simd.add_f64s(cs[2], cs[3]));
         }
@@ -871,9 +863,6 @@ impl OwnScratch {
 
 /// Lanes are padded to a multiple of this.
 const OWN_LANES: usize = 8;
-
-/// Chains of additions in each lane's sums.
-const CHAINS: usize = 4;
 
 /// Most steps of a disc's own balance (each one Newton's or a bisection's).
 const OWN_BALANCE_STEPS: usize = 100;
