@@ -17,6 +17,9 @@
 /// so the compiler cannot do this on its own).
 const LANES: usize = 4;
 
+/// The instruction sets [`Moments::from_slice`] may use (the processor's report, read once).
+static ARCH: std::sync::LazyLock<pulp::Arch> = std::sync::LazyLock::new(pulp::Arch::new);
+
 /// Count, mean, central power sums, minimum and maximum of a set of values.
 ///
 /// `m2`, `m3` and `m4` are the sums of `(x - mean)^k` for k = 2, 3, 4 (not
@@ -38,6 +41,17 @@ pub struct Moments {
     pub min: f64,
     /// Largest value (-inf when empty).
     pub max: f64,
+}
+
+/// [`Moments::from_slice`] as an operation `pulp` compiles once per instruction set.
+struct Summary<'a>(&'a [f64]);
+
+impl pulp::WithSimd for Summary<'_> {
+    type Output = Moments;
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) -> Moments {
+        Moments::summarise(self.0)
+    }
 }
 
 impl Default for Moments {
@@ -90,7 +104,16 @@ impl Moments {
     /// the machine or thread. NaN values are not expected (the caller filters
     /// them); if present they propagate into the mean and sums but are
     /// ignored by min/max.
+    ///
+    /// Built for the widest instruction set the processor has (`pulp`, chosen at run time):
+    /// the same operations in the same order in every build, so the same bits (tested).
     pub fn from_slice(values: &[f64]) -> Moments {
+        ARCH.dispatch(Summary(values))
+    }
+
+    /// [`Moments::from_slice`], inlined into each instruction set's build.
+    #[inline(always)]
+    fn summarise(values: &[f64]) -> Moments {
         if values.is_empty() {
             return Moments::new();
         }
@@ -295,6 +318,42 @@ pub fn proportion_standard_error(fraction: f64, n: u64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_instruction_set_summarises_to_the_same_bits() {
+        // The baseline build, AVX2 and AVX-512 where this processor has them, and the
+        // dispatch: lengths around the four lanes, values of mixed sign and scale, a NaN.
+        use pulp::Simd;
+        let mut state = 7_u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.3) * 1e3
+        };
+        let bits = |m: &Moments| [m.mean, m.m2, m.m3, m.m4, m.min, m.max].map(f64::to_bits);
+        for n in [0, 1, 3, 4, 5, 63, 1000, 4099] {
+            let mut values: Vec<f64> = (0..n).map(|i| next() * (1.0 + i as f64)).collect();
+            if n == 63 {
+                values[20] = f64::NAN;
+            }
+            let baseline = Simd::vectorize(pulp::Scalar::new(), Summary(&values));
+            let mut builds = vec![Moments::from_slice(&values)];
+            #[cfg(target_arch = "x86_64")]
+            {
+                if let Some(simd) = pulp::x86::V3::try_new() {
+                    builds.push(Simd::vectorize(simd, Summary(&values)));
+                }
+                if let Some(simd) = pulp::x86::V4::try_new() {
+                    builds.push(Simd::vectorize(simd, Summary(&values)));
+                }
+            }
+            for build in &builds {
+                assert_eq!(build.n, baseline.n);
+                assert_eq!(bits(build), bits(&baseline), "{n} values");
+            }
+        }
+    }
 
     fn relative_difference(a: f64, b: f64) -> f64 {
         if a == b {
