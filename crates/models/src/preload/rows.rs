@@ -74,7 +74,7 @@ impl pulp::WithSimd for Rows<'_> {
             let result = group.balance();
             let mut values = [[0.0; MOST_LANES]; 4];
             for (value, v) in values.iter_mut().zip(result) {
-                simd.partial_store_f64s(&mut value[..lanes], v);
+                S::as_mut_simd_f64s(&mut value[..lanes]).0[0] = v;
             }
             let [finite, overlapping, largest, drag] = values;
             for (lane, r) in rows.enumerate() {
@@ -118,10 +118,21 @@ impl<'a, S: Simd> Group<'a, S> {
         rows: std::ops::Range<usize>,
         gaps: &'a mut [S::f64s; MAX_PINS],
     ) -> Self {
-        let load = |column: &[f64]| simd.partial_load_f64s(&column[rows.clone()]);
-        let (equidistant, shift) = (load(p.equidistant), load(p.shift));
-        let (pin_circle, pin_radius) = (load(p.pin_circle), load(p.pin_radius));
-        let eccentric = load(p.eccentric);
+        // Whole vectors of a zero-padded copy (pulp's partial loads are functions of their
+        // own, outside the dispatched builds).
+        let mut lanes = [[0.0; MOST_LANES]; 5];
+        let columns = [
+            p.equidistant,
+            p.shift,
+            p.pin_circle,
+            p.pin_radius,
+            p.eccentric,
+        ];
+        for (lane, column) in lanes.iter_mut().zip(columns) {
+            lane[..rows.len()].copy_from_slice(&column[rows.clone()]);
+        }
+        let [equidistant, shift, pin_circle, pin_radius, eccentric] =
+            lanes.map(|lane| S::as_simd_f64s(&lane[..S::F64_LANES]).0[0]);
         let c = &rule.columns;
         let infinity = simd.splat_f64s(f64::INFINITY);
         let mut finite = simd.splat_f64s(1.0);
