@@ -26,3 +26,10 @@ macro_rules! in_chains {
     }};
 }
 pub(crate) use in_chains;
+
+/// The chains' sums added in their fixed order, (c0 + c1) + (c2 + c3), in every lane.
+#[inline(always)]
+pub(crate) fn total<S: pulp::Simd>(simd: S, chains: [S::f64s; CHAINS]) -> S::f64s {
+    let [c0, c1, c2, c3] = chains;
+    simd.add_f64s(simd.add_f64s(c0, c1), simd.add_f64s(c2, c3))
+}

@@ -918,8 +918,8 @@ impl GeometricHysteresis {
             self.rule.of_profiles(&profiles, &mut verdicts[..m]);
             for (r, verdict) in rows.zip(verdicts) {
                 let stage = [involute[r], cycloid[r], crank[r]];
-                let x: [f64; N_INPUTS] = std::array::from_fn(|i| columns[i][r]);
-                let values = self.verdict(stage, &x, verdict);
+                let design = (columns[2][r], columns[3][r]);
+                let values = self.verdict(stage, design, verdict);
                 for (column, value) in judged.iter_mut().zip(values) {
                     column[r] = value;
                 }
@@ -954,7 +954,11 @@ impl GeometricHysteresis {
     #[inline]
     fn judge(&self, stages: [f64; 3], x: &[f64; N_INPUTS], pin_radius: f64) -> [f64; 5] {
         let (modification, errors) = self.profile(x, pin_radius);
-        self.verdict(stages, x, self.rule.of_profile(modification, errors))
+        self.verdict(
+            stages,
+            (x[2], x[3]),
+            self.rule.of_profile(modification, errors),
+        )
     }
 
     /// The profile the rule judges for the row `x` whose pins have the radius error
@@ -974,20 +978,18 @@ impl GeometricHysteresis {
         )
     }
 
-    /// The rule's five outputs for the row `x` with the stage clearances [involute,
-    /// cycloid, crank] whose profile the rule found overlapping or not, with its preload
-    /// ([`Self::judge`]).
+    /// The rule's five outputs for a row with the stage clearances [involute, cycloid,
+    /// crank] and the design modification (Δr_rp, Δr_p) `design` whose profile the rule
+    /// found overlapping or not, with its preload ([`Self::judge`]).
     #[inline]
     fn verdict(
         &self,
         [involute, cycloid, crank]: [f64; 3],
-        x: &[f64; N_INPUTS],
+        design: (f64, f64),
         (overlapping, load): (bool, preload::Preload),
     ) -> [f64; 5] {
         let jammed = involute < 0.0 || crank < 0.0;
-        let class = self
-            .rule
-            .classify(&load, (overlapping, jammed), (x[2], x[3]));
+        let class = self.rule.classify(&load, (overlapping, jammed), design);
         let nan = 0.0 * (involute + cycloid + crank);
         [
             load.overlap_um + nan,

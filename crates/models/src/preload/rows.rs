@@ -14,7 +14,7 @@
 use pulp::Simd;
 
 use super::{balance, Preload, PreloadRule, MAX_PINS};
-use crate::chains::{in_chains, CHAINS};
+use crate::chains::{in_chains, total, CHAINS};
 
 /// The profiles of a block of rows, one column per parameter (every column as long as the
 /// block): the modification (Δr_rp, Δr_p) and the pin circle, pin radius and eccentricity
@@ -257,10 +257,7 @@ impl<'a, S: Simd> Group<'a, S> {
             }};
         }
         in_chains!(self.gaps.len(), add);
-        let total = |v: [S::f64s; CHAINS]| {
-            simd.add_f64s(simd.add_f64s(v[0], v[1]), simd.add_f64s(v[2], v[3]))
-        };
-        (total(sum), total(slope), total(size))
+        (total(simd, sum), total(simd, slope), total(simd, size))
     }
 
     /// max(0, max_j (l_j·y − g_j)) and Σ d_j·h_j over the loaded pins (four chains, as
@@ -284,11 +281,7 @@ impl<'a, S: Simd> Group<'a, S> {
             }};
         }
         in_chains!(self.gaps.len(), add);
-        let drag = simd.add_f64s(
-            simd.add_f64s(drag[0], drag[1]),
-            simd.add_f64s(drag[2], drag[3]),
-        );
-        (largest, drag)
+        (largest, total(simd, drag))
     }
 }
 

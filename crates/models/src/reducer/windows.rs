@@ -36,7 +36,7 @@
 use super::folds::{fold_flank, Flank, Turned};
 use super::geometry::{needle_slack, Grid, Reducer, MAX_CRANKS};
 use super::layout::{Layout, ECCENTRICS};
-use crate::chains::{in_chains, CHAINS};
+use crate::chains::{in_chains, total, CHAINS};
 
 /// What a row contributes, reduced once per row.
 #[derive(Debug, Clone, Default)]
@@ -804,8 +804,8 @@ impl OwnScratch {
                 }};
             }
             in_chains!(n, add);
-            *p = simd.add_f64s(simd.add_f64s(cp[0], cp[1]), simd.add_f64s(cp[2], cp[3]));
-            *s = simd.add_f64s(simd.add_f64s(cs[0], cs[1]), simd.add_f64s(cs[2], cs[3]));
+            *p = total(simd, cp);
+            *s = total(simd, cs);
         }
     }
 
